@@ -1,0 +1,1 @@
+"""cardan-forces: driveline."""

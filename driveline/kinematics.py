@@ -1,0 +1,181 @@
+"""Rest geometry and 1-DOF kinematics of a chain of shafts and Cardan joints.
+
+The joint is built from 3-D frames, not from the closed forms: each cross-pin has a
+driving trunnion axis ``e1`` fixed in the driving yoke and a driven trunnion axis
+``e2`` fixed in the driven yoke, and the only condition is ``e1 · e2 = 0`` (both
+trunnions lie in one rigid cross). The driven shaft's angle solves that condition;
+its derivatives come from implicit differentiation. The closed forms of the paper's
+eqs. (1)-(4) are tests of this construction, not its implementation.
+
+Everything is batched over instants: angles have shape ``(n_shafts, T)`` and
+vectors ``(n_joints, T, 3)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene import Scene
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _rotate_perp(v: np.ndarray, axis: np.ndarray, angle) -> np.ndarray:
+    """Rotate ``v`` (perpendicular to the unit ``axis``) by ``angle`` (rad), batched."""
+    angle = np.asarray(angle, float)[..., None]
+    return v * np.cos(angle) + np.cross(axis, v) * np.sin(angle)
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The chain at rest (all shaft angles zero), in the global frame (m).
+
+    ``axes[k]`` points downstream along shaft ``k``; ``starts[k]`` and
+    ``centres[k]`` are its upstream end and centre; joint ``j`` sits at
+    ``joint_centres[j]``, the end of shaft ``j`` and start of shaft ``j + 1``.
+    ``yoke_in[j]`` / ``yoke_out[j]`` are the driving / driven trunnion axes of joint
+    ``j`` at rest. ``bearing_points[k]`` are the bearing positions on shaft ``k``.
+    """
+
+    axes: np.ndarray
+    starts: np.ndarray
+    centres: np.ndarray
+    joint_centres: np.ndarray
+    yoke_in: np.ndarray
+    yoke_out: np.ndarray
+    bearing_points: tuple[np.ndarray, ...]
+    plane_normal: np.ndarray
+
+
+def rest_geometry(scene: Scene) -> Geometry:
+    """Lay out the chain: shafts end to end, each joint turning the next shaft in the
+    articulation plane by its signed articulation angle."""
+    a = np.array(scene.frame.input_axis)
+    towards = np.array(scene.frame.articulation_towards)
+    u = _unit(towards - towards.dot(a) * a)
+    normal = np.cross(a, u)
+    start = np.array(scene.frame.input_start_m)
+    axes, starts, ins, outs = [], [], [], []
+    for k, shaft in enumerate(scene.shafts):
+        axes.append(a)
+        starts.append(start)
+        start = start + shaft.length_m * a
+        if k < len(scene.joints):
+            joint = scene.joints[k]
+            # yoke phase reference: the articulation plane for the first joint, the
+            # previous joint's driven yoke on the same shaft for later ones
+            reference = outs[-1] if outs else u
+            y_in = _rotate_perp(reference, a, math.radians(joint.yoke_phase_deg))
+            gamma = math.radians(joint.articulation_deg) * scene.articulation_signs()[k]
+            a, u = (
+                math.cos(gamma) * a + math.sin(gamma) * u,
+                -math.sin(gamma) * a + math.cos(gamma) * u,
+            )
+            ins.append(y_in)
+            outs.append(_unit(np.cross(a, y_in)))
+    axes, starts = np.array(axes), np.array(starts)
+    lengths = np.array([s.length_m for s in scene.shafts])
+    centres = starts + 0.5 * lengths[:, None] * axes
+    bearing_points = tuple(
+        np.array([centres[k] + b.offset_m * axes[k] for b in s.bearings]).reshape(-1, 3)
+        for k, s in enumerate(scene.shafts)
+    )
+    return Geometry(
+        axes=axes,
+        starts=starts,
+        centres=centres,
+        joint_centres=starts[1:],
+        yoke_in=np.array(ins).reshape(-1, 3),
+        yoke_out=np.array(outs).reshape(-1, 3),
+        bearing_points=bearing_points,
+        plane_normal=normal,
+    )
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Configuration of the chain as a function of the input angle ``q`` (rad).
+
+    ``phi[k]`` is shaft ``k``'s angle about its axis, ``ratio[k] = dphi_k/dq`` and
+    ``ratio_dq[k] = d²phi_k/dq²``. Per joint: the cross-pin frame ``e1`` (driving
+    trunnion), ``e2`` (driven trunnion), ``e3 = e1 x e2``, and the cross-pin's angular
+    velocity per unit input speed ``pin_rate`` and its ``q``-derivative
+    ``pin_rate_dq`` (so ``omega = pin_rate q'``, ``alpha = pin_rate q'' +
+    pin_rate_dq q'²``).
+    """
+
+    q: np.ndarray
+    phi: np.ndarray
+    ratio: np.ndarray
+    ratio_dq: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    e3: np.ndarray
+    pin_rate: np.ndarray
+    pin_rate_dq: np.ndarray
+
+
+def kinematics(geometry: Geometry, q) -> Kinematics:
+    """Shaft angles, velocity ratios and cross-pin frames at input angles ``q``."""
+    q = np.atleast_1d(np.asarray(q, float))
+    axes = geometry.axes
+    phi, ratio, ratio_dq = [q], [np.ones_like(q)], [np.zeros_like(q)]
+    e1s, e2s, rates, rates_dq = [], [], [], []
+    for j in range(len(geometry.yoke_in)):
+        a_in, a_out = axes[j], axes[j + 1]
+        y_out = geometry.yoke_out[j]
+        e1 = _rotate_perp(geometry.yoke_in[j], a_in, phi[j])
+        w_out = np.cross(a_out, y_out)
+        raw = np.arctan2(-(e1 @ y_out), e1 @ w_out)
+        # e2 and -e2 are the same trunnion: the solution is defined modulo pi; take the
+        # branch nearest to the driving shaft's angle, which keeps it continuous.
+        psi = phi[j] + np.mod(raw - phi[j] + 0.5 * np.pi, np.pi) - 0.5 * np.pi
+        e2 = _rotate_perp(y_out, a_out, psi)
+        # implicit derivatives of g(phi, psi) = e1 · e2 = 0
+        de1 = np.cross(a_in, e1)
+        de2 = np.cross(a_out, e2)
+        g_phi = np.einsum("ti,ti->t", de1, e2)
+        g_psi = np.einsum("ti,ti->t", e1, de2)
+        g_phiphi = np.einsum("ti,ti->t", np.cross(a_in, de1), e2)
+        g_psipsi = np.einsum("ti,ti->t", e1, np.cross(a_out, de2))
+        g_phipsi = np.einsum("ti,ti->t", de1, de2)
+        rho = -g_phi / g_psi
+        rho_dphi = -(g_phiphi + 2.0 * g_phipsi * rho + g_psipsi * rho**2) / g_psi
+        j_in, h_in = ratio[j], ratio_dq[j]
+        j_out = rho * j_in
+        h_out = rho_dphi * j_in**2 + rho * h_in
+        # cross-pin: omega = omega_in a_in + omega_out (a_out · e1) e1 (rotation about e1
+        # relative to the driving yoke); differentiate for its rate of change.
+        c = e1 @ a_out
+        de1_dq = j_in[:, None] * de1
+        rate = j_in[:, None] * a_in + (j_out * c)[:, None] * e1
+        rate_dq = (
+            h_in[:, None] * a_in
+            + (h_out * c + j_out * (de1_dq @ a_out))[:, None] * e1
+            + (j_out * c)[:, None] * de1_dq
+        )
+        phi.append(psi)
+        ratio.append(j_out)
+        ratio_dq.append(h_out)
+        e1s.append(e1)
+        e2s.append(e2)
+        rates.append(rate)
+        rates_dq.append(rate_dq)
+    e1a = np.array(e1s).reshape(-1, len(q), 3)
+    e2a = np.array(e2s).reshape(-1, len(q), 3)
+    return Kinematics(
+        q=q,
+        phi=np.array(phi),
+        ratio=np.array(ratio),
+        ratio_dq=np.array(ratio_dq),
+        e1=e1a,
+        e2=e2a,
+        e3=np.cross(e1a, e2a),
+        pin_rate=np.array(rates).reshape(-1, len(q), 3),
+        pin_rate_dq=np.array(rates_dq).reshape(-1, len(q), 3),
+    )

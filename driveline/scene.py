@@ -1,0 +1,540 @@
+"""Scenes: a drive line described in TOML, validated into frozen dataclasses.
+
+A scene argument is a built-in name (``paper``, ``paper-fig15``, ...) or a path to a
+TOML file. A file may start from another scene with ``extends = "NAME-or-path"``;
+its tables then override the parent's key by key (arrays are replaced whole).
+Every quantity is SI; a field's unit is in its name (``length_m``, ``mass_kg``).
+The built-in ``paper.toml`` documents each field and each convention once.
+
+Bad input raises :class:`SceneError` naming the file and the field.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+EFFECTS = (
+    "gravity",
+    "inertia",
+    "crosspin_inertia",
+    "clearance",
+    "compliance",
+    "friction",
+    "penalty_dynamics",
+)
+"""Effects a scene may call for (DESIGN §1); only those listed are built."""
+
+
+class SceneError(ValueError):
+    """A scene that cannot be used: the message names the file and the field."""
+
+
+# ---------------------------------------------------------------------------- data
+
+
+@dataclass(frozen=True)
+class Bearing:
+    """A rolling bearing: carries a force in any direction (3 components), no moment.
+
+    ``offset_m`` is its position along the shaft axis from the shaft's centre, positive
+    downstream (towards the output).
+    """
+
+    name: str
+    offset_m: float
+
+
+@dataclass(frozen=True)
+class Shaft:
+    """A rigid shaft between two points of the chain, centre of mass at its centre.
+
+    ``inertia_kg_m2`` are the principal moments about the centre of mass in the
+    paper's order (J1, J2, J3), J2 about the shaft axis.
+    """
+
+    name: str
+    length_m: float
+    mass_kg: float
+    inertia_kg_m2: tuple[float, float, float]
+    bearings: tuple[Bearing, ...]
+
+    @property
+    def axial_inertia_kg_m2(self) -> float:
+        return self.inertia_kg_m2[1]
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A Cardan joint at the end of one shaft and the start of the next.
+
+    ``articulation_deg`` is the angle between the two shafts; its sense follows the
+    scene's arrangement. ``yoke_phase_deg`` turns this joint's driving yoke about the
+    driving shaft: for the first joint from the articulation plane, for later joints
+    from the previous joint's driven yoke on the same shaft. Cross-pin geometry as in
+    the paper's Table 2 and Fig. 5.
+    """
+
+    name: str
+    articulation_deg: float
+    yoke_phase_deg: float
+    hs_m: float
+    rs_m: float
+    rb_m: float
+    ht_m: float
+    hb_m: float
+    rt_m: float
+
+    @property
+    def radial_clearance_m(self) -> float:
+        """Paper: eps_r = rb - rs."""
+        return self.rb_m - self.rs_m
+
+    @property
+    def axial_clearance_m(self) -> float:
+        """Paper: eps_a = hb - ht."""
+        return self.hb_m - self.ht_m
+
+
+@dataclass(frozen=True)
+class Crosspin:
+    """Cross-pin mass and principal moments about its centre along (e1, e2, e3)."""
+
+    mass_kg: float
+    inertia_kg_m2: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class TorqueLaw:
+    """``M(t) = mean + amplitude * cos(2 pi f t + phase)`` in N·m (constant: amplitude 0)."""
+
+    mean_N_m: float
+    amplitude_N_m: float = 0.0
+    frequency_hz: float = 0.0
+    phase_rad: float = 0.0
+
+    def __call__(self, t):
+        """Torque at time(s) ``t`` (s), vectorized."""
+        t = np.asarray(t, float)
+        w = 2.0 * math.pi * self.frequency_hz
+        return self.mean_N_m + self.amplitude_N_m * np.cos(w * t + self.phase_rad)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """Where the chain sits in the global frame (unit vectors are normalized)."""
+
+    input_start_m: tuple[float, float, float]
+    input_axis: tuple[float, float, float]
+    articulation_towards: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """Uniform instants from ``start_s`` to ``stop_s`` (inclusive) every ``step_s``."""
+
+    start_s: float
+    stop_s: float
+    step_s: float
+
+    def instants(self) -> np.ndarray:
+        n = int(round((self.stop_s - self.start_s) / self.step_s))
+        return self.start_s + self.step_s * np.arange(n + 1)
+
+
+@dataclass(frozen=True)
+class Material:
+    youngs_modulus_Pa: float
+    poisson_ratio: float
+    density_kg_m3: float
+
+
+@dataclass(frozen=True)
+class Contact:
+    """Penalty-contact parameters (paper eqs. 75-78) and the bearings' own."""
+
+    exponent: float
+    damping_full_depth_m: float
+    damping_fraction_of_stiffness: float
+    bearing_clearance_m: float
+    bearing_stiffness_N_m: float
+    friction_coefficient: float
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated drive line: a chain of shafts joined by Cardan joints."""
+
+    name: str
+    description: str
+    effects: frozenset[str]
+    arrangement: str
+    gravity_m_s2: tuple[float, float, float]
+    frame: Frame
+    shafts: tuple[Shaft, ...]
+    joints: tuple[Joint, ...]
+    crosspin: Crosspin
+    input_torque: TorqueLaw
+    load_torque: TorqueLaw
+    initial_angle_rad: float
+    initial_speed_rad_s: float
+    time: TimeGrid
+    material: Material
+    contact: Contact
+    source: str = "<memory>"
+
+    def has(self, effect: str) -> bool:
+        """Whether the scene calls for ``effect`` (one of :data:`EFFECTS`)."""
+        if effect not in EFFECTS:
+            raise KeyError(f"unknown effect {effect!r}; known: {', '.join(EFFECTS)}")
+        return effect in self.effects
+
+    def articulation_signs(self) -> tuple[int, ...]:
+        """Sense of each joint's articulation: Z alternates it, W keeps it."""
+        signs = [1]
+        for _ in self.joints[1:]:
+            signs.append(-signs[-1] if self.arrangement == "Z" else signs[-1])
+        return tuple(signs)
+
+
+# ---------------------------------------------------------------------------- loading
+
+
+def builtin_names() -> list[str]:
+    """Names of the scenes shipped with the package."""
+    folder = resources.files("driveline") / "scenes"
+    return sorted(p.name[: -len(".toml")] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def builtin_text(name: str) -> str:
+    """The TOML text of a built-in scene."""
+    if name not in builtin_names():
+        raise SceneError(f"no built-in scene {name!r}; built-in: {', '.join(builtin_names())}")
+    return (resources.files("driveline") / "scenes" / f"{name}.toml").read_text()
+
+
+def load_scene(spec: str | Path = "paper") -> Scene:
+    """Load a scene from a built-in name or a TOML path, validated."""
+    raw, source = _load_raw(str(spec), seen=())
+    return _build(raw, source)
+
+
+def scene_from_dict(raw: dict, source: str = "<memory>") -> Scene:
+    """Validate a scene given as a TOML-like dict (``extends`` is honoured)."""
+    return _build(_resolve_extends(dict(raw), source, Path("."), ()), source)
+
+
+def _load_raw(spec: str, seen: tuple[str, ...]) -> tuple[dict, str]:
+    if spec in builtin_names():
+        text, source, folder = builtin_text(spec), f"{spec} (built-in)", Path(".")
+    else:
+        path = Path(spec)
+        if not path.is_file():
+            raise SceneError(
+                f"scene {spec}: not a built-in name ({', '.join(builtin_names())}) "
+                "and no such file"
+            )
+        text, source, folder = path.read_text(), str(path), path.parent
+    if source in seen:
+        raise SceneError(f"scene {source}: 'extends' loops back to itself")
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(f"scene {source}: not valid TOML: {err}") from None
+    return _resolve_extends(raw, source, folder, seen), source
+
+
+def _resolve_extends(raw: dict, source: str, folder: Path, seen: tuple[str, ...]) -> dict:
+    """Merge ``raw`` over the scene it ``extends`` (a built-in name or a path
+    relative to the extending file)."""
+    parent = raw.pop("extends", None)
+    if parent is None:
+        return raw
+    if not isinstance(parent, str):
+        raise SceneError(f"scene {source}: field 'extends': expected a scene name or path")
+    if parent not in builtin_names() and (folder / parent).is_file():
+        parent = str(folder / parent)
+    base, _ = _load_raw(parent, seen + (source,))
+    return _merge(base, raw)
+
+
+def _merge(base: dict, over: dict) -> dict:
+    """Tables merge key by key; anything else (arrays included) is replaced."""
+    out = dict(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+# ---------------------------------------------------------------------------- validation
+
+
+class _Table:
+    """Reads typed fields from one TOML table; remembers which keys were used."""
+
+    def __init__(self, raw, path: str, source: str):
+        self.source, self.path = source, path
+        if not isinstance(raw, dict):
+            self.fail("", "expected a table")
+        self.raw, self.used = raw, set()
+
+    def where(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def fail(self, key: str, message: str):
+        raise SceneError(f"scene {self.source}: field '{self.where(key)}': {message}")
+
+    def get(self, key: str, default=...):
+        self.used.add(key)
+        if key not in self.raw:
+            if default is ...:
+                self.fail(key, "missing")
+            return default
+        return self.raw[key]
+
+    def number(self, key: str, default=..., positive=False, nonnegative=False) -> float:
+        value = self.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(key, f"expected a number, got {type(value).__name__} {value!r}")
+        if not math.isfinite(value):
+            self.fail(key, f"must be finite, got {value}")
+        if positive and value <= 0:
+            self.fail(key, f"must be positive, got {value}")
+        if nonnegative and value < 0:
+            self.fail(key, f"must not be negative, got {value}")
+        return float(value)
+
+    def string(self, key: str, default=..., choices: tuple[str, ...] | None = None) -> str:
+        value = self.get(key, default)
+        if not isinstance(value, str):
+            self.fail(key, f"expected a string, got {type(value).__name__} {value!r}")
+        if choices is not None and value not in choices:
+            self.fail(key, f"must be one of {', '.join(choices)}, got {value!r}")
+        return value
+
+    def vector(self, key: str, size: int, default=..., unit=False) -> tuple[float, ...]:
+        value = self.get(key, default)
+        if (
+            not isinstance(value, list)
+            or len(value) != size
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)
+        ):
+            self.fail(key, f"expected a list of {size} numbers, got {value!r}")
+        if not all(math.isfinite(v) for v in value):
+            self.fail(key, "must be finite")
+        vec = tuple(float(v) for v in value)
+        if unit:
+            norm = math.sqrt(sum(v * v for v in vec))
+            if norm == 0:
+                self.fail(key, "must not be the zero vector")
+            vec = tuple(v / norm for v in vec)
+        return vec
+
+    def table(self, key: str, default=...) -> _Table:
+        return _Table(self.get(key, default), self.where(key), self.source)
+
+    def tables(self, key: str) -> list[_Table]:
+        value = self.get(key)
+        if not isinstance(value, list):
+            self.fail(key, "expected an array of tables")
+        return [_Table(v, f"{self.where(key)}[{i}]", self.source) for i, v in enumerate(value)]
+
+    def done(self) -> None:
+        unknown = sorted(set(self.raw) - self.used)
+        if unknown:
+            self.fail(unknown[0], "unknown key" + (f" (also: {', '.join(unknown[1:])})"
+                                                  if len(unknown) > 1 else ""))
+
+
+def _torque(t: _Table) -> TorqueLaw:
+    kind = t.string("kind", choices=("constant", "harmonic"))
+    if kind == "constant":
+        law = TorqueLaw(mean_N_m=t.number("value_N_m"))
+    else:
+        law = TorqueLaw(
+            mean_N_m=t.number("mean_N_m"),
+            amplitude_N_m=t.number("amplitude_N_m"),
+            frequency_hz=t.number("frequency_hz", nonnegative=True),
+            phase_rad=t.number("phase_rad", 0.0),
+        )
+    t.done()
+    return law
+
+
+def _torque_field(parent: _Table, key: str, default=...) -> TorqueLaw:
+    value = parent.get(key, default)
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return TorqueLaw(mean_N_m=parent.number(key))
+    if not isinstance(value, dict):
+        parent.fail(
+            key,
+            "expected a number (constant torque, N m) or a table "
+            "{kind = 'constant' | 'harmonic', ...}",
+        )
+    return _torque(_Table(value, parent.where(key), parent.source))
+
+
+def _inertia(t: _Table, key: str) -> tuple[float, float, float]:
+    j = t.vector(key, 3)
+    if min(j) <= 0:
+        t.fail(key, f"inertia must be positive definite (all principal moments > 0), got {j}")
+    a, b, c = j
+    if a + b < c * (1 - 1e-9) or b + c < a * (1 - 1e-9) or a + c < b * (1 - 1e-9):
+        t.fail(key, f"principal moments {j} violate the triangle inequality of a rigid body")
+    return j
+
+
+def _shaft(t: _Table) -> Shaft:
+    name = t.string("name")
+    length = t.number("length_m", positive=True)
+    bearings = []
+    for i, b in enumerate(t.get("bearings", [])):
+        bt = _Table(b, f"{t.where('bearings')}[{i}]", t.source)
+        offset = bt.number("offset_m")
+        if abs(offset) > length / 2:
+            bt.fail("offset_m", f"bearing lies outside the shaft (|offset| > {length / 2} m)")
+        bearings.append(Bearing(name=bt.string("name"), offset_m=offset))
+        bt.done()
+    if len({b.name for b in bearings}) != len(bearings):
+        t.fail("bearings", "bearing names must be unique on a shaft")
+    shaft = Shaft(
+        name=name,
+        length_m=length,
+        mass_kg=t.number("mass_kg", positive=True),
+        inertia_kg_m2=_inertia(t, "inertia_kg_m2"),
+        bearings=tuple(bearings),
+    )
+    t.done()
+    return shaft
+
+
+def _joint(t: _Table) -> Joint:
+    name = t.string("name")
+    gamma = t.number("articulation_deg")
+    if not abs(gamma) < 90.0:
+        t.fail("articulation_deg", f"|articulation| must be below 90 deg, got {gamma}")
+    joint = Joint(
+        name=name,
+        articulation_deg=gamma,
+        yoke_phase_deg=t.number("yoke_phase_deg", 0.0),
+        hs_m=t.number("hs_m", positive=True),
+        rs_m=t.number("rs_m", positive=True),
+        rb_m=t.number("rb_m", positive=True),
+        ht_m=t.number("ht_m", positive=True),
+        hb_m=t.number("hb_m", positive=True),
+        rt_m=t.number("rt_m", positive=True),
+    )
+    if joint.rb_m < joint.rs_m:
+        t.fail("rb_m", f"housing bore {joint.rb_m} m is smaller than the trunnion {joint.rs_m} m")
+    if joint.hb_m < joint.ht_m:
+        t.fail("hb_m", f"housing bottom {joint.hb_m} m is inside the trunnion end {joint.ht_m} m")
+    t.done()
+    return joint
+
+
+def _build(raw: dict, source: str) -> Scene:
+    top = _Table(raw, "", source)
+    effects = top.get("effects", ["gravity", "inertia"])
+    if not isinstance(effects, list) or not all(isinstance(e, str) for e in effects):
+        top.fail("effects", "expected a list of effect names")
+    for e in effects:
+        if e not in EFFECTS:
+            top.fail("effects", f"unknown effect {e!r}; known: {', '.join(EFFECTS)}")
+
+    frame_t = top.table("frame", {})
+    frame = Frame(
+        input_start_m=frame_t.vector("input_start_m", 3, [0.0, 0.0, 0.0]),
+        input_axis=frame_t.vector("input_axis", 3, [1.0, 0.0, 0.0], unit=True),
+        articulation_towards=frame_t.vector("articulation_towards", 3, [0.0, 0.0, 1.0],
+                                            unit=True),
+    )
+    if abs(np.dot(frame.input_axis, frame.articulation_towards)) > 1 - 1e-9:
+        frame_t.fail("articulation_towards", "must not be parallel to input_axis")
+    frame_t.done()
+
+    shafts = tuple(_shaft(t) for t in top.tables("shafts"))
+    joints = tuple(_joint(t) for t in top.tables("joints"))
+    if len(shafts) < 2:
+        top.fail("shafts", "a drive line needs at least two shafts")
+    if len(joints) != len(shafts) - 1:
+        top.fail("joints", f"{len(shafts)} shafts need {len(shafts) - 1} joints, got {len(joints)}")
+    names = [s.name for s in shafts] + [j.name for j in joints]
+    if len(set(names)) != len(names):
+        top.fail("shafts", f"shaft and joint names must be unique, got {names}")
+
+    cp = top.table("crosspin", {"mass_kg": 0.05, "inertia_kg_m2": [1e-5, 1e-5, 2e-5]})
+    crosspin = Crosspin(mass_kg=cp.number("mass_kg", positive=True),
+                        inertia_kg_m2=_inertia(cp, "inertia_kg_m2"))
+    cp.done()
+
+    torque = top.table("torque")
+    input_torque = _torque_field(torque, "input")
+    load_torque = _torque_field(torque, "load", 0.0)
+    torque.done()
+
+    init = top.table("initial", {})
+    initial = (init.number("angle_rad", 0.0), init.number("speed_rad_s", 0.0))
+    init.done()
+
+    tt = top.table("time")
+    time = TimeGrid(tt.number("start_s", 0.0), tt.number("stop_s"), tt.number("step_s",
+                                                                              positive=True))
+    if time.stop_s <= time.start_s:
+        tt.fail("stop_s", f"must be after start_s ({time.start_s}), got {time.stop_s}")
+    tt.done()
+
+    mt = top.table("material", {})
+    material = Material(
+        youngs_modulus_Pa=mt.number("youngs_modulus_Pa", 2.07e11, positive=True),
+        poisson_ratio=mt.number("poisson_ratio", 0.29),
+        density_kg_m3=mt.number("density_kg_m3", 7850.0, positive=True),
+    )
+    if not -1.0 < material.poisson_ratio < 0.5:
+        mt.fail("poisson_ratio", f"must lie in (-1, 0.5), got {material.poisson_ratio}")
+    mt.done()
+
+    ct = top.table("contact", {})
+    contact = Contact(
+        exponent=ct.number("exponent", 1.5, positive=True),
+        damping_full_depth_m=ct.number("damping_full_depth_m", 1e-5, positive=True),
+        damping_fraction_of_stiffness=ct.number("damping_fraction_of_stiffness", 0.01,
+                                                nonnegative=True),
+        bearing_clearance_m=ct.number("bearing_clearance_m", 1e-5, nonnegative=True),
+        bearing_stiffness_N_m=ct.number("bearing_stiffness_N_m", 1e9, positive=True),
+        friction_coefficient=ct.number("friction_coefficient", 0.0, nonnegative=True),
+    )
+    ct.done()
+
+    scene = Scene(
+        name=top.string("name"),
+        description=top.string("description", ""),
+        effects=frozenset(effects),
+        arrangement=top.string("arrangement", "Z", choices=("Z", "W")),
+        gravity_m_s2=top.vector("gravity_m_s2", 3, [0.0, 0.0, -9.81]),
+        frame=frame,
+        shafts=shafts,
+        joints=joints,
+        crosspin=crosspin,
+        input_torque=input_torque,
+        load_torque=load_torque,
+        initial_angle_rad=initial[0],
+        initial_speed_rad_s=initial[1],
+        time=time,
+        material=material,
+        contact=contact,
+        source=source,
+    )
+    top.done()
+    return scene

@@ -1,0 +1,301 @@
+"""Problem classes that solvers understand (DESIGN §2).
+
+Every formulation turns one instant of a driveline into one of these objects. A
+problem carries its own data in the solver's variable ``z`` and two things that
+let the package judge any answer without trusting the solver:
+
+- ``checks``: the rigid equilibrium ``A x = b`` in the named Cartesian contact
+  forces ``x`` (N), the unilateral components, the complementary pairs and the
+  cones the forces must satisfy;
+- ``to_forces``: the map from the solver's variable ``z`` to those forces ``x``
+  (a slice for most formulations, a nonlinear map for the paper's polar unknowns).
+
+Classes:
+
+- :class:`LS`    min 1/2 x'Wx            s.t. A x = b
+- :class:`QP`    min 1/2 z'Pz + q'z      s.t. A z = b, G z <= h, lb <= z <= ub
+- :class:`LP`    min c'z                 s.t. A z = b, G z <= h, lb <= z <= ub
+- :class:`Conic` min 1/2 z'Pz + q'z      s.t. A z + s = b, s in K (Clarabel's standard form)
+- :class:`LCP`   find z >= 0, w = M z + q >= 0, z'w = 0
+- :class:`NLS`   F(z) = 0, F square, with its Jacobian and a start
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class ProblemError(ValueError):
+    """A problem whose data are malformed (shapes, NaN, inconsistent sizes)."""
+
+
+@dataclass(frozen=True)
+class SecondOrderCone:
+    """Cone ``||x[members]|| <= scale * x[apex]`` on the named forces."""
+
+    apex: int
+    members: tuple[int, ...]
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class ForceChecks:
+    """What any set of contact forces ``x`` must satisfy, checked by the package.
+
+    ``A x = b`` are the Newton-Euler (d'Alembert) rows of all bodies; rows in N and
+    N·m, columns the named force components in N. ``unilateral`` marks components
+    that may only push (>= 0). ``pairs`` are index pairs ``(i, j)`` with
+    ``0 <= x_i ⟂ x_j >= 0`` (the two end faces of one trunnion pair, paper eqs.
+    39, 46). ``cones`` are second-order cones the formulation imposes.
+    """
+
+    A: np.ndarray
+    b: np.ndarray
+    names: tuple[str, ...]
+    unilateral: np.ndarray
+    pairs: tuple[tuple[int, int], ...] = ()
+    cones: tuple[SecondOrderCone, ...] = ()
+
+    def __post_init__(self) -> None:
+        A, b = np.asarray(self.A, float), np.asarray(self.b, float)
+        if A.ndim != 2 or b.shape != (A.shape[0],):
+            raise ProblemError(f"equilibrium shapes do not match: A {A.shape}, b {b.shape}")
+        if len(self.names) != A.shape[1] or np.shape(self.unilateral) != (A.shape[1],):
+            raise ProblemError("names and unilateral must have one entry per column of A")
+        if not (np.all(np.isfinite(A)) and np.all(np.isfinite(b))):
+            raise ProblemError("equilibrium data contain NaN or inf")
+
+    @property
+    def scale(self) -> float:
+        """Force scale used to make residuals relative: ``||b||`` (at least 1e-12)."""
+        return max(float(np.linalg.norm(self.b)), 1e-12)
+
+    def residuals(self, x: np.ndarray) -> dict[str, float]:
+        """Relative residuals of ``x``; ``inf`` everywhere when ``x`` is not finite.
+
+        - ``equilibrium``: ``||A x - b|| / ||b||``
+        - ``sign``: largest pull of a unilateral component, over ``||b||``
+        - ``complementarity``: largest ``min(x_i, x_j)`` over the pairs, over ``||b||``
+        - ``cone``: largest cone violation, over ``||b||``
+        """
+        x = np.asarray(x, float)
+        if x.shape != (len(self.names),) or not np.all(np.isfinite(x)):
+            return {k: float("inf") for k in ("equilibrium", "sign", "complementarity", "cone")}
+        s = self.scale
+        xu = x[np.asarray(self.unilateral, bool)]
+        sign = max(0.0, float(-xu.min())) if xu.size else 0.0
+        comp = max((max(0.0, float(min(x[i], x[j]))) for i, j in self.pairs), default=0.0)
+        cone = max(
+            (
+                max(0.0, float(np.linalg.norm(x[list(c.members)]) - c.scale * x[c.apex]))
+                for c in self.cones
+            ),
+            default=0.0,
+        )
+        return {
+            "equilibrium": float(np.linalg.norm(self.A @ x - self.b)) / s,
+            "sign": sign / s,
+            "complementarity": comp / s,
+            "cone": cone / s,
+        }
+
+
+def _identity(z: np.ndarray) -> np.ndarray:
+    return np.asarray(z, float)
+
+
+@dataclass(frozen=True)
+class _Problem:
+    """Fields shared by every problem class."""
+
+    checks: ForceChecks
+    formulation: str = ""
+    to_forces: Callable[[np.ndarray], np.ndarray] = field(default=_identity, repr=False)
+
+
+def _as_array(name: str, value, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    arr = np.asarray(value, float)
+    if shape is not None and arr.shape != shape:
+        raise ProblemError(f"{name} has shape {arr.shape}, expected {shape}")
+    if np.any(np.isnan(arr)):
+        raise ProblemError(f"{name} contains NaN")
+    return arr
+
+
+@dataclass(frozen=True)
+class LS(_Problem):
+    """Equality-constrained least norm: min 1/2 x'Wx s.t. A x = b, W = diag(weights) > 0."""
+
+    A: np.ndarray = None
+    b: np.ndarray = None
+    weights: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        m, n = np.shape(self.A)
+        _as_array("A", self.A)
+        _as_array("b", self.b, (m,))
+        if self.weights is not None:
+            w = _as_array("weights", self.weights, (n,))
+            if np.any(w <= 0):
+                raise ProblemError("least-norm weights must be positive")
+
+    @property
+    def n(self) -> int:
+        return np.shape(self.A)[1]
+
+    def as_qp(self) -> QP:
+        """The same problem as a :class:`QP`."""
+        w = np.ones(self.n) if self.weights is None else np.asarray(self.weights, float)
+        return QP(
+            checks=self.checks, formulation=self.formulation, to_forces=self.to_forces,
+            P=np.diag(w), q=np.zeros(self.n), A=self.A, b=self.b,
+        )
+
+
+@dataclass(frozen=True)
+class QP(_Problem):
+    """min 1/2 z'Pz + q'z  s.t.  A z = b,  G z <= h,  lb <= z <= ub (absent parts are None)."""
+
+    P: np.ndarray = None
+    q: np.ndarray = None
+    A: np.ndarray | None = None
+    b: np.ndarray | None = None
+    G: np.ndarray | None = None
+    h: np.ndarray | None = None
+    lb: np.ndarray | None = None
+    ub: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.q)[0]
+        _as_array("P", self.P, (n, n))
+        _as_array("q", self.q, (n,))
+        for mat, vec, label in ((self.A, self.b, "A/b"), (self.G, self.h, "G/h")):
+            if (mat is None) != (vec is None):
+                raise ProblemError(f"{label}: give both or neither")
+            if mat is not None:
+                _as_array(label, mat, (np.shape(vec)[0], n))
+                _as_array(label, vec)
+        for vec, label in ((self.lb, "lb"), (self.ub, "ub")):
+            if vec is not None:
+                _as_array(label, vec, (n,))
+
+    @property
+    def n(self) -> int:
+        return np.shape(self.q)[0]
+
+    def as_conic(self) -> Conic:
+        """The same problem in Clarabel's standard form (zero cone, then nonnegative)."""
+        rows, rhs, cones = [], [], []
+        if self.A is not None:
+            rows.append(np.asarray(self.A, float))
+            rhs.append(np.asarray(self.b, float))
+            cones.append(("zero", len(self.b)))
+        ineq_rows, ineq_rhs = [], []
+        if self.G is not None:
+            ineq_rows.append(np.asarray(self.G, float))
+            ineq_rhs.append(np.asarray(self.h, float))
+        eye = np.eye(self.n)
+        if self.lb is not None:
+            keep = np.isfinite(self.lb)
+            ineq_rows.append(-eye[keep])
+            ineq_rhs.append(-np.asarray(self.lb, float)[keep])
+        if self.ub is not None:
+            keep = np.isfinite(self.ub)
+            ineq_rows.append(eye[keep])
+            ineq_rhs.append(np.asarray(self.ub, float)[keep])
+        if ineq_rows:
+            rows.extend(ineq_rows)
+            rhs.extend(ineq_rhs)
+            cones.append(("nonneg", sum(len(r) for r in ineq_rhs)))
+        return Conic(
+            checks=self.checks, formulation=self.formulation, to_forces=self.to_forces,
+            P=self.P, q=self.q, A=np.vstack(rows), b=np.concatenate(rhs), cones=tuple(cones),
+        )
+
+
+@dataclass(frozen=True)
+class LP(_Problem):
+    """min c'z  s.t.  A z = b,  G z <= h,  lb <= z <= ub (absent parts are None).
+
+    An unbounded LP is a legitimate answer here (an interval end at infinity).
+    """
+
+    c: np.ndarray = None
+    A: np.ndarray | None = None
+    b: np.ndarray | None = None
+    G: np.ndarray | None = None
+    h: np.ndarray | None = None
+    lb: np.ndarray | None = None
+    ub: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        _as_array("c", self.c)
+
+    @property
+    def n(self) -> int:
+        return np.shape(self.c)[0]
+
+
+@dataclass(frozen=True)
+class Conic(_Problem):
+    """min 1/2 z'Pz + q'z  s.t.  A z + s = b,  s in K.
+
+    ``cones`` lists the blocks of K in row order as ``(kind, size)``:
+    ``("zero", m)``, ``("nonneg", m)``, ``("soc", m)`` (first entry the apex), or
+    ``("pow", alpha)`` (3 rows: ``x^alpha * y^(1-alpha) >= |z|``, x, y >= 0).
+    """
+
+    P: np.ndarray | None = None
+    q: np.ndarray = None
+    A: np.ndarray = None
+    b: np.ndarray = None
+    cones: tuple[tuple[str, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.q)[0]
+        m = np.shape(self.b)[0]
+        _as_array("A", self.A, (m, n))
+        rows = 0
+        for kind, size in self.cones:
+            if kind not in ("zero", "nonneg", "soc", "pow"):
+                raise ProblemError(f"unknown cone kind {kind!r}")
+            rows += 3 if kind == "pow" else int(size)
+        if rows != m:
+            raise ProblemError(f"cones cover {rows} rows, A has {m}")
+
+    @property
+    def n(self) -> int:
+        return np.shape(self.q)[0]
+
+
+@dataclass(frozen=True)
+class LCP(_Problem):
+    """Find z >= 0 with w = M z + q >= 0 and z'w = 0."""
+
+    M: np.ndarray = None
+    q: np.ndarray = None
+
+    def __post_init__(self) -> None:
+        n = np.shape(self.q)[0]
+        _as_array("M", self.M, (n, n))
+        _as_array("q", self.q, (n,))
+
+    @property
+    def n(self) -> int:
+        return np.shape(self.q)[0]
+
+
+@dataclass(frozen=True)
+class NLS(_Problem):
+    """Square nonlinear system F(z) = 0 with Jacobian ``jac`` and start ``z0``."""
+
+    fun: Callable[[np.ndarray], np.ndarray] = None
+    jac: Callable[[np.ndarray], np.ndarray] | None = None
+    z0: np.ndarray = None
+
+    @property
+    def n(self) -> int:
+        return np.shape(self.z0)[0]

@@ -1,0 +1,1 @@
+"""cardan-forces: paper_repro."""

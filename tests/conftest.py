@@ -1,0 +1,26 @@
+import copy
+
+import pytest
+
+from driveline.scene import builtin_text, load_scene, scene_from_dict
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+
+@pytest.fixture(scope="session")
+def paper():
+    return load_scene("paper")
+
+
+@pytest.fixture
+def paper_raw():
+    """The paper scene as a mutable dict, for building variants."""
+    return copy.deepcopy(tomllib.loads(builtin_text("paper")))
+
+
+def variant(**overrides):
+    """The paper scene with top-level keys replaced (tables merge key by key)."""
+    return scene_from_dict({"extends": "paper", **overrides}, source="<variant>")

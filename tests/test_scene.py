@@ -1,0 +1,123 @@
+import subprocess
+import sys
+
+import pytest
+
+from driveline.scene import SceneError, builtin_names, builtin_text, load_scene, scene_from_dict
+from experiments.cli import main
+from tests.conftest import variant
+
+
+def test_builtins_load_and_paper_fields(paper):
+    assert {"paper", "paper-fig15"} <= set(builtin_names())
+    assert [s.name for s in paper.shafts] == ["input", "intermediate", "output"]
+    assert paper.gravity_m_s2 == (0.0, 0.0, -9.8)
+    assert len(paper.time.instants()) == 1001
+    assert paper.joints[0].radial_clearance_m == pytest.approx(0.25e-3)
+    assert paper.joints[0].axial_clearance_m == pytest.approx(0.75e-3)
+    assert paper.input_torque(0.0) == pytest.approx(5.0)  # 10 - 5 cos 0
+    assert paper.input_torque(0.5) == pytest.approx(15.0)
+    fig15 = load_scene("paper-fig15")
+    assert fig15.gravity_m_s2 == (0.0, 9.8, 0.0)
+    assert fig15.shafts == paper.shafts
+
+
+def test_dump_then_load_gives_the_same_scene(tmp_path, capsys):
+    for name in builtin_names():
+        assert main(["scene", "dump", name]) == 0
+        path = tmp_path / f"{name}.toml"
+        path.write_text(capsys.readouterr().out)
+        again = load_scene(path)
+        original = load_scene(name)
+        assert again.shafts == original.shafts and again.joints == original.joints
+        assert again.gravity_m_s2 == original.gravity_m_s2
+
+
+def test_extends_relative_file(tmp_path):
+    (tmp_path / "base.toml").write_text(builtin_text("paper"))
+    (tmp_path / "child.toml").write_text('extends = "base.toml"\nname = "child"\n'
+                                         'arrangement = "W"\n')
+    scene = load_scene(tmp_path / "child.toml")
+    assert scene.name == "child" and scene.arrangement == "W"
+
+
+BAD = [
+    ({"colour": "red"}, "colour", "unknown key"),
+    ({"time": {"stop_s": 5.0, "step_s": 0.0}}, "time.step_s", "positive"),
+    ({"time": {"stop_s": -1.0}}, "time.stop_s", "after"),
+    ({"time": {"stop_s": "five"}}, "time.stop_s", "expected a number"),
+    ({"gravity_m_s2": [0, 0]}, "gravity_m_s2", "3 numbers"),
+    ({"effects": ["gravity", "magnetism"]}, "effects", "unknown effect"),
+    ({"arrangement": "S"}, "arrangement", "one of"),
+    ({"torque": {"input": "10 - 5 cos(2 pi t)"}}, "torque.input", "expected a number"),
+    ({"torque": {"input": {"kind": "square", "value_N_m": 1}}}, "torque.input.kind", "one of"),
+    ({"torque": {"input": {"kind": "constant"}}}, "torque.input.value_N_m", "missing"),
+]
+
+
+@pytest.mark.parametrize("override,field,text", BAD)
+def test_bad_scene_names_file_and_field(override, field, text):
+    with pytest.raises(SceneError) as err:
+        scene_from_dict({"extends": "paper", **override}, source="bad.toml")
+    message = str(err.value)
+    assert "bad.toml" in message and f"'{field}'" in message and text in message
+
+
+def _shaft_override(paper_raw, key, value, index=0):
+    shafts = paper_raw["shafts"]
+    shafts[index][key] = value
+    return {"shafts": shafts}
+
+
+@pytest.mark.parametrize(
+    "key,value,field,text",
+    [
+        ("mass_kg", 0.0, "shafts[0].mass_kg", "positive"),
+        ("mass_kg", -3.0, "shafts[0].mass_kg", "positive"),
+        ("length_m", 0.0, "shafts[0].length_m", "positive"),
+        ("inertia_kg_m2", [1.0, -1.0, 1.0], "shafts[0].inertia_kg_m2", "positive definite"),
+        ("inertia_kg_m2", [1.0, 1.0, 5.0], "shafts[0].inertia_kg_m2", "triangle"),
+        ("mass_kg", True, "shafts[0].mass_kg", "expected a number"),
+        ("wheels", 4, "shafts[0].wheels", "unknown key"),
+    ],
+)
+def test_bad_shaft(paper_raw, key, value, field, text):
+    with pytest.raises(SceneError, match=text) as err:
+        scene_from_dict({"extends": "paper", **_shaft_override(paper_raw, key, value)}, "s.toml")
+    assert f"'{field}'" in str(err.value)
+
+
+@pytest.mark.parametrize("gamma", [90.0, -90.0, 120.0])
+def test_articulation_must_stay_below_90_degrees(paper_raw, gamma):
+    joints = paper_raw["joints"]
+    joints[1]["articulation_deg"] = gamma
+    with pytest.raises(SceneError, match=r"joints\[1\].articulation_deg"):
+        scene_from_dict({"extends": "paper", "joints": joints})
+
+
+def test_missing_field_and_joint_count(paper_raw):
+    joints = [dict(j) for j in paper_raw["joints"]]
+    del joints[0]["hs_m"]
+    with pytest.raises(SceneError, match=r"'joints\[0\].hs_m': missing"):
+        scene_from_dict({"extends": "paper", "joints": joints})
+    with pytest.raises(SceneError, match="3 shafts need 2 joints"):
+        scene_from_dict({"extends": "paper", "joints": paper_raw["joints"][:1]})
+
+
+def test_cli_bad_scene_exit_2_without_traceback(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('extends = "paper"\n[[shafts]]\nname = "x"\nlength_m = -1\n')
+    proc = subprocess.run([sys.executable, "-m", "experiments.cli", "scene", "check", str(bad)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    assert str(bad) in proc.stderr and "shafts[0]" in proc.stderr
+    broken = tmp_path / "broken.toml"
+    broken.write_text("name = [unclosed\n")
+    assert main(["sets", str(broken)]) == 2
+    assert main(["sets", "no-such-scene"]) == 2
+
+
+def test_variant_helper_builds_valid_scene():
+    scene = variant(arrangement="W", gravity_m_s2=[0.0, 0.0, 0.0])
+    assert scene.arrangement == "W" and scene.articulation_signs() == (1, 1)
