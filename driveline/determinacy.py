@@ -48,7 +48,8 @@ class Determinacy:
 
     def to_json(self) -> dict:
         """``{"t", "rank", "nullity", "residual", "tolerances", "components": {name:
-        {"determinate", "min_norm"}}}``."""
+        {"determinate", "min_norm"}}}``.
+        """
         return {
             "t": self.t,
             "rank": self.rank,

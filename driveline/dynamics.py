@@ -85,7 +85,8 @@ def _acceleration(scene: Scene, kin: Kinematics, t, qd) -> np.ndarray:
 
 def simulate(scene: Scene, times=None, rtol: float = 1e-11, atol: float = 1e-12) -> Motion:
     """Motion at ``times`` (default: the scene's grid), integrated from the scene's
-    start with an explicit 8th-order method at tight tolerance."""
+    start with an explicit 8th-order method at tight tolerance.
+    """
     geometry = rest_geometry(scene)
     t = scene.time.instants() if times is None else np.atleast_1d(np.asarray(times, float))
     if np.any(t < scene.time.start_s):

@@ -22,7 +22,8 @@ change of variables); in this operator an end-face force acts on the trunnion ax
 
 ``b`` is kept as a sum of named terms, one per effect, so that switching an effect
 off removes exactly its term: ``applied`` (drive and load torques, always),
-``gravity``, ``inertia`` (shafts), ``crosspin_inertia`` (cross-pins).
+``gravity`` (the shafts' weight, and the cross-pins' when ``crosspin_inertia`` gives
+them mass), ``inertia`` (shafts), ``crosspin_inertia`` (cross-pins).
 """
 
 from __future__ import annotations
@@ -64,7 +65,8 @@ class Operator:
 
 def _columns(motion: Motion):
     """Yield (name, body, point (T,3) or (3,), direction (T,3) or (3,), other body or
-    None, unilateral) for every contact force component."""
+    None, unilateral) for every contact force component.
+    """
     scene, geo, kin = motion.scene, motion.geometry, motion.kin
     n_shafts = len(scene.shafts)
     eye = np.eye(3)

@@ -54,7 +54,8 @@ class Geometry:
 
 def rest_geometry(scene: Scene) -> Geometry:
     """Lay out the chain: shafts end to end, each joint turning the next shaft in the
-    articulation plane by its signed articulation angle."""
+    articulation plane by its signed articulation angle.
+    """
     a = np.array(scene.frame.input_axis)
     towards = np.array(scene.frame.articulation_towards)
     u = _unit(towards - towards.dot(a) * a)

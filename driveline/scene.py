@@ -153,6 +153,8 @@ class TimeGrid:
 
 @dataclass(frozen=True)
 class Material:
+    """Elastic constants for Hertz stiffness (paper eqs. 76-77) and density."""
+
     youngs_modulus_Pa: float
     poisson_ratio: float
     density_kg_m3: float
@@ -255,7 +257,8 @@ def _load_raw(spec: str, seen: tuple[str, ...]) -> tuple[dict, str]:
 
 def _resolve_extends(raw: dict, source: str, folder: Path, seen: tuple[str, ...]) -> dict:
     """Merge ``raw`` over the scene it ``extends`` (a built-in name or a path
-    relative to the extending file)."""
+    relative to the extending file).
+    """
     parent = raw.pop("extends", None)
     if parent is None:
         return raw
@@ -452,6 +455,9 @@ def _build(raw: dict, source: str) -> Scene:
     for e in effects:
         if e not in EFFECTS:
             top.fail("effects", f"unknown effect {e!r}; known: {', '.join(EFFECTS)}")
+    if "crosspin_inertia" in effects and "inertia" not in effects:
+        top.fail("effects", "'crosspin_inertia' needs 'inertia' (a quasi-static analysis "
+                 "has no d'Alembert terms)")
 
     frame_t = top.table("frame", {})
     frame = Frame(

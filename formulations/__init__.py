@@ -1,0 +1,1 @@
+"""Contact formulations: problems built from a driveline state (DESIGN §2)."""

@@ -1,0 +1,50 @@
+import json
+
+import numpy as np
+
+from experiments.cli import main
+from paper_repro.figures import read_csv
+
+
+def test_sets_json_reports_every_component(capsys):
+    for scene in ("paper", "paper-fig15"):
+        assert main(["sets", scene, "--t", "0.5", "--json"]) == 0
+        report = json.loads(capsys.readouterr().out)
+        assert report["t"] == 0.5 and report["rank"] == 29 and report["nullity"] == 7
+        components = report["components"]
+        assert len(components) == 36
+        assert set(components["bearing.input.near.x"]) == {"determinate", "min_norm"}
+        assert components["bearing.input.near.y"]["determinate"] is True
+        assert components["bearing.input.near.x"]["determinate"] is False
+
+
+def test_sets_table_and_time_outside_span(capsys):
+    assert main(["sets", "--t", "1.0"]) == 0
+    assert "rank 29, nullity 7" in capsys.readouterr().out
+    assert main(["sets", "--t", "9.0"]) == 2
+    assert "outside the scene's time span" in capsys.readouterr().err
+
+
+def test_repro_quick_writes_fig11_fig12(tmp_path):
+    assert main(["repro", "--fig", "11", "--fig", "12", "--quick", "--out", str(tmp_path)]) == 0
+    fig11 = read_csv(tmp_path / "fig11.csv")
+    fig12 = read_csv(tmp_path / "fig12.csv")
+    assert list(fig11) == ["t", "omega_input", "omega_output"]
+    assert list(fig12) == ["t", "omega_intermediate"]
+    assert (tmp_path / "fig11.png").stat().st_size > 10_000
+    assert (tmp_path / "fig12.png").stat().st_size > 10_000
+    # from rest; Z arrangement with equal angles: output speed equals input speed
+    assert fig11["omega_input"][0] == 0.0
+    assert np.allclose(fig11["omega_output"], fig11["omega_input"], rtol=1e-9, atol=1e-12)
+    # intermediate speed oscillates about the input speed (eq. 3): 1/cos 30 at phi_i = 0
+    ratio = fig12["omega_intermediate"][1:] / fig11["omega_input"][1:]
+    assert ratio.max() <= 1 / np.cos(np.radians(30)) + 1e-9
+    assert ratio.min() >= np.cos(np.radians(30)) - 1e-9
+
+
+def test_scene_list_show_check(capsys):
+    assert main(["scene", "list"]) == 0
+    assert "paper-fig15" in capsys.readouterr().out
+    assert main(["scene", "show", "paper"]) == 0
+    assert "intermediate" in capsys.readouterr().out
+    assert main(["scene", "check", "paper-fig15"]) == 0

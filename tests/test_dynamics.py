@@ -1,0 +1,59 @@
+"""The reduced equation of motion: energy, torque ratios, uniform output."""
+
+import numpy as np
+import pytest
+from scipy.integrate import simpson
+
+from driveline.determinacy import determinacy
+from driveline.dynamics import reduced_inertia, simulate
+from driveline.equilibrium import build_operator
+from tests.conftest import variant
+
+
+@pytest.mark.parametrize("effects", [["inertia"], ["inertia", "gravity", "crosspin_inertia"]])
+def test_work_of_the_torques_equals_kinetic_energy(effects):
+    scene = variant(effects=effects, time={"stop_s": 1.0, "step_s": 0.0005},
+                    initial={"speed_rad_s": 2.0},
+                    torque={"load": {"kind": "constant", "value_N_m": 3.0}})
+    m = simulate(scene)
+    inertia, _ = reduced_inertia(scene, m.kin)
+    energy = 0.5 * inertia * m.qd**2
+    power = (m.input_torque - m.load_torque * m.kin.ratio[-1]) * m.qd
+    work = simpson(power, x=m.t)
+    assert work == pytest.approx(energy[-1] - energy[0], rel=1e-7)
+    assert energy[-1] > energy[0]  # the mean drive (10 N m) beats the load (3 N m)
+
+
+def test_crosspin_inertia_slows_the_start():
+    bare = simulate(variant(time={"stop_s": 0.5}), [0.5])
+    heavy = simulate(variant(effects=["inertia", "crosspin_inertia"], time={"stop_s": 0.5},
+                             crosspin={"mass_kg": 2.0, "inertia_kg_m2": [0.05, 0.05, 0.1]}),
+                     [0.5])
+    assert heavy.qd[0] < bare.qd[0]
+
+
+def test_equal_angles_z_output_turns_with_input(paper):
+    m = simulate(paper, np.linspace(0, 2, 201))
+    assert np.allclose(m.omega[2], m.omega[0], rtol=1e-12, atol=1e-12)
+    assert np.allclose(m.alpha[2], m.alpha[0], rtol=1e-10, atol=1e-10)
+    # the intermediate shaft does not: eq (3) with phi_i = 0 gives 1/cos(30 deg)
+    assert m.omega[1][100] != pytest.approx(m.omega[0][100])
+
+
+@pytest.mark.parametrize("g1,g2", [(30.0, 30.0), (15.0, 40.0)])
+def test_torque_ratio_across_each_joint_quasi_static(g1, g2):
+    """T_out = T_in dphi_in/dphi_out across a Hooke joint, read from the contact forces."""
+    joints = [dict(name=n, articulation_deg=g, hs_m=0.03, rs_m=0.005, rb_m=0.005, ht_m=0.02,
+                   hb_m=0.02, rt_m=0.006) for n, g in (("uj1", g1), ("uj2", g2))]
+    scene = variant(effects=[], joints=joints, initial={"speed_rad_s": 1.0},
+                    time={"stop_s": 3.0})
+    m = simulate(scene, np.linspace(0.0, 3.0, 13))
+    op = build_operator(m)
+    driven_side = [i for i, n in enumerate(op.names) if n.startswith("uj1.F") and
+                   n.split(".")[1] in ("F5", "F6", "F7", "F8")]
+    rows = slice(6 * 1 + 3, 6 * 1 + 6)  # moment rows of the intermediate shaft
+    for i in range(len(m.t)):
+        x = determinacy(op, i).min_norm
+        torque = op.A[i, rows][:, driven_side] @ x[driven_side] @ m.geometry.axes[1]
+        assert torque == pytest.approx(m.input_torque[i] / m.kin.ratio[1][i], rel=1e-9)
+        assert m.load_torque[i] == pytest.approx(m.input_torque[i] / m.kin.ratio[2][i])
