@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import Motion, _pin_inertia_global
+from .scene import Scene
 
 AXES = "xyz"
 
@@ -54,6 +55,7 @@ class Operator:
     rows: tuple[str, ...]
     unilateral: np.ndarray
     pairs: tuple[tuple[int, int], ...]
+    scene: Scene
 
     def index(self, name: str) -> int:
         """Column of a named force component."""
@@ -124,7 +126,7 @@ def build_operator(motion: Motion) -> Operator:
     )
     return Operator(
         t=motion.t, A=A, b=sum(terms.values()), terms=terms, names=names, rows=rows,
-        unilateral=unilateral, pairs=pairs,
+        unilateral=unilateral, pairs=pairs, scene=scene,
     )
 
 

@@ -1,7 +1,9 @@
 """The ``cardan`` command line.
 
-Subcommands: ``scene`` (list, show, dump, check), ``sets`` (rank, null space and
-determinacy of the contact forces at one instant), ``repro`` (the paper's figures).
+Subcommands: ``scene`` (list, show, dump, check), ``sets`` (rank, null space,
+determinacy and intervals of the contact forces at one instant), ``solvers`` (the
+backends present), ``solve`` (formulations x solvers at one instant), ``repro`` (the
+paper's figures).
 Errors in the user's input end with one message on stderr and exit code 2.
 """
 
@@ -19,6 +21,11 @@ from driveline.determinacy import DETERMINATE_TOL, determinacy
 from driveline.dynamics import DynamicsError, simulate
 from driveline.equilibrium import build_operator
 from driveline.scene import SceneError, builtin_names, builtin_text, load_scene
+from experiments.analysis import intervals, solve_all
+from formulations.convex import FORMULATIONS
+from solvers import SolverNotFound, available
+from solvers import get as get_backend
+from solvers.registry import known_backends
 
 FIGURES = (11, 12)
 
@@ -87,18 +94,70 @@ def _check_time(scene, t: float) -> None:
 def _cmd_sets(args) -> int:
     scene = load_scene(args.scene)
     _check_time(scene, args.t)
-    result = determinacy(build_operator(simulate(scene, [args.t])), 0)
+    op = build_operator(simulate(scene, [args.t]))
+    result = determinacy(op, 0)
+    ranges = intervals(op, 0)
     if args.json:
-        print(json.dumps(result.to_json(), indent=2))
+        report = result.to_json()
+        for name, entry in report["components"].items():
+            entry.update(min=ranges[name]["min"], max=ranges[name]["max"])
+        print(json.dumps(report, indent=2))
         return 0
     print(f"scene {scene.name}, t = {result.t:g} s: rank {result.rank}, nullity "
           f"{result.nullity}, least-norm residual {result.residual:.1e}")
     print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; least-norm values in N "
-          "(one member of the solution set where not determinate)")
-    print(f"{'component':24s} {'determinate':>11s} {'least-norm N':>14s} {'null row':>9s}")
-    for name, det, value, row in zip(result.names, result.determinate, result.min_norm,
-                                     result.null_row_norms):
-        print(f"{name:24s} {'yes' if det else 'no':>11s} {value:14.4f} {row:9.2e}")
+          "(one member of the solution set where not determinate); interval over all "
+          "solutions with end faces >= 0 (-inf/+inf: unbounded)")
+    print(f"{'component':24s} {'determinate':>11s} {'least-norm N':>14s} {'min N':>12s} "
+          f"{'max N':>12s}")
+    for name, det, value in zip(result.names, result.determinate, result.min_norm):
+        lo, hi = ranges[name]["min"], ranges[name]["max"]
+        lo = "-inf" if lo is None else f"{lo:.4f}"
+        hi = "+inf" if hi is None else f"{hi:.4f}"
+        print(f"{name:24s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}")
+    return 0
+
+
+# ---------------------------------------------------------------------------- solvers
+
+
+def _cmd_solvers(args) -> int:
+    backends = available()
+    if args.json:
+        print(json.dumps([{"name": b.name, "family": b.family, "version": b.version,
+                           "classes": [c.__name__ for c in b.accepts], "extra": b.extra}
+                          for b in backends.values()], indent=2))
+        return 0
+    for b in backends.values():
+        print(f"{b.name:22s} {'/'.join(c.__name__ for c in b.accepts):18s} {b.version}")
+    missing = sorted(set(known_backends()) - set(backends))
+    for name in missing:
+        extra = known_backends()[name]
+        target = "cardan-forces" if extra is None else f"cardan-forces[{extra}]"
+        print(f"{name:22s} absent: pip install \"{target}\"")
+    return 0
+
+
+def _cmd_solve(args) -> int:
+    scene = load_scene(args.scene)
+    _check_time(scene, args.t)
+    for name in args.solver or ():
+        get_backend(name)  # unknown or absent backend: a clear error before any work
+    op = build_operator(simulate(scene, [args.t]))
+    records = solve_all(op, 0, args.formulation, args.solver, tol=args.tol,
+                        progress=None if args.json else _progress)
+    if args.json:
+        print(json.dumps([r.to_json() for r in records], indent=2))
+        return 0
+    print(f"scene {scene.name}, t = {args.t:g} s; residuals relative to ||b||; "
+          "ref = distance to the formulation's clarabel answer at tol 1e-10")
+    print(f"{'formulation':16s} {'solver':22s} {'status':10s} {'equil':>8s} {'sign':>8s} "
+          f"{'compl':>8s} {'cone':>8s} {'ref':>8s} {'ms':>8s}")
+    for r in records:
+        res = r.residuals
+        print(f"{r.formulation:16s} {r.solver:22s} {r.status:10s} {res['equilibrium']:8.1e} "
+              f"{res['sign']:8.1e} {res['complementarity']:8.1e} {res['cone']:8.1e} "
+              f"{res.get('reference', float('nan')):8.1e} {1e3 * (r.setup_s + r.solve_s):8.2f}")
     return 0
 
 
@@ -149,6 +208,21 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--json", action="store_true", help="print JSON")
     st.set_defaults(func=_cmd_sets)
 
+    sv = sub.add_parser("solvers", help="solver backends present, with their problem classes")
+    sv.add_argument("--json", action="store_true", help="print JSON")
+    sv.set_defaults(func=_cmd_solvers)
+
+    so = sub.add_parser("solve", help="formulations x solvers at one instant")
+    so.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
+    so.add_argument("--t", type=float, default=0.5, help="instant in s (default 0.5)")
+    so.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
+                    help="one formulation (repeatable); default all")
+    so.add_argument("--solver", action="append", help="one backend (repeatable); default all")
+    so.add_argument("--tol", type=float, default=None,
+                    help="one tolerance for every solver (default: each solver's own)")
+    so.add_argument("--json", action="store_true", help="print JSON records")
+    so.set_defaults(func=_cmd_solve)
+
     rp = sub.add_parser("repro", help="reproduce the paper's figures (CSV + PNG)")
     rp.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     rp.add_argument("--fig", type=int, action="append", choices=FIGURES,
@@ -165,7 +239,7 @@ def main(argv: list[str] | None = None) -> int:
     np.set_printoptions(precision=4, suppress=True)
     try:
         return args.func(args)
-    except (SceneError, UsageError, DynamicsError, OSError) as err:
+    except (SceneError, UsageError, DynamicsError, SolverNotFound, OSError) as err:
         print(f"cardan: error: {err}", file=sys.stderr)
         return 2
 

@@ -212,7 +212,8 @@ class QP(_Problem):
             cones.append(("nonneg", sum(len(r) for r in ineq_rhs)))
         return Conic(
             checks=self.checks, formulation=self.formulation, to_forces=self.to_forces,
-            P=self.P, q=self.q, A=np.vstack(rows), b=np.concatenate(rhs), cones=tuple(cones),
+            P=self.P, q=self.q, A=np.vstack(rows) if rows else np.zeros((0, self.n)),
+            b=np.concatenate(rhs) if rhs else np.zeros(0), cones=tuple(cones),
         )
 
 

@@ -1,6 +1,7 @@
 import json
 
 import numpy as np
+import pytest
 
 from experiments.cli import main
 from paper_repro.figures import read_csv
@@ -13,9 +14,13 @@ def test_sets_json_reports_every_component(capsys):
         assert report["t"] == 0.5 and report["rank"] == 29 and report["nullity"] == 7
         components = report["components"]
         assert len(components) == 36
-        assert set(components["bearing.input.near.x"]) == {"determinate", "min_norm"}
-        assert components["bearing.input.near.y"]["determinate"] is True
-        assert components["bearing.input.near.x"]["determinate"] is False
+        assert set(components["bearing.input.near.x"]) == {"determinate", "min_norm", "min",
+                                                           "max"}
+        near_y = components["bearing.input.near.y"]
+        assert near_y["determinate"] is True
+        assert near_y["min"] == near_y["max"] == pytest.approx(near_y["min_norm"], abs=1e-6)
+        near_x = components["bearing.input.near.x"]
+        assert near_x["determinate"] is False and near_x["min"] is None and near_x["max"] is None
 
 
 def test_sets_table_and_time_outside_span(capsys):
@@ -48,3 +53,19 @@ def test_scene_list_show_check(capsys):
     assert main(["scene", "show", "paper"]) == 0
     assert "intermediate" in capsys.readouterr().out
     assert main(["scene", "check", "paper-fig15"]) == 0
+
+
+def test_solvers_and_solve_commands(capsys):
+    assert main(["solvers", "--json"]) == 0
+    backends = json.loads(capsys.readouterr().out)
+    names = {b["name"] for b in backends}
+    assert {"numpy-kkt", "clarabel", "lcp-lemke", "scipy-fsolve"} <= names
+    assert main(["solve", "--t", "0.5", "--formulation", "positive", "--formulation", "lcp",
+                 "--json"]) == 0
+    records = json.loads(capsys.readouterr().out)
+    assert {r["formulation"] for r in records} == {"positive", "lcp"}
+    assert set(records[0]) >= {"formulation", "solver", "status", "residuals", "forces",
+                               "setup_s", "solve_s", "iterations"}
+    assert any(r["status"] == "solved" for r in records)
+    assert main(["solve", "--solver", "no-such-solver"]) == 2
+    assert "unknown backend" in capsys.readouterr().err

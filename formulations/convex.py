@@ -1,0 +1,230 @@
+"""Convex recasts of the contact analysis at one instant (DESIGN §2).
+
+Each builder takes the equilibrium operator and an instant index and returns a
+problem object; all of them share the unknowns of the operator (the named Cartesian
+contact forces, N) or map back to them with ``to_forces``.
+
+- ``min_norm``: least ``||x||`` on ``A x = b`` (every component in N alike).
+- ``min_norm_scaled``: least ``||D x||`` with ``D`` the column norms of ``A`` after its
+  moment rows are divided by a reference length: every unknown weighted by how
+  strongly it acts on the bodies, so the answer does not depend on whether a force
+  is a bearing's or a trunnion's.
+- ``positive``: ``min_norm`` with the end faces pushing only (``F3, F4, F7, F8 >= 0``);
+  complementarity of each end-face pair falls out of the least norm.
+- ``min_max``: least peak contact load ``t`` with ``||f_c|| <= t`` for every contact
+  (a bearing's 3-vector, a trunnion's radial 2-vector, an end face), then least norm
+  (weight ``MIN_MAX_NORM_WEIGHT``) to make the answer unique; end-face pairs may both
+  push here (complementarity is not imposed).
+- ``lcp``: the KKT system of ``positive`` as an LCP in the end-face multipliers, on the
+  null-space parametrization ``x = x0 + N y`` (``x0`` the least-norm point).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from driveline.determinacy import RANK_RTOL, determinacy
+from driveline.equilibrium import Operator
+from driveline.scene import Joint, Scene
+
+from .problems import LCP, LS, QP, Conic, ForceChecks
+
+MIN_MAX_NORM_WEIGHT = 1e-6
+"""Weight of the tie-breaking ``1/2 ||x||^2 / ||b||`` term of ``min_max``."""
+
+
+def checks(op: Operator, i: int, signs: bool = True, pairs: bool = True) -> ForceChecks:
+    """The rigid equilibrium at instant ``i``; ``signs``/``pairs``: whether the
+    formulation imposes the end faces' sign and complementarity (a residual is only
+    judged where the formulation asks for it).
+    """
+    unilateral = op.unilateral if signs else np.zeros_like(op.unilateral)
+    return ForceChecks(A=op.A[i], b=op.b[i], names=op.names, unilateral=unilateral,
+                       pairs=op.pairs if pairs else ())
+
+
+def equalities(op: Operator, i: int) -> tuple[np.ndarray, np.ndarray]:
+    """``A x = b`` reduced to ``rank(A)`` independent rows (``S V' x = U' b`` from the
+    SVD): the Newton-Euler rows are dependent along the motion, and several solvers
+    (quadprog, ECOS) refuse dependent equality constraints.
+    """
+    u, s, vt = np.linalg.svd(op.A[i], full_matrices=False)
+    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    return s[:rank, None] * vt[:rank], u[:, :rank].T @ op.b[i]
+
+
+def contacts(op: Operator) -> list[list[int]]:
+    """Column groups that form one contact force: a bearing, a radial trunnion force, an
+    end face.
+    """
+    groups: dict[str, list[int]] = {}
+    for j, name in enumerate(op.names):
+        key = name.rsplit(".", 1)[0] if name.count(".") >= 2 else name
+        groups.setdefault(key, []).append(j)
+    return list(groups.values())
+
+
+def min_norm(op: Operator, i: int) -> LS:
+    A, b = equalities(op, i)
+    return LS(checks=checks(op, i, signs=False, pairs=False), formulation="min_norm", A=A, b=b)
+
+
+def min_norm_scaled(op: Operator, i: int, reference_length_m: float = 1.0) -> LS:
+    A = op.A[i].copy()
+    moment_rows = np.array([".moment." in r for r in op.rows])
+    A[moment_rows] /= reference_length_m
+    weights = np.linalg.norm(A, axis=0) ** 2
+    A, b = equalities(op, i)
+    return LS(checks=checks(op, i, signs=False, pairs=False), formulation="min_norm_scaled",
+              A=A, b=b, weights=weights)
+
+
+def positive(op: Operator, i: int) -> QP:
+    n = len(op.names)
+    lb = np.where(op.unilateral, 0.0, -np.inf)
+    A, b = equalities(op, i)
+    return QP(checks=checks(op, i), formulation="positive", P=np.eye(n), q=np.zeros(n),
+              A=A, b=b, lb=lb)
+
+
+def min_max(op: Operator, i: int) -> Conic:
+    """Variables ``z = (x, t)``; cones: equality, end faces >= 0, one SOC per contact."""
+    A, b = equalities(op, i)
+    m, n = A.shape
+    t = n
+    scale = max(float(np.linalg.norm(b)), 1e-12)
+    blocks, rhs, cones = [np.hstack([A, np.zeros((m, 1))])], [b], [("zero", m)]
+    uni = np.flatnonzero(op.unilateral)
+    rows = np.zeros((len(uni), n + 1))
+    rows[np.arange(len(uni)), uni] = -1.0
+    blocks.append(rows)
+    rhs.append(np.zeros(len(uni)))
+    cones.append(("nonneg", len(uni)))
+    for group in contacts(op):
+        soc = np.zeros((len(group) + 1, n + 1))
+        soc[0, t] = -1.0
+        soc[np.arange(1, len(group) + 1), group] = -1.0
+        blocks.append(soc)
+        rhs.append(np.zeros(len(group) + 1))
+        cones.append(("soc", len(group) + 1))
+    P = np.zeros((n + 1, n + 1))
+    P[:n, :n] = MIN_MAX_NORM_WEIGHT / scale * np.eye(n)
+    q = np.zeros(n + 1)
+    q[t] = 1.0
+    return Conic(checks=checks(op, i, pairs=False), formulation="min_max", to_forces=lambda z: z[:n],
+                 P=P, q=q, A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones))
+
+
+def lcp(op: Operator, i: int) -> LCP:
+    """``positive`` as ``0 <= lam ⟂ M lam + q >= 0`` with ``M = N_u N_u'``, ``q = x0_u``.
+
+    With ``x = x0 + N y`` (``N'x0 = 0``), ``positive`` is ``min 1/2 y'y`` s.t.
+    ``N_u y + x0_u >= 0``; its KKT conditions give ``y = N_u' lam`` and the LCP.
+    """
+    d = determinacy(op, i)
+    x0, N = d.min_norm, d.null_basis
+    Nu = N[op.unilateral]
+    return LCP(checks=checks(op, i), formulation="lcp",
+               to_forces=lambda lam: x0 + N @ (Nu.T @ np.asarray(lam, float)),
+               M=Nu @ Nu.T, q=x0[op.unilateral])
+
+
+FORMULATIONS = {
+    "min_norm": min_norm,
+    "min_norm_scaled": min_norm_scaled,
+    "positive": positive,
+    "min_max": min_max,
+    "lcp": lcp,
+}
+"""Builders by name: ``FORMULATIONS[name](op, i) -> problem``."""
+
+
+def hertz_stiffness(scene: Scene, joint: Joint) -> float:
+    """Paper eqs. 76-77: ``K = 4 / (3 (s1 + s2)) sqrt(R1 R2 / (R2 - R1))`` (N/m^1.5) for
+    the trunnion (R1 = rs) in its bore (R2 = rb), ``s_k = (1 - nu^2) / E``; the end faces
+    of the same joint use the same K (the paper gives one per joint).
+    """
+    sigma = (1.0 - scene.material.poisson_ratio**2) / scene.material.youngs_modulus_Pa
+    r1, r2 = joint.rs_m, joint.rb_m
+    return 4.0 / (3.0 * 2.0 * sigma) * np.sqrt(r1 * r2 / max(r2 - r1, 1e-12))
+
+
+def contact_laws(op: Operator) -> list[tuple[list[int], float, float]]:
+    """Per contact: (columns, Hertz K (N/m^n) or linear k (N/m) for bearings, gap (m))."""
+    scene = op.scene
+    joints = {j.name: j for j in scene.joints}
+    laws = []
+    for group in contacts(op):
+        name = op.names[group[0]]
+        if name.startswith("bearing."):
+            laws.append((group, scene.contact.bearing_stiffness_N_m,
+                         scene.contact.bearing_clearance_m))
+        else:
+            joint = joints[name.split(".")[0]]
+            end_face = len(group) == 1
+            gap = joint.axial_clearance_m if end_face else joint.radial_clearance_m
+            laws.append((group, hertz_stiffness(scene, joint), gap))
+    return laws
+
+
+def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None = None):
+    """Least complementary energy ``sum phi*_c(f_c) + gap_c ||f_c||`` on ``A x = b`` with
+    end faces >= 0 (Menabrea): the member of the rigid set that a compliant world picks.
+
+    ``law="linear"``: ``phi* = ||f||^2 / (2 k)`` with the joints' Hertz K made linear by
+    its secant at the scene's ``damping_full_depth_m`` (d_max): a QP when there are no
+    gaps. ``law="hertz"``: ``f = K d^n`` (bearings stay linear), ``phi* = n/(n+1)
+    K^(-1/n) ||f||^((n+1)/n)`` through power cones. Gaps are the scene's clearances and
+    enter only when it calls for ``clearance`` (or ``clearance=True``).
+    """
+    scene = op.scene
+    use_gaps = scene.has("clearance") if clearance is None else clearance
+    n_exp, d_ref = scene.contact.exponent, scene.contact.damping_full_depth_m
+    laws = contact_laws(op)
+    A, b = equalities(op, i)
+    m, n = A.shape
+    is_bearing = [op.names[g[0]].startswith("bearing.") for g, _, _ in laws]
+    name = "compliance" if law == "linear" else "compliance_hertz"
+    if law == "linear" and not use_gaps:
+        p = np.zeros(n)
+        for (group, k, _), bearing in zip(laws, is_bearing):
+            p[group] = 1.0 / (k if bearing else k * d_ref ** (n_exp - 1.0))
+        return QP(checks=checks(op, i), formulation=name, P=np.diag(p), q=np.zeros(n), A=A, b=b,
+                  lb=np.where(op.unilateral, 0.0, -np.inf))
+    # conic form: z = (x, r_c per contact, s_c per power-law contact)
+    nc = len(laws)
+    power = [c for c, bearing in enumerate(is_bearing) if law == "hertz" and not bearing]
+    nz = n + nc + len(power)
+    P, q = np.zeros((nz, nz)), np.zeros(nz)
+    blocks, rhs, cones = [np.hstack([A, np.zeros((m, nz - n))])], [b], [("zero", m)]
+    uni = np.flatnonzero(op.unilateral)
+    rows = np.zeros((len(uni), nz))
+    rows[np.arange(len(uni)), uni] = -1.0
+    blocks.append(rows)
+    rhs.append(np.zeros(len(uni)))
+    cones.append(("nonneg", len(uni)))
+    for c, ((group, k, gap), bearing) in enumerate(zip(laws, is_bearing)):
+        r = n + c
+        soc = np.zeros((len(group) + 1, nz))
+        soc[0, r] = -1.0
+        soc[np.arange(1, len(group) + 1), group] = -1.0
+        blocks.append(soc)
+        rhs.append(np.zeros(len(group) + 1))
+        cones.append(("soc", len(group) + 1))
+        q[r] = gap if use_gaps else 0.0
+        if c in power:
+            s = n + nc + power.index(c)
+            q[s] = n_exp / (n_exp + 1.0) * k ** (-1.0 / n_exp)
+            cone = np.zeros((3, nz))
+            cone[0, s], cone[2, r] = -1.0, -1.0
+            blocks.append(cone)
+            rhs.append(np.array([0.0, 1.0, 0.0]))
+            cones.append(("pow", n_exp / (n_exp + 1.0)))
+        else:
+            P[r, r] = 1.0 / (k if bearing else k * d_ref ** (n_exp - 1.0))
+    return Conic(checks=checks(op, i), formulation=name, to_forces=lambda z: z[:n], P=P, q=q,
+                 A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones))
+
+
+FORMULATIONS["compliance"] = compliance
+FORMULATIONS["compliance_hertz"] = lambda op, i: compliance(op, i, law="hertz")

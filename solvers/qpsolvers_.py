@@ -1,0 +1,137 @@
+"""Backends ``qpsolvers-<name>``: every QP solver that qpsolvers finds installed.
+
+Matrices go dense to solvers that take dense input, CSC to the others. qpsolvers only
+says ``found``; when it fails, the solver's own status (in ``extras``) tells infeasible
+from unbounded where the solver reports it. ``setup_s`` includes qpsolvers' build time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from formulations.problems import QP
+
+from . import settings
+from .record import Outcome
+from .registry import Backend, dist_version
+
+DISTRIBUTIONS: dict[str, str] = {
+    "clarabel": "clarabel", "daqp": "daqp", "ecos": "ecos", "highs": "highspy", "osqp": "osqp",
+    "piqp": "piqp", "proxqp": "proxsuite", "quadprog": "quadprog", "scs": "scs",
+}
+"""The distribution behind each qpsolvers solver name we know."""
+
+CORE = ("clarabel", "osqp")
+"""Solvers installed with the package itself; the others have an extra of their name."""
+
+EXTRAS: dict[str, str | None] = {
+    f"qpsolvers-{name}": None if name in CORE else name for name in DISTRIBUTIONS
+}
+
+BOUNDS_AS_ROWS = ("ecos",)
+"""Solvers that reject infinite bounds; their finite bounds are passed as rows of G."""
+
+SCS_STATUS = {2: "inaccurate", -1: "unbounded", -2: "infeasible", -6: "unbounded",
+              -7: "infeasible"}
+ECOS_STATUS = {10: "inaccurate", -1: "inaccurate", 1: "infeasible", 2: "unbounded",
+               11: "infeasible", 12: "unbounded"}
+
+
+def _unfound_status(solver: str, extras: dict) -> tuple[str, str]:
+    """Our status for a run qpsolvers did not call found, from the solver's own status.
+
+    Infeasibility and unboundedness certificates are kept; "inaccurate" and iteration
+    limits become ``"inaccurate"`` (the package then checks the iterate); else failed.
+    """
+    if solver == "scs":
+        code = extras.get("status_val")
+        return SCS_STATUS.get(code, "failed"), f"SCS status {code}"
+    if solver == "ecos":
+        code = extras.get("exitFlag")
+        return ECOS_STATUS.get(code, "failed"), f"ECOS exit flag {code}"
+    info = extras.get("info")
+    text = str(getattr(info, "status", extras.get("status", "")))
+    key = text.lower().replace("_", "").replace(" ", "")
+    if "dualinfeasible" in key or "unbounded" in key:
+        return "unbounded", text
+    if "infeasible" in key:
+        return "infeasible", text
+    if "inaccurate" in key or "almost" in key or ("max" in key and "iter" in key):
+        return "inaccurate", text
+    return "failed", text or "no solution found"
+
+
+def _iterations(extras: dict) -> int | None:
+    info = extras.get("info")
+    count = getattr(info, "iter", extras.get("iter"))
+    return None if count is None else int(count)
+
+
+def bounds_as_rows(problem: QP) -> QP:
+    """The same QP with its finite bounds as rows of ``G`` and no ``lb``/``ub``."""
+    n = problem.n
+    rows = [] if problem.G is None else [np.asarray(problem.G, float)]
+    rhs = [] if problem.h is None else [np.asarray(problem.h, float)]
+    for bound, sign in ((problem.lb, -1.0), (problem.ub, 1.0)):
+        if bound is not None:
+            keep = np.isfinite(bound)
+            rows.append(sign * np.eye(n)[keep])
+            rhs.append(sign * np.asarray(bound, float)[keep])
+    G, h = (np.vstack(rows), np.concatenate(rhs)) if sum(len(r) for r in rhs) else (None, None)
+    return dataclasses.replace(problem, G=G, h=h, lb=None, ub=None)
+
+
+def _solve_with(solver: str):
+    """The adapter function for one qpsolvers solver."""
+
+    def solve_qp(problem: QP, tol=None, initvals=None, **options) -> Outcome:
+        import qpsolvers
+        import scipy.sparse as spa
+
+        start = time.perf_counter()
+        if solver in BOUNDS_AS_ROWS:
+            problem = bounds_as_rows(problem)
+        matrix = np.asarray if solver in qpsolvers.dense_solvers else spa.csc_matrix
+
+        def mat(m):
+            return None if m is None else matrix(np.asarray(m, float))
+
+        def vec(v):
+            return None if v is None else np.asarray(v, float)
+
+        P, q = np.asarray(problem.P, float), vec(problem.q)
+        qp = qpsolvers.Problem(mat(P), q, mat(problem.G), vec(problem.h), mat(problem.A),
+                               vec(problem.b), vec(problem.lb), vec(problem.ub))
+        kwargs = settings.options_for(solver, tol)
+        if solver == "osqp":
+            kwargs["raise_error"] = False  # today's behaviour, without osqp's FutureWarning
+        setup_done = time.perf_counter()
+        sol = qpsolvers.solve_problem(qp, solver=solver, initvals=initvals, **(kwargs | options))
+        wall = time.perf_counter() - setup_done
+        build = sol.build_time or 0.0
+        solve_s = wall - build if sol.solve_time is None else sol.solve_time
+        extras = sol.extras or {}
+        status, text = ("solved", "") if sol.found else _unfound_status(solver, extras)
+        z = sol.x
+        objective = None if z is None else 0.5 * z @ P @ z + q @ z
+        return Outcome(status, z, iterations=_iterations(extras), message=text,
+                       objective=objective, setup_s=setup_done - start + build, solve_s=solve_s)
+
+    return solve_qp
+
+
+def backends() -> list[Backend]:
+    """One backend per solver in ``qpsolvers.available_solvers``."""
+    try:
+        import qpsolvers
+    except ImportError:
+        return []
+    return [
+        Backend(f"qpsolvers-{name}", (QP,), _solve_with(name),
+                dist_version("qpsolvers", DISTRIBUTIONS.get(name, name)),
+                EXTRAS.get(f"qpsolvers-{name}"), "qpsolvers")
+        for name in qpsolvers.available_solvers
+    ]

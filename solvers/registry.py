@@ -1,0 +1,177 @@
+"""Registry of solver backends and the one entry point :func:`solve`.
+
+Each adapter module (``<family>_.py``) exposes ``EXTRAS`` (every backend name it can
+provide and the pip extra that installs it, ``None`` for core dependencies) and
+``backends()``, which imports its package and returns ``[]`` when it is missing. A
+missing package therefore makes its backends absent, never an import error, and asking
+for one raises :class:`SolverNotFound` with the install hint.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import importlib.metadata
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .conversions import convert, reachable
+from .record import Outcome, Record, failed_record, finalize
+
+ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "lcp_")
+"""Adapter modules of this package, loaded lazily by :func:`available`."""
+
+
+class SolverNotFound(LookupError):
+    """The named backend is not registered (unknown, or its package is not installed)."""
+
+
+class UnsupportedProblem(TypeError):
+    """The backend cannot take this problem class, even after conversion."""
+
+
+def _always(problem) -> bool:
+    return True
+
+
+@dataclass(frozen=True)
+class Backend:
+    """One named way to solve problems.
+
+    ``solve(problem, tol, initvals, **options) -> Outcome`` receives a problem of one of
+    the ``accepts`` classes for which ``supports(problem)`` holds (e.g. no power cone
+    for ECOS). ``extra`` is the pip extra that installs it (``None``: core dependency).
+    """
+
+    name: str
+    accepts: tuple[type, ...]
+    solve: Callable[..., Outcome]
+    version: str
+    extra: str | None
+    family: str
+    supports: Callable[[object], bool] = _always
+
+
+def dist_version(*dists: str) -> str:
+    """``"name version"`` of installed distributions, joined by ``" + "``."""
+    parts = []
+    for dist in dists:
+        try:
+            parts.append(f"{dist} {importlib.metadata.version(dist)}")
+        except importlib.metadata.PackageNotFoundError:
+            parts.append(f"{dist} ?")
+    return " + ".join(parts)
+
+
+_CACHE: dict[str, Backend] = {}
+_KNOWN: dict[str, str | None] = {}
+
+
+def _load() -> None:
+    if _CACHE:
+        return
+    known, found = {}, {}
+    for module_name in ADAPTERS:
+        module = importlib.import_module(f"{__package__}.{module_name}")
+        known.update(module.EXTRAS)
+        found.update((backend.name, backend) for backend in module.backends())
+    _KNOWN.update(known | {name: backend.extra for name, backend in found.items()})
+    _CACHE.update(found)
+
+
+def available() -> dict[str, Backend]:
+    """All registered backends by name, in registration order."""
+    _load()
+    return dict(_CACHE)
+
+
+def known_backends() -> dict[str, str | None]:
+    """Every backend name this package can provide, installed or not, with its pip extra.
+
+    ``None`` marks a core dependency (``pip install cardan-forces`` brings it).
+    """
+    _load()
+    return dict(_KNOWN)
+
+
+def get(name: str) -> Backend:
+    """The backend called ``name``; :class:`SolverNotFound` with an install hint if absent."""
+    _load()
+    if name in _CACHE:
+        return _CACHE[name]
+    if name in _KNOWN:
+        extra = _KNOWN[name]
+        target = "cardan-forces" if extra is None else f"cardan-forces[{extra}]"
+        raise SolverNotFound(f"backend {name!r} needs a package that is not installed: "
+                             f'pip install "{target}"')
+    raise SolverNotFound(f"unknown backend {name!r}; available: {', '.join(_CACHE)}")
+
+
+def backends_for(problem) -> list[str]:
+    """Names of the backends that can solve ``problem`` (directly or after conversion)."""
+    names, converted = [], {}
+    for backend in available().values():
+        if not reachable(type(problem), backend.accepts):
+            continue
+        key = backend.accepts
+        if key not in converted:
+            try:
+                converted[key] = convert(problem, key)
+            except Exception:  # a conversion that fails rules the backend out
+                converted[key] = None
+        if converted[key] is not None and backend.supports(converted[key]):
+            names.append(backend.name)
+    return names
+
+
+def solve(
+    problem,
+    solver: str,
+    tol: float | None = None,
+    initvals: np.ndarray | None = None,
+    reference: np.ndarray | None = None,
+    **options,
+) -> Record:
+    """Solve ``problem`` with backend ``solver`` and return the package-judged record.
+
+    ``tol`` is translated by :mod:`solvers.settings` (None: the solver's defaults);
+    ``initvals`` is a start in the solver's variable (ignored where the backend cannot
+    warm-start); ``reference`` is the force vector the record is compared with;
+    ``options`` go to the backend unchanged and override ``tol``. Solver failures of any
+    kind (exceptions, NaN, iteration limits) come back as records; only an unknown
+    backend (:class:`SolverNotFound`) or a problem class it cannot take
+    (:class:`UnsupportedProblem`) raise.
+    """
+    backend = get(solver)
+    if not reachable(type(problem), backend.accepts):
+        raise UnsupportedProblem(f"{solver} takes {[c.__name__ for c in backend.accepts]}, "
+                                 f"not {type(problem).__name__}")
+    start = time.perf_counter()
+    try:
+        converted = convert(problem, backend.accepts)
+    except Exception as exc:
+        return failed_record(problem, solver, f"conversion failed: {type(exc).__name__}: {exc}",
+                             setup_s=time.perf_counter() - start, reference=reference)
+    if not backend.supports(converted):
+        raise UnsupportedProblem(f"{solver} does not support this {type(converted).__name__}")
+    convert_s = time.perf_counter() - start
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            outcome = backend.solve(converted, tol=tol, initvals=initvals, **options)
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except BaseException as exc:  # Rust panics (pyo3) derive from BaseException
+            elapsed = time.perf_counter() - start
+            return failed_record(problem, solver, f"{type(exc).__name__}: {exc}",
+                                 setup_s=convert_s, solve_s=elapsed - convert_s,
+                                 reference=reference)
+    notes = dict.fromkeys(str(w.message) for w in caught)
+    if notes:
+        message = "; ".join(filter(None, [outcome.message, *notes]))
+        outcome = dataclasses.replace(outcome, message=message)
+    return finalize(problem, solver, outcome, reference=reference, extra_setup_s=convert_s)

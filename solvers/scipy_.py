@@ -1,0 +1,130 @@
+"""SciPy backends: ``scipy-lsq_linear``, ``scipy-highs``, ``scipy-fsolve``, ``scipy-root-lm``.
+
+``scipy-lsq_linear`` is an *approximate* method: it cannot impose ``A z = b`` exactly,
+so it solves the Tikhonov problem
+
+    min ||A z - b||^2 + mu ||L' z + L^{-1} q||^2   s.t.  lb <= z <= ub,   P = L L',
+
+whose answer tends to the QP's as ``mu -> 0``. ``mu = t * sigma_max(A L^{-T})^2`` with
+``t = settings.tikhonov_weight(tol)``, so the bias is about ``t`` times the squared
+condition number; the package's residual check reports it (``"inaccurate"`` above 1e-6).
+It runs ``method="bvls"`` (exact active set for small dense problems): the default
+``"trf"`` stops on a gradient norm that the penalty's conditioning makes meaningless.
+The two MINPACK backends report function evaluations, not iterations (in ``message``),
+and count as failed whenever ``F`` is not finite at the returned point.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from formulations.problems import LP, LS, NLS, QP
+
+from . import settings
+from .record import Outcome
+from .registry import Backend, dist_version
+
+EXTRAS: dict[str, str | None] = dict.fromkeys(
+    ("scipy-lsq_linear", "scipy-highs", "scipy-fsolve", "scipy-root-lm")
+)
+
+LINPROG_STATUS = {0: "solved", 1: "inaccurate", 2: "infeasible", 3: "unbounded", 4: "failed"}
+"""``scipy.optimize.linprog`` status codes (1: iteration limit, 4: numerical trouble)."""
+
+
+def _no_inequalities(problem) -> bool:
+    return isinstance(problem, LS) or problem.G is None
+
+
+def solve_lsq_linear(problem: LS | QP, tol=None, initvals=None, **options) -> Outcome:
+    """Tikhonov-regularised bounded least squares (see the module docstring)."""
+    from scipy.linalg import cholesky, solve_triangular
+    from scipy.optimize import lsq_linear
+
+    start = time.perf_counter()
+    if isinstance(problem, LS):
+        problem = problem.as_qp()
+    n, P, q = problem.n, np.asarray(problem.P, float), np.asarray(problem.q, float)
+    L = cholesky(P, lower=True)  # LinAlgError if P is not positive definite
+    R, r = L.T, -solve_triangular(L, q, lower=True)
+    message = "exact (no equality rows)"
+    if problem.A is not None:
+        A, b = np.asarray(problem.A, float), np.asarray(problem.b, float)
+        A_scaled = solve_triangular(L, A.T, lower=True).T
+        mu = settings.tikhonov_weight(tol) * np.linalg.norm(A_scaled, 2) ** 2
+        R, r = np.vstack([A, np.sqrt(mu) * R]), np.concatenate([b, np.sqrt(mu) * r])
+        message = f"Tikhonov mu={mu:.1e}"
+    lb = np.full(n, -np.inf) if problem.lb is None else problem.lb
+    ub = np.full(n, np.inf) if problem.ub is None else problem.ub
+    setup_done = time.perf_counter()
+    kwargs = {"method": "bvls"} | settings.options_for("lsq_linear", tol) | options
+    res = lsq_linear(R, r, bounds=(lb, ub), **kwargs)
+    status = "solved" if res.status > 0 else ("inaccurate" if res.status == 0 else "failed")
+    z = res.x
+    return Outcome(status, z, iterations=int(res.nit), message=f"{message}; {res.message}",
+                   objective=0.5 * z @ P @ z + q @ z,
+                   setup_s=setup_done - start, solve_s=time.perf_counter() - setup_done)
+
+
+def solve_highs(problem: LP, tol=None, initvals=None, **options) -> Outcome:
+    """``linprog(method="highs")``; free variables unless ``lb``/``ub`` say otherwise."""
+    from scipy.optimize import linprog
+
+    start = time.perf_counter()
+    n = problem.n
+    lb = np.full(n, -np.inf) if problem.lb is None else problem.lb
+    ub = np.full(n, np.inf) if problem.ub is None else problem.ub
+    setup_done = time.perf_counter()
+    res = linprog(problem.c, A_ub=problem.G, b_ub=problem.h, A_eq=problem.A, b_eq=problem.b,
+                  bounds=np.column_stack([lb, ub]), method="highs",
+                  options=settings.options_for("highs", tol) | options)
+    return Outcome(LINPROG_STATUS.get(res.status, "failed"), res.x, iterations=int(res.nit),
+                   message=res.message, objective=res.fun,
+                   setup_s=setup_done - start, solve_s=time.perf_counter() - setup_done)
+
+
+def solve_fsolve(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
+    """MINPACK hybrid Powell (``fsolve``) with the problem's Jacobian; ``ier == 1`` is success."""
+    from scipy.optimize import fsolve
+
+    z0 = problem.z0 if initvals is None else initvals
+    start = time.perf_counter()
+    z, info, ier, mesg = fsolve(problem.fun, np.asarray(z0, float), fprime=problem.jac,
+                                full_output=True, **(settings.options_for("fsolve", tol) | options))
+    status = "solved" if ier == 1 and np.all(np.isfinite(info["fvec"])) else "failed"
+    return Outcome(status, z, message=f"{mesg.strip()} (nfev {info['nfev']}, ier {ier})",
+                   solve_s=time.perf_counter() - start)
+
+
+def solve_root_lm(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
+    """MINPACK Levenberg-Marquardt (``root(method="lm")``) with the problem's Jacobian."""
+    from scipy.optimize import root
+
+    z0 = problem.z0 if initvals is None else initvals
+    start = time.perf_counter()
+    sol = root(problem.fun, np.asarray(z0, float), jac=problem.jac, method="lm",
+               options=settings.options_for("root-lm", tol) | options)
+    if not (sol.success and np.all(np.isfinite(sol.fun))):
+        status = "failed"
+    else:  # status 4: a stationary point of ||F||^2, not necessarily a root
+        status = "inaccurate" if sol.status == 4 else "solved"
+    return Outcome(status, sol.x, message=f"{sol.message} (nfev {sol.nfev}, status {sol.status})",
+                   solve_s=time.perf_counter() - start)
+
+
+def backends() -> list[Backend]:
+    """The four SciPy backends (SciPy is a core dependency)."""
+    try:
+        import scipy.optimize  # noqa: F401
+    except ImportError:
+        return []
+    version = dist_version("scipy")
+    return [
+        Backend("scipy-lsq_linear", (LS, QP), solve_lsq_linear, version, None, "scipy",
+                supports=_no_inequalities),
+        Backend("scipy-highs", (LP,), solve_highs, version, None, "scipy"),
+        Backend("scipy-fsolve", (NLS,), solve_fsolve, version, None, "scipy"),
+        Backend("scipy-root-lm", (NLS,), solve_root_lm, version, None, "scipy"),
+    ]

@@ -1,0 +1,129 @@
+"""Every formulation with every backend that takes it: residuals, agreement, sets."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from driveline.determinacy import determinacy
+from driveline.dynamics import simulate
+from driveline.equilibrium import build_operator
+from experiments.analysis import intervals, solve_all
+from formulations.convex import FORMULATIONS
+from solvers import backends_for, solve
+from tests.conftest import variant
+
+# how closely a solved record must reproduce the determinate components (relative to
+# the force scale); solvers not named use "default"
+AGREEMENT = {"default": 1e-6, "scipy-lsq_linear": 1e-5, "qpsolvers-osqp": 1e-4,
+             "qpsolvers-scs": 1e-4, "cvxpy-scs": 1e-4, "cvxpy-ecos": 1e-5,
+             "qpsolvers-ecos": 1e-5}
+
+
+@pytest.fixture(scope="module")
+def paper_op(paper):
+    return build_operator(simulate(paper, [0.5]))
+
+
+@pytest.fixture(scope="module")
+def paper_records(paper_op):
+    return solve_all(paper_op, 0)
+
+
+def test_every_formulation_has_a_solved_backend(paper_records):
+    solved = {r.formulation for r in paper_records if r.status == "solved"}
+    assert solved == set(FORMULATIONS)
+
+
+def test_solved_records_meet_their_residuals_and_agree_on_determinate_forces(
+        paper_op, paper_records):
+    d = determinacy(paper_op, 0)
+    scale = np.abs(d.min_norm).max()
+    for r in paper_records:
+        if r.status != "solved":
+            continue
+        judged = ("equilibrium", "sign", "complementarity", "cone")
+        assert all(r.residuals[k] <= 1e-6 for k in judged), r
+        tol = AGREEMENT.get(r.solver, AGREEMENT["default"])
+        gap = np.abs(r.x - d.min_norm)[d.determinate].max() / scale
+        assert gap <= tol, (r.formulation, r.solver, gap)
+
+
+def test_positive_never_pulls_and_lcp_is_complementary(paper_op, paper_records):
+    uni = paper_op.unilateral
+    for r in paper_records:
+        if r.status == "solved" and r.formulation in ("positive", "lcp", "compliance"):
+            assert r.x[uni].min() >= -1e-6 * np.abs(r.x).max()
+            for i, j in paper_op.pairs:
+                assert min(r.x[i], r.x[j]) <= 1e-5 * np.abs(r.x).max()
+
+
+def test_indeterminate_forces_differ_between_selection_rules(paper_records, paper_op):
+    d = determinacy(paper_op, 0)
+    best = {}
+    for r in paper_records:
+        if r.status == "solved" and r.solver == "clarabel":
+            best[r.formulation] = r.x
+    free = ~d.determinate
+    # least norm with pulling end faces vs only pushing: the end faces differ
+    assert np.abs(best["min_norm"] - best["positive"])[free].max() > 1.0
+    # least peak load picks another member than least norm
+    assert np.abs(best["min_max"] - best["positive"])[free].max() > 1.0
+    # ... and all agree where the model determines the force
+    for x in best.values():
+        assert np.allclose(x[d.determinate], d.min_norm[d.determinate], rtol=1e-6, atol=1e-6)
+
+
+def test_every_answer_lies_in_the_solution_set(paper_op, paper_records):
+    sets = intervals(paper_op, 0)
+    d = determinacy(paper_op, 0)
+    for j, name in enumerate(paper_op.names):
+        lo, hi = sets[name]["min"], sets[name]["max"]
+        if d.determinate[j]:
+            assert lo == pytest.approx(d.min_norm[j], abs=1e-6)
+            assert hi == pytest.approx(d.min_norm[j], abs=1e-6)
+        for r in paper_records:
+            if r.status == "solved" and r.formulation != "min_norm" and \
+                    r.formulation != "min_norm_scaled":
+                slack = 1e-4 * np.abs(r.x).max()
+                assert lo is None or r.x[j] >= lo - slack
+                assert hi is None or r.x[j] <= hi + slack
+    # the axial split between two bearings of a shaft is free in both directions
+    assert sets["bearing.input.near.x"] == {"min": None, "max": None, "status": "solved"}
+
+
+def test_lever_rule_on_a_straight_line():
+    """Straight line, gravity only: every formulation gives the lever rule on the input
+    shaft's vertical bearing forces (the intermediate shaft hangs half on each joint)."""
+    joints = [dict(name=n, articulation_deg=0.0, hs_m=0.03, rs_m=0.005, rb_m=0.0052, ht_m=0.02,
+                   hb_m=0.021, rt_m=0.006) for n in ("uj1", "uj2")]
+    scene = variant(effects=["gravity"], joints=joints,
+                    torque={"input": 0.0}, initial={"speed_rad_s": 0.0})
+    op = build_operator(simulate(scene, [0.2]))
+    m_in, m_mid = scene.shafts[0].mass_kg, scene.shafts[1].mass_kg
+    g = 9.8
+    near = (0.4 * m_in + 0.9 * m_mid / 2) * g / 0.8  # moments about the far bearing at 0.1 m
+    far = (m_in + m_mid / 2) * g - near
+    d = determinacy(op, 0)
+    assert d.determinate[op.index("bearing.input.near.z")]
+    for r in solve_all(op, 0, formulations=["min_norm", "positive", "lcp", "compliance"]):
+        if r.status == "solved":
+            tol = AGREEMENT.get(r.solver, AGREEMENT["default"])
+            assert r.forces()["bearing.input.near.z"] == pytest.approx(near, rel=10 * tol)
+            assert r.forces()["bearing.input.far.z"] == pytest.approx(far, rel=10 * tol)
+
+
+def test_inconsistent_equilibrium_gives_no_solved_record(paper_op):
+    """b off the range of A (the motion no longer obeys its own equation): no solver may
+    report it solved, and none may raise."""
+    d = determinacy(paper_op, 0)
+    u, s, _ = np.linalg.svd(paper_op.A[0])
+    bad_b = paper_op.b.copy()
+    bad_b[0] += 1e3 * u[:, -1]  # a left null direction of A
+    bad = dataclasses.replace(paper_op, b=bad_b)
+    assert d.rank == 29
+    for name in ("positive", "lcp", "compliance", "min_max"):
+        problem = FORMULATIONS[name](bad, 0)
+        for solver in backends_for(problem):
+            record = solve(problem, solver)
+            assert record.status != "solved", (name, solver)

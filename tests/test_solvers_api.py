@@ -1,0 +1,209 @@
+"""The registry, the solution record and the settings: failures are data, not crashes."""
+
+from __future__ import annotations
+
+import json
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from formulations.problems import NLS, QP
+from solvers import (
+    Backend,
+    SolverNotFound,
+    UnsupportedProblem,
+    available,
+    backends_for,
+    failed_record,
+    get,
+    known_backends,
+    registry,
+    settings,
+    solve,
+)
+from solvers.record import Outcome
+from solvers.reference_problems import references
+
+REFS = {ref.name: ref for ref in references()}
+JSON_KEYS = {"formulation", "solver", "status", "residuals", "forces", "setup_s", "solve_s",
+             "iterations", "message"}
+
+
+def _nan_ls():
+    """ls_min_norm with a NaN in b, slipped past validation of the frozen dataclass."""
+    ls = references()[0].problem
+    object.__setattr__(ls, "b", np.array([np.nan, 2.0]))
+    return ls
+
+
+@pytest.fixture
+def fake_backend(monkeypatch):
+    """Register a backend ``fake`` for LS whose outcome the test chooses."""
+
+    def register(solve_fn):
+        available()  # load the real ones first
+        backend = Backend("fake", (REFS["ls_min_norm"].problem.__class__,), solve_fn, "0",
+                          None, "test")
+        monkeypatch.setitem(registry._CACHE, "fake", backend)
+
+    return register
+
+
+def test_core_backends_registered():
+    names = available()
+    for name in ("numpy-kkt", "scipy-lsq_linear", "scipy-highs", "scipy-fsolve",
+                 "scipy-root-lm", "clarabel", "lcp-lemke", "lcp-pgs", "lcp-fb-newton"):
+        assert name in names
+    assert all(b.version and b.family for b in names.values())
+
+
+def test_unknown_solver_raises():
+    with pytest.raises(SolverNotFound, match="unknown backend"):
+        solve(REFS["ls_min_norm"].problem, "no-such-solver")
+
+
+def test_missing_package_gives_install_hint(monkeypatch):
+    available()
+    monkeypatch.delitem(registry._CACHE, "qpsolvers-daqp", raising=False)
+    with pytest.raises(SolverNotFound, match=r'pip install "cardan-forces\[daqp\]"'):
+        get("qpsolvers-daqp")
+    assert known_backends()["qpsolvers-daqp"] == "daqp"
+    assert set(available()) <= set(known_backends())
+
+
+def test_unsupported_problem_raises():
+    with pytest.raises(UnsupportedProblem):
+        solve(REFS["lcp_mixed"].problem, "numpy-kkt")
+    assert "numpy-kkt" not in backends_for(REFS["qp_active_inequality"].problem)
+    with pytest.raises(UnsupportedProblem):  # lsq_linear takes no general inequalities
+        solve(REFS["qp_active_inequality"].problem, "scipy-lsq_linear")
+
+
+def test_power_cone_only_where_supported():
+    names = backends_for(REFS["conic_pow"].problem)
+    assert "clarabel" in names and "cvxpy-ecos" not in names
+
+
+def test_conversion_chain_reaches_conic_backends():
+    names = backends_for(REFS["ls_min_norm"].problem)
+    assert {"numpy-kkt", "clarabel", "qpsolvers-osqp", "cvxpy-clarabel"} <= set(names)
+    assert "clarabel" in backends_for(REFS["lp_vertex"].problem)
+
+
+@pytest.mark.parametrize("name", ["scipy-fsolve", "scipy-root-lm"])
+def test_nan_nls_is_failed(name):
+    ref = REFS["nls_polynomial"].problem
+    nan = NLS(checks=ref.checks, formulation="nan", fun=lambda z: np.full(2, np.nan),
+              jac=lambda z: np.full((2, 2), np.nan), z0=np.ones(2))
+    record = solve(nan, name)
+    assert record.status == "failed"
+    assert np.all(np.isnan(record.x))
+    assert all(v == np.inf for v in record.residuals.values())
+
+
+@pytest.mark.parametrize("name", backends_for(_nan_ls()))
+def test_nan_problem_is_failed(name):
+    record = solve(_nan_ls(), name)
+    assert record.status == "failed" and record.message
+
+
+def test_failed_conversion_is_a_record():
+    record = solve(_nan_ls(), "clarabel")
+    assert record.status == "failed" and "conversion failed" in record.message
+
+
+def test_psd_only_quadprog_fails_as_data():
+    if "qpsolvers-quadprog" not in available():
+        pytest.skip("quadprog not installed")
+    qp = REFS["qp_active_bound"].problem
+    psd = QP(checks=qp.checks, P=np.diag([1.0, 1.0, 0.0]), q=qp.q, A=qp.A, b=qp.b, lb=qp.lb)
+    record = solve(psd, "qpsolvers-quadprog")
+    assert record.status == "failed" and "positive definite" in record.message
+
+
+def test_backend_exception_is_failed_record(fake_backend):
+    def boom(problem, tol=None, initvals=None):
+        raise RuntimeError("boom")
+
+    fake_backend(boom)
+    record = solve(REFS["ls_min_norm"].problem, "fake")
+    assert record.status == "failed" and "RuntimeError: boom" in record.message
+
+
+def test_reported_success_with_nan_is_failed(fake_backend):
+    fake_backend(lambda problem, tol=None, initvals=None: Outcome("solved", np.full(3, np.nan)))
+    record = solve(REFS["ls_min_norm"].problem, "fake")
+    assert record.status == "failed" and "NaN" in record.message
+    assert np.all(np.isnan(record.x))
+
+
+def test_reported_success_with_large_residual_is_inaccurate(fake_backend):
+    fake_backend(lambda problem, tol=None, initvals=None: Outcome("solved", np.zeros(3)))
+    record = solve(REFS["ls_min_norm"].problem, "fake", reference=np.array([0.0, 1, 1]))
+    assert record.status == "inaccurate" and "equilibrium" in record.message
+    assert record.residuals["equilibrium"] == pytest.approx(1.0)
+    assert record.residuals["reference"] == pytest.approx(1.0)
+
+
+def test_record_json_is_strict_json():
+    ok = solve(REFS["ls_min_norm"].problem, "numpy-kkt", reference=REFS["ls_min_norm"].x)
+    bad = failed_record(REFS["ls_min_norm"].problem, "numpy-kkt", "why")
+    for record in (ok, bad):
+        data = json.loads(json.dumps(record.to_json(), allow_nan=False))
+        assert set(data) == JSON_KEYS
+    assert ok.forces() == pytest.approx({"x0": 0.0, "x1": 1.0, "x2": 1.0}, abs=1e-12)
+    assert bad.to_json()["residuals"]["equilibrium"] == "inf"
+    assert bad.to_json()["forces"]["x0"] == "nan"
+    assert "reference" not in bad.residuals
+
+
+def test_initvals_reach_warm_startable_solvers():
+    ref = REFS["nls_polynomial"]
+    record = solve(ref.problem, "scipy-fsolve", initvals=np.array([2.2, 0.7]))
+    assert record.forces() == pytest.approx({"x0": 2.0, "x1": 1.0})
+
+
+def test_tol_none_changes_nothing():
+    assert all(settings.options_for(key, None) == {} for key in settings.TOLERANCE_PARAMETERS)
+    assert settings.options_for("osqp", 1e-7) == {"eps_abs": 1e-7, "eps_rel": 1e-7}
+    assert settings.options_for("highs", 1e-13)["primal_feasibility_tolerance"] == 1e-10
+    with pytest.raises(KeyError):
+        settings.options_for("unknown-solver", 1e-6)
+
+
+def test_tol_reaches_the_solver():
+    lcp = REFS["lcp_mixed"].problem
+    loose = solve(lcp, "lcp-fb-newton", tol=1e-2)
+    tight = solve(lcp, "lcp-fb-newton", tol=1e-14)
+    assert loose.iterations < tight.iterations
+    if "qpsolvers-osqp" in available():
+        ls = REFS["ls_min_norm"].problem
+        default = solve(ls, "qpsolvers-osqp")
+        strict = solve(ls, "qpsolvers-osqp", tol=1e-10)
+        assert strict.iterations > default.iterations
+        assert strict.residuals["equilibrium"] < default.residuals["equilibrium"]
+
+
+def test_options_override_tol():
+    lcp = REFS["lcp_mixed"].problem
+    record = solve(lcp, "lcp-fb-newton", tol=1e-14, max_iter=1)
+    assert record.status == "inaccurate" and record.iterations == 1
+    assert "max_iter" in record.message
+
+
+@pytest.mark.parametrize(("solver", "extras", "expected"), [
+    ("osqp", {"info": SimpleNamespace(status="primal infeasible inaccurate")}, "infeasible"),
+    ("osqp", {"info": SimpleNamespace(status="dual infeasible")}, "unbounded"),
+    ("osqp", {"info": SimpleNamespace(status="maximum iterations reached")}, "inaccurate"),
+    ("piqp", {"info": SimpleNamespace(status="Status.PIQP_DUAL_INFEASIBLE")}, "unbounded"),
+    ("clarabel", {"status": "AlmostSolved"}, "inaccurate"),
+    ("clarabel", {"status": "NumericalError"}, "failed"),
+    ("scs", {"status_val": -2}, "infeasible"),
+    ("ecos", {"exitFlag": 10}, "inaccurate"),
+    ("daqp", {}, "failed"),
+])
+def test_qpsolvers_status_map(solver, extras, expected):
+    from solvers.qpsolvers_ import _unfound_status
+
+    assert _unfound_status(solver, extras)[0] == expected
