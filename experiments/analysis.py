@@ -7,7 +7,7 @@ from collections.abc import Callable, Iterable
 import numpy as np
 
 from driveline.equilibrium import Operator
-from formulations.convex import FORMULATIONS
+from formulations import FORMULATIONS
 from formulations.sets import interval_problems
 from solvers import Record, backends_for, solve
 

@@ -22,7 +22,7 @@ from driveline.dynamics import DynamicsError, simulate
 from driveline.equilibrium import build_operator
 from driveline.scene import SceneError, builtin_names, builtin_text, load_scene
 from experiments.analysis import intervals, solve_all
-from formulations.convex import FORMULATIONS
+from formulations import FORMULATIONS
 from solvers import SolverNotFound, available
 from solvers import get as get_backend
 from solvers.registry import known_backends

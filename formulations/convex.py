@@ -27,7 +27,7 @@ from driveline.determinacy import RANK_RTOL, determinacy
 from driveline.equilibrium import Operator
 from driveline.scene import Joint, Scene
 
-from .problems import LCP, LS, QP, Conic, ForceChecks
+from .problems import LCP, LS, QP, Conic, ForceChecks, SecondOrderCone
 
 MIN_MAX_NORM_WEIGHT = 1e-6
 """Weight of the tie-breaking ``1/2 ||x||^2 / ||b||`` term of ``min_max``."""
@@ -111,8 +111,9 @@ def min_max(op: Operator, i: int) -> Conic:
     P[:n, :n] = MIN_MAX_NORM_WEIGHT / scale * np.eye(n)
     q = np.zeros(n + 1)
     q[t] = 1.0
-    return Conic(checks=checks(op, i, pairs=False), formulation="min_max", to_forces=lambda z: z[:n],
-                 P=P, q=q, A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones))
+    return Conic(checks=checks(op, i, pairs=False), formulation="min_max",
+                 to_forces=lambda z: z[:n], P=P, q=q, A=np.vstack(blocks),
+                 b=np.concatenate(rhs), cones=tuple(cones))
 
 
 def lcp(op: Operator, i: int) -> LCP:
@@ -129,11 +130,87 @@ def lcp(op: Operator, i: int) -> LCP:
                M=Nu @ Nu.T, q=x0[op.unilateral])
 
 
+def socp_face(op: Operator, i: int) -> Conic:
+    """``positive`` with each end face also carrying a moment ``m`` normal to its
+    trunnion axis, inside its centre-of-pressure cone ``||m|| <= rt f``: the paper's
+    rim contact (eqs. 33-36, 42-43) made convex. The face may press anywhere on its
+    disc of radius ``rt`` instead of at one rim point.
+
+    Unknowns: the operator's forces, then ``<face>.m_<e>`` (N·m) per end face, acting
+    on the pin and the opposite on the yoke. Objective: least ``||x||^2 + ||m / rt||^2``.
+    """
+    scene = op.scene
+    joints = {j.name: j for j in scene.joints}
+    n_shafts = len(scene.shafts)
+    kin_e = _pin_frames(op, i)
+    A0 = op.A[i]
+    columns, names, cones, weights = [], list(op.names), [], []
+    for j, name in enumerate(op.names):
+        if not op.unilateral[j]:
+            continue
+        joint_name, face = name.split(".")
+        k = list(joints).index(joint_name)
+        rt = joints[joint_name].rt_m
+        driving = face in ("F3", "F4")
+        yoke_body = k if driving else k + 1
+        members = []
+        for comp in (("e2", "e3") if driving else ("e3", "e1")):
+            col = np.zeros(A0.shape[0])
+            pin = 6 * (n_shafts + k) + 3
+            col[pin: pin + 3] = kin_e[comp][k]
+            col[6 * yoke_body + 3: 6 * yoke_body + 6] = -kin_e[comp][k]
+            columns.append(col)
+            members.append(len(names))
+            names.append(f"{name}.m_{comp}")
+            weights.append(1.0 / rt**2)
+        cones.append(SecondOrderCone(apex=j, members=tuple(members), scale=rt))
+    A = np.hstack([A0, np.array(columns).T])
+    n0, n = len(op.names), A.shape[1]
+    unilateral = np.concatenate([op.unilateral, np.zeros(n - n0, bool)])
+    check = ForceChecks(A=A, b=op.b[i], names=tuple(names), unilateral=unilateral,
+                        pairs=op.pairs, cones=tuple(cones))
+    u, s, vt = np.linalg.svd(A, full_matrices=False)
+    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    Aeq, beq = s[:rank, None] * vt[:rank], u[:, :rank].T @ op.b[i]
+    blocks, rhs, cone_list = [Aeq], [beq], [("zero", rank)]
+    uni = np.flatnonzero(unilateral)
+    rows = np.zeros((len(uni), n))
+    rows[np.arange(len(uni)), uni] = -1.0
+    blocks.append(rows)
+    rhs.append(np.zeros(len(uni)))
+    cone_list.append(("nonneg", len(uni)))
+    for c in cones:
+        soc = np.zeros((1 + len(c.members), n))
+        soc[0, c.apex] = -c.scale
+        soc[np.arange(1, 1 + len(c.members)), list(c.members)] = -1.0
+        blocks.append(soc)
+        rhs.append(np.zeros(1 + len(c.members)))
+        cone_list.append(("soc", 1 + len(c.members)))
+    P = np.diag(np.concatenate([np.ones(n0), weights]))
+    return Conic(checks=check, formulation="socp_face", P=P, q=np.zeros(n),
+                 A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cone_list))
+
+
+def _pin_frames(op: Operator, i: int) -> dict[str, np.ndarray]:
+    """Cross-pin frames (joints, 3) at instant ``i``, read back from the operator's
+    end-face columns (F4 pushes along +e1, F8 along +e2 on the pin).
+    """
+    n_shafts = len(op.scene.shafts)
+    e1, e2 = [], []
+    for k, joint in enumerate(op.scene.joints):
+        pin = slice(6 * (n_shafts + k), 6 * (n_shafts + k) + 3)
+        e1.append(op.A[i, pin, op.index(f"{joint.name}.F4")])
+        e2.append(op.A[i, pin, op.index(f"{joint.name}.F8")])
+    e1, e2 = np.array(e1), np.array(e2)
+    return {"e1": e1, "e2": e2, "e3": np.cross(e1, e2)}
+
+
 FORMULATIONS = {
     "min_norm": min_norm,
     "min_norm_scaled": min_norm_scaled,
     "positive": positive,
     "min_max": min_max,
+    "socp_face": socp_face,
     "lcp": lcp,
 }
 """Builders by name: ``FORMULATIONS[name](op, i) -> problem``."""

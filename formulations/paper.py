@@ -1,0 +1,382 @@
+"""The paper's own method: 34 polar unknowns, 34 nonlinear equations, ``fsolve``.
+
+Wang & Qi (2017) write every radial contact force as a magnitude and a contact angle
+(bearings eqs. 11-14, trunnions eqs. 37, 44), keep the end-face forces as magnitudes
+(eqs. 38, 45) whose contact points sit on the trunnion rim at angles fixed by the
+radial ones (eqs. 33-36, 42-43), merge the two axial bearing forces of a shaft into
+one unknown, and solve the Newton-Euler rows (eqs. 49-58) together with the
+Fischer-Burmeister form of the end-face complementarity (eqs. 59-62).
+
+Unknowns ``z`` (``unknown_names``), per shaft with bearings, in scene order: each
+bearing's radial magnitude and angle, then the shaft's axial sum; per joint:
+``theta1, theta2, theta5, theta6, f1, ..., f8``. Signs (derived, the OCR lost them):
+
+- bearing: force on the shaft ``f (cos a u + sin a w) + g/n s`` with ``s`` the shaft
+  axis (downstream), ``u`` the unit part of the frame's ``articulation_towards``
+  normal to ``s`` (the paper's ``i3``), ``w = s x u`` (``i1``). The paper's frame turns
+  with the shaft; the bearing is axisymmetric, so a fixed frame only shifts the angle.
+  The merged axial force ``g`` is split evenly between the ``n`` bearings: the split
+  lies in the null space of ``A`` and changes no equation.
+- trunnion ``+hs e1``: contact at ``hs e1 + rs (cos t1 e2 + sin t1 e3)``, force on the
+  pin ``-f1 (cos t1 e2 + sin t1 e3)``; driven ``+hs e2``: contact at
+  ``hs e2 + rs (sin t5 e1 + cos t5 e3)``, force ``-f5 (sin t5 e1 + cos t5 e3)``.
+- end faces (eqs. 33-36): minimizing the axial gap over the rim gives
+  ``(c3, s3) = S (-sin m, cos m)``, ``(c4, s4) = -(c3, s3)``, ``m = (t1 + t2)/2``,
+  ``S = Sgn(sin((t2 - t1)/2))``; driven side (eqs. 42-43) ``(c7, s7)`` the same in
+  ``t5, t6`` with the rim point ``rt (s7 e1 + c7 e3)``. F3 pushes along ``-e1`` at
+  ``ht e1 + rt (c3 e2 + s3 e3)``, F4 along ``+e1`` at the opposite rim point, so the
+  pair adds the moment ``-(f3 + f4) rt S (cos m e2 + sin m e3)`` on the pin (the
+  driven pair ``-(f7 + f8) rt S (sin m e1 + cos m e3)``) and the opposite on the
+  yoke's shaft. The package's operator puts end-face forces on the axis; ``rim=False``
+  drops these moments and then the paper's equations are exactly ``A x = b``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import fsolve, root
+
+from driveline.determinacy import RANK_RTOL
+from driveline.equilibrium import Operator
+from driveline.kinematics import rest_geometry
+from driveline.scene import Scene
+
+from .convex import socp_face
+from .problems import NLS, ForceChecks
+
+CONVERGED = 1e-8
+"""``paper_residual`` below which a solve counts as converged."""
+
+TINY = 1e-12
+"""Relative magnitude under which a start's contact angle is set to 0."""
+
+_FB_ORIGIN = 1.0 / np.sqrt(2.0) - 1.0
+"""Generalized derivative of ``sqrt(a^2 + b^2) - a - b`` at (0, 0) in a and b."""
+
+
+@dataclass(frozen=True)
+class PaperNLS(NLS):
+    """The paper's 34 x 34 system plus its own residual and unknown names."""
+
+    unknown_names: tuple[str, ...] = ()
+    paper_residual: object = field(default=None, repr=False)
+    rim: bool = True
+    radial: np.ndarray = field(default=None, repr=False)
+    angles: np.ndarray = field(default=None, repr=False)
+    end_faces: np.ndarray = field(default=None, repr=False)
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Where each polar unknown goes in ``x`` (36) and in the rows (30)."""
+
+    P: np.ndarray  # (n_x, n_polar): x += f cos(a) P[:, p] + f sin(a) Q[:, p]
+    Q: np.ndarray
+    mag: np.ndarray  # (n_polar,) index into z of f
+    ang: np.ndarray  # (n_polar,) index into z of a
+    L: np.ndarray  # (n_x, n_z): linear part (axial sums, end faces)
+    rim_U: np.ndarray  # (n_rows, n_sides): rim moment direction for cos m
+    rim_V: np.ndarray  # (n_rows, n_sides): for sin m
+    rim_t: np.ndarray  # (n_sides, 2) z indices of the two radial angles
+    rim_f: np.ndarray  # (n_sides, 2) z indices of the two end-face forces
+    rim_r: np.ndarray  # (n_sides,) rim radius rt
+    fb: np.ndarray  # (n_pairs, 2) z indices of the complementary magnitudes
+    names: tuple[str, ...]
+
+
+def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
+    """Map the polar unknowns onto the operator's columns and rows at instant ``i``."""
+    names, A = op.names, op.A[i]
+    geo = rest_geometry(scene)
+    n_shafts = len(scene.shafts)
+    towards = np.array(scene.frame.articulation_towards, float)
+    z_names: list[str] = []
+    P_cols, Q_cols, mag, ang, lin = [], [], [], [], []
+
+    def unit(col: int) -> np.ndarray:
+        return np.eye(len(names))[col]
+
+    def add(name: str) -> int:
+        z_names.append(name)
+        return len(z_names) - 1
+
+    for k, shaft in enumerate(scene.shafts):
+        if not shaft.bearings:
+            continue
+        s = geo.axes[k]
+        u = towards - towards.dot(s) * s
+        u /= np.linalg.norm(u)
+        w = np.cross(s, u)
+        axial = np.zeros(len(names))
+        for bearing in shaft.bearings:
+            cols = [op.index(f"bearing.{shaft.name}.{bearing.name}.{c}") for c in "xyz"]
+            p, q = np.zeros(len(names)), np.zeros(len(names))
+            p[cols], q[cols], axial[cols] = u, w, s / len(shaft.bearings)
+            P_cols.append(p)
+            Q_cols.append(q)
+            mag.append(add(f"{shaft.name}.bearing.{bearing.name}.radial"))
+            ang.append(add(f"{shaft.name}.bearing.{bearing.name}.angle"))
+        lin.append((add(f"{shaft.name}.axial_sum"), axial))
+
+    n_rows = A.shape[0]
+    rim_U, rim_V, rim_t, rim_f, rim_r, fb = [], [], [], [], [], []
+    for j, joint in enumerate(scene.joints):
+        pin = slice(6 * (n_shafts + j), 6 * (n_shafts + j) + 3)
+        e1 = A[pin, op.index(f"{joint.name}.F5.e1")]
+        e2 = A[pin, op.index(f"{joint.name}.F1.e2")]
+        e3 = A[pin, op.index(f"{joint.name}.F1.e3")]
+        theta = {t: add(f"{joint.name}.theta{t}") for t in (1, 2, 5, 6)}
+        f = {n: add(f"{joint.name}.f{n}") for n in range(1, 9)}
+        for n, (cos_c, sin_c) in {1: ("e2", "e3"), 2: ("e2", "e3"),
+                                  5: ("e3", "e1"), 6: ("e3", "e1")}.items():
+            P_cols.append(-unit(op.index(f"{joint.name}.F{n}.{cos_c}")))
+            Q_cols.append(-unit(op.index(f"{joint.name}.F{n}.{sin_c}")))
+            mag.append(f[n])
+            ang.append(theta[n])
+        for n in (3, 4, 7, 8):
+            lin.append((f[n], unit(op.index(f"{joint.name}.F{n}"))))
+        for yoke, (ta, tb), (fa, fb_), (cos_dir, sin_dir) in (
+            (j, (1, 2), (3, 4), (e2, e3)),
+            (j + 1, (5, 6), (7, 8), (e3, e1)),
+        ):
+            U, V = np.zeros(n_rows), np.zeros(n_rows)
+            for body, sign in ((n_shafts + j, 1.0), (yoke, -1.0)):
+                moment = slice(6 * body + 3, 6 * body + 6)
+                U[moment] += sign * cos_dir
+                V[moment] += sign * sin_dir
+            rim_U.append(U)
+            rim_V.append(V)
+            rim_t.append((theta[ta], theta[tb]))
+            rim_f.append((f[fa], f[fb_]))
+            rim_r.append(joint.rt_m)
+            fb.append((f[fa], f[fb_]))
+
+    L = np.zeros((len(names), len(z_names)))
+    for idx, col in lin:
+        L[:, idx] = col
+    return _Layout(
+        P=np.array(P_cols).T, Q=np.array(Q_cols).T, mag=np.array(mag), ang=np.array(ang), L=L,
+        rim_U=np.array(rim_U).T.reshape(n_rows, -1), rim_V=np.array(rim_V).T.reshape(n_rows, -1),
+        rim_t=np.array(rim_t, int).reshape(-1, 2), rim_f=np.array(rim_f, int).reshape(-1, 2),
+        rim_r=np.array(rim_r, float), fb=np.array(fb, int).reshape(-1, 2), names=tuple(z_names),
+    )
+
+
+def _to_forces(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """Polar unknowns -> the 36 Cartesian forces (eqs. 11-14, 37-38, 44-45)."""
+    z = np.asarray(z, float)
+    f, a = z[lay.mag], z[lay.ang]
+    return lay.P @ (f * np.cos(a)) + lay.Q @ (f * np.sin(a)) + lay.L @ z
+
+
+def _dx_dz(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """Jacobian of :func:`_to_forces` (n_x, n_z)."""
+    f, a = z[lay.mag], z[lay.ang]
+    c, s = np.cos(a), np.sin(a)
+    J = lay.L.copy()
+    J[:, lay.mag] += lay.P * c + lay.Q * s
+    J[:, lay.ang] += (lay.Q * c - lay.P * s) * f
+    return J
+
+
+def _rim(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rim moments of the end faces (eqs. 35-36, 42-43 in eqs. 50-58) and their
+    Jacobian; ``Sgn`` is piecewise constant, so it has no derivative.
+    """
+    ta, tb = z[lay.rim_t[:, 0]], z[lay.rim_t[:, 1]]
+    fsum = z[lay.rim_f[:, 0]] + z[lay.rim_f[:, 1]]
+    m = 0.5 * (ta + tb)
+    k = -lay.rim_r * np.sign(np.sin(0.5 * (tb - ta)))
+    dirs = lay.rim_U * np.cos(m) + lay.rim_V * np.sin(m)  # (rows, sides)
+    R = dirs @ (k * fsum)
+    J = np.zeros((len(R), len(z)))
+    d_m = (lay.rim_V * np.cos(m) - lay.rim_U * np.sin(m)) * (0.5 * k * fsum)
+    for col in (0, 1):
+        np.add.at(J.T, lay.rim_f[:, col], (dirs * k).T)
+        np.add.at(J.T, lay.rim_t[:, col], d_m.T)
+    return R, J
+
+
+def _fb(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Fischer-Burmeister rows (eqs. 59-62) and their (generalized) Jacobian."""
+    a, b = z[lay.fb[:, 0]], z[lay.fb[:, 1]]
+    r = np.hypot(a, b)
+    safe = np.where(r > 0, r, 1.0)
+    da = np.where(r > 0, a / safe - 1.0, _FB_ORIGIN)
+    db = np.where(r > 0, b / safe - 1.0, _FB_ORIGIN)
+    J = np.zeros((len(a), len(z)))
+    rows = np.arange(len(a))
+    J[rows, lay.fb[:, 0]] = da
+    J[rows, lay.fb[:, 1]] = db
+    return r - a - b, J
+
+
+def _start(op: Operator, i: int, lay: _Layout) -> np.ndarray:
+    """Initial values (eqs. 63-74): end faces zero, the rest least-norm on the axis."""
+    A, b = op.A[i], op.b[i]
+    keep = ~np.asarray(op.unilateral, bool)
+    x = np.zeros(A.shape[1])
+    x[keep] = np.linalg.lstsq(A[:, keep], b, rcond=None)[0]
+    z = np.zeros(len(lay.names))
+    z[lay.mag] = np.hypot(lay.P.T @ x, lay.Q.T @ x)
+    tiny = z[lay.mag] <= TINY * max(np.linalg.norm(b), TINY)
+    z[lay.ang] = np.where(tiny, 0.0, np.arctan2(lay.Q.T @ x, lay.P.T @ x))
+    # axial sums and end faces: project x on their columns of L (end faces give 0)
+    linear = np.flatnonzero(np.any(lay.L != 0, axis=0))
+    cols = lay.L[:, linear]
+    z[linear] = (cols.T @ x) / np.sum(cols * cols, axis=0)
+    return z
+
+
+def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = None) -> PaperNLS:
+    """The paper's system (eqs. 49-62) at instant ``i`` of ``op``.
+
+    ``scene`` (default: the operator's) supplies the shaft axes for the bearing angles
+    and the rim radius ``rt``. With ``rim=True`` the answer is judged in ``socp_face``'s
+    force space (forces plus end-face moments, the rim moments being such moments on
+    the cone's boundary), so the package's residuals check the paper's own model;
+    ``paper_residual(z)`` is ``||F(z)|| / ||b||`` of the paper's equations.
+    """
+    scene = op.scene if scene is None else scene
+    lay = _layout(op, i, scene)
+    A, b = op.A[i], op.b[i]
+    scale = max(float(np.linalg.norm(b)), 1e-12)
+
+    def fun(z):
+        z = np.asarray(z, float)
+        eq = A @ _to_forces(lay, z) - b
+        if rim:
+            eq = eq + _rim(lay, z)[0]
+        return np.concatenate([eq, _fb(lay, z)[0]])
+
+    def jac(z):
+        z = np.asarray(z, float)
+        eq = A @ _dx_dz(lay, z)
+        if rim:
+            eq = eq + _rim(lay, z)[1]
+        return np.vstack([eq, _fb(lay, z)[1]])
+
+    if rim:
+        # judged in the force space of ``socp_face``: the rim moments become end-face
+        # moments, which the centre-of-pressure cone ||m|| <= rt f must contain
+        face = socp_face(op, i)
+        checks, to_forces = face.checks, _with_face_moments(lay, face, op)
+    else:
+        checks = ForceChecks(A=A, b=b, names=op.names, unilateral=op.unilateral,
+                             pairs=op.pairs)
+        to_forces = lambda z: _to_forces(lay, z)  # noqa: E731
+    return PaperNLS(
+        checks=checks, formulation="paper", to_forces=to_forces,
+        fun=fun, jac=jac, z0=_start(op, i, lay), unknown_names=lay.names,
+        paper_residual=lambda z: float(np.linalg.norm(fun(z))) / scale,
+        rim=rim, radial=lay.mag, angles=lay.ang, end_faces=lay.fb.ravel(),
+    )
+
+
+def _with_face_moments(lay: _Layout, face, op: Operator):
+    """Map polar unknowns to ``socp_face``'s forces: the Cartesian forces, then each end
+    face's moment. The rim moments of one trunnion pair are shared by its two faces in
+    proportion to their forces (both sit on the same diameter), found as the weighted
+    least-norm ``m`` with ``M m`` = the rim terms.
+    """
+    n = len(op.names)
+    M = face.checks.A[:, n:]
+    owner = [face.checks.names.index(name.rsplit(".", 1)[0]) for name in face.checks.names[n:]]
+
+    def to_forces(z):
+        z = np.asarray(z, float)
+        x = _to_forces(lay, z)
+        weight = np.sqrt(np.maximum(x[owner], 0.0))
+        m = weight * (np.linalg.pinv(M * weight) @ _rim(lay, z)[0])
+        return np.concatenate([x, m])
+
+    return to_forces
+
+
+def _run(problem: PaperNLS, method: str, z0: np.ndarray, xtol: float | None):
+    """One run of ``fsolve`` (MINPACK hybrid, MATLAB's fsolve counterpart) or ``root(lm)``."""
+    if method == "hybr":
+        z, info, ier, message = fsolve(
+            problem.fun, z0, fprime=problem.jac, full_output=True,
+            **({} if xtol is None else {"xtol": xtol}),
+        )
+        return z, ier == 1, message, int(info["nfev"])
+    if method == "lm":
+        sol = root(problem.fun, z0, jac=problem.jac, method="lm",
+                   **({} if xtol is None else {"options": {"xtol": xtol}}))
+        return sol.x, bool(sol.success), sol.message, int(sol.nfev)
+    raise ValueError(f"unknown method {method!r}: use 'hybr' or 'lm'")
+
+
+def _solve(problem: PaperNLS, method: str, z0: np.ndarray, xtol: float | None):
+    """Solve, then make the radial magnitudes >= 0 (``(-f, a) -> (f, a + pi)``).
+
+    Without the rim that changes no force. With it the end-face points move, so it
+    solves again from the flipped point and keeps that answer when it converges with
+    all magnitudes >= 0; otherwise it returns the first answer as the solver gave it.
+    """
+    z, success, message, nfev = _run(problem, method, z0, xtol)
+    flipped_z, flipped = _canonical(problem, z)
+    if not (flipped and problem.rim):
+        return flipped_z, success, message, nfev
+    again, success2, message2, nfev2 = _run(problem, method, flipped_z, xtol)
+    again, flipped = _canonical(problem, again)
+    if success2 and not flipped and problem.paper_residual(again) < CONVERGED:
+        return again, success2, message2, nfev + nfev2
+    return z, success, message, nfev + nfev2
+
+
+def _canonical(problem: PaperNLS, z: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Nonnegative radial magnitudes, angles in (-pi, pi]; and whether any flipped."""
+    z = np.array(z, float)
+    neg = z[problem.radial] < 0
+    z[problem.radial[neg]] *= -1.0
+    z[problem.angles[neg]] += np.pi
+    z[problem.angles] = np.pi - np.mod(np.pi - z[problem.angles], 2.0 * np.pi)
+    return z, bool(neg.any())
+
+
+def solve_paper(op: Operator, i: int, method: str = "hybr", rim: bool = True,
+                z0: np.ndarray | None = None, xtol: float | None = None,
+                scene: Scene | None = None) -> dict:
+    """Solve the paper's system at instant ``i``; the Jacobian's rank and condition
+    at the answer show the direction the 34 equations leave free (the closed loop's
+    self-stress).
+    """
+    problem = build_paper(op, i, rim=rim, scene=scene)
+    z, success, message, nfev = _solve(problem, method, problem.z0 if z0 is None else z0, xtol)
+    s = np.linalg.svd(problem.jac(z), compute_uv=False)
+    return {
+        "x": problem.to_forces(z),
+        "z": z,
+        "success": success,
+        "message": message,
+        "nfev": nfev,
+        "paper_residual": problem.paper_residual(z),
+        "jac_rank": int(np.sum(s > RANK_RTOL * s[0])),
+        "jac_cond": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
+    }
+
+
+def multistart(op: Operator, i: int, n: int = 20, seed: int = 0, rim: bool = True,
+               scene: Scene | None = None) -> np.ndarray:
+    """``fsolve`` from ``n`` seeded random starts around eqs. 63-74's; the converged
+    forces (n_converged, len(checks.names)): the 36 Cartesian forces, then with the rim
+    the end-face moments) sample the rigid model's solution set.
+    """
+    problem = build_paper(op, i, rim=rim, scene=scene)
+    rng = np.random.default_rng(seed)
+    top = np.abs(problem.z0).max()
+    found = []
+    for _ in range(n):
+        z0 = problem.z0.copy()
+        z0[problem.radial] *= np.exp(0.5 * rng.standard_normal(len(problem.radial)))
+        z0[problem.angles] += rng.uniform(-0.5, 0.5, len(problem.angles))
+        z0[problem.end_faces] = rng.uniform(0.0, 0.2 * top, len(problem.end_faces))
+        z, success, _, _ = _solve(problem, "hybr", z0, None)
+        if success and problem.paper_residual(z) < CONVERGED:
+            found.append(problem.to_forces(z))
+    return np.array(found).reshape(-1, len(problem.checks.names))
+
