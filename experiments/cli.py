@@ -23,6 +23,7 @@ from driveline.equilibrium import build_operator
 from driveline.scene import SceneError, builtin_names, builtin_text, load_scene
 from experiments.analysis import intervals, solve_all
 from formulations import FORMULATIONS
+from formulations.paper import multistart
 from solvers import SolverNotFound, available
 from solvers import get as get_backend
 from solvers.registry import known_backends
@@ -97,10 +98,14 @@ def _cmd_sets(args) -> int:
     op = build_operator(simulate(scene, [args.t]))
     result = determinacy(op, 0)
     ranges = intervals(op, 0)
+    starts = multistart(op, 0, n=args.multistart, rim=False)[:, : len(op.names)] \
+        if args.multistart else None
     if args.json:
         report = result.to_json()
-        for name, entry in report["components"].items():
+        for j, (name, entry) in enumerate(report["components"].items()):
             entry.update(min=ranges[name]["min"], max=ranges[name]["max"])
+            if starts is not None:
+                entry["paper_multistart"] = [float(v) for v in starts[:, j]]
         print(json.dumps(report, indent=2))
         return 0
     print(f"scene {scene.name}, t = {result.t:g} s: rank {result.rank}, nullity "
@@ -110,11 +115,18 @@ def _cmd_sets(args) -> int:
           "solutions with end faces >= 0 (-inf/+inf: unbounded)")
     print(f"{'component':24s} {'determinate':>11s} {'least-norm N':>14s} {'min N':>12s} "
           f"{'max N':>12s}")
-    for name, det, value in zip(result.names, result.determinate, result.min_norm):
+    if starts is not None:
+        print(f"paper method (fsolve, end faces on the axis) from {args.multistart} random "
+              f"starts: {len(starts)} converged; their spread per component at the right")
+    for j, (name, det, value) in enumerate(zip(result.names, result.determinate,
+                                               result.min_norm)):
         lo, hi = ranges[name]["min"], ranges[name]["max"]
         lo = "-inf" if lo is None else f"{lo:.4f}"
         hi = "+inf" if hi is None else f"{hi:.4f}"
-        print(f"{name:24s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}")
+        spread = "" if starts is None or not len(starts) else \
+            f"  paper: [{starts[:, j].min():.3f}, {starts[:, j].max():.3f}]"
+        print(f"{name:24s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}"
+              f"{spread}")
     return 0
 
 
@@ -206,6 +218,8 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     st.add_argument("--t", type=float, default=0.5, help="instant in s (default 0.5)")
     st.add_argument("--json", action="store_true", help="print JSON")
+    st.add_argument("--multistart", type=int, default=0, metavar="N",
+                    help="also run the paper's method from N seeded random starts")
     st.set_defaults(func=_cmd_sets)
 
     sv = sub.add_parser("solvers", help="solver backends present, with their problem classes")

@@ -69,3 +69,14 @@ def test_solvers_and_solve_commands(capsys):
     assert any(r["status"] == "solved" for r in records)
     assert main(["solve", "--solver", "no-such-solver"]) == 2
     assert "unknown backend" in capsys.readouterr().err
+
+
+def test_sets_multistart_points_lie_in_the_intervals(capsys):
+    assert main(["sets", "--t", "0.5", "--json", "--multistart", "4"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    for entry in report["components"].values():
+        points = entry["paper_multistart"]
+        assert len(points) == 4
+        lo = -np.inf if entry["min"] is None else entry["min"]
+        hi = np.inf if entry["max"] is None else entry["max"]
+        assert all(lo - 1e-6 <= p <= hi + 1e-6 for p in points)
