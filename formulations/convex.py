@@ -23,9 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from driveline.contact import hertz_stiffness
 from driveline.determinacy import RANK_RTOL, determinacy
 from driveline.equilibrium import Operator
-from driveline.contact import hertz_stiffness
 
 from .problems import LCP, LS, QP, Conic, ForceChecks, SecondOrderCone
 
