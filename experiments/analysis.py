@@ -8,7 +8,7 @@ import numpy as np
 
 from driveline.equilibrium import Operator
 from formulations import FORMULATIONS
-from formulations.sets import interval_problems
+from formulations.sets import range_problems
 from solvers import Record, backends_for, solve
 
 INTERVAL_SOLVER = "scipy-highs"
@@ -20,18 +20,21 @@ def intervals(op: Operator, i: int, solver: str = INTERVAL_SOLVER) -> dict[str, 
     ``None`` marks an unbounded side; a side whose LP fails is ``None`` with the status
     saying so (never a number that was not checked).
     """
-    out = {}
-    for name, (low, high) in interval_problems(op, i).items():
-        ends, statuses = [], []
-        for problem in (low, high):
-            record = solve(problem, solver)
-            statuses.append(record.status)
-            j = op.index(name)
-            ends.append(float(record.x[j]) if record.status == "solved" else None)
-        status = "solved" if all(s in ("solved", "unbounded") for s in statuses) else "/".join(
-            statuses)
-        out[name] = {"min": ends[0], "max": ends[1], "status": status}
-    return out
+    eye = np.eye(len(op.names))
+    return {name: value_range(op, i, eye[j], solver)
+            for j, name in enumerate(op.names)}
+
+
+def value_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLVER) -> dict:
+    """``{"min", "max", "status"}`` of ``c'x`` over the rigid set at instant ``i``."""
+    ends, statuses = [], []
+    for problem in range_problems(op, i, c):
+        record = solve(problem, solver)
+        statuses.append(record.status)
+        ends.append(float(c @ record.x) if record.status == "solved" else None)
+    status = "solved" if all(s in ("solved", "unbounded") for s in statuses) else "/".join(
+        statuses)
+    return {"min": ends[0], "max": ends[1], "status": status}
 
 
 def solve_all(

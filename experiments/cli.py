@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +27,7 @@ from solvers import SolverNotFound, available
 from solvers import get as get_backend
 from solvers.registry import known_backends
 
-FIGURES = (11, 12)
+FIGURES = (11, 12, 13, 14, 15)
 
 
 class UsageError(ValueError):
@@ -177,21 +176,10 @@ def _cmd_solve(args) -> int:
 
 
 def _cmd_repro(args) -> int:
-    from paper_repro import figures
+    from paper_repro.repro import FIGURES, run_repro
 
-    figs = sorted(set(args.fig or FIGURES))
-    out = Path(args.out)
-    scene = load_scene(args.scene)
-    times = scene.time.instants()
-    if args.quick:
-        times = times[times <= scene.time.start_s + 0.5]
-    started = time.perf_counter()
-    _progress(f"repro: simulating {scene.name} over {len(times)} instants ...")
-    motion = simulate(scene, times)
-    _progress(f"repro: motion done in {time.perf_counter() - started:.1f} s")
-    for number in figs:
-        csv = getattr(figures, f"fig{number}")(motion, out)
-        _progress(f"repro: fig {number} -> {csv} and {csv.with_suffix('.png').name}")
+    run_repro(args.scene, sorted(set(args.fig or FIGURES)), args.out, args.quick,
+              args.fig15_scene, progress=_progress)
     return 0
 
 
@@ -243,6 +231,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="one figure (repeatable); default all")
     rp.add_argument("--out", default="results", help="output folder (default results/)")
     rp.add_argument("--quick", action="store_true", help="first 0.5 s only (tests, CI)")
+    rp.add_argument("--fig15-scene", default="paper-fig15",
+                    help="scene of Fig. 15 (default paper-fig15: gravity +y; "
+                         "paper-fig15-axial: gravity +x)")
     rp.set_defaults(func=_cmd_repro)
     return p
 

@@ -29,8 +29,9 @@ from driveline.equilibrium import Operator
 
 from .problems import LCP, LS, QP, Conic, ForceChecks, SecondOrderCone
 
-MIN_MAX_NORM_WEIGHT = 1e-6
-"""Weight of the tie-breaking ``1/2 ||x||^2 / ||b||`` term of ``min_max``."""
+MIN_MAX_NORM_WEIGHT = 1e-4
+"""Weight of the tie-breaking ``1/2 ||x / ||b|| ||^2`` term of ``min_max`` (its cost in
+the peak load is below this fraction of ``||b||``)."""
 
 
 def checks(op: Operator, i: int, signs: bool = True, pairs: bool = True) -> ForceChecks:
@@ -88,12 +89,15 @@ def positive(op: Operator, i: int) -> QP:
 
 
 def min_max(op: Operator, i: int) -> Conic:
-    """Variables ``z = (x, t)``; cones: equality, end faces >= 0, one SOC per contact."""
+    """Variables ``z = (x, t) / ||b||`` (forces in units of the load, which keeps the
+    interior-point iterates well scaled); cones: equality, end faces >= 0, one SOC per
+    contact.
+    """
     A, b = equalities(op, i)
     m, n = A.shape
     t = n
     scale = max(float(np.linalg.norm(b)), 1e-12)
-    blocks, rhs, cones = [np.hstack([A, np.zeros((m, 1))])], [b], [("zero", m)]
+    blocks, rhs, cones = [np.hstack([A, np.zeros((m, 1))])], [b / scale], [("zero", m)]
     uni = np.flatnonzero(op.unilateral)
     rows = np.zeros((len(uni), n + 1))
     rows[np.arange(len(uni)), uni] = -1.0
@@ -108,11 +112,11 @@ def min_max(op: Operator, i: int) -> Conic:
         rhs.append(np.zeros(len(group) + 1))
         cones.append(("soc", len(group) + 1))
     P = np.zeros((n + 1, n + 1))
-    P[:n, :n] = MIN_MAX_NORM_WEIGHT / scale * np.eye(n)
+    P[:n, :n] = MIN_MAX_NORM_WEIGHT * np.eye(n)
     q = np.zeros(n + 1)
     q[t] = 1.0
     return Conic(checks=checks(op, i, pairs=False), formulation="min_max",
-                 to_forces=lambda z: z[:n], P=P, q=q, A=np.vstack(blocks),
+                 to_forces=lambda z: scale * np.asarray(z)[:n], P=P, q=q, A=np.vstack(blocks),
                  b=np.concatenate(rhs), cones=tuple(cones))
 
 

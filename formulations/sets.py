@@ -18,17 +18,19 @@ from .convex import checks, equalities
 from .problems import LP
 
 
-def interval_problems(op: Operator, i: int) -> dict[str, tuple[LP, LP]]:
-    """``{name: (lp_min, lp_max)}``; ``lp_max`` minimizes ``-x_j``."""
+def range_problems(op: Operator, i: int, c: np.ndarray) -> tuple[LP, LP]:
+    """The two LPs bounding ``c'x`` over the rigid set: min ``c'x``, min ``-c'x``."""
     A, b = equalities(op, i)
     lb = np.where(op.unilateral, 0.0, -np.inf)
     base = checks(op, i, pairs=False)
-    problems = {}
-    for j, name in enumerate(op.names):
-        c = np.zeros(len(op.names))
-        c[j] = 1.0
-        problems[name] = tuple(
-            LP(checks=base, formulation=f"interval.{side}", c=sign * c, A=A, b=b, lb=lb)
-            for side, sign in (("min", 1.0), ("max", -1.0))
-        )
-    return problems
+    return tuple(
+        LP(checks=base, formulation=f"interval.{side}", c=sign * np.asarray(c, float), A=A, b=b,
+           lb=lb)
+        for side, sign in (("min", 1.0), ("max", -1.0))
+    )
+
+
+def interval_problems(op: Operator, i: int) -> dict[str, tuple[LP, LP]]:
+    """``{name: (lp_min, lp_max)}`` for every named component."""
+    eye = np.eye(len(op.names))
+    return {name: range_problems(op, i, eye[j]) for j, name in enumerate(op.names)}

@@ -80,3 +80,26 @@ def test_sets_multistart_points_lie_in_the_intervals(capsys):
         lo = -np.inf if entry["min"] is None else entry["min"]
         hi = np.inf if entry["max"] is None else entry["max"]
         assert all(lo - 1e-6 <= p <= hi + 1e-6 for p in points)
+
+
+def test_repro_quick_writes_all_figures_and_report(tmp_path):
+    assert main(["repro", "--quick", "--out", str(tmp_path)]) == 0
+    for n in (11, 12, 13, 14, 15):
+        assert (tmp_path / f"fig{n}.csv").is_file() and (tmp_path / f"fig{n}.png").is_file()
+    report = (tmp_path / "report.md").read_text()
+    assert "## Fig. 13" in report and "## Fig. 15" in report
+    fig13 = read_csv(tmp_path / "fig13.csv")
+    for method in ("paper", "positive", "min_max", "compliance"):
+        for k in range(1, 9):
+            values = fig13[f"F{k}_{method}"]
+            assert np.all(values[np.isfinite(values)] >= 0)
+    # complementary end faces in positive: one face of each pair at most pushes
+    assert np.all(np.minimum(fig13["F3_positive"], fig13["F4_positive"]) < 1e-6)
+    fig14 = read_csv(tmp_path / "fig14.csv")
+    # every method's axial load lies inside the shaded rigid set where it was computed
+    low, high = fig14["axial_set_min"], fig14["axial_set_max"]
+    done = ~np.isnan(low)
+    assert done.sum() >= 10
+    for method in ("paper", "positive", "compliance"):
+        v = fig14[f"axial_{method}"][done]
+        assert np.all((low[done] - 1e-6 <= v) & (v <= high[done] + 1e-6))

@@ -10,6 +10,7 @@ from driveline.dynamics import simulate
 from driveline.equilibrium import build_operator
 from experiments.analysis import intervals, solve_all
 from formulations import FORMULATIONS
+from formulations.convex import contacts
 from solvers import backends_for, solve
 from tests.conftest import variant
 
@@ -69,8 +70,11 @@ def test_indeterminate_forces_differ_between_selection_rules(paper_records, pape
     free = ~d.determinate
     # least norm with pulling end faces vs only pushing: the end faces differ
     assert np.abs(best["min_norm"] - best["positive"])[free].max() > 1.0
-    # least peak load picks another member than least norm
-    assert np.abs(best["min_max"] - best["positive"])[free].max() > 1.0
+    # least peak load: no other member has a smaller worst contact
+    peak = lambda x: max(np.linalg.norm(x[g]) for g in contacts(paper_op))  # noqa: E731
+    for name, x in best.items():
+        if name != "min_norm" and name != "min_norm_scaled":
+            assert peak(best["min_max"]) <= peak(x) * (1 + 1e-6), name
     # ... and all agree where the model determines the force
     for x in best.values():
         assert np.allclose(x[d.determinate], d.min_norm[d.determinate], rtol=1e-6, atol=1e-6)
