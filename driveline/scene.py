@@ -521,6 +521,8 @@ def _build(raw: dict, source: str) -> Scene:
         bearing_stiffness_N_m=ct.number("bearing_stiffness_N_m", 1e9, positive=True),
         friction_coefficient=ct.number("friction_coefficient", 0.0, nonnegative=True),
     )
+    if "friction" in effects and contact.friction_coefficient <= 0:
+        ct.fail("friction_coefficient", "the 'friction' effect needs a positive coefficient")
     ct.done()
 
     scene = Scene(

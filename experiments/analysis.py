@@ -8,6 +8,7 @@ import numpy as np
 
 from driveline.equilibrium import Operator
 from formulations import FORMULATIONS
+from formulations.convex import NotApplicable
 from formulations.sets import range_problems
 from solvers import Record, backends_for, solve
 
@@ -57,7 +58,12 @@ def solve_all(
                        f"{', '.join(FORMULATIONS)}")
     records = []
     for formulation in names:
-        problem = FORMULATIONS[formulation](op, i)
+        try:
+            problem = FORMULATIONS[formulation](op, i)
+        except NotApplicable:
+            if formulations is not None:
+                raise
+            continue  # not called for by this scene (e.g. friction without friction)
         usable = backends_for(problem)
         chosen = usable if solvers is None else [s for s in solvers if s in usable]
         reference = None

@@ -22,6 +22,7 @@ from driveline.equilibrium import build_operator
 from driveline.scene import SceneError, builtin_names, builtin_text, load_scene
 from experiments.analysis import intervals, solve_all
 from formulations import FORMULATIONS
+from formulations.convex import NotApplicable
 from formulations.paper import multistart
 from solvers import SolverNotFound, available
 from solvers import get as get_backend
@@ -244,7 +245,8 @@ def main(argv: list[str] | None = None) -> int:
     np.set_printoptions(precision=4, suppress=True)
     try:
         return args.func(args)
-    except (SceneError, UsageError, DynamicsError, SolverNotFound, OSError) as err:
+    except (SceneError, UsageError, DynamicsError, SolverNotFound, NotApplicable,
+            OSError) as err:
         print(f"cardan: error: {err}", file=sys.stderr)
         return 2
 

@@ -143,40 +143,119 @@ def socp_face(op: Operator, i: int) -> Conic:
     Unknowns: the operator's forces, then ``<face>.m_<e>`` (N·m) per end face, acting
     on the pin and the opposite on the yoke. Objective: least ``||x||^2 + ||m / rt||^2``.
     """
-    scene = op.scene
-    joints = {j.name: j for j in scene.joints}
-    n_shafts = len(scene.shafts)
-    kin_e = _pin_frames(op, i)
-    A0 = op.A[i]
-    columns, names, cones, weights = [], list(op.names), [], []
-    for j, name in enumerate(op.names):
-        if not op.unilateral[j]:
-            continue
+    joints = {j.name: j for j in op.scene.joints}
+    n_shafts = len(op.scene.shafts)
+    frames = _pin_frames(op, i)
+    extra = []
+    for j, name in _end_faces(op):
         joint_name, face = name.split(".")
         k = list(joints).index(joint_name)
-        rt = joints[joint_name].rt_m
         driving = face in ("F3", "F4")
-        yoke_body = k if driving else k + 1
         members = []
         for comp in (("e2", "e3") if driving else ("e3", "e1")):
-            col = np.zeros(A0.shape[0])
-            pin = 6 * (n_shafts + k) + 3
-            col[pin: pin + 3] = kin_e[comp][k]
-            col[6 * yoke_body + 3: 6 * yoke_body + 6] = -kin_e[comp][k]
+            col = np.zeros(op.A.shape[1])
+            col[6 * (n_shafts + k) + 3: 6 * (n_shafts + k) + 6] = frames[comp][k]
+            yoke = k if driving else k + 1
+            col[6 * yoke + 3: 6 * yoke + 6] = -frames[comp][k]
+            members.append((f"{name}.m_{comp}", col, 1.0 / joints[joint_name].rt_m ** 2))
+        extra.append((members, lambda idx, j=j, rt=joints[joint_name].rt_m:
+                      SecondOrderCone(apex=j, members=idx, scale=rt)))
+    return _extended(op, i, extra, "socp_face")
+
+
+def friction(op: Operator, i: int) -> Conic:
+    """``positive`` plus Coulomb friction in the joints (the scene's ``friction``
+    effect, coefficient ``friction_coefficient``); rolling bearings take none.
+
+    - end faces: a tangential force ``t`` in the face plane at the face centre,
+      ``||t|| <= mu f``;
+    - trunnion radial contacts: a force along the trunnion axis ``a``,
+      ``|a| <= mu n0 · r`` with ``n0`` the direction of the frictionless least-norm
+      radial force at the same instant: Coulomb's cone about that contact normal, an
+      inner approximation of ``|a| <= mu ||r||`` (which is not convex).
+
+    With friction, pushing both end faces of a trunnion pair would buy friction that
+    the clearance does not allow, so complementarity is imposed: the face that pushes
+    in the frictionless least-norm answer is the active one, the other is held at zero.
+    Objective: least ``||x||^2`` over forces and friction forces.
+    """
+    scene = op.scene
+    if not scene.has("friction"):
+        raise NotApplicable("formulation 'friction' needs a scene whose effects include "
+                            "'friction'")
+    mu = scene.contact.friction_coefficient
+    frameless = determinacy(op, i).min_norm
+    idle = [a if frameless[b] - frameless[a] >= 0 else b for a, b in op.pairs]
+    joints = {j.name: j for j in scene.joints}
+    n_shafts = len(scene.shafts)
+    frames = _pin_frames(op, i)
+    extra = []
+    for j, name in _end_faces(op):
+        joint_name, face = name.split(".")
+        joint, k = joints[joint_name], list(joints).index(joint_name)
+        axis = "e1" if face in ("F3", "F4") else "e2"
+        radial = {"F3": "F1", "F4": "F2", "F7": "F5", "F8": "F6"}[face]
+        sign = 1.0 if face in ("F3", "F7") else -1.0
+        yoke = k if axis == "e1" else k + 1
+        members = []
+        for comp in (("e2", "e3") if axis == "e1" else ("e3", "e1")):
+            # the radial column of the same trunnion, moved from hs to ht along the axis
+            col = op.A[i][:, op.index(f"{joint_name}.{radial}.{comp}")].copy()
+            arm = sign * (joint.ht_m - joint.hs_m) * np.cross(frames[axis][k], frames[comp][k])
+            col[6 * (n_shafts + k) + 3: 6 * (n_shafts + k) + 6] += arm
+            col[6 * yoke + 3: 6 * yoke + 6] -= arm
+            members.append((f"{name}.t_{comp}", col, 1.0))
+        extra.append((members, lambda idx, j=j: SecondOrderCone(apex=j, members=idx,
+                                                                  scale=mu)))
+        # axial friction of the radial contact on this trunnion: a force along the axis
+        # through the axis, the same line as the end face's (opposite) push
+        radial_cols = [op.index(f"{joint_name}.{radial}.{c}") for c in
+                       (("e2", "e3") if axis == "e1" else ("e3", "e1"))]
+        normal = frameless[radial_cols]
+        norm = np.linalg.norm(normal)
+        normal = normal / norm if norm > 0 else np.zeros(2)
+        along = -sign * op.A[i][:, j]
+        extra.append(([(f"{joint_name}.{radial}.t_{axis}", along, 1.0)],
+                      lambda idx, cols=radial_cols, w=mu * normal: SecondOrderCone(
+                          apex=cols[0], members=idx, scale=w[0],
+                          apex_terms=((cols[1], w[1]),))))
+    return _extended(op, i, extra, "friction", idle=idle)
+
+
+class NotApplicable(ValueError):
+    """A formulation the scene does not call for (e.g. ``friction`` without friction)."""
+
+
+def _end_faces(op: Operator):
+    return [(j, name) for j, name in enumerate(op.names) if op.unilateral[j]]
+
+
+def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
+    """``positive`` on the operator's forces plus extra named columns; ``extra`` lists
+    ``([(name, column, weight), ...], make_cone(indices))`` groups, each group's new
+    unknowns bound by the cone ``make_cone`` builds from their indices; ``idle`` are
+    columns held at zero. Objective: least ``||x||^2 + sum weight * extra^2``.
+    """
+    names, columns, weights, cones = list(op.names), [], [], []
+    for members, make_cone in extra:
+        idx = []
+        for name, col, weight in members:
+            idx.append(len(names))
+            names.append(name)
             columns.append(col)
-            members.append(len(names))
-            names.append(f"{name}.m_{comp}")
-            weights.append(1.0 / rt**2)
-        cones.append(SecondOrderCone(apex=j, members=tuple(members), scale=rt))
-    A = np.hstack([A0, np.array(columns).T])
+            weights.append(weight)
+        cones.append(make_cone(tuple(idx)))
+    A = np.hstack([op.A[i], np.array(columns).T])
     n0, n = len(op.names), A.shape[1]
     unilateral = np.concatenate([op.unilateral, np.zeros(n - n0, bool)])
     check = ForceChecks(A=A, b=op.b[i], names=tuple(names), unilateral=unilateral,
                         pairs=op.pairs, cones=tuple(cones))
     u, s, vt = np.linalg.svd(A, full_matrices=False)
     rank = int(np.sum(s > RANK_RTOL * s[0]))
-    Aeq, beq = s[:rank, None] * vt[:rank], u[:, :rank].T @ op.b[i]
-    blocks, rhs, cone_list = [Aeq], [beq], [("zero", rank)]
+    held = np.eye(n)[list(idle)]
+    blocks = [np.vstack([s[:rank, None] * vt[:rank], held])]
+    rhs = [np.concatenate([u[:, :rank].T @ op.b[i], np.zeros(len(held))])]
+    cone_list = [("zero", rank + len(held))]
     uni = np.flatnonzero(unilateral)
     rows = np.zeros((len(uni), n))
     rows[np.arange(len(uni)), uni] = -1.0
@@ -185,13 +264,13 @@ def socp_face(op: Operator, i: int) -> Conic:
     cone_list.append(("nonneg", len(uni)))
     for c in cones:
         soc = np.zeros((1 + len(c.members), n))
-        soc[0, c.apex] = -c.scale
+        soc[0] = -c.apex_row(n)
         soc[np.arange(1, 1 + len(c.members)), list(c.members)] = -1.0
         blocks.append(soc)
         rhs.append(np.zeros(1 + len(c.members)))
         cone_list.append(("soc", 1 + len(c.members)))
     P = np.diag(np.concatenate([np.ones(n0), weights]))
-    return Conic(checks=check, formulation="socp_face", P=P, q=np.zeros(n),
+    return Conic(checks=check, formulation=formulation, P=P, q=np.zeros(n),
                  A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cone_list))
 
 
@@ -216,6 +295,7 @@ FORMULATIONS = {
     "min_max": min_max,
     "socp_face": socp_face,
     "lcp": lcp,
+    "friction": friction,
 }
 """Builders by name: ``FORMULATIONS[name](op, i) -> problem``."""
 

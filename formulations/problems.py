@@ -34,11 +34,22 @@ class ProblemError(ValueError):
 
 @dataclass(frozen=True)
 class SecondOrderCone:
-    """Cone ``||x[members]|| <= scale * x[apex]`` on the named forces."""
+    """Cone ``||x[members]|| <= scale * x[apex] + sum(w * x[k] for k, w in apex_terms)``
+    on the named forces (the apex may be any linear form of them).
+    """
 
     apex: int
     members: tuple[int, ...]
     scale: float = 1.0
+    apex_terms: tuple[tuple[int, float], ...] = ()
+
+    def apex_row(self, n: int) -> np.ndarray:
+        """Coefficients of the apex's linear form over ``n`` unknowns."""
+        row = np.zeros(n)
+        row[self.apex] += self.scale
+        for k, w in self.apex_terms:
+            row[k] += w
+        return row
 
 
 @dataclass(frozen=True)
@@ -90,7 +101,7 @@ class ForceChecks:
         comp = max((max(0.0, float(min(x[i], x[j]))) for i, j in self.pairs), default=0.0)
         cone = max(
             (
-                max(0.0, float(np.linalg.norm(x[list(c.members)]) - c.scale * x[c.apex]))
+                max(0.0, float(np.linalg.norm(x[list(c.members)]) - c.apex_row(len(x)) @ x))
                 for c in self.cones
             ),
             default=0.0,

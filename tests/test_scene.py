@@ -50,6 +50,7 @@ BAD = [
     ({"effects": ["gravity", "magnetism"]}, "effects", "unknown effect"),
     ({"arrangement": "S"}, "arrangement", "one of"),
     ({"effects": ["crosspin_inertia"]}, "effects", "needs 'inertia'"),
+    ({"effects": ["friction"]}, "contact.friction_coefficient", "positive coefficient"),
     ({"torque": {"input": "10 - 5 cos(2 pi t)"}}, "torque.input", "expected a number"),
     ({"torque": {"input": {"kind": "square", "value_N_m": 1}}}, "torque.input.kind", "one of"),
     ({"torque": {"input": {"kind": "constant"}}}, "torque.input.value_N_m", "missing"),
