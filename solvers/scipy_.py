@@ -85,6 +85,20 @@ def solve_highs(problem: LP, tol=None, initvals=None, **options) -> Outcome:
                    setup_s=setup_done - start, solve_s=time.perf_counter() - setup_done)
 
 
+def _jacobian_note(problem: NLS, z: np.ndarray) -> str:
+    """Numerical rank and condition of the Jacobian at the answer (after timing): a
+    rank-deficient square system has no isolated root, so its answer is one of many.
+    """
+    if problem.jac is None or not np.all(np.isfinite(z)):
+        return ""
+    s = np.linalg.svd(problem.jac(z), compute_uv=False)
+    if not np.all(np.isfinite(s)) or s[0] == 0:
+        return ""
+    rank = int(np.sum(s > 1e-9 * s[0]))
+    cond = s[0] / s[-1] if s[-1] > 0 else float("inf")
+    return f"; jacobian rank {rank} of {len(s)}, cond {cond:.1e}"
+
+
 def solve_fsolve(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
     """MINPACK hybrid Powell (``fsolve``) with the problem's Jacobian; ``ier == 1`` is success."""
     from scipy.optimize import fsolve
@@ -94,8 +108,9 @@ def solve_fsolve(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
     z, info, ier, mesg = fsolve(problem.fun, np.asarray(z0, float), fprime=problem.jac,
                                 full_output=True, **(settings.options_for("fsolve", tol) | options))
     status = "solved" if ier == 1 and np.all(np.isfinite(info["fvec"])) else "failed"
-    return Outcome(status, z, message=f"{mesg.strip()} (nfev {info['nfev']}, ier {ier})",
-                   solve_s=time.perf_counter() - start)
+    solve_s = time.perf_counter() - start
+    return Outcome(status, z, message=f"{mesg.strip()} (nfev {info['nfev']}, ier {ier})"
+                   + _jacobian_note(problem, z), solve_s=solve_s)
 
 
 def solve_root_lm(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
@@ -110,8 +125,9 @@ def solve_root_lm(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
         status = "failed"
     else:  # status 4: a stationary point of ||F||^2, not necessarily a root
         status = "inaccurate" if sol.status == 4 else "solved"
-    return Outcome(status, sol.x, message=f"{sol.message} (nfev {sol.nfev}, status {sol.status})",
-                   solve_s=time.perf_counter() - start)
+    solve_s = time.perf_counter() - start
+    return Outcome(status, sol.x, message=f"{sol.message} (nfev {sol.nfev}, status {sol.status})"
+                   + _jacobian_note(problem, sol.x), solve_s=solve_s)
 
 
 def backends() -> list[Backend]:

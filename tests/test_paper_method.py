@@ -138,3 +138,11 @@ def test_rim_solution_balances_the_pin_with_explicit_contact_points(paper):
         scale = np.linalg.norm(op.b[0])
         assert np.linalg.norm(sum(f for _, f in contacts)) < 1e-9 * scale
         assert np.linalg.norm(sum(np.cross(p, f) for p, f in contacts)) < 1e-9 * scale * hs
+
+
+def test_records_report_the_singular_jacobian(op):
+    from solvers import solve
+
+    record = solve(build_paper(op, 0), "scipy-fsolve")
+    assert record.status == "solved"
+    assert "jacobian rank 33 of 34" in record.message
