@@ -1,0 +1,563 @@
+"""Penalty-contact simulation of the released drive line: the paper's ADAMS model.
+
+Wang & Qi check their method against an ADAMS model in which every joint is released
+and replaced by contact forces with clearances (DESIGN §1). Here the shafts and the
+cross-pins are free rigid bodies (6 DOF each) held only by contact forces of the form
+of the paper's eqs. 75-78,
+
+    f = K d^n + step(d, 0, 0, d_max, c_max) d'       for d > 0, else 0       (75)
+    step = c_max (d/d_max)^2 (3 - 2 d/d_max)  (0 < d < d_max),  c_max beyond  (78)
+
+with ``d`` the penetration beyond the clearance and ``d'`` its rate; a contact only
+pushes (``f >= 0``). The contacts:
+
+- **trunnion in its bore** (4 per cross-pin): ``d`` = distance of the trunnion's axis
+  point at ``±hs`` from the yoke's bore axis, measured in the trunnion's cross-section,
+  minus ``rb - rs``; the force acts along that offset, normal to the trunnion axis,
+  at that point. ``K`` from :func:`~driveline.contact.hertz_stiffness` (eqs. 76-77),
+  ``n`` = the scene's exponent (1.5);
+- **end face** (4 per cross-pin): ``d`` = the trunnion end's (``±ht``) distance along
+  the bore axis beyond the housing bottom at ``hb``; the force acts along the trunnion
+  axis at the end point; the same ``K``, ``n``;
+- **bearing** (per bearing point of a shaft, against its fixed ground position): radially
+  as a trunnion with clearance ``bearing_clearance_m``, and axially both ways with the
+  same clearance (each bearing locates the shaft axially, as in the rigid model where
+  each bearing carries an axial force); linear, ``K = bearing_stiffness_N_m``, ``n = 1``.
+
+So each reported force is exactly one of the equilibrium operator's columns
+(:mod:`driveline.equilibrium`) at the current configuration: radial forces normal to
+the pin's own trunnion axis, end-face forces along it, all on the cross-pin's axis.
+
+**Damping units.** "c_max = 1 % of K" (the paper, after ADAMS) is unit-free only for
+``n = 1``. We read it in ADAMS's default mm-N-s units, the units of the paper's Table 2
+and of ``d_max = 0.01 mm``: ``c_max = fraction * K * L^(n - 1)`` with ``L = 1 mm``
+(:data:`DAMPING_LENGTH_UNIT_M`). For the paper's joints (K = 4.6e10 N/m^1.5) that is
+1.5e7 N s/m; the SI reading would be sqrt(1000) = 31.6 times larger (and drives the
+integrator to 1e-9 s steps). Bearings (``n = 1``): ``0.01 s * K`` either way.
+
+**What to expect** on ``paper-penalty``: from rest the input shaft turns through the
+play (~0.07 s) before it meets the rest of the line; the impacts make the light
+intermediate shaft (J2 = 0.0152 kg m^2) rattle, nearly elastically since the step
+damping vanishes at small depths. Twice a revolution the cross-pins' axial load
+reverses and they cross their 1.5 mm axial play. These impacts, not the stiffness, set
+the step size (~10 us) and the cost.
+
+**Bodies.** Shafts: the scene's mass and principal inertias (J2 about the axis).
+Cross-pins: always the scene's ``[crosspin]`` mass and inertia about (e1, e2, e3) (a
+free body needs mass), whether or not the scene lists ``crosspin_inertia``. Gravity
+when the scene has it; the input torque about the input shaft's current axis, the load
+torque against the output shaft's. The simulation is dynamic whatever the effects.
+
+**State and integrator.** Per body: centre displacement from its rest position, a
+quaternion (body to global, renormalized where used), centre velocity, angular
+velocity in body axes; 13 numbers per body. Quaternions: no singularity for the
+shafts' unbounded spin, a polynomial right-hand side, and no re-basing (a rotation-
+vector increment would restart the integrator). Tolerances are absolute (``rtol`` at
+its floor): the O(1) quaternion components are controlled like positions, to
+``atol_m`` times 1 m, not to ``rtol`` times 1, since penetrations are micrometres. The
+problem is stiff (a 0.05 kg pin on a contact of ~1e8 N/m with up to 1.5e7 N s/m), so
+it is integrated by an implicit method: SciPy's LSODA by default (its stiff branch is
+ODEPACK's BDF, the family of ADAMS's GSTIFF, stepped in Fortran: on ``paper-penalty``
+it takes about half the wall time of SciPy's ``BDF`` and a fifth of ``Radau``, which
+are there on request). The Jacobian is a forward difference in one vectorized call:
+the columns of bodies that share no contact neighbour are perturbed together (shaft,
+pin, shaft, ... along the chain: 3 groups of 13 columns), and its sparsity is the
+bodies' contact graph. The right-hand side evaluates every contact's geometry and
+relative velocity with one sparse product, since all are linear in the bodies'
+centres, velocities, rotation matrices and their rates. The integrator's own
+``OdeSolver`` is stepped here (as ``solve_ivp`` does) to report progress and to turn a
+failure into a status.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+from scipy.integrate import BDF, LSODA, Radau
+from scipy.spatial.transform import Rotation
+
+from .contact import hertz_stiffness
+from .dynamics import simulate
+from .kinematics import rest_geometry
+from .scene import Scene
+
+DAMPING_LENGTH_UNIT_M = 1e-3
+"""Length unit in which ``c_max = fraction * K`` is read (ADAMS's mm; see the module)."""
+
+METHODS = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA}
+
+_RTOL = 1e-10
+_TAU_S = 1e-3
+"""Time scale turning the position tolerance into velocity tolerances."""
+
+
+@dataclass(frozen=True)
+class PenaltyResult:
+    """The penalty simulation sampled at ``t`` (s).
+
+    ``omega[k]``: shaft ``k``'s angular velocity about its own current axis (rad/s).
+    ``forces``: the equilibrium operator's 36 names and sign conventions (N): bearing
+    forces on the shafts in the global frame; joint contact forces on the cross-pins in
+    each pin's own current frame (``e1`` its driving trunnion axis, ``e2`` its driven
+    one, ``e3 = e1 x e2``); end faces as pushes >= 0. ``penetration``: the deepest
+    contact penetration (m) at each instant (negative: no contact). ``status`` is 0 on
+    success, -1 on failure (then ``message`` says why and samples after the failure
+    are NaN). ``nfev`` counts right-hand-side evaluations (a vectorized Jacobian call
+    counts as one), ``njev`` Jacobians, ``nlu`` LU factorizations, ``nsteps`` steps.
+    """
+
+    scene: Scene
+    t: np.ndarray
+    omega: np.ndarray
+    forces: dict[str, np.ndarray]
+    penetration: np.ndarray
+    wall_s: float
+    nfev: int
+    njev: int
+    nlu: int
+    nsteps: int
+    method: str
+    status: int
+    message: str
+
+    @property
+    def success(self) -> bool:
+        return self.status == 0
+
+
+def contact_law(d, rate, stiffness, exponent, c_max, d_max):
+    """Paper eqs. 75 and 78: ``max(0, K d^n + step(d, 0, 0, d_max, c_max) d')`` for
+    ``d > 0``, 0 otherwise (N), vectorized.
+    """
+    depth = np.maximum(d, 0.0)
+    x = np.minimum(depth / d_max, 1.0)
+    return np.maximum(stiffness * depth**exponent + c_max * x * x * (3.0 - 2.0 * x) * rate, 0.0)
+
+
+def _quadratic_rotation() -> np.ndarray:
+    """(16, 10): the products ``q_i q_j`` of a quaternion (w, x, y, z) to the nine
+    entries of ``|q|^2 R(q) = (w^2 - v.v) I + 2 v v^T + 2 w [v]x`` (row-major) and
+    ``|q|^2``: ``R`` of a quaternion of any norm in two array operations.
+    """
+    m = np.zeros((4, 4, 10))
+    entries = {
+        0: {(0, 0): 1, (1, 1): 1, (2, 2): -1, (3, 3): -1},
+        1: {(1, 2): 2, (0, 3): -2}, 2: {(1, 3): 2, (0, 2): 2},
+        3: {(1, 2): 2, (0, 3): 2}, 4: {(0, 0): 1, (1, 1): -1, (2, 2): 1, (3, 3): -1},
+        5: {(2, 3): 2, (0, 1): -2}, 6: {(1, 3): 2, (0, 2): -2}, 7: {(2, 3): 2, (0, 1): 2},
+        8: {(0, 0): 1, (1, 1): -1, (2, 2): -1, (3, 3): 1},
+        9: {(0, 0): 1, (1, 1): 1, (2, 2): 1, (3, 3): 1},
+    }
+    for column, terms in entries.items():
+        for (i, j), value in terms.items():
+            m[i, j, column] = value
+    return m.reshape(16, 10)
+
+
+def _quaternion_rate() -> np.ndarray:
+    """(12, 4): the products ``q_i w_j`` to ``q' = q (0, w) / 2`` (w in body axes)."""
+    m = np.zeros((4, 3, 4))
+    for j in range(3):
+        m[j + 1, j, 0] = -0.5  # w' = -x . w / 2
+        m[0, j, j + 1] = 0.5  # v' = (s w + v x w) / 2
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        m[i + 1, j, k + 1] = 0.5
+        m[j + 1, i, k + 1] = -0.5
+    return m.reshape(12, 4)
+
+
+_ROTATION = _quadratic_rotation()
+_QUATERNION_RATE = _quaternion_rate()
+
+
+_NEXT, _LAST = np.array([1, 2, 0]), np.array([2, 0, 1])
+
+
+def _cross(a: np.ndarray, b: np.ndarray, axis: int = 0) -> np.ndarray:
+    """``a x b`` with the components along ``axis`` (cheaper than ``np.cross`` here)."""
+    return (a.take(_NEXT, axis) * b.take(_LAST, axis)
+            - a.take(_LAST, axis) * b.take(_NEXT, axis))
+
+
+_FEATURES = 27
+"""Per body, the columns of the contact map: centre, velocity, rotation matrix and its
+rate (row-major), angular velocity, all global."""
+
+
+@dataclass(frozen=True)
+class _Contacts:
+    """Every contact, between a body ``a`` and a body ``b`` (the ground: index = number
+    of bodies).
+
+    Body ``a`` carries the point ``s`` and the axis ``e``, body ``b`` the point ``j`` and
+    the axis ``u``, in body coordinates (the ground's: global). ``radial``: ``d`` is the
+    distance of the point from ``b``'s axis line in ``a``'s cross-section, minus
+    ``offset`` (the clearance), the force normal to ``e``; else a face: ``d`` is the
+    point's height over ``j`` along ``u`` (outward) minus ``offset``, the force along
+    ``-e``. ``stiffness``, ``exponent``, ``c_max``: eqs. 75-78.
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    s: np.ndarray
+    e: np.ndarray
+    j: np.ndarray
+    u: np.ndarray
+    offset: np.ndarray
+    radial: np.ndarray
+    stiffness: np.ndarray
+    exponent: np.ndarray
+    c_max: np.ndarray
+
+
+class _Model:
+    """Bodies (shafts, then cross-pins), contacts and the right-hand side."""
+
+    def __init__(self, scene: Scene, damping_length_unit_m: float):
+        geo = rest_geometry(scene)
+        ns, nj = len(scene.shafts), len(scene.joints)
+        nb = ns + nj
+        self.scene, self.geometry, self.n_shafts, self.n_bodies = scene, geo, ns, nb
+        self.n_state, self.n_calls = 13 * nb, 0
+        cp, ct = scene.crosspin, scene.contact
+        self.mass = np.array([s.mass_kg for s in scene.shafts] + [cp.mass_kg] * nj)
+        self.inertia = np.array([s.inertia_kg_m2 for s in scene.shafts]
+                                + [cp.inertia_kg_m2] * nj)
+        self.rest_centre = np.concatenate([geo.centres, geo.joint_centres])
+        self.gravity = np.array(scene.gravity_m_s2) if scene.has("gravity") else np.zeros(3)
+        # shaft body frames at rest: columns (n1, axis, n3), J2 about the axis
+        self.rest_frame = [np.column_stack([np.cross(a, geo.plane_normal), a,
+                                            geo.plane_normal]) for a in geo.axes]
+        axis = np.array([0.0, 1.0, 0.0])  # a shaft's axis in its body coordinates
+        rows = []
+
+        def add(*row) -> int:
+            rows.append(row)
+            return len(rows) - 1
+
+        def law(stiffness: float, exponent: float) -> tuple[float, float, float]:
+            c = ct.damping_fraction_of_stiffness * stiffness
+            return stiffness, exponent, c * damping_length_unit_m ** (exponent - 1.0)
+
+        self.bearing_contacts = []  # (radial, [face, face]) per bearing, scene order
+        bearing = law(ct.bearing_stiffness_N_m, 1.0)
+        gap = ct.bearing_clearance_m
+        for k in range(ns):
+            for point in geo.bearing_points[k]:
+                s = self.rest_frame[k].T @ (point - geo.centres[k])
+                self.bearing_contacts.append((
+                    add(k, nb, s, axis, point, geo.axes[k], gap, True, *bearing),
+                    [add(k, nb, s, sign * axis, point, sign * geo.axes[k], gap, False,
+                         *bearing) for sign in (1.0, -1.0)],
+                ))
+        self.joint_contacts = []  # {"F1": contact, ...} per joint
+        for j, joint in enumerate(scene.joints):
+            hertz, index = law(hertz_stiffness(scene, joint), ct.exponent), {}
+            sides = ((j, geo.yoke_in[j], np.eye(3)[0], "F1 F2 F3 F4"),
+                     (j + 1, geo.yoke_out[j], np.eye(3)[1], "F5 F6 F7 F8"))
+            for shaft, yoke, e, labels in sides:
+                frame = self.rest_frame[shaft]
+                centre = frame.T @ (geo.joint_centres[j] - geo.centres[shaft])
+                u = frame.T @ yoke
+                for label, sign in zip(labels.split(), (1.0, -1.0, 1.0, -1.0)):
+                    if label in ("F1", "F2", "F5", "F6"):
+                        index[label] = add(ns + j, shaft, sign * joint.hs_m * e, e, centre, u,
+                                           joint.radial_clearance_m, True, *hertz)
+                    else:
+                        index[label] = add(ns + j, shaft, sign * joint.ht_m * e, sign * e,
+                                           centre, sign * u, joint.hb_m, False, *hertz)
+            self.joint_contacts.append(index)
+        c = self.c = _Contacts(*(np.array(column) for column in zip(*rows)))
+        self.d_max = ct.damping_full_depth_m
+        self.contact_map, self.contact_bias = self._contact_map()
+        # the contact force acts +F on a, -F on b; the ground's row is dropped
+        m = len(c.a)
+        signed = np.concatenate([np.eye(nb + 1)[:nb, c.a], -np.eye(nb + 1)[:nb, c.b]], axis=1)
+        self.gather_force, self.gather_moment = signed[:, :m] + signed[:, m:], signed
+        self.links = np.eye(nb, dtype=bool)
+        inner = c.b < nb
+        self.links[c.a[inner], c.b[inner]] = self.links[c.b[inner], c.a[inner]] = True
+        self.jacobian_columns = self._colour()
+
+    def _contact_map(self) -> tuple[sparse.csr_matrix, np.ndarray]:
+        """The sparse linear map (and constant) from the bodies' :data:`_FEATURES` to,
+        per contact, 7 vectors (7, 3, m): the offset ``w`` of ``a``'s point ``p`` from
+        ``b``'s point ``J``, the axes ``e`` (on ``a``) and ``u`` (on ``b``), the velocity
+        of ``a``'s material point at ``p`` less that of ``b``'s at ``J``, the arm of ``p``
+        from ``a``'s centre, the arm of ``J`` from ``b``'s centre, ``b``'s angular
+        velocity. Every one is linear in a body's centre, velocity, rotation ``R`` and
+        rate ``R'`` (``R s``, ``R' s``), so one sparse product evaluates them all.
+        """
+        c, nb = self.c, self.n_bodies
+        m = len(c.a)
+        entries: dict[tuple[int, int], float] = {}
+        bias = np.zeros((7, 3, m))
+
+        def put(quantity, i, k, body, feature, value):
+            key = ((quantity * 3 + i) * m + k, _FEATURES * body + feature)
+            entries[key] = entries.get(key, 0.0) + value
+
+        for k, (a, b) in enumerate(zip(c.a, c.b)):
+            for i in range(3):
+                put(0, i, k, a, i, 1.0)  # w = c_a + R_a s - c_b - R_b j
+                put(3, i, k, a, 3 + i, 1.0)  # v_a + R'_a s - v_b - R'_b j
+                for j in range(3):
+                    put(0, i, k, a, 6 + 3 * i + j, c.s[k, j])
+                    put(1, i, k, a, 6 + 3 * i + j, c.e[k, j])
+                    put(3, i, k, a, 15 + 3 * i + j, c.s[k, j])
+                    put(4, i, k, a, 6 + 3 * i + j, c.s[k, j])
+                if b == nb:  # the ground: R = I, at rest
+                    bias[0, i, k], bias[2, i, k], bias[5, i, k] = -c.j[k, i], c.u[k, i], c.j[k, i]
+                    continue
+                put(0, i, k, b, i, -1.0)
+                put(3, i, k, b, 3 + i, -1.0)
+                put(6, i, k, b, 24 + i, 1.0)
+                for j in range(3):
+                    put(0, i, k, b, 6 + 3 * i + j, -c.j[k, j])
+                    put(2, i, k, b, 6 + 3 * i + j, c.u[k, j])
+                    put(3, i, k, b, 15 + 3 * i + j, -c.j[k, j])
+                    put(5, i, k, b, 6 + 3 * i + j, c.j[k, j])
+        rows, cols = np.array(list(entries)).T
+        matrix = sparse.csr_matrix((list(entries.values()), (rows, cols)),
+                                   shape=(21 * m, _FEATURES * nb))
+        return matrix, bias.reshape(-1, 1)
+
+    # ------------------------------------------------------------------ state layout
+
+    def initial_state(self, t0: float) -> np.ndarray:
+        """Rest positions (cross-pins centred in their clearances), orientations and
+        speeds of the rigid model at ``t0``, centres at rest.
+        """
+        m = simulate(self.scene, [t0])
+        geo, kin = self.geometry, m.kin
+        frames = [Rotation.from_rotvec(kin.phi[k, 0] * geo.axes[k]).as_matrix()
+                  @ self.rest_frame[k] for k in range(self.n_shafts)]
+        frames += [np.column_stack([kin.e1[j, 0], kin.e2[j, 0], kin.e3[j, 0]])
+                   for j in range(len(self.scene.joints))]
+        rates = [m.omega[k, 0] * geo.axes[k] for k in range(self.n_shafts)]
+        rates += list(m.pin_omega[:, 0])
+        nb = self.n_bodies
+        return np.concatenate([
+            np.zeros(3 * nb),
+            Rotation.from_matrix(np.array(frames)).as_quat()[:, [3, 0, 1, 2]].ravel(),
+            np.zeros(3 * nb),
+            np.concatenate([f.T @ w for f, w in zip(frames, rates)]),
+        ])
+
+    # ------------------------------------------------------------------ contacts
+
+    def bodies(self, y: np.ndarray):
+        """State columns ``y`` (n, k) as (bodies, ., k) arrays: displacement, quaternion,
+        velocity, body-axis rate, rotation matrix (bodies, 3, 3, k) and global angular
+        velocity.
+        """
+        nb, k = self.n_bodies, y.shape[1]
+        u, q = y[:3 * nb].reshape(nb, 3, k), y[3 * nb:7 * nb].reshape(nb, 4, k)
+        v, w = y[7 * nb:10 * nb].reshape(nb, 3, k), y[10 * nb:].reshape(nb, 3, k)
+        quadratic = _ROTATION.T @ (q[:, :, None] * q[:, None]).reshape(nb, 16, k)
+        rot = (quadratic[:, :9] / quadratic[:, 9:]).reshape(nb, 3, 3, k)
+        return u, q, v, w, rot, (rot * w[:, None]).sum(axis=2)
+
+    def contacts(self, bodies: tuple[np.ndarray, ...]):
+        """From :meth:`bodies`: penetration ``d`` (m, k), push ``f`` (m, k), force on
+        body ``a`` (3, m, k) and the arms of the contact point from ``a``'s and ``b``'s
+        centres (3, 2m, k).
+        """
+        u, _, v, w, rot, omega = bodies
+        c, nb, k = self.c, self.n_bodies, u.shape[-1]
+        rate = _cross(rot, w[:, None], axis=2)  # R' = R [w]x: each row of R times w
+        features = np.concatenate([self.rest_centre[:, :, None] + u, v, rot.reshape(nb, 9, k),
+                                   rate.reshape(nb, 9, k), omega], axis=1)
+        vectors = self.contact_map @ features.reshape(-1, k) + self.contact_bias
+        offset, e, axis, moving, arm, arm_j, omega_b = vectors.reshape(7, 3, -1, k)
+        relative = moving - _cross(omega_b, offset)
+        # radial: the bore axis meets the trunnion's cross-section plane at p - r
+        r = offset - ((offset * e).sum(0) / (axis * e).sum(0)) * axis
+        rho = np.sqrt((r * r).sum(0))
+        radial = c.radial[:, None]
+        normal = np.where(radial, r / np.maximum(rho, 1e-300), axis)
+        d = np.where(radial, rho, (offset * axis).sum(0)) - c.offset[:, None]
+        f = contact_law(d, (normal * relative).sum(0), c.stiffness[:, None],
+                        c.exponent[:, None], c.c_max[:, None], self.d_max)
+        force = -f * np.where(radial, normal, e)
+        return d, f, force, np.concatenate([arm, offset + arm_j], axis=1)
+
+    # ------------------------------------------------------------------ dynamics
+
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        """Newton-Euler equations of every body, batched over the columns of ``y``
+        (n, k): ``m v' = F + m g``, ``J w' + w x J w = R^T M`` (body axes), ``x' = v``,
+        ``q' = q (0, w) / 2``.
+        """
+        self.n_calls += 1
+        bodies = self.bodies(y)
+        _, q, v, w, rot, _ = bodies
+        nb, ns, k = self.n_bodies, self.n_shafts, y.shape[1]
+        _, _, f, arms = self.contacts(bodies)
+        force = self.gather_force @ f
+        moment = self.gather_moment @ _cross(arms, np.concatenate([f, f], axis=1))
+        moment[:, 0] += self.scene.input_torque(t) * rot[0, :, 1]
+        moment[:, ns - 1] -= self.scene.load_torque(t) * rot[ns - 1, :, 1]
+        torque = (rot * moment.transpose(1, 0, 2)[:, :, None]).sum(axis=1)
+        inertia = self.inertia[:, :, None]
+        dw = (torque - _cross(w, inertia * w, axis=1)) / inertia
+        dq = _QUATERNION_RATE.T @ (q[:, :, None] * w[:, None]).reshape(nb, 12, k)
+        dv = force.transpose(1, 0, 2) / self.mass[:, None, None] + self.gravity[:, None]
+        return np.concatenate([v.reshape(-1, k), dq.reshape(-1, k), dv.reshape(-1, k),
+                               dw.reshape(-1, k)])
+
+    def _colour(self) -> tuple[np.ndarray, np.ndarray]:
+        """Jacobian colouring: for each state, the column of the vectorized difference
+        call that perturbs it, and the sparsity (rows x states).
+
+        Bodies go into groups that no contact links at distance <= 2 (greedy, along the
+        chain shaft, pin, shaft, ...: three groups for a chain); perturbing one group's
+        states changes disjoint rows of the right-hand side.
+        """
+        nb, ns = self.n_bodies, self.n_shafts
+        reach = (self.links.astype(int) @ self.links.astype(int)) > 0
+        chain = [body for k in range(ns) for body in (k, ns + k) if body < nb]
+        groups: list[list[int]] = []
+        for body in chain:
+            for g in groups:
+                if not reach[body, g].any():
+                    g.append(body)
+                    break
+            else:
+                groups.append([body])
+        colour = np.empty(nb, dtype=int)
+        for g, members in enumerate(groups):
+            colour[members] = g
+        # state layout: 3 displacement, 4 quaternion, 3 velocity, 3 rate per body
+        body_of = np.concatenate([np.repeat(np.arange(nb), size) for size in (3, 4, 3, 3)])
+        local = np.concatenate([np.tile(np.arange(size), nb) + first
+                                for size, first in ((3, 0), (4, 3), (3, 7), (3, 10))])
+        return 13 * colour[body_of] + local, self.links[body_of][:, body_of]
+
+    def tolerances(self, atol_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Absolute tolerances and finite-difference steps per state component:
+        ``atol_m`` on displacements and quaternions, ``atol_m / 1 ms`` on speeds.
+        """
+        nb = self.n_bodies
+        atol = np.concatenate([np.full(7 * nb, atol_m), np.full(6 * nb, atol_m / _TAU_S)])
+        return atol, 0.1 * atol
+
+    def jacobian(self, t: float, y: np.ndarray, step: np.ndarray) -> np.ndarray:
+        """Forward-difference Jacobian, all coloured groups in one vectorized call."""
+        column, sparsity = self.jacobian_columns
+        shifts = np.zeros((self.n_state, column.max() + 1))
+        shifts[np.arange(self.n_state), column] = step
+        f = self.rhs(t, np.column_stack([y, y[:, None] + shifts]))
+        return np.where(sparsity, (f[:, 1:] - f[:, :1])[:, column] / step, 0.0)
+
+
+def simulate_penalty(
+    scene: Scene,
+    times,
+    progress: Callable[[float], None] | None = None,
+    *,
+    method: str = "LSODA",
+    atol_m: float = 1e-8,
+    progress_every_s: float = 0.1,
+    damping_length_unit_m: float = DAMPING_LENGTH_UNIT_M,
+) -> PenaltyResult:
+    """Integrate the released drive line from the scene's start to ``max(times)`` and
+    sample it at ``times`` (s).
+
+    Starts from the rigid model's state at the start: shafts at rest positions, turned
+    and spinning as :func:`~driveline.dynamics.simulate` says, cross-pins centred in
+    their clearances. ``method``: one of :data:`METHODS`. ``atol_m`` is the absolute
+    tolerance on positions (m; velocities get ``atol_m / 1 ms``): 1e-7 and 1e-8 give the
+    same statistics of forces and speeds on ``paper-penalty``. ``damping_length_unit_m``:
+    the unit of "c_max = 1 % of K" (module docstring). ``progress(t)`` is called every
+    ``progress_every_s`` of simulated time. A failed integration returns
+    ``status = -1`` and its message; it raises only for bad arguments.
+    """
+    if not scene.has("penalty_dynamics"):
+        raise ValueError(
+            f"scene {scene.name!r} does not call for 'penalty_dynamics' (its effects: "
+            f"{', '.join(sorted(scene.effects)) or 'none'}); add it to the scene's effects "
+            "to run the penalty-contact simulation"
+        )
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
+    t = np.atleast_1d(np.asarray(times, float))
+    t0 = scene.time.start_s
+    if np.any(t < t0):
+        raise ValueError(f"instants before the scene's start {t0} s")
+    start = _time.perf_counter()
+    model = _Model(scene, damping_length_unit_m)
+    y0 = model.initial_state(t0)
+    atol, step = model.tolerances(atol_m)
+    order = np.argsort(t)
+    states = np.full((len(t), model.n_state), np.nan)
+    states[t == t0] = y0
+    status, message, solver, n_steps = 0, "no motion asked for", None, 0
+    t_end = float(t.max())
+    if t_end > t0:
+        solver = METHODS[method](
+            lambda time, y: model.rhs(time, y[:, None])[:, 0], t0, y0, t_end,
+            rtol=_RTOL, atol=atol, jac=lambda time, y: model.jacobian(time, y, step),
+        )
+        mark, i = t0 + progress_every_s, int(np.searchsorted(t[order], t0, side="right"))
+        try:
+            while solver.status == "running":
+                message = solver.step()
+                n_steps += 1
+                if solver.status == "failed":
+                    break
+                if not np.all(np.isfinite(solver.y)):
+                    solver.status, message = "failed", f"non-finite state at t = {solver.t} s"
+                    break
+                stop = int(np.searchsorted(t[order], solver.t, side="right"))
+                if stop > i:
+                    states[order[i:stop]] = solver.dense_output()(t[order[i:stop]]).T
+                    i = stop
+                while progress is not None and solver.t >= mark - 1e-12:
+                    progress(mark)
+                    mark += progress_every_s
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as err:
+            solver.status, message = "failed", f"{type(err).__name__}: {err}"
+        status = 0 if solver.status == "finished" else -1
+        message = message or ("finished" if status == 0 else "failed")
+    forces, omega, depth = _sample(model, states)
+    return PenaltyResult(
+        scene=scene, t=t, omega=omega, forces=forces, penetration=depth,
+        wall_s=_time.perf_counter() - start,
+        nfev=model.n_calls, njev=int(solver.njev) if solver else 0,
+        nlu=int(solver.nlu) if solver else 0, nsteps=n_steps, method=method, status=status,
+        message=message,
+    )
+
+
+def _sample(model: _Model, states: np.ndarray):
+    """Named forces (in the equilibrium operator's order), shaft speeds about their own
+    axes and the deepest penetration at sampled states (T, n).
+    """
+    bodies = model.bodies(states.T)
+    depth, push, force, _ = model.contacts(bodies)
+    rot, omega = bodies[4:]
+    scene, ns = model.scene, model.n_shafts
+    speeds = (omega[:ns] * rot[:ns, :, 1]).sum(axis=1)
+    bearings = iter(model.bearing_contacts)
+    forces = {}
+    for shaft in scene.shafts:
+        for bearing in shaft.bearings:
+            radial, faces = next(bearings)
+            total = force[:, radial] + force[:, faces].sum(axis=1)
+            for i, axis in enumerate("xyz"):
+                forces[f"bearing.{shaft.name}.{bearing.name}.{axis}"] = total[i]
+    for j, joint in enumerate(scene.joints):
+        frame, index = rot[ns + j], model.joint_contacts[j]
+        for radial, comps, faces in (("F1 F2", (1, 2), "F3 F4"), ("F5 F6", (2, 0), "F7 F8")):
+            for label in radial.split():
+                for c in comps:
+                    forces[f"{joint.name}.{label}.e{c + 1}"] = (
+                        force[:, index[label]] * frame[:, c]).sum(axis=0)
+            for label in faces.split():
+                forces[f"{joint.name}.{label}"] = push[index[label]]
+    return forces, speeds, depth.max(axis=0)
