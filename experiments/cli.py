@@ -3,7 +3,8 @@
 Subcommands: ``scene`` (list, show, dump, check), ``sets`` (rank, null space,
 determinacy and intervals of the contact forces at one instant), ``solvers`` (the
 backends present), ``solve`` (formulations x solvers at one instant), ``repro`` (the
-paper's figures).
+paper's figures), ``bench`` (throughput and accuracy vs time), ``hard`` (the hard-case
+stability suite).
 Errors in the user's input end with one message on stderr and exit code 2.
 """
 
@@ -20,6 +21,7 @@ from driveline.determinacy import DETERMINATE_TOL, determinacy
 from driveline.dynamics import DynamicsError, simulate
 from driveline.equilibrium import build_operator
 from driveline.scene import SceneError, builtin_names, builtin_text, load_scene
+from experiments import bench, hard
 from experiments.analysis import intervals, solve_all
 from formulations import FORMULATIONS
 from formulations.convex import NotApplicable
@@ -236,6 +238,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="scene of Fig. 15 (default paper-fig15: gravity +y; "
                          "paper-fig15-axial: gravity +x)")
     rp.set_defaults(func=_cmd_repro)
+
+    bench.add_parser(sub)
+    hard.add_parser(sub)
     return p
 
 

@@ -1,0 +1,382 @@
+"""``cardan hard``: the hard-case stability suite (DESIGN §4).
+
+Every case is a variant of the built-in ``paper`` scene (:data:`CASES`, one table).
+For each case x formulation x backend the suite solves a short window of instants
+and reports, per backend: the worst status, the worst residuals over the window, a
+NaN check, and how continuous the selected forces are in time: ``max_jump`` =
+``max_i max_j |x_{i+1,j} - x_{i,j}| / max_{i,j} |x_{i,j}|`` over the operator's 36
+contact forces (``inf`` when an instant has no forces).
+
+Formulations that genuinely cannot handle a case are listed once, with the reason, in
+:data:`KNOWN_FAILURES`; their failures are records like any other.
+"""
+
+from __future__ import annotations
+
+import copy
+import csv
+import json
+import math
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from driveline.contact import hertz_stiffness
+from driveline.dynamics import simulate
+from driveline.equilibrium import build_operator
+from driveline.scene import Scene, builtin_text, load_scene, scene_from_dict
+from experiments.analysis import solve_all
+from formulations import FORMULATIONS
+from solvers import Record
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
+
+SEVERITY = ("solved", "inaccurate", "unbounded", "infeasible", "failed")
+"""Statuses from best to worst: a run over a window carries its worst."""
+
+EQUILIBRIUM_BAR = 1e-8
+"""A case x formulation passes when every instant has a solved record at or below this."""
+
+TOL = 1e-10
+"""Tolerance asked of every backend (``--tol``): the suite wants each one's best."""
+
+INSTANTS, QUICK_INSTANTS = 11, 6
+"""Instants per window; the quick ones are every other full one."""
+
+QUICK_SOLVERS = ("clarabel", "numpy-kkt", "qpsolvers-daqp", "lcp-lemke", "scipy-fsolve",
+                 "scipy-root-lm")
+"""The reduced backend set of ``--quick``: at least one per formulation."""
+
+
+def _paper() -> dict:
+    return tomllib.loads(builtin_text("paper"))
+
+
+def _tables(key: str, **fields) -> Callable[[dict], dict]:
+    """Overrides replacing every entry of the array ``key`` (``shafts``, ``joints``) with
+    its ``paper`` entry updated by ``fields`` (a value, or a list with one per entry).
+    """
+    def build(paper: dict) -> dict:
+        entries = copy.deepcopy(paper[key])
+        for k, entry in enumerate(entries):
+            entry.update({f: v[k] if isinstance(v, list) else v for f, v in fields.items()})
+        return {key: entries}
+    return build
+
+
+def _mass_ratio(ratio: float) -> Callable[[dict], dict]:
+    """The intermediate shaft's mass and all its principal moments times ``ratio``."""
+    def build(paper: dict) -> dict:
+        shafts = copy.deepcopy(paper["shafts"])
+        middle = shafts[1]
+        middle["mass_kg"] *= ratio
+        middle["inertia_kg_m2"] = [ratio * j for j in middle["inertia_kg_m2"]]
+        return {"shafts": shafts}
+    return build
+
+
+def _stiffness_ratio(ratio: float) -> Callable[[dict], dict]:
+    """Bearing stiffness = ``ratio`` x the joints' linear (secant) Hertz stiffness, the
+    one the ``compliance`` formulation uses (K d_max^(n-1)).
+    """
+    def build(paper: dict) -> dict:
+        scene = load_scene("paper")
+        joint = hertz_stiffness(scene, scene.joints[0]) * \
+            scene.contact.damping_full_depth_m ** (scene.contact.exponent - 1.0)
+        return {"contact": {"bearing_stiffness_N_m": ratio * float(joint)}}
+    return build
+
+
+def _clearance(gap_m: float) -> Callable[[dict], dict]:
+    """Radial, axial and bearing clearances all ``gap_m``, the ``clearance`` effect on."""
+    def build(paper: dict) -> dict:
+        joints = copy.deepcopy(paper["joints"])
+        for j in joints:
+            j.update(rb_m=j["rs_m"] + gap_m, hb_m=j["ht_m"] + gap_m)
+        return {"joints": joints, "effects": [*paper["effects"], "clearance"],
+                "contact": {"bearing_clearance_m": gap_m}}
+    return build
+
+
+def _fixed(**overrides) -> Callable[[dict], dict]:
+    return lambda paper: overrides
+
+
+@dataclass(frozen=True)
+class Case:
+    """A hard case: ``overrides(paper_dict)`` gives the keys that replace ``paper``'s;
+    instants are spread over ``[0, stop_s]``.
+    """
+
+    name: str
+    what: str
+    overrides: Callable[[dict], dict]
+    stop_s: float = 0.5
+
+    def scene(self) -> Scene:
+        return scene_from_dict({"extends": "paper", "name": f"hard-{self.name}",
+                                **self.overrides(_paper())}, source=f"<hard case {self.name}>")
+
+
+CASES = (
+    Case("articulation-0", "both joints straight (0 deg)",
+         _tables("joints", articulation_deg=0.0)),
+    Case("articulation-1e-6rad", "both joints at 1e-6 rad (in degrees)",
+         _tables("joints", articulation_deg=math.degrees(1e-6))),
+    Case("articulation-89", "both joints at 89 deg", _tables("joints", articulation_deg=89.0)),
+    Case("W", "W arrangement (input and output not parallel)", _fixed(arrangement="W")),
+    Case("unequal-10-40", "joint angles 10 and 40 deg (non-uniform output)",
+         _tables("joints", articulation_deg=[10.0, 40.0])),
+    Case("torque-0", "no input torque: at rest under gravity",
+         _fixed(torque={"input": 0.0})),
+    Case("torque-1e6", "1e6 N m mean input torque against a 1e6 N m load (transmitted)",
+         _fixed(torque={"input": {"mean_N_m": 1e6}, "load": 1e6})),
+    Case("mass-1e6", "intermediate shaft mass and inertia x 1e6", _mass_ratio(1e6)),
+    Case("mass-1e-6", "intermediate shaft mass and inertia x 1e-6", _mass_ratio(1e-6)),
+    Case("stiffness-1e6", "bearing stiffness 1e6 x the joints' (compliance)",
+         _stiffness_ratio(1e6)),
+    Case("stiffness-1e-6", "bearing stiffness 1e-6 x the joints' (compliance)",
+         _stiffness_ratio(1e-6)),
+    Case("clearance-1e-7", "all clearances 1e-7 m, clearance effect on", _clearance(1e-7)),
+    Case("clearance-2mm", "all clearances 2 mm, clearance effect on", _clearance(2e-3)),
+    Case("surface-contact", "quasi-static, gravity only, no torque: theta1 = theta2",
+         _fixed(effects=["gravity"], torque={"input": 0.0}, initial={"speed_rad_s": 1.0})),
+    Case("gravity-horizontal", "gravity +9.8 m/s^2 along +y, normal to the articulation plane",
+         _fixed(gravity_m_s2=[0.0, 9.8, 0.0])),
+    Case("speed-1000", "initial speed 1000 rad/s (instants over 2 ms: 0.2 rad apart)",
+         _fixed(initial={"speed_rad_s": 1000.0}), stop_s=0.002),
+)
+
+KNOWN_FAILURES: dict[tuple[str, str], str] = {}
+"""``(case, formulation) -> reason`` where no backend gives a solved record at every
+instant; each was checked against the reduced (``--quick``) backend set.
+"""
+
+
+@dataclass(frozen=True)
+class Run:
+    """One case x formulation x backend: a record per instant ``t`` (s)."""
+
+    case: str
+    formulation: str
+    solver: str
+    t: tuple[float, ...]
+    records: tuple[Record, ...]
+    n_forces: int  # the operator's contact forces lead every record's x
+
+    @property
+    def forces(self) -> np.ndarray:
+        """The contact forces (instants, n_forces), N; NaN where a record has none."""
+        return np.array([r.x[: self.n_forces] for r in self.records])
+
+    @property
+    def status(self) -> str:
+        """The worst status over the window."""
+        return max((r.status for r in self.records), key=SEVERITY.index)
+
+    @property
+    def n_solved(self) -> int:
+        return sum(r.solved for r in self.records)
+
+    @property
+    def nan_free(self) -> bool:
+        """Whether every record that claims forces has finite ones."""
+        return all(np.all(np.isfinite(r.x)) for r in self.records
+                   if r.status in ("solved", "inaccurate"))
+
+    def worst(self) -> dict[str, float]:
+        """The largest of each residual over the window (``inf`` if an instant failed)."""
+        return {k: max(r.residuals[k] for r in self.records) for k in RESIDUALS}
+
+    def jumps(self) -> np.ndarray:
+        """Per instant ``max_j |x_j(t_i) - x_j(t_{i-1})| / max |x|`` (0 at the first
+        instant, ``inf`` next to an instant without forces).
+        """
+        x = self.forces
+        finite = np.all(np.isfinite(x), axis=1)
+        scale = np.abs(x[finite]).max() if finite.any() else np.inf
+        with np.errstate(invalid="ignore"):
+            step = np.abs(np.diff(x, axis=0)).max(axis=1, initial=0.0) / max(scale, 1e-300)
+        return np.concatenate([[0.0], np.where(finite[1:] & finite[:-1], step, np.inf)])
+
+    @property
+    def max_jump(self) -> float:
+        return float(self.jumps().max())
+
+    def to_json(self) -> dict:
+        """The JSON entry of ``--json``: ``forces`` at the window's middle instant."""
+        middle = len(self.records) // 2
+        return {
+            "case": self.case, "formulation": self.formulation, "solver": self.solver,
+            "status": self.status, "solved": f"{self.n_solved}/{len(self.records)}",
+            "residuals": {k: _num(v) for k, v in self.worst().items()},
+            "t_forces": self.t[middle],
+            "forces": {k: _num(v) for k, v in self.records[middle].forces().items()},
+            "max_jump": _num(self.max_jump), "nan_free": self.nan_free,
+        }
+
+
+def _num(value: float) -> float | str:
+    """A JSON-safe float: ``inf``/``nan`` as strings, read back with ``float()``."""
+    value = float(value)
+    return value if math.isfinite(value) else str(value)
+
+
+def run_case(case: Case, formulations=None, solvers=None, instants: int = INSTANTS,
+             tol: float | None = TOL) -> list[Run]:
+    """Solve ``case`` at ``instants`` instants over its window with every requested
+    formulation and backend (``None``: all).
+    """
+    t = np.linspace(0.0, case.stop_s, instants)
+    op = build_operator(simulate(case.scene(), t))
+    by: dict[tuple[str, str], list] = {}
+    for i, ti in enumerate(t):
+        for r in solve_all(op, i, formulations, solvers, tol=tol):
+            by.setdefault((r.formulation, r.solver), []).append((float(ti), r))
+    return [Run(case.name, f, s, tuple(ti for ti, _ in pairs), tuple(r for _, r in pairs),
+                len(op.names)) for (f, s), pairs in by.items()]
+
+
+def covered(runs: list[Run]) -> bool:
+    """Whether at every instant some backend's record is solved with an equilibrium
+    residual at or below :data:`EQUILIBRIUM_BAR` (``runs``: one case x formulation).
+    """
+    return all(
+        any(r.solved and r.residuals["equilibrium"] <= EQUILIBRIUM_BAR for r in records)
+        for records in zip(*(run.records for run in runs))
+    )
+
+
+def summarize(runs: list[Run]) -> list[dict]:
+    """One row per case x formulation: the best backend (most instants solved, then
+    the smallest worst residual), its worst residual and max jump, the NaN check over
+    all backends, the backends that failed somewhere, and the verdict.
+    """
+    groups: dict[tuple[str, str], list[Run]] = {}
+    for run in runs:
+        groups.setdefault((run.case, run.formulation), []).append(run)
+    rows = []
+    for (case, formulation), group in groups.items():
+        best = min(group, key=lambda r: (-r.n_solved, max(r.worst().values())))
+        rows.append({
+            "case": case, "formulation": formulation, "best": best.solver,
+            "solved": f"{best.n_solved}/{len(best.records)}",
+            "worst_residual": max(best.worst().values()), "max_jump": best.max_jump,
+            "nan_free": all(r.nan_free for r in group),
+            "failing": [f"{r.solver} ({r.status})" for r in group if r.status != "solved"],
+            "covered": covered(group), "known": KNOWN_FAILURES.get((case, formulation)),
+        })
+    return rows
+
+
+def _verdict(row: dict) -> str:
+    if row["covered"]:
+        return "ok" if row["known"] is None else "ok (known failure passed)"
+    return "known failure" if row["known"] else "FAIL"
+
+
+# ---------------------------------------------------------------------------- output
+
+
+def _table(rows: list[dict]) -> list[str]:
+    lines = [f"{'case':22s} {'formulation':16s} {'best backend':22s} {'solved':>6s} "
+             f"{'worst res':>9s} {'max jump':>9s} {'NaN-free':>8s}  verdict"]
+    for row in rows:
+        lines.append(f"{row['case']:22s} {row['formulation']:16s} {row['best']:22s} "
+                     f"{row['solved']:>6s} {row['worst_residual']:9.1e} {row['max_jump']:9.2e} "
+                     f"{'yes' if row['nan_free'] else 'NO':>8s}  {_verdict(row)}")
+    return lines
+
+
+def write_csv(runs: list[Run], path: Path) -> None:
+    """Long format: one row per case x formulation x backend x instant; a failed
+    solve is a row with ``inf`` residuals; ``jump`` is the step from the previous instant.
+    """
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["case", "formulation", "solver", "t_s", "status", *RESIDUALS, "jump",
+                    "time_s", "message"])
+        for run in runs:
+            for ti, r, jump in zip(run.t, run.records, run.jumps()):
+                w.writerow([run.case, run.formulation, run.solver, f"{ti:.6g}", r.status,
+                            *(f"{r.residuals[k]:.3e}" for k in RESIDUALS), f"{jump:.3e}",
+                            f"{r.setup_s + r.solve_s:.3e}", r.message])
+
+
+def write_md(rows: list[dict], path: Path, settings: str) -> None:
+    """The Markdown report: cases, the summary table, known and unexpected failures."""
+    lines = ["# Hard cases", "", settings, "",
+             "## Cases (variants of `paper`)", "", "| case | what | window (s) |", "|---|---|---|"]
+    lines += [f"| {c.name} | {c.what} | 0 .. {c.stop_s:g} |" for c in CASES]
+    lines += ["", "## Case x formulation: the best backend", "",
+              "| case | formulation | best backend | solved | worst residual | max jump | "
+              "NaN-free | verdict | backends failing somewhere |", "|---" * 9 + "|"]
+    lines += [f"| {r['case']} | {r['formulation']} | {r['best']} | {r['solved']} | "
+              f"{r['worst_residual']:.1e} | {r['max_jump']:.2e} | "
+              f"{'yes' if r['nan_free'] else 'NO'} | {_verdict(r)} | "
+              f"{', '.join(r['failing']) or '-'} |" for r in rows]
+    lines += ["", "## Known failures", ""]
+    lines += [f"- **{case} / {formulation}**: {reason}"
+              for (case, formulation), reason in KNOWN_FAILURES.items()]
+    unexpected = [f"{r['case']} / {r['formulation']}" for r in rows if _verdict(r) == "FAIL"]
+    lines += ["", "## Unexpected failures", "", ", ".join(unexpected) or "none", ""]
+    path.write_text("\n".join(lines))
+
+
+# ---------------------------------------------------------------------------- CLI
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cardan hard``."""
+    p = subparsers.add_parser("hard", help="hard-case stability suite (every formulation x "
+                              "backend on extreme variants of the paper scene)")
+    p.add_argument("--case", action="append", choices=[c.name for c in CASES],
+                   help="one case (repeatable); default all")
+    p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
+                   help="one formulation (repeatable); default all")
+    p.add_argument("--solver", action="append",
+                   help="one backend (repeatable); default all (--quick: a reduced set)")
+    p.add_argument("--tol", type=float, default=TOL,
+                   help=f"tolerance for every backend (default {TOL:g})")
+    p.add_argument("--quick", action="store_true",
+                   help=f"{QUICK_INSTANTS} instants, backends {', '.join(QUICK_SOLVERS)}")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--out", help="folder for hard.csv and hard.md")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Run the suite; text summary (or JSON) on stdout, progress on stderr."""
+    cases = [c for c in CASES if not args.case or c.name in args.case]
+    solvers = args.solver or (list(QUICK_SOLVERS) if args.quick else None)
+    instants = QUICK_INSTANTS if args.quick else INSTANTS
+    runs = []
+    for k, case in enumerate(cases, 1):
+        print(f"hard: case {k}/{len(cases)} {case.name}", file=sys.stderr, flush=True)
+        runs += run_case(case, args.formulation, solvers, instants, args.tol)
+    rows = summarize(runs)
+    settings = (f"{instants} instants per window, tolerance {args.tol:g}, backends: "
+                f"{', '.join(solvers) if solvers else 'all available'}; forces judged by the "
+                f"package; pass = every instant solved with equilibrium <= {EQUILIBRIUM_BAR:g}")
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        write_csv(runs, out / "hard.csv")
+        write_md(rows, out / "hard.md", settings)
+    if args.json:
+        print(json.dumps({"cases": [r.to_json() for r in runs]}, indent=2))
+        return 0
+    print(settings)
+    print("\n".join(_table(rows)))
+    for (case, formulation), reason in KNOWN_FAILURES.items():
+        if case in {c.name for c in cases}:
+            print(f"known failure {case} / {formulation}: {reason}")
+    return 0
