@@ -45,8 +45,11 @@ SEVERITY = ("solved", "inaccurate", "unbounded", "infeasible", "failed")
 EQUILIBRIUM_BAR = 1e-8
 """A case x formulation passes when every instant has a solved record at or below this."""
 
-TOL = 1e-10
-"""Tolerance asked of every backend (``--tol``): the suite wants each one's best."""
+TOL = 1e-8
+"""Tolerance asked of every backend (``--tol``), the bar the suite asserts. Tighter
+asks find out the solvers, not the cases: at 1e-9 and below Clarabel reports
+``AlmostSolved`` on a third of the ``min_max`` instants (package residuals ~1e-12),
+so those records are ``inaccurate``."""
 
 INSTANTS, QUICK_INSTANTS = 11, 6
 """Instants per window; the quick ones are every other full one."""
@@ -155,7 +158,22 @@ CASES = (
          _fixed(initial={"speed_rad_s": 1000.0}), stop_s=0.002),
 )
 
-KNOWN_FAILURES: dict[tuple[str, str], str] = {}
+_RANK = "its 34x34 Jacobian is singular everywhere (rank 33 of 34, the closed loop)"
+
+KNOWN_FAILURES: dict[tuple[str, str], str] = {
+    ("torque-0", "paper"): "with no torque the driving trunnions of uj1 carry no radial "
+        "load (least-norm |F1| ~ 1e-11 N), so their contact angles, and with them the rim "
+        "points of eqs. 33-36, are 0/0; fsolve reports 'converged' at an equilibrium "
+        "residual of 7e-2, root(lm) stalls at 4e-2; " + _RANK,
+    ("surface-contact", "paper"): "theta1 = theta2 makes eq. 33 divide by zero; fsolve "
+        "makes no progress, root(lm) stalls at residuals 3e-4 .. 2e-3",
+    ("articulation-89", "paper"): "at 89 deg the Jacobian's condition reaches 1e18-1e19; "
+        "fsolve makes no progress at the first instants, root(lm) stalls at 1.5e-5; "
+        + _RANK,
+    ("mass-1e6", "paper"): "with the intermediate shaft 1e6 times heavier the Jacobian's "
+        "rank drops to 27-29 of 34 and the residual stalls at 1e-7 .. 2e-6 (lm) or worse "
+        "(fsolve), above the 1e-8 bar",
+}
 """``(case, formulation) -> reason`` where no backend gives a solved record at every
 instant; each was checked against the reduced (``--quick``) backend set.
 """

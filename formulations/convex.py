@@ -10,7 +10,11 @@ contact forces, N) or map back to them with ``to_forces``.
   strongly it acts on the bodies, so the answer does not depend on whether a force
   is a bearing's or a trunnion's.
 - ``positive``: ``min_norm`` with the end faces pushing only (``F3, F4, F7, F8 >= 0``);
-  complementarity of each end-face pair falls out of the least norm.
+  complementarity of each end-face pair falls out of the least norm, exactly with an
+  active-set solver; at a pair that carries no load, pushing both faces by ``d`` raises
+  the objective only by ``d^2``, so an interior-point solver leaves both at
+  ``~sqrt(tol) ||b||`` (seen with Clarabel at 1e6 N m: 7e-4) and its record is
+  ``inaccurate``.
 - ``min_max``: least peak contact load ``t`` with ``||f_c|| <= t`` for every contact
   (a bearing's 3-vector, a trunnion's radial 2-vector, an end face), then least norm
   (weight ``MIN_MAX_NORM_WEIGHT``) to make the answer unique; end-face pairs may both
@@ -81,11 +85,16 @@ def min_norm_scaled(op: Operator, i: int, reference_length_m: float = 1.0) -> LS
 
 
 def positive(op: Operator, i: int) -> QP:
+    """Unknowns in units of ``||b||`` (as ``min_max``): interior-point QP solvers keep
+    their relative accuracy from zero to very large loads.
+    """
     n = len(op.names)
     lb = np.where(op.unilateral, 0.0, -np.inf)
     A, b = equalities(op, i)
-    return QP(checks=checks(op, i), formulation="positive", P=np.eye(n), q=np.zeros(n),
-              A=A, b=b, lb=lb)
+    scale = max(float(np.linalg.norm(b)), 1e-12)
+    return QP(checks=checks(op, i), formulation="positive",
+              to_forces=lambda z: scale * np.asarray(z), P=np.eye(n), q=np.zeros(n),
+              A=A, b=b / scale, lb=lb)
 
 
 def min_max(op: Operator, i: int) -> Conic:
@@ -142,6 +151,10 @@ def socp_face(op: Operator, i: int) -> Conic:
 
     Unknowns: the operator's forces, then ``<face>.m_<e>`` (N·m) per end face, acting
     on the pin and the opposite on the yoke. Objective: least ``||x||^2 + ||m / rt||^2``.
+
+    Complementarity is imposed as in ``friction``: with moments, pushing both faces of
+    a pair would buy moment capacity that the axial clearance does not allow (only one
+    face of a pair can touch), so the face idle in the least-norm answer is held at 0.
     """
     joints = {j.name: j for j in op.scene.joints}
     n_shafts = len(op.scene.shafts)
@@ -160,7 +173,7 @@ def socp_face(op: Operator, i: int) -> Conic:
             members.append((f"{name}.m_{comp}", col, 1.0 / joints[joint_name].rt_m ** 2))
         extra.append((members, lambda idx, j=j, rt=joints[joint_name].rt_m:
                       SecondOrderCone(apex=j, members=idx, scale=rt)))
-    return _extended(op, i, extra, "socp_face")
+    return _extended(op, i, extra, "socp_face", idle=_idle_faces(op, i))
 
 
 def friction(op: Operator, i: int) -> Conic:
@@ -185,7 +198,6 @@ def friction(op: Operator, i: int) -> Conic:
                             "'friction'")
     mu = scene.contact.friction_coefficient
     frameless = determinacy(op, i).min_norm
-    idle = [a if frameless[b] - frameless[a] >= 0 else b for a, b in op.pairs]
     joints = {j.name: j for j in scene.joints}
     n_shafts = len(scene.shafts)
     frames = _pin_frames(op, i)
@@ -219,11 +231,19 @@ def friction(op: Operator, i: int) -> Conic:
                       lambda idx, cols=radial_cols, w=mu * normal: SecondOrderCone(
                           apex=cols[0], members=idx, scale=w[0],
                           apex_terms=((cols[1], w[1]),))))
-    return _extended(op, i, extra, "friction", idle=idle)
+    return _extended(op, i, extra, "friction", idle=_idle_faces(op, i))
 
 
 class NotApplicable(ValueError):
     """A formulation the scene does not call for (e.g. ``friction`` without friction)."""
+
+
+def _idle_faces(op: Operator, i: int) -> list[int]:
+    """Per end-face pair, the face that does not push in the least-norm answer (the
+    pair's columns are opposite, so exactly one of the two is >= 0 there).
+    """
+    least = determinacy(op, i).min_norm
+    return [a if least[b] - least[a] >= 0 else b for a, b in op.pairs]
 
 
 def _end_faces(op: Operator):
@@ -234,7 +254,9 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     """``positive`` on the operator's forces plus extra named columns; ``extra`` lists
     ``([(name, column, weight), ...], make_cone(indices))`` groups, each group's new
     unknowns bound by the cone ``make_cone`` builds from their indices; ``idle`` are
-    columns held at zero. Objective: least ``||x||^2 + sum weight * extra^2``.
+    columns held at zero. Objective: least ``||x||^2 + sum weight * extra^2``. The
+    solver's unknowns are the forces in units of ``||b||`` (as in ``min_max``), which
+    keeps interior-point iterates well scaled from zero to very large loads.
     """
     names, columns, weights, cones = list(op.names), [], [], []
     for members, make_cone in extra:
@@ -254,7 +276,8 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     rank = int(np.sum(s > RANK_RTOL * s[0]))
     held = np.eye(n)[list(idle)]
     blocks = [np.vstack([s[:rank, None] * vt[:rank], held])]
-    rhs = [np.concatenate([u[:, :rank].T @ op.b[i], np.zeros(len(held))])]
+    scale = max(float(np.linalg.norm(op.b[i])), 1e-12)
+    rhs = [np.concatenate([u[:, :rank].T @ op.b[i] / scale, np.zeros(len(held))])]
     cone_list = [("zero", rank + len(held))]
     uni = np.flatnonzero(unilateral)
     rows = np.zeros((len(uni), n))
@@ -270,8 +293,9 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
         rhs.append(np.zeros(1 + len(c.members)))
         cone_list.append(("soc", 1 + len(c.members)))
     P = np.diag(np.concatenate([np.ones(n0), weights]))
-    return Conic(checks=check, formulation=formulation, P=P, q=np.zeros(n),
-                 A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cone_list))
+    return Conic(checks=check, formulation=formulation, to_forces=lambda z: scale * np.asarray(z),
+                 P=P, q=np.zeros(n), A=np.vstack(blocks), b=np.concatenate(rhs),
+                 cones=tuple(cone_list))
 
 
 def _pin_frames(op: Operator, i: int) -> dict[str, np.ndarray]:
@@ -327,6 +351,17 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     gaps. ``law="hertz"``: ``f = K d^n`` (bearings stay linear), ``phi* = n/(n+1)
     K^(-1/n) ||f||^((n+1)/n)`` through power cones. Gaps are the scene's clearances and
     enter only when it calls for ``clearance`` (or ``clearance=True``).
+
+    In the conic form each end-face pair (opposite columns, the same law and gap) is one
+    signed axial force ``a`` with ``F_a = max(a, 0)``, ``F_b = max(-a, 0)``: the same
+    problem, since its optimum never presses both faces, but with complementarity exact
+    by construction instead of to the interior-point tolerance (the Hertz energy
+    ``~ f^(5/3)`` is too flat near 0 to pin an idle face down).
+
+    The solver's unknowns are the forces in units of ``sb = ||b||`` and the objective is
+    divided by its largest coefficient, so the data stay O(1) from zero to very large
+    loads (the power-cone epigraphs scale by ``sb^((n+1)/n)``, which leaves their cone
+    rows unchanged).
     """
     scene = op.scene
     use_gaps = scene.has("clearance") if clearance is None else clearance
@@ -336,19 +371,30 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     m, n = A.shape
     is_bearing = [op.names[g[0]].startswith("bearing.") for g, _, _ in laws]
     name = "compliance" if law == "linear" else "compliance_hertz"
+    sb = max(float(np.linalg.norm(b)), 1e-12)
+    b = b / sb
     if law == "linear" and not use_gaps:
         p = np.zeros(n)
         for (group, k, _), bearing in zip(laws, is_bearing):
             p[group] = 1.0 / (k if bearing else k * d_ref ** (n_exp - 1.0))
-        return QP(checks=checks(op, i), formulation=name, P=np.diag(p), q=np.zeros(n), A=A, b=b,
+        return QP(checks=checks(op, i), formulation=name, to_forces=lambda z: sb * np.asarray(z),
+                  P=np.diag(p / p.max()), q=np.zeros(n), A=A, b=b,
                   lb=np.where(op.unilateral, 0.0, -np.inf))
-    # conic form: z = (x, r_c per contact, s_c per power-law contact)
+    # conic form: z = (x, r_c per contact, s_c per power-law contact); the second face
+    # of each pair is held at 0, the first one signed
+    merged = {b_: a_ for a_, b_ in op.pairs}
+    kept = [c for c, (group, _, _) in enumerate(laws) if group[0] not in merged]
+    laws, is_bearing = [laws[c] for c in kept], [is_bearing[c] for c in kept]
     nc = len(laws)
     power = [c for c, bearing in enumerate(is_bearing) if law == "hertz" and not bearing]
     nz = n + nc + len(power)
     P, q = np.zeros((nz, nz)), np.zeros(nz)
-    blocks, rhs, cones = [np.hstack([A, np.zeros((m, nz - n))])], [b], [("zero", m)]
-    uni = np.flatnonzero(op.unilateral)
+    held = np.zeros((len(merged), nz))
+    held[np.arange(len(merged)), list(merged)] = 1.0
+    blocks = [np.vstack([np.hstack([A, np.zeros((m, nz - n))]), held])]
+    rhs, cones = [np.concatenate([b, np.zeros(len(merged))])], [("zero", m + len(merged))]
+    uni = [j for j in np.flatnonzero(op.unilateral) if j not in merged and j not in
+           merged.values()]
     rows = np.zeros((len(uni), nz))
     rows[np.arange(len(uni)), uni] = -1.0
     blocks.append(rows)
@@ -365,15 +411,24 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
         q[r] = gap if use_gaps else 0.0
         if c in power:
             s = n + nc + power.index(c)
-            q[s] = n_exp / (n_exp + 1.0) * k ** (-1.0 / n_exp)
+            q[s] = n_exp / (n_exp + 1.0) * k ** (-1.0 / n_exp) * sb ** (1.0 / n_exp)
             cone = np.zeros((3, nz))
             cone[0, s], cone[2, r] = -1.0, -1.0
             blocks.append(cone)
             rhs.append(np.array([0.0, 1.0, 0.0]))
             cones.append(("pow", n_exp / (n_exp + 1.0)))
         else:
-            P[r, r] = 1.0 / (k if bearing else k * d_ref ** (n_exp - 1.0))
-    return Conic(checks=checks(op, i), formulation=name, to_forces=lambda z: z[:n], P=P, q=q,
+            P[r, r] = sb / (k if bearing else k * d_ref ** (n_exp - 1.0))
+    unit = max(np.abs(q).max(), P.max())
+
+    def to_forces(z):
+        x = sb * np.asarray(z, float)[:n]
+        for b_, a_ in merged.items():
+            x[a_], x[b_] = max(x[a_], 0.0), max(-x[a_], 0.0)
+        return x
+
+    return Conic(checks=checks(op, i), formulation=name, to_forces=to_forces, P=P / unit,
+                 q=q / unit,
                  A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones))
 
 
