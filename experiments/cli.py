@@ -5,6 +5,7 @@ determinacy and intervals of the contact forces at one instant), ``solvers`` (th
 backends present), ``solve`` (formulations x solvers at one instant), ``repro`` (the
 paper's figures), ``bench`` (throughput and accuracy vs time), ``hard`` (the hard-case
 stability suite).
+``sweep`` (parameter studies, local processes or Dask; resumable CSV).
 Errors in the user's input end with one message on stderr and exit code 2.
 """
 
@@ -21,7 +22,7 @@ from driveline.determinacy import DETERMINATE_TOL, determinacy
 from driveline.dynamics import DynamicsError, simulate
 from driveline.equilibrium import build_operator
 from driveline.scene import SceneError, builtin_names, builtin_text, load_scene
-from experiments import bench, hard
+from experiments import bench, hard, sweep
 from experiments.analysis import intervals, solve_all
 from formulations import FORMULATIONS
 from formulations.convex import NotApplicable
@@ -241,6 +242,7 @@ def _parser() -> argparse.ArgumentParser:
 
     bench.add_parser(sub)
     hard.add_parser(sub)
+    sweep.add_parser(sub)
     return p
 
 

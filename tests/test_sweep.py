@@ -1,0 +1,180 @@
+import argparse
+import csv
+import json
+import math
+import shutil
+import socket
+import sys
+
+import pytest
+
+from experiments import sweep
+from experiments.cli import main
+
+ARGS = ["sweep", "--angle", "0", "--angle", "30", "--amplitude", "-5", "--formulation",
+        "min_norm", "--formulation", "positive", "--quick"]
+TIMES = ("simulate_s", "solve_s", "total_s")
+
+
+def rows(folder):
+    with open(folder / "sweep.csv", newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def by_key(table):
+    return {tuple(r[k] for k in sweep.KEY): r for r in table}
+
+
+def same_results(a, b):
+    """Equal rows up to timing and round-off (forces to 1e-6 relative)."""
+    assert a.keys() == b.keys()
+    for key in a:
+        for column in sweep.COLUMNS:
+            x, y = a[key][column], b[key][column]
+            if column in TIMES or column == "max_equilibrium":
+                continue
+            if column in sweep.PEAKS or column.startswith("speed_ratio"):
+                assert float(x) == pytest.approx(float(y), rel=1e-6, abs=1e-9), (key, column)
+            else:
+                assert x == y, (key, column)
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory):
+    """The tiny sweep on the process pool: 2 angles x 1 amplitude x 2 formulations."""
+    out = tmp_path_factory.mktemp("sweep")
+    assert main([*ARGS, "--workers", "2", "--out", str(out)]) == 0
+    return out
+
+
+def test_pool_rows_and_physics(base):
+    table = rows(base)
+    assert [(r["angle_deg"], r["formulation"]) for r in table] == [
+        ("0", "min_norm"), ("0", "positive"), ("30", "min_norm"), ("30", "positive")]
+    assert {r["solver"] for r in table} == {"numpy-kkt", "qpsolvers-daqp"}
+    for r in table:
+        assert r["status"] == "solved" and r["n_solved"] == "6"
+        assert float(r["max_equilibrium"]) <= 1e-8
+        assert r["amplitude_N_m"] == "-5" and r["instants"] == "6" and r["stop_s"] == "0.5"
+        # Z arrangement, equal angles: the output turns with the input at any angle
+        assert float(r["speed_ratio_output_max"]) == pytest.approx(1.0, abs=1e-12)
+    at = {(r["angle_deg"], r["formulation"]): r for r in table}
+    # behind one joint at gamma the second shaft peaks at 1/cos(gamma); straight: 1
+    assert float(at["0", "min_norm"]["speed_ratio_shaft2_max"]) == pytest.approx(1.0, abs=1e-12)
+    assert float(at["30", "min_norm"]["speed_ratio_shaft2_max"]) == pytest.approx(
+        1 / math.cos(math.radians(30)), rel=1e-9)
+    # a straight drive line loads its bearings only in the vertical (gravity) plane; at 30
+    # deg the joints' secondary couples load them out of plane, and that load is
+    # determinate, so every formulation gives the same
+    for f in ("min_norm", "positive"):
+        assert float(at["0", f]["peak_input_out_of_plane_N"]) < 1e-9
+        assert float(at["0", f]["peak_input_radial_N"]) > 100.0
+    bent = [float(at["30", f]["peak_input_out_of_plane_N"]) for f in ("min_norm", "positive")]
+    assert bent[0] > 0.1 and bent[1] == pytest.approx(bent[0], rel=1e-6)
+    report = (base / "sweep.md").read_text()
+    assert "Cost per point" in report and "processes (2 workers)" in report
+    assert "min_norm (numpy-kkt), positive (qpsolvers-daqp)" in report
+
+
+def test_rerun_computes_nothing_and_prints_json(base, tmp_path, capsys):
+    out = tmp_path / "again"
+    shutil.copytree(base, out)
+    before = (out / "sweep.csv").read_bytes()
+    assert main([*ARGS, "--out", str(out), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert "2 resumed" in captured.err and "0 to run" in captured.err
+    assert (out / "sweep.csv").read_bytes() == before
+    report = json.loads(captured.out)
+    assert [r["formulation"] for r in report["rows"]] == [r["formulation"] for r in rows(out)]
+    first = report["rows"][0]
+    assert first["n_solved"] == 6 and isinstance(first["peak_joint1_N"], float)
+    assert report["cost"]["points"] == 2 and report["cost"]["mean_s"] > 0
+
+
+def test_deleted_row_and_cut_line_only_that_row_is_recomputed(base, tmp_path, capsys):
+    out = tmp_path / "again"
+    shutil.copytree(base, out)
+    lines = (out / "sweep.csv").read_text().splitlines(keepends=True)
+    gone = next(line for line in lines if line.startswith("paper,0.5,6,30,-5,positive,"))
+    # the row deleted, and a killed sweep's half-written line at the end
+    kept = [line for line in lines if line is not gone]
+    (out / "sweep.csv").write_text("".join(kept) + gone[:40])
+    assert main([*ARGS, "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "1 resumed" in err and "1 to run" in err
+    old, new = by_key(rows(base)), by_key(rows(out))
+    assert len(rows(out)) == 4
+    same_results(old, new)
+    for key, row in old.items():  # the untouched rows keep their timings: not recomputed
+        if key[5] != "positive" or key[3] != "30":
+            assert new[key] == row
+
+
+def test_dask_gives_the_pool_rows(base, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        assert main([*ARGS, "--out", str(tmp_path), "--scheduler",
+                     cluster.scheduler_address]) == 0
+    same_results(by_key(rows(base)), by_key(rows(tmp_path)))
+    assert "Backend: dask at" in (tmp_path / "sweep.md").read_text()
+
+
+def test_missing_dask_names_the_extra(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)
+    assert main([*ARGS, "--out", str(tmp_path), "--scheduler", "tcp://127.0.0.1:8786"]) == 2
+    assert 'pip install -e ".[dask]"' in capsys.readouterr().err
+    assert not (tmp_path / "sweep.csv").exists()
+
+
+def test_unreachable_scheduler_is_one_message(tmp_path, capsys):
+    pytest.importorskip("distributed")
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    assert main([*ARGS, "--out", str(tmp_path), "--scheduler", f"tcp://127.0.0.1:{port}",
+                 "--timeout", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("cardan: error: cannot reach the Dask scheduler") and "Traceback" \
+        not in err
+
+
+def test_bad_requests_exit_2(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["sweep", "--formulation", "nonsense", "--out", str(tmp_path)])
+    assert exit_.value.code == 2
+    constant = tmp_path / "constant.toml"
+    constant.write_text('extends = "paper"\n[torque]\ninput = 10.0\n')
+    for extra, message in (
+        (["--formulation", "friction"], "needs a scene whose effects include 'friction'"),
+        (["--formulation", "lcp", "--solver", "numpy-kkt"], "backends that do: lcp-lemke"),
+        (["--solver", "no-such-backend"], "unknown backend"),
+        (["--angles", "0:30"], "expected a number or a:b:n"),
+        ([str(constant), "--amplitude", "5"], "input torque is constant"),
+        (["--instants", "0"], "at least 1"),
+    ):
+        assert main(["sweep", "--quick", "--out", str(tmp_path), *extra]) == 2, extra
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "sweep.csv").exists()
+
+
+def test_unphysical_angle_is_a_failed_row(tmp_path):
+    assert main(["sweep", "--angles", "90:95:2", "--formulation", "min_norm", "--quick",
+                 "--workers", "1", "--out", str(tmp_path)]) == 0
+    table = rows(tmp_path)
+    assert [r["angle_deg"] for r in table] == ["90", "95"]
+    for r in table:
+        assert r["status"] == "failed" and r["max_equilibrium"] == "inf"
+        assert "must be below 90 deg" in r["message"] and r["peak_joint1_N"] == "nan"
+
+
+def test_point_scene_sets_every_joint_and_the_amplitude():
+    parser = argparse.ArgumentParser()
+    sweep.add_parser(parser.add_subparsers())
+    study = sweep.plan(parser.parse_args(["sweep", "--angle", "12", "--amplitude", "7",
+                                          "--formulation", "min_norm"]))
+    scene = sweep.point_scene(study.task(12.0, 7.0, study.methods))
+    assert [j.articulation_deg for j in scene.joints] == [12.0, 12.0]
+    torque = scene.input_torque
+    assert (torque.mean_N_m, torque.amplitude_N_m, torque.frequency_hz) == (10.0, 7.0, 1.0)
+    assert study.methods == (("min_norm", "numpy-kkt"),)
