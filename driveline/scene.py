@@ -458,6 +458,9 @@ def _build(raw: dict, source: str) -> Scene:
     if "crosspin_inertia" in effects and "inertia" not in effects:
         top.fail("effects", "'crosspin_inertia' needs 'inertia' (a quasi-static analysis "
                  "has no d'Alembert terms)")
+    if "penalty_dynamics" in effects and "inertia" not in effects:
+        top.fail("effects", "'penalty_dynamics' needs 'inertia' (the penalty simulation is "
+                 "dynamic; its rigid counterpart must be too)")
 
     frame_t = top.table("frame", {})
     frame = Frame(

@@ -183,7 +183,7 @@ def _cmd_repro(args) -> int:
     from paper_repro.repro import FIGURES, run_repro
 
     run_repro(args.scene, sorted(set(args.fig or FIGURES)), args.out, args.quick,
-              args.fig15_scene, progress=_progress)
+              args.fig15_scene, progress=_progress, penalty=args.penalty)
     return 0
 
 
@@ -234,7 +234,9 @@ def _parser() -> argparse.ArgumentParser:
     rp.add_argument("--fig", type=int, action="append", choices=FIGURES,
                     help="one figure (repeatable); default all")
     rp.add_argument("--out", default="results", help="output folder (default results/)")
-    rp.add_argument("--quick", action="store_true", help="first 0.5 s only (tests, CI)")
+    rp.add_argument("--quick", action="store_true", help="first 0.15 s only (tests, CI)")
+    rp.add_argument("--no-penalty", dest="penalty", action="store_false",
+                    help="leave out the penalty-contact simulation (the slow part)")
     rp.add_argument("--fig15-scene", default="paper-fig15",
                     help="scene of Fig. 15 (default paper-fig15: gravity +y; "
                          "paper-fig15-axial: gravity +x)")

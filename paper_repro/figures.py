@@ -32,16 +32,21 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     return {name: data[name] for name in data.dtype.names}
 
 
-def fig11(motion: Motion, out: Path) -> Path:
-    """Fig. 11: angular velocities of the input and output shafts (rad/s)."""
-    csv = write_csv(
-        Path(out) / "fig11.csv",
-        {"t": motion.t, "omega_input": motion.omega[0], "omega_output": motion.omega[-1]},
-    )
+def fig11(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None) -> Path:
+    """Fig. 11: angular velocities of the input and output shafts (rad/s); with
+    ``penalty_omega`` (shafts, T) the penalty simulation's beside the rigid model's.
+    """
+    columns = {"t": motion.t, "omega_input": motion.omega[0], "omega_output": motion.omega[-1]}
+    if penalty_omega is not None:
+        columns |= {"omega_input_penalty": penalty_omega[0],
+                    "omega_output_penalty": penalty_omega[-1]}
+    csv = write_csv(Path(out) / "fig11.csv", columns)
     _plot_grid(
         csv,
-        [("(a) input shaft", [("omega_input", "input")]),
-         ("(b) output shaft", [("omega_output", "output")])],
+        [(f"({p}) {name} shaft", [(c, label) for c, label in
+                                  ((f"omega_{name}", "rigid model"),
+                                   (f"omega_{name}_penalty", "penalty")) if c in columns])
+         for p, name in (("a", "input"), ("b", "output"))],
         "angular velocity [rad/s]",
         f"Fig. 11: input and output angular velocity ({motion.scene.name})",
         ncols=1,
@@ -49,13 +54,17 @@ def fig11(motion: Motion, out: Path) -> Path:
     return csv
 
 
-def fig12(motion: Motion, out: Path) -> Path:
-    """Fig. 12: angular velocity of the intermediate shaft (rad/s)."""
-    csv = write_csv(Path(out) / "fig12.csv",
-                    {"t": motion.t, "omega_intermediate": motion.omega[1]})
+def fig12(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None) -> Path:
+    """Fig. 12: angular velocity of the intermediate shaft (rad/s), rigid and penalty."""
+    columns = {"t": motion.t, "omega_intermediate": motion.omega[1]}
+    if penalty_omega is not None:
+        columns["omega_intermediate_penalty"] = penalty_omega[1]
+    csv = write_csv(Path(out) / "fig12.csv", columns)
     _plot_grid(
         csv,
-        [("intermediate shaft", [("omega_intermediate", "intermediate")])],
+        [("intermediate shaft", [(c, label) for c, label in
+                                 (("omega_intermediate", "rigid model"),
+                                  ("omega_intermediate_penalty", "penalty")) if c in columns])],
         "angular velocity [rad/s]",
         f"Fig. 12: intermediate shaft angular velocity ({motion.scene.name})",
         ncols=1,

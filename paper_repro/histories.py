@@ -9,12 +9,15 @@ as NaN in the history (and counted), never drawn as if fine.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from driveline.equilibrium import Operator
+from driveline.penalty import PenaltyResult, simulate_penalty
+from driveline.scene import Scene, SceneError
 from formulations import FORMULATIONS
 from solvers import solve
 
@@ -66,3 +69,37 @@ def history(op: Operator, method: str, solver: str | None = None,
         if progress and (i + 1) % 200 == 0:
             progress(f"repro: {method} ({solver}) {i + 1}/{len(op.t)} instants")
     return History(method, solver, forces, tuple(statuses), seconds)
+
+
+RELEASED = frozenset({"clearance", "crosspin_inertia", "penalty_dynamics"})
+"""Effects that turn a scene into its penalty-contact (ADAMS-style) counterpart."""
+
+
+def released(scene: Scene) -> Scene:
+    """``scene`` with every joint released (``paper`` gives ``paper-penalty``'s model):
+    the same bodies, loads and clearances, contacts by penalty forces (eqs. 75-78).
+    """
+    if scene.has("penalty_dynamics"):
+        return scene
+    if not scene.has("inertia"):
+        raise SceneError(f"scene {scene.name!r}: the penalty simulation is dynamic and needs "
+                         "the 'inertia' effect")
+    return dataclasses.replace(
+        scene, name=f"{scene.name}-penalty", effects=scene.effects | RELEASED,
+        description=f"{scene.description}; joints released (penalty contacts)")
+
+
+def penalty_history(scene: Scene, names: tuple[str, ...], times,
+                    progress: Callable[[str], None] | None = None
+                    ) -> tuple[History, PenaltyResult]:
+    """The penalty simulation of ``released(scene)`` sampled at ``times`` as a History
+    in the operator's ``names`` (NaN after a failed integration), and its raw result.
+    """
+    scene = released(scene)
+    end = float(np.max(times))
+    report = None if progress is None else (
+        lambda t: progress(f"repro: penalty simulation of {scene.name} at {t:.2f} of {end:g} s"))
+    result = simulate_penalty(scene, times, report, progress_every_s=max(end / 10, 0.05))
+    forces = np.column_stack([result.forces[n] for n in names])
+    statuses = tuple("solved" if np.all(np.isfinite(row)) else "failed" for row in forces)
+    return History("penalty", f"scipy-{result.method}", forces, statuses, result.wall_s), result
