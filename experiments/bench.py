@@ -22,11 +22,8 @@ from __future__ import annotations
 
 import csv
 import datetime
-import importlib.metadata
 import json
 import math
-import os
-import platform
 import sys
 import time
 from pathlib import Path
@@ -41,10 +38,10 @@ from formulations.convex import MIN_MAX_NORM_WEIGHT, NotApplicable
 from formulations.problems import LCP, LS, NLS, QP
 from solvers import ACCEPT, available, backends_for, solve
 from solvers import get as get_backend
-from solvers.qpsolvers_ import DISTRIBUTIONS
 from solvers.settings import TOLERANCE_PARAMETERS
 
 from . import batched
+from .environment import json_number, machine, versions
 
 LADDER = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
 QUICK_LADDER = (1e-4, 1e-8)
@@ -442,28 +439,6 @@ def plot_pareto(points: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def _versions() -> list[str]:
-    """Installed versions of NumPy, SciPy, the solver packages and Matplotlib."""
-    found = []
-    for dist in dict.fromkeys(("numpy", "scipy", "cvxpy", "qpsolvers", *DISTRIBUTIONS.values(),
-                               "matplotlib")):
-        try:
-            found.append(f"{dist} {importlib.metadata.version(dist)}")
-        except importlib.metadata.PackageNotFoundError:
-            continue
-    return found
-
-
 def _fmt(value: float, digits: int = 2) -> str:
     return "inf" if value == math.inf else f"{value:.{digits}e}"
 
@@ -473,9 +448,8 @@ def report(summary, points, rates, target, stages, references, settings) -> str:
     lines = [
         f"# cardan bench: scene {settings['scene']}", "",
         f"- date: {datetime.datetime.now().isoformat(timespec='seconds')}",
-        f"- machine: {_cpu()}, {os.cpu_count()} logical CPUs, {platform.platform()}, "
-        f"Python {platform.python_version()}",
-        f"- versions: {', '.join(_versions())}",
+        f"- machine: {machine()}",
+        f"- versions: {versions()}",
         f"- settings: {settings['instants']} instants ({settings['span']}), budget "
         f"{settings['budget_s']:g} s per run, accuracy on {settings['samples']} evenly "
         f"spaced instants over the ladder {', '.join(f'{t:g}' for t in settings['ladder'])}"
@@ -628,10 +602,6 @@ def _without_batched(summary) -> list[str]:
     return [name for name, seen in modes.items() if "batched" not in seen and name != "paper"]
 
 
-def _json_float(value: float) -> float | str:
-    return value if math.isfinite(value) else str(value)
-
-
 # ---------------------------------------------------------------------------- command
 
 
@@ -675,14 +645,14 @@ def run(args) -> int:
     _progress(f"bench: wrote {out} in {time.perf_counter() - started:.0f} s")
     if args.json:
         print(json.dumps({
-            "throughput": [{k: _json_float(e[k]) if isinstance(e[k], float) else e[k]
+            "throughput": [{k: json_number(e[k]) if isinstance(e[k], float) else e[k]
                             for k in ("formulation", "solver", "mode", "instants_per_s",
                                       "setup_s", "success_rate", "max_equilibrium")}
                            for e in summary],
             "pareto": [{"formulation": p["formulation"], "solver": p["solver"],
                         "tol": None if p["tol"] == "default" else p["tol"],
-                        "time_s": p["time_s"], "error": _json_float(p["error"]),
-                        "equilibrium": _json_float(p["equilibrium"])}
+                        "time_s": p["time_s"], "error": json_number(p["error"]),
+                        "equilibrium": json_number(p["equilibrium"])}
                        for p in points if p["front"]],
         }, indent=2))
     else:

@@ -29,8 +29,9 @@ from driveline.dynamics import simulate
 from driveline.equilibrium import build_operator
 from driveline.scene import Scene, builtin_text, load_scene, scene_from_dict
 from experiments.analysis import solve_all
+from experiments.environment import json_number
 from formulations import FORMULATIONS
-from solvers import Record
+from solvers import STATUSES, Record
 
 try:
     import tomllib
@@ -39,8 +40,6 @@ except ModuleNotFoundError:  # Python 3.10
 
 RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
 
-SEVERITY = ("solved", "inaccurate", "unbounded", "infeasible", "failed")
-"""Statuses from best to worst: a run over a window carries its worst."""
 
 EQUILIBRIUM_BAR = 1e-8
 """A case x formulation passes when every instant has a solved record at or below this."""
@@ -198,7 +197,7 @@ class Run:
     @property
     def status(self) -> str:
         """The worst status over the window."""
-        return max((r.status for r in self.records), key=SEVERITY.index)
+        return max((r.status for r in self.records), key=STATUSES.index)
 
     @property
     def n_solved(self) -> int:
@@ -235,17 +234,11 @@ class Run:
         return {
             "case": self.case, "formulation": self.formulation, "solver": self.solver,
             "status": self.status, "solved": f"{self.n_solved}/{len(self.records)}",
-            "residuals": {k: _num(v) for k, v in self.worst().items()},
+            "residuals": {k: json_number(v) for k, v in self.worst().items()},
             "t_forces": self.t[middle],
-            "forces": {k: _num(v) for k, v in self.records[middle].forces().items()},
-            "max_jump": _num(self.max_jump), "nan_free": self.nan_free,
+            "forces": {k: json_number(v) for k, v in self.records[middle].forces().items()},
+            "max_jump": json_number(self.max_jump), "nan_free": self.nan_free,
         }
-
-
-def _num(value: float) -> float | str:
-    """A JSON-safe float: ``inf``/``nan`` as strings, read back with ``float()``."""
-    value = float(value)
-    return value if math.isfinite(value) else str(value)
 
 
 def run_case(case: Case, formulations=None, solvers=None, instants: int = INSTANTS,

@@ -32,7 +32,7 @@ from driveline.kinematics import Geometry, kinematics
 from driveline.scene import Scene, builtin_names, load_scene, scene_from_dict
 from formulations import FORMULATIONS
 from formulations.convex import NotApplicable
-from solvers import Record, backends_for, solve
+from solvers import STATUSES, Record, backends_for, solve
 from solvers import get as get_backend
 
 KEY = ("scene", "stop_s", "instants", "angle_deg", "amplitude_N_m", "formulation", "solver")
@@ -47,9 +47,6 @@ COLUMNS = (*KEY, "status", "n_solved", "max_equilibrium", *PEAKS, "speed_ratio_s
 
 FORMATS = {"max_equilibrium": ".2e", "simulate_s": ".4g", "solve_s": ".4g", "total_s": ".4g"}
 """CSV number formats other than 10 significant digits."""
-
-SEVERITY = ("solved", "inaccurate", "unbounded", "infeasible", "failed")
-"""Statuses from best to worst: a row carries the worst over its instants."""
 
 PREFERRED = {
     "paper": ("scipy-fsolve", "scipy-root-lm"),
@@ -129,7 +126,7 @@ def _failed(key: dict, exc: Exception, simulate_s: float) -> dict:
 
 def summarize(records: list[Record]) -> dict:
     """Worst status, solved count, worst equilibrium residual, the first complaint."""
-    worst = max(records, key=lambda r: SEVERITY.index(r.status))
+    worst = max(records, key=lambda r: STATUSES.index(r.status))
     return {"status": worst.status, "n_solved": sum(r.solved for r in records),
             "max_equilibrium": max(r.residuals["equilibrium"] for r in records),
             "message": worst.message}

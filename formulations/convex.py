@@ -53,9 +53,25 @@ def equalities(op: Operator, i: int) -> tuple[np.ndarray, np.ndarray]:
     SVD): the Newton-Euler rows are dependent along the motion, and several solvers
     (quadprog, ECOS) refuse dependent equality constraints.
     """
-    u, s, vt = np.linalg.svd(op.A[i], full_matrices=False)
+    return _independent_rows(op.A[i], op.b[i])
+
+
+def _independent_rows(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    u, s, vt = np.linalg.svd(A, full_matrices=False)
     rank = int(np.sum(s > RANK_RTOL * s[0]))
-    return s[:rank, None] * vt[:rank], u[:, :rank].T @ op.b[i]
+    return s[:rank, None] * vt[:rank], u[:, :rank].T @ b
+
+
+def _load_scale(b: np.ndarray) -> float:
+    """``||b||``, the unit in which the conic and QP recasts state their unknowns."""
+    return max(float(np.linalg.norm(b)), 1e-12)
+
+
+def _minus_identity_rows(columns, n: int) -> np.ndarray:
+    """Rows ``-e_j'`` for ``j`` in ``columns``: ``x_j >= 0`` as ``A z + s = 0, s >= 0``."""
+    rows = np.zeros((len(columns), n))
+    rows[np.arange(len(columns)), list(columns)] = -1.0
+    return rows
 
 
 def contacts(op: Operator) -> list[list[int]]:
@@ -91,7 +107,7 @@ def positive(op: Operator, i: int) -> QP:
     n = len(op.names)
     lb = np.where(op.unilateral, 0.0, -np.inf)
     A, b = equalities(op, i)
-    scale = max(float(np.linalg.norm(b)), 1e-12)
+    scale = _load_scale(b)
     return QP(checks=checks(op, i), formulation="positive",
               to_forces=lambda z: scale * np.asarray(z), P=np.eye(n), q=np.zeros(n),
               A=A, b=b / scale, lb=lb)
@@ -105,12 +121,10 @@ def min_max(op: Operator, i: int) -> Conic:
     A, b = equalities(op, i)
     m, n = A.shape
     t = n
-    scale = max(float(np.linalg.norm(b)), 1e-12)
+    scale = _load_scale(b)
     blocks, rhs, cones = [np.hstack([A, np.zeros((m, 1))])], [b / scale], [("zero", m)]
     uni = np.flatnonzero(op.unilateral)
-    rows = np.zeros((len(uni), n + 1))
-    rows[np.arange(len(uni)), uni] = -1.0
-    blocks.append(rows)
+    blocks.append(_minus_identity_rows(uni, n + 1))
     rhs.append(np.zeros(len(uni)))
     cones.append(("nonneg", len(uni)))
     for group in contacts(op):
@@ -173,7 +187,8 @@ def socp_face(op: Operator, i: int) -> Conic:
             members.append((f"{name}.m_{comp}", col, 1.0 / joints[joint_name].rt_m ** 2))
         extra.append((members, lambda idx, j=j, rt=joints[joint_name].rt_m:
                       SecondOrderCone(apex=j, members=idx, scale=rt)))
-    return _extended(op, i, extra, "socp_face", idle=_idle_faces(op, i))
+    return _extended(op, i, extra, "socp_face",
+                     idle=_idle_faces(op, determinacy(op, i).min_norm))
 
 
 def friction(op: Operator, i: int) -> Conic:
@@ -231,18 +246,17 @@ def friction(op: Operator, i: int) -> Conic:
                       lambda idx, cols=radial_cols, w=mu * normal: SecondOrderCone(
                           apex=cols[0], members=idx, scale=w[0],
                           apex_terms=((cols[1], w[1]),))))
-    return _extended(op, i, extra, "friction", idle=_idle_faces(op, i))
+    return _extended(op, i, extra, "friction", idle=_idle_faces(op, frameless))
 
 
 class NotApplicable(ValueError):
     """A formulation the scene does not call for (e.g. ``friction`` without friction)."""
 
 
-def _idle_faces(op: Operator, i: int) -> list[int]:
-    """Per end-face pair, the face that does not push in the least-norm answer (the
-    pair's columns are opposite, so exactly one of the two is >= 0 there).
+def _idle_faces(op: Operator, least: np.ndarray) -> list[int]:
+    """Per end-face pair, the face that does not push in the least-norm answer ``least``
+    (the pair's columns are opposite, so exactly one of the two is >= 0 there).
     """
-    least = determinacy(op, i).min_norm
     return [a if least[b] - least[a] >= 0 else b for a, b in op.pairs]
 
 
@@ -272,17 +286,14 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     unilateral = np.concatenate([op.unilateral, np.zeros(n - n0, bool)])
     check = ForceChecks(A=A, b=op.b[i], names=tuple(names), unilateral=unilateral,
                         pairs=op.pairs, cones=tuple(cones))
-    u, s, vt = np.linalg.svd(A, full_matrices=False)
-    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    reduced, b_reduced = _independent_rows(A, op.b[i])
     held = np.eye(n)[list(idle)]
-    blocks = [np.vstack([s[:rank, None] * vt[:rank], held])]
-    scale = max(float(np.linalg.norm(op.b[i])), 1e-12)
-    rhs = [np.concatenate([u[:, :rank].T @ op.b[i] / scale, np.zeros(len(held))])]
-    cone_list = [("zero", rank + len(held))]
+    blocks = [np.vstack([reduced, held])]
+    scale = _load_scale(op.b[i])
+    rhs = [np.concatenate([b_reduced / scale, np.zeros(len(held))])]
+    cone_list = [("zero", len(reduced) + len(held))]
     uni = np.flatnonzero(unilateral)
-    rows = np.zeros((len(uni), n))
-    rows[np.arange(len(uni)), uni] = -1.0
-    blocks.append(rows)
+    blocks.append(_minus_identity_rows(uni, n))
     rhs.append(np.zeros(len(uni)))
     cone_list.append(("nonneg", len(uni)))
     for c in cones:
@@ -371,7 +382,7 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     m, n = A.shape
     is_bearing = [op.names[g[0]].startswith("bearing.") for g, _, _ in laws]
     name = "compliance" if law == "linear" else "compliance_hertz"
-    sb = max(float(np.linalg.norm(b)), 1e-12)
+    sb = _load_scale(b)
     b = b / sb
     if law == "linear" and not use_gaps:
         p = np.zeros(n)
@@ -395,9 +406,7 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     rhs, cones = [np.concatenate([b, np.zeros(len(merged))])], [("zero", m + len(merged))]
     uni = [j for j in np.flatnonzero(op.unilateral) if j not in merged and j not in
            merged.values()]
-    rows = np.zeros((len(uni), nz))
-    rows[np.arange(len(uni)), uni] = -1.0
-    blocks.append(rows)
+    blocks.append(_minus_identity_rows(uni, nz))
     rhs.append(np.zeros(len(uni)))
     cones.append(("nonneg", len(uni)))
     for c, ((group, k, gap), bearing) in enumerate(zip(laws, is_bearing)):

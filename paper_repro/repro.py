@@ -13,8 +13,6 @@ paper's text.
 from __future__ import annotations
 
 import datetime
-import importlib.metadata
-import platform
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -27,6 +25,7 @@ from driveline.dynamics import Motion, simulate
 from driveline.equilibrium import Operator, build_operator
 from driveline.scene import Scene, load_scene
 from experiments.analysis import value_range
+from experiments.environment import machine, versions
 
 from . import figures
 from .histories import METHODS, History, history, penalty_history, released
@@ -46,27 +45,6 @@ COMPLIANCE_VS_PENALTY = {"compliance": "clarabel", "compliance_hertz": "clarabel
                          "positive": "qpsolvers-daqp", "min_norm": "numpy-kkt"}
 """Methods compared with the penalty simulation, on the released scene's operator (the
 same effects, so the compliance formulations see the same clearances as gaps)."""
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def _versions() -> str:
-    names = ("numpy", "scipy", "cvxpy", "clarabel", "qpsolvers", "osqp", "daqp", "matplotlib")
-    found = []
-    for name in names:
-        try:
-            found.append(f"{name} {importlib.metadata.version(name)}")
-        except importlib.metadata.PackageNotFoundError:
-            pass
-    return ", ".join(found)
 
 
 def bearing_bounds(op: Operator, shaft: str = "input") -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -330,7 +308,7 @@ def _compliance_vs_penalty(scene: Scene, times, result, out: Path, progress):
         for r in rows))
     lines = [f"Median over the instants after {SETTLED_S:g} s of ||x_method - x_penalty|| / "
              f"||x_penalty|| per group (raw; and both smoothed over {SMOOTH_S:g} s), on "
-             f"`{released(scene).name}` (clearances as gaps for `compliance*`). Penalty: "
+             f"`{op.scene.name}` (clearances as gaps for `compliance*`). Penalty: "
              f"{result.wall_s:.1f} s wall for {op.t[-1] - op.t[0]:g} s simulated "
              f"({result.nsteps} steps, {result.method}, status: {result.message}).", "",
              "| method | backend | solved | bearings raw | bearings smoothed | joints raw | "
@@ -364,8 +342,8 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15_scene: st
         "# cardan repro: the paper's Figs. 11-15",
         "",
         f"- date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC",
-        f"- machine: {_cpu()}, Python {platform.python_version()}",
-        f"- versions: {_versions()}",
+        f"- machine: {machine()}",
+        f"- versions: {versions()}",
         f"- scene: `{scene.name}` ({scene.description}); Fig. 15: `{fig15_scene}`",
         f"- instants: {len(motion.t)} from {motion.t[0]:g} to {motion.t[-1]:g} s"
         + (" (quick run)" if quick else ""),

@@ -14,8 +14,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-STATUSES = ("solved", "inaccurate", "failed", "infeasible", "unbounded")
-"""Every status a record can carry; only ``"solved"`` means the forces are trusted."""
+STATUSES = ("solved", "inaccurate", "unbounded", "infeasible", "failed")
+"""Every status a record can carry, from best to worst (a run over several instants
+carries its worst); only ``"solved"`` means the forces are trusted."""
 
 ACCEPT = 1e-6
 """Largest relative residual (equilibrium, sign, complementarity, cone) of a solved record."""

@@ -1,0 +1,45 @@
+"""What a report states about where it ran: CPU, platform, package versions; and
+numbers made JSON-safe.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import math
+import os
+import platform
+from pathlib import Path
+
+from solvers.qpsolvers_ import DISTRIBUTIONS
+
+
+def machine() -> str:
+    """CPU model, logical CPUs, platform and Python version, in one line."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return (f"{cpu}, {os.cpu_count()} logical CPUs, {platform.platform()}, "
+            f"Python {platform.python_version()}")
+
+
+def versions() -> str:
+    """Installed versions of NumPy, SciPy, the solver packages and Matplotlib."""
+    found = []
+    for dist in dict.fromkeys(("numpy", "scipy", "cvxpy", "qpsolvers", *DISTRIBUTIONS.values(),
+                               "matplotlib")):
+        try:
+            found.append(f"{dist} {importlib.metadata.version(dist)}")
+        except importlib.metadata.PackageNotFoundError:
+            continue
+    return ", ".join(found)
+
+
+def json_number(value: float) -> float | str:
+    """A JSON-safe float: ``inf``/``nan`` as strings, read back with ``float()``."""
+    value = float(value)
+    return value if math.isfinite(value) else str(value)
