@@ -14,7 +14,7 @@ pushes (``f >= 0``). The contacts:
 - **trunnion in its bore** (4 per cross-pin): ``d`` = distance of the trunnion's axis
   point at ``±hs`` from the yoke's bore axis, measured in the trunnion's cross-section,
   minus ``rb - rs``; the force acts along that offset, normal to the trunnion axis,
-  at that point. ``K`` from :func:`~driveline.contact.hertz_stiffness` (eqs. 76-77),
+  at that point. ``K`` from :func:`~cardan_forces.driveline.contact.hertz_stiffness` (eqs. 76-77),
   ``n`` = the scene's exponent (1.5);
 - **end face** (4 per cross-pin): ``d`` = the trunnion end's (``±ht``) distance along
   the bore axis beyond the housing bottom at ``hb``; the force acts along the trunnion
@@ -25,7 +25,7 @@ pushes (``f >= 0``). The contacts:
   each bearing carries an axial force); linear, ``K = bearing_stiffness_N_m``, ``n = 1``.
 
 So each reported force is exactly one of the equilibrium operator's columns
-(:mod:`driveline.equilibrium`) at the current configuration: radial forces normal to
+(:mod:`cardan_forces.driveline.equilibrium`) at the current configuration: radial forces normal to
 the pin's own trunnion axis, end-face forces along it, all on the cross-pin's axis.
 
 **Damping units.** "c_max = 1 % of K" (the paper, after ADAMS) is unit-free only for
@@ -469,7 +469,7 @@ def simulate_penalty(
     sample it at ``times`` (s).
 
     Starts from the rigid model's state at the start: shafts at rest positions, turned
-    and spinning as :func:`~driveline.dynamics.simulate` says, cross-pins centred in
+    and spinning as :func:`~cardan_forces.driveline.dynamics.simulate` says, cross-pins centred in
     their clearances. ``method``: one of :data:`METHODS`. ``atol_m`` is the absolute
     tolerance on positions (m; velocities get ``atol_m / 1 ms``): 1e-7 and 1e-8 give the
     same statistics of forces and speeds on ``paper-penalty``. ``damping_length_unit_m``:

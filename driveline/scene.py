@@ -213,7 +213,7 @@ class Scene:
 
 def builtin_names() -> list[str]:
     """Names of the scenes shipped with the package."""
-    folder = resources.files("driveline") / "scenes"
+    folder = resources.files("cardan_forces.driveline") / "scenes"
     return sorted(p.name[: -len(".toml")] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
@@ -221,7 +221,7 @@ def builtin_text(name: str) -> str:
     """The TOML text of a built-in scene."""
     if name not in builtin_names():
         raise SceneError(f"no built-in scene {name!r}; built-in: {', '.join(builtin_names())}")
-    return (resources.files("driveline") / "scenes" / f"{name}.toml").read_text()
+    return (resources.files("cardan_forces.driveline") / "scenes" / f"{name}.toml").read_text()
 
 
 def load_scene(spec: str | Path = "paper") -> Scene:

@@ -6,11 +6,11 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
-from driveline.equilibrium import Operator
-from formulations import FORMULATIONS
-from formulations.convex import NotApplicable
-from formulations.sets import range_problems
-from solvers import Record, backends_for, solve
+from cardan_forces.driveline.equilibrium import Operator
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.formulations.sets import range_problems
+from cardan_forces.solvers import Record, backends_for, solve
 
 INTERVAL_SOLVER = "scipy-highs"
 

@@ -31,10 +31,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from driveline.equilibrium import Operator
-from formulations import FORMULATIONS
-from formulations.problems import QP
-from solvers.lcp_ import lemke
+from cardan_forces.driveline.equilibrium import Operator
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.problems import QP
+from cardan_forces.solvers.lcp_ import lemke
 
 GRAM_RTOL = 1e-15
 """Regularization of the Gram matrix, relative to its mean diagonal."""

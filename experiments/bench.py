@@ -7,7 +7,7 @@ The operator over all instants is built once and reported apart as one-time setu
 - **Throughput** over the scene's instants in time order: ``cold`` (every instant from
   the formulation's own start), ``warm`` (the previous instant's answer as
   ``initvals``, for the backends in :data:`WARM_STARTS`) and ``batched`` (all instants
-  at once, :mod:`experiments.batched`). A per-instant run stops after ``--budget-s``
+  at once, :mod:`cardan_forces.experiments.batched`). A per-instant run stops after ``--budget-s``
   seconds (the paper's method, the baseline, never does); its rate then comes from the
   instants it reached.
 - **Accuracy vs time** on evenly spaced instants over the tolerance ladder, with the
@@ -30,15 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
-from driveline.dynamics import simulate
-from driveline.equilibrium import Operator, build_operator
-from driveline.scene import load_scene
-from formulations import FORMULATIONS
-from formulations.convex import MIN_MAX_NORM_WEIGHT, NotApplicable
-from formulations.problems import LCP, LS, NLS, QP
-from solvers import ACCEPT, available, backends_for, solve
-from solvers import get as get_backend
-from solvers.settings import TOLERANCE_PARAMETERS
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.scene import load_scene
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import MIN_MAX_NORM_WEIGHT, NotApplicable
+from cardan_forces.formulations.problems import LCP, LS, NLS, QP
+from cardan_forces.solvers import ACCEPT, available, backends_for, solve
+from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.settings import TOLERANCE_PARAMETERS
 
 from . import batched
 from .environment import json_number, machine, versions

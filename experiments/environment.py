@@ -10,7 +10,7 @@ import os
 import platform
 from pathlib import Path
 
-from solvers.qpsolvers_ import DISTRIBUTIONS
+from cardan_forces.solvers.qpsolvers_ import DISTRIBUTIONS
 
 
 def machine() -> str:

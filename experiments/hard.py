@@ -24,14 +24,14 @@ from pathlib import Path
 
 import numpy as np
 
-from driveline.contact import hertz_stiffness
-from driveline.dynamics import simulate
-from driveline.equilibrium import build_operator
-from driveline.scene import Scene, builtin_text, load_scene, scene_from_dict
-from experiments.analysis import solve_all
-from experiments.environment import json_number
-from formulations import FORMULATIONS
-from solvers import STATUSES, Record
+from cardan_forces.driveline.contact import hertz_stiffness
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.scene import Scene, builtin_text, load_scene, scene_from_dict
+from cardan_forces.experiments.analysis import solve_all
+from cardan_forces.experiments.environment import json_number
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.solvers import STATUSES, Record
 
 try:
     import tomllib

@@ -26,14 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from driveline.dynamics import simulate
-from driveline.equilibrium import Operator, build_operator
-from driveline.kinematics import Geometry, kinematics
-from driveline.scene import Scene, builtin_names, load_scene, scene_from_dict
-from formulations import FORMULATIONS
-from formulations.convex import NotApplicable
-from solvers import STATUSES, Record, backends_for, solve
-from solvers import get as get_backend
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.kinematics import Geometry, kinematics
+from cardan_forces.driveline.scene import Scene, builtin_names, load_scene, scene_from_dict
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.solvers import STATUSES, Record, backends_for, solve
+from cardan_forces.solvers import get as get_backend
 
 KEY = ("scene", "stop_s", "instants", "angle_deg", "amplitude_N_m", "formulation", "solver")
 """Columns that name a row: a rerun skips every row whose key is in the CSV."""

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from driveline.contact import hertz_stiffness
-from driveline.determinacy import RANK_RTOL, determinacy
-from driveline.equilibrium import Operator
+from cardan_forces.driveline.contact import hertz_stiffness
+from cardan_forces.driveline.determinacy import RANK_RTOL, determinacy
+from cardan_forces.driveline.equilibrium import Operator
 
 from .problems import LCP, LS, QP, Conic, ForceChecks, SecondOrderCone
 

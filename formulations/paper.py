@@ -38,10 +38,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import fsolve, root
 
-from driveline.determinacy import RANK_RTOL
-from driveline.equilibrium import Operator
-from driveline.kinematics import rest_geometry
-from driveline.scene import Scene
+from cardan_forces.driveline.determinacy import RANK_RTOL
+from cardan_forces.driveline.equilibrium import Operator
+from cardan_forces.driveline.kinematics import rest_geometry
+from cardan_forces.driveline.scene import Scene
 
 from .convex import socp_face
 from .problems import NLS, ForceChecks

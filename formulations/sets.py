@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from driveline.equilibrium import Operator
+from cardan_forces.driveline.equilibrium import Operator
 
 from .convex import checks, equalities
 from .problems import LP

@@ -15,7 +15,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from driveline.dynamics import Motion  # noqa: E402
+from cardan_forces.driveline.dynamics import Motion  # noqa: E402
 
 
 def write_csv(path: Path, columns: dict[str, np.ndarray]) -> Path:

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from driveline.equilibrium import Operator
-from driveline.penalty import PenaltyResult, simulate_penalty
-from driveline.scene import Scene, SceneError
-from formulations import FORMULATIONS
-from solvers import solve
+from cardan_forces.driveline.equilibrium import Operator
+from cardan_forces.driveline.penalty import PenaltyResult, simulate_penalty
+from cardan_forces.driveline.scene import Scene, SceneError
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.solvers import solve
 
 METHODS = {
     "paper": "scipy-fsolve",

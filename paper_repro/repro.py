@@ -1,10 +1,10 @@
 """``cardan repro``: the paper's Figs. 11-15 and a report, on the embedded scenes.
 
 Figs. 11-12 come from the motion; 13-15 from contact-force histories of the paper's
-method and the convex formulations (:mod:`paper_repro.histories`), with the rigid
+method and the convex formulations (:mod:`cardan_forces.paper_repro.histories`), with the rigid
 solution set's interval shaded where a bearing load is not unique. Every figure also
 carries the penalty-contact simulation of the same scene with its joints released
-(the paper's ADAMS model, :mod:`driveline.penalty`), and the report compares it with
+(the paper's ADAMS model, :mod:`cardan_forces.driveline.penalty`), and the report compares it with
 the ``compliance`` formulations on the same stiffness and clearances. The report
 states versions, machine, settings, and per figure what the numbers say next to the
 paper's text.
@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
-from driveline.determinacy import determinacy
-from driveline.dynamics import Motion, simulate
-from driveline.equilibrium import Operator, build_operator
-from driveline.scene import Scene, load_scene
-from experiments.analysis import value_range
-from experiments.environment import machine, versions
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import Motion, simulate
+from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.scene import Scene, load_scene
+from cardan_forces.experiments.analysis import value_range
+from cardan_forces.experiments.environment import machine, versions
 
 from . import figures
 from .histories import METHODS, History, history, penalty_history, released

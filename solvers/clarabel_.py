@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from formulations.problems import Conic
+from cardan_forces.formulations.problems import Conic
 
 from . import settings
 from .record import Outcome

@@ -10,7 +10,7 @@ import dataclasses
 
 import numpy as np
 
-from formulations.problems import LP, LS, QP, Conic
+from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 
 def lp_as_conic(lp: LP) -> Conic:

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from formulations.problems import LP, LS, QP, Conic
+from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 from . import settings
 from .record import Outcome

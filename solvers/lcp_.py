@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from formulations.problems import LCP
+from cardan_forces.formulations.problems import LCP
 
 from . import settings
 from .record import Outcome

@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 
-from formulations.problems import LS
+from cardan_forces.formulations.problems import LS
 
 from .record import Outcome
 from .registry import Backend, dist_version

@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from formulations.problems import QP
+from cardan_forces.formulations.problems import QP
 
 from . import settings
 from .record import Outcome

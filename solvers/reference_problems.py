@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from formulations.problems import LCP, LP, LS, NLS, QP, Conic, ForceChecks, SecondOrderCone
+from cardan_forces.formulations.problems import LCP, LP, LS, NLS, QP, Conic, ForceChecks, SecondOrderCone
 
 
 @dataclass(frozen=True)

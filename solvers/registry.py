@@ -138,7 +138,7 @@ def solve(
 ) -> Record:
     """Solve ``problem`` with backend ``solver`` and return the package-judged record.
 
-    ``tol`` is translated by :mod:`solvers.settings` (None: the solver's defaults);
+    ``tol`` is translated by :mod:`cardan_forces.solvers.settings` (None: the solver's defaults);
     ``initvals`` is a start in the solver's variable (ignored where the backend cannot
     warm-start); ``reference`` is the force vector the record is compared with;
     ``options`` go to the backend unchanged and override ``tol``. Solver failures of any

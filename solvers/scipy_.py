@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from formulations.problems import LP, LS, NLS, QP
+from cardan_forces.formulations.problems import LP, LS, NLS, QP
 
 from . import settings
 from .record import Outcome

@@ -40,7 +40,7 @@ def options_for(solver: str, tol: float | None) -> dict[str, float]:
     """The solver's own keyword arguments for tolerance ``tol`` (empty when ``tol`` is None).
 
     A ``tol`` for a solver missing from :data:`TOLERANCE_PARAMETERS` raises ``KeyError``
-    (a failed record in :func:`solvers.solve`) rather than being silently ignored.
+    (a failed record in :func:`cardan_forces.solvers.solve`) rather than being silently ignored.
     """
     if tol is None:
         return {}

@@ -2,7 +2,7 @@ import copy
 
 import pytest
 
-from driveline.scene import builtin_text, load_scene, scene_from_dict
+from cardan_forces.driveline.scene import builtin_text, load_scene, scene_from_dict
 
 try:
     import tomllib

@@ -6,12 +6,12 @@ import math
 import numpy as np
 import pytest
 
-from driveline.dynamics import simulate
-from driveline.equilibrium import build_operator
-from experiments import batched, bench
-from formulations import FORMULATIONS
-from solvers import SolverNotFound, available, failed_record, solve
-from solvers.lcp_ import lemke
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.experiments import batched, bench
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.solvers import SolverNotFound, available, failed_record, solve
+from cardan_forces.solvers.lcp_ import lemke
 
 
 @pytest.fixture(scope="module")

@@ -3,8 +3,8 @@ import json
 import numpy as np
 import pytest
 
-from experiments.cli import main
-from paper_repro.figures import read_csv
+from cardan_forces.cli import main
+from cardan_forces.paper_repro.figures import read_csv
 
 
 def test_sets_json_reports_every_component(capsys):

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy.integrate import simpson
 
-from driveline.determinacy import determinacy
-from driveline.dynamics import reduced_inertia, simulate
-from driveline.equilibrium import build_operator
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import reduced_inertia, simulate
+from cardan_forces.driveline.equilibrium import build_operator
 from tests.conftest import variant
 
 

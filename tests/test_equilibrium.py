@@ -6,10 +6,10 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from driveline.determinacy import determinacy
-from driveline.dynamics import simulate
-from driveline.equilibrium import build_operator
-from driveline.scene import EFFECTS
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.scene import EFFECTS
 from tests.conftest import variant
 
 LINEAR_EFFECTS = ("gravity", "inertia", "crosspin_inertia")

@@ -5,13 +5,13 @@ import dataclasses
 import numpy as np
 import pytest
 
-from driveline.determinacy import determinacy
-from driveline.dynamics import simulate
-from driveline.equilibrium import build_operator
-from experiments.analysis import intervals, solve_all
-from formulations import FORMULATIONS
-from formulations.convex import contacts
-from solvers import backends_for, solve
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.experiments.analysis import intervals, solve_all
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import contacts
+from cardan_forces.solvers import backends_for, solve
 from tests.conftest import variant
 
 # how closely a solved record must reproduce the determinate components (relative to
@@ -153,7 +153,7 @@ def _friction_op(mu):
 
 
 def test_friction_only_when_the_scene_asks(paper_op):
-    from formulations.convex import NotApplicable
+    from cardan_forces.formulations.convex import NotApplicable
     with pytest.raises(NotApplicable):
         FORMULATIONS["friction"](paper_op, 0)
     assert all(r.formulation != "friction" for r in solve_all(paper_op, 0))

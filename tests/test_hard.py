@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from experiments import hard
-from experiments.cli import main
-from solvers import STATUSES
+from cardan_forces.experiments import hard
+from cardan_forces.cli import main
+from cardan_forces.solvers import STATUSES
 
 INSTANTS = 3
 

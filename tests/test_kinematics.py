@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from driveline.kinematics import kinematics, rest_geometry
+from cardan_forces.driveline.kinematics import kinematics, rest_geometry
 from tests.conftest import variant
 
 

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from driveline.determinacy import determinacy
-from driveline.dynamics import simulate
-from driveline.equilibrium import build_operator
-from formulations.paper import build_paper, multistart, solve_paper
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.formulations.paper import build_paper, multistart, solve_paper
 
 TIMES = [0.5, 1.3, 2.77]
 
@@ -141,7 +141,7 @@ def test_rim_solution_balances_the_pin_with_explicit_contact_points(paper):
 
 
 def test_records_report_the_singular_jacobian(op):
-    from solvers import solve
+    from cardan_forces.solvers import solve
 
     record = solve(build_paper(op, 0), "scipy-fsolve")
     assert record.status == "solved"

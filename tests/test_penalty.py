@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-from driveline import penalty
-from driveline.contact import hertz_stiffness
-from driveline.determinacy import determinacy
-from driveline.dynamics import simulate
-from driveline.equilibrium import build_operator
-from driveline.penalty import contact_law, simulate_penalty
-from driveline.scene import load_scene
+from cardan_forces.driveline import penalty
+from cardan_forces.driveline.contact import hertz_stiffness
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.penalty import contact_law, simulate_penalty
+from cardan_forces.driveline.scene import load_scene
 
 STOP_S = 0.2
 LATE_S = 0.1  # after the play has closed (~0.07 s from rest) and the first impacts

@@ -3,8 +3,8 @@ import sys
 
 import pytest
 
-from driveline.scene import SceneError, builtin_names, builtin_text, load_scene, scene_from_dict
-from experiments.cli import main
+from cardan_forces.driveline.scene import SceneError, builtin_names, builtin_text, load_scene, scene_from_dict
+from cardan_forces.cli import main
 from tests.conftest import variant
 
 
@@ -109,7 +109,7 @@ def test_missing_field_and_joint_count(paper_raw):
 def test_cli_bad_scene_exit_2_without_traceback(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text('extends = "paper"\n[[shafts]]\nname = "x"\nlength_m = -1\n')
-    proc = subprocess.run([sys.executable, "-m", "experiments.cli", "scene", "check", str(bad)],
+    proc = subprocess.run([sys.executable, "-m", "cardan_forces.cli", "scene", "check", str(bad)],
                           capture_output=True, text=True)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr

@@ -8,8 +8,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from formulations.problems import NLS, QP
-from solvers import (
+from cardan_forces.formulations.problems import NLS, QP
+from cardan_forces.solvers import (
     Backend,
     SolverNotFound,
     UnsupportedProblem,
@@ -22,8 +22,8 @@ from solvers import (
     settings,
     solve,
 )
-from solvers.record import Outcome
-from solvers.reference_problems import references
+from cardan_forces.solvers.record import Outcome
+from cardan_forces.solvers.reference_problems import references
 
 REFS = {ref.name: ref for ref in references()}
 JSON_KEYS = {"formulation", "solver", "status", "residuals", "forces", "setup_s", "solve_s",
@@ -204,6 +204,6 @@ def test_options_override_tol():
     ("daqp", {}, "failed"),
 ])
 def test_qpsolvers_status_map(solver, extras, expected):
-    from solvers.qpsolvers_ import _unfound_status
+    from cardan_forces.solvers.qpsolvers_ import _unfound_status
 
     assert _unfound_status(solver, extras)[0] == expected

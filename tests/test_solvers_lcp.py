@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from solvers.lcp_ import fb_newton, fischer_burmeister, lemke, natural_residual, pgs
+from cardan_forces.solvers.lcp_ import fb_newton, fischer_burmeister, lemke, natural_residual, pgs
 
 
 def _spd_lcp(seed: int, n: int = 8) -> tuple[np.ndarray, np.ndarray]:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from solvers import ACCEPT, backends_for, solve
-from solvers.reference_problems import references
+from cardan_forces.solvers import ACCEPT, backends_for, solve
+from cardan_forces.solvers.reference_problems import references
 
 TOL = 1e-9
 """Tolerance requested from every backend in the reference runs."""

@@ -8,8 +8,8 @@ import sys
 
 import pytest
 
-from experiments import sweep
-from experiments.cli import main
+from cardan_forces.experiments import sweep
+from cardan_forces.cli import main
 
 ARGS = ["sweep", "--angle", "0", "--angle", "30", "--amplitude", "-5", "--formulation",
         "min_norm", "--formulation", "positive", "--quick"]

@@ -18,18 +18,18 @@ from pathlib import Path
 
 import numpy as np
 
-from driveline.determinacy import DETERMINATE_TOL, determinacy
-from driveline.dynamics import DynamicsError, simulate
-from driveline.equilibrium import build_operator
-from driveline.scene import SceneError, builtin_names, builtin_text, load_scene
-from experiments import bench, hard, sweep
-from experiments.analysis import intervals, solve_all
-from formulations import FORMULATIONS
-from formulations.convex import NotApplicable
-from formulations.paper import multistart
-from solvers import SolverNotFound, available
-from solvers import get as get_backend
-from solvers.registry import known_backends
+from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
+from cardan_forces.driveline.dynamics import DynamicsError, simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.scene import SceneError, builtin_names, builtin_text, load_scene
+from cardan_forces.experiments import bench, hard, sweep
+from cardan_forces.experiments.analysis import intervals, solve_all
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.formulations.paper import multistart
+from cardan_forces.solvers import SolverNotFound, available
+from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.registry import known_backends
 
 FIGURES = (11, 12, 13, 14, 15)
 
@@ -180,7 +180,7 @@ def _cmd_solve(args) -> int:
 
 
 def _cmd_repro(args) -> int:
-    from paper_repro.repro import FIGURES, run_repro
+    from cardan_forces.paper_repro.repro import FIGURES, run_repro
 
     run_repro(args.scene, sorted(set(args.fig or FIGURES)), args.out, args.quick,
               args.fig15_scene, progress=_progress, penalty=args.penalty)

@@ -1,0 +1,42 @@
+"""One import namespace: only ``cardan_forces`` is installed; the README example runs."""
+
+import re
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+LAYERS = ("driveline", "formulations", "solvers", "experiments", "paper_repro")
+
+
+def test_only_cardan_forces_is_a_top_level_module():
+    top = metadata.distribution("cardan-forces").read_text("top_level.txt").split()
+    assert top == ["cardan_forces"]
+
+
+def test_generic_names_are_not_importable_outside_the_checkout(tmp_path):
+    code = ("import importlib.util as u; import cardan_forces.driveline, cardan_forces.cli; "
+            f"print([n for n in {LAYERS!r} if u.find_spec(n) is not None])")
+    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                         text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_layers_import_only_downwards():
+    """Lower layers never import upper ones (driveline < formulations < solvers < ...)."""
+    order = {name: k for k, name in enumerate(LAYERS[:3])}
+    for layer, rank in order.items():
+        for path in (ROOT / layer).glob("*.py"):
+            imported = re.findall(r"^\s*(?:from|import) cardan_forces\.(\w+)",
+                                  path.read_text(), flags=re.M)
+            above = [m for m in imported if order.get(m, 99) > rank]
+            assert not above, f"{path.name} imports {above}"
+
+
+def test_readme_python_example_runs(capsys):
+    text = (ROOT / "README.md").read_text()
+    block = re.search(r"## From Python.*?```python\n(.*?)```", text, flags=re.S).group(1)
+    exec(compile(block, "README.md", "exec"), {})
+    lines = capsys.readouterr().out.splitlines()
+    assert lines == ["29 7", "solved True"]
