@@ -83,7 +83,7 @@ from scipy.spatial.transform import Rotation
 from .contact import hertz_stiffness
 from .dynamics import simulate
 from .kinematics import rest_geometry
-from .scene import Scene
+from .scene import Scene, SceneError
 
 DAMPING_LENGTH_UNIT_M = 1e-3
 """Length unit in which ``c_max = fraction * K`` is read (ADAMS's mm; see the module)."""
@@ -483,6 +483,11 @@ def simulate_penalty(
             f"{', '.join(sorted(scene.effects)) or 'none'}); add it to the scene's effects "
             "to run the penalty-contact simulation"
         )
+    if scene.slip_joints or any(b.kind != "locating" for s in scene.shafts for b in s.bearings):
+        raise SceneError(
+            f"scene {scene.name!r}: the penalty-contact simulation does not apply to scenes "
+            "with slip joints or floating bearings (it models every bearing as locating and "
+            "every joint as a cross-pin)")
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
     t = np.atleast_1d(np.asarray(times, float))

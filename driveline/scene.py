@@ -39,19 +39,27 @@ class SceneError(ValueError):
     """A scene that cannot be used: the message names the file and the field."""
 
 
+BEARING_KINDS = ("locating", "floating")
+"""Bearing kinds: ``locating`` carries radial and axial force, ``floating`` radial only
+(the shaft slides through it axially)."""
+
+
 # ---------------------------------------------------------------------------- data
 
 
 @dataclass(frozen=True)
 class Bearing:
-    """A rolling bearing: carries a force in any direction (3 components), no moment.
+    """A rolling bearing: carries a force, no moment.
 
     ``offset_m`` is its position along the shaft axis from the shaft's centre, positive
-    downstream (towards the output).
+    downstream (towards the output). ``kind`` (:data:`BEARING_KINDS`): ``locating``
+    carries a force in any direction (3 components), ``floating`` only normal to the
+    shaft axis (2 components; the shaft slides through it).
     """
 
     name: str
     offset_m: float
+    kind: str = "locating"
 
 
 @dataclass(frozen=True)
@@ -103,6 +111,22 @@ class Joint:
     def axial_clearance_m(self) -> float:
         """Paper: eps_a = hb - ht."""
         return self.hb_m - self.ht_m
+
+
+@dataclass(frozen=True)
+class SlipJoint:
+    """A slip (spline) joint inside one shaft, ``offset_m`` from its centre (downstream
+    positive): the shaft is two coaxial segments that turn together and may slide
+    axially. The spline carries torque, shear and bending; axially only friction, at
+    most ``friction_coefficient`` times its normal load ``T / pitch_radius_m`` (see
+    :mod:`cardan_forces.driveline.equilibrium`); none when frictionless.
+    """
+
+    name: str
+    shaft: str
+    offset_m: float
+    pitch_radius_m: float
+    friction_coefficient: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -193,6 +217,7 @@ class Scene:
     material: Material
     contact: Contact
     source: str = "<memory>"
+    slip_joints: tuple[SlipJoint, ...] = ()
 
     def has(self, effect: str) -> bool:
         """Whether the scene calls for ``effect`` (one of :data:`EFFECTS`)."""
@@ -408,7 +433,8 @@ def _shaft(t: _Table) -> Shaft:
         offset = bt.number("offset_m")
         if abs(offset) > length / 2:
             bt.fail("offset_m", f"bearing lies outside the shaft (|offset| > {length / 2} m)")
-        bearings.append(Bearing(name=bt.string("name"), offset_m=offset))
+        bearings.append(Bearing(name=bt.string("name"), offset_m=offset,
+                                kind=bt.string("kind", "locating", choices=BEARING_KINDS)))
         bt.done()
     if len({b.name for b in bearings}) != len(bearings):
         t.fail("bearings", "bearing names must be unique on a shaft")
@@ -528,6 +554,7 @@ def _build(raw: dict, source: str) -> Scene:
         ct.fail("friction_coefficient", "the 'friction' effect needs a positive coefficient")
     ct.done()
 
+    slips = _slip_joints(top, shafts, names)
     scene = Scene(
         name=top.string("name"),
         description=top.string("description", ""),
@@ -546,6 +573,53 @@ def _build(raw: dict, source: str) -> Scene:
         material=material,
         contact=contact,
         source=source,
+        slip_joints=slips,
     )
     top.done()
+    _check_elements(scene)
     return scene
+
+
+# ---------------------------------------------------------------------------- elements
+# Slip joints and bearing kinds (DESIGN §1, elements a real drive line has).
+
+
+def _slip_joints(top: _Table, shafts: tuple[Shaft, ...], names: list[str]) -> tuple:
+    """The ``[[slip_joints]]`` array: at most one per shaft, strictly inside it, not at a
+    bearing."""
+    if "slip_joints" not in top.raw:
+        top.used.add("slip_joints")
+        return ()
+    by_name = {s.name: s for s in shafts}
+    slips = []
+    for t in top.tables("slip_joints"):
+        shaft_name = t.string("shaft")
+        if shaft_name not in by_name:
+            t.fail("shaft", f"no shaft {shaft_name!r}; shafts: {', '.join(by_name)}")
+        shaft = by_name[shaft_name]
+        offset = t.number("offset_m", 0.0)
+        if not abs(offset) < shaft.length_m / 2:
+            t.fail("offset_m", f"the slip joint must lie inside shaft {shaft_name!r} "
+                   f"(|offset| < {shaft.length_m / 2} m), got {offset}")
+        if any(abs(b.offset_m - offset) < 1e-9 for b in shaft.bearings):
+            t.fail("offset_m", "a slip joint cannot sit exactly at a bearing")
+        slips.append(SlipJoint(
+            name=t.string("name"), shaft=shaft_name, offset_m=offset,
+            pitch_radius_m=t.number("pitch_radius_m", positive=True),
+            friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True)))
+        t.done()
+    taken = names + [s.name for s in slips]
+    if len(set(taken)) != len(taken):
+        top.fail("slip_joints", f"slip joint names must differ from each other and from "
+                 f"shafts and joints, got {[s.name for s in slips]}")
+    on = [s.shaft for s in slips]
+    if len(set(on)) != len(on):
+        top.fail("slip_joints", "at most one slip joint per shaft")
+    return tuple(slips)
+
+
+def _check_elements(scene: Scene) -> None:
+    """Slip joints and floating bearings that leave a part of the line unheld."""
+    from .elements import check_elements  # needs the rest geometry, built from a Scene
+
+    check_elements(scene)

@@ -45,7 +45,43 @@ def checks(op: Operator, i: int, signs: bool = True, pairs: bool = True) -> Forc
     """
     unilateral = op.unilateral if signs else np.zeros_like(op.unilateral)
     return ForceChecks(A=op.A[i], b=op.b[i], names=op.names, unilateral=unilateral,
-                       pairs=op.pairs if pairs else ())
+                       pairs=op.pairs if pairs else (), cones=slip_cones(op, i))
+
+
+def slip_cones(op: Operator, i: int) -> tuple[SecondOrderCone, ...]:
+    """The slip joints' friction bounds ``|axial| <= (mu / r) s0 torque`` as cones, ``s0``
+    the sign of the spline torque in the least-norm answer (the torque through a spline
+    is determinate: no self-stress of the line twists a shaft, so every solution has
+    the same sign)."""
+    if not op.slip_friction:
+        return ()
+    least = determinacy(op, i).min_norm
+    return tuple(SecondOrderCone(apex=f.torque, members=(f.axial,),
+                                 scale=f.ratio_per_m * (1.0 if least[f.torque] >= 0 else -1.0))
+                 for f in op.slip_friction)
+
+
+def slip_rows(op: Operator, i: int, n: int | None = None) -> np.ndarray:
+    """The friction bounds as linear rows ``G x <= 0`` (two per slip joint with friction),
+    padded to ``n`` unknowns."""
+    cones = slip_cones(op, i)
+    G = np.zeros((2 * len(cones), len(op.names) if n is None else n))
+    for r, c in enumerate(cones):
+        apex = c.apex_row(G.shape[1])
+        G[2 * r] = -apex
+        G[2 * r + 1] = -apex
+        G[2 * r, c.members[0]] += 1.0
+        G[2 * r + 1, c.members[0]] -= 1.0
+    return G
+
+
+def _no_bounds(op: Operator, formulation: str) -> None:
+    """Least-norm formulations have no inequality: refuse a bounded slip friction."""
+    if op.slip_friction:
+        raise NotApplicable(
+            f"formulation {formulation!r} cannot bound a slip joint's friction force "
+            f"({', '.join(f.slip for f in op.slip_friction)}); use positive, min_max, "
+            "socp_face or compliance")
 
 
 def equalities(op: Operator, i: int) -> tuple[np.ndarray, np.ndarray]:
@@ -76,24 +112,29 @@ def _minus_identity_rows(columns, n: int) -> np.ndarray:
 
 def contacts(op: Operator) -> list[list[int]]:
     """Column groups that form one contact force: a bearing, a radial trunnion force, an
-    end face.
+    end face, a slip joint's shear force (its moments and axial force apart, since they
+    are not one vector): from the operator's structure.
     """
-    groups: dict[str, list[int]] = {}
-    for j, name in enumerate(op.names):
-        key = name.rsplit(".", 1)[0] if name.count(".") >= 2 else name
-        groups.setdefault(key, []).append(j)
-    return list(groups.values())
+    groups = []
+    for c in op.contacts:
+        if c.kind == "slip":
+            groups.append(list(c.columns[:2]))
+            groups.extend([list(c.columns[2:4]), [c.columns[4]], *[[k] for k in c.columns[5:]]])
+        else:
+            groups.append(list(c.columns))
+    return groups
 
 
 def min_norm(op: Operator, i: int) -> LS:
+    _no_bounds(op, "min_norm")
     A, b = equalities(op, i)
     return LS(checks=checks(op, i, signs=False, pairs=False), formulation="min_norm", A=A, b=b)
 
 
 def min_norm_scaled(op: Operator, i: int, reference_length_m: float = 1.0) -> LS:
+    _no_bounds(op, "min_norm_scaled")
     A = op.A[i].copy()
-    moment_rows = np.array([".moment." in r for r in op.rows])
-    A[moment_rows] /= reference_length_m
+    A[op.moment_rows] /= reference_length_m
     weights = np.linalg.norm(A, axis=0) ** 2
     A, b = equalities(op, i)
     return LS(checks=checks(op, i, signs=False, pairs=False), formulation="min_norm_scaled",
@@ -108,9 +149,11 @@ def positive(op: Operator, i: int) -> QP:
     lb = np.where(op.unilateral, 0.0, -np.inf)
     A, b = equalities(op, i)
     scale = _load_scale(b)
+    G = slip_rows(op, i)
     return QP(checks=checks(op, i), formulation="positive",
               to_forces=lambda z: scale * np.asarray(z), P=np.eye(n), q=np.zeros(n),
-              A=A, b=b / scale, lb=lb)
+              A=A, b=b / scale, lb=lb, G=G if len(G) else None,
+              h=np.zeros(len(G)) if len(G) else None)
 
 
 def min_max(op: Operator, i: int) -> Conic:
@@ -124,9 +167,10 @@ def min_max(op: Operator, i: int) -> Conic:
     scale = _load_scale(b)
     blocks, rhs, cones = [np.hstack([A, np.zeros((m, 1))])], [b / scale], [("zero", m)]
     uni = np.flatnonzero(op.unilateral)
-    blocks.append(_minus_identity_rows(uni, n + 1))
-    rhs.append(np.zeros(len(uni)))
-    cones.append(("nonneg", len(uni)))
+    G = slip_rows(op, i, n + 1)
+    blocks.append(np.vstack([_minus_identity_rows(uni, n + 1), G]))
+    rhs.append(np.zeros(len(uni) + len(G)))
+    cones.append(("nonneg", len(uni) + len(G)))
     for group in contacts(op):
         soc = np.zeros((len(group) + 1, n + 1))
         soc[0, t] = -1.0
@@ -149,6 +193,7 @@ def lcp(op: Operator, i: int) -> LCP:
     With ``x = x0 + N y`` (``N'x0 = 0``), ``positive`` is ``min 1/2 y'y`` s.t.
     ``N_u y + x0_u >= 0``; its KKT conditions give ``y = N_u' lam`` and the LCP.
     """
+    _no_bounds(op, "lcp")
     d = determinacy(op, i)
     x0, N = d.min_norm, d.null_basis
     Nu = N[op.unilateral]
@@ -170,22 +215,17 @@ def socp_face(op: Operator, i: int) -> Conic:
     a pair would buy moment capacity that the axial clearance does not allow (only one
     face of a pair can touch), so the face idle in the least-norm answer is held at 0.
     """
-    joints = {j.name: j for j in op.scene.joints}
-    n_shafts = len(op.scene.shafts)
     frames = _pin_frames(op, i)
     extra = []
-    for j, name in _end_faces(op):
-        joint_name, face = name.split(".")
-        k = list(joints).index(joint_name)
-        driving = face in ("F3", "F4")
+    for face in op.of_kind("end-face"):
+        j, rt = face.columns[0], op.scene.joints[face.joint].rt_m
         members = []
-        for comp in (("e2", "e3") if driving else ("e3", "e1")):
+        for comp in _normal_components(face.trunnion):
             col = np.zeros(op.A.shape[1])
-            col[6 * (n_shafts + k) + 3: 6 * (n_shafts + k) + 6] = frames[comp][k]
-            yoke = k if driving else k + 1
-            col[6 * yoke + 3: 6 * yoke + 6] = -frames[comp][k]
-            members.append((f"{name}.m_{comp}", col, 1.0 / joints[joint_name].rt_m ** 2))
-        extra.append((members, lambda idx, j=j, rt=joints[joint_name].rt_m:
+            col[op.body_rows(face.body)] = frames[comp][face.joint]
+            col[op.body_rows(face.other)] = -frames[comp][face.joint]
+            members.append((f"{face.name}.m_{comp}", col, 1.0 / rt ** 2))
+        extra.append((members, lambda idx, j=j, rt=rt:
                       SecondOrderCone(apex=j, members=idx, scale=rt)))
     return _extended(op, i, extra, "socp_face",
                      idle=_idle_faces(op, determinacy(op, i).min_norm))
@@ -213,36 +253,32 @@ def friction(op: Operator, i: int) -> Conic:
                             "'friction'")
     mu = scene.contact.friction_coefficient
     frameless = determinacy(op, i).min_norm
-    joints = {j.name: j for j in scene.joints}
-    n_shafts = len(scene.shafts)
     frames = _pin_frames(op, i)
+    radial_of = {(c.joint, c.trunnion, c.side): c for c in op.of_kind("trunnion-radial")}
     extra = []
-    for j, name in _end_faces(op):
-        joint_name, face = name.split(".")
-        joint, k = joints[joint_name], list(joints).index(joint_name)
-        axis = "e1" if face in ("F3", "F4") else "e2"
-        radial = {"F3": "F1", "F4": "F2", "F7": "F5", "F8": "F6"}[face]
-        sign = 1.0 if face in ("F3", "F7") else -1.0
-        yoke = k if axis == "e1" else k + 1
+    for face in op.of_kind("end-face"):
+        j, joint = face.columns[0], scene.joints[face.joint]
+        axis, comps = face.trunnion, _normal_components(face.trunnion)
+        radial = radial_of[(face.joint, face.trunnion, face.side)]
         members = []
-        for comp in (("e2", "e3") if axis == "e1" else ("e3", "e1")):
+        for comp, column in zip(comps, radial.columns):
             # the radial column of the same trunnion, moved from hs to ht along the axis
-            col = op.A[i][:, op.index(f"{joint_name}.{radial}.{comp}")].copy()
-            arm = sign * (joint.ht_m - joint.hs_m) * np.cross(frames[axis][k], frames[comp][k])
-            col[6 * (n_shafts + k) + 3: 6 * (n_shafts + k) + 6] += arm
-            col[6 * yoke + 3: 6 * yoke + 6] -= arm
-            members.append((f"{name}.t_{comp}", col, 1.0))
+            col = op.A[i][:, column].copy()
+            arm = face.side * (joint.ht_m - joint.hs_m) * np.cross(frames[axis][face.joint],
+                                                                  frames[comp][face.joint])
+            col[op.body_rows(face.body)] += arm
+            col[op.body_rows(face.other)] -= arm
+            members.append((f"{face.name}.t_{comp}", col, 1.0))
         extra.append((members, lambda idx, j=j: SecondOrderCone(apex=j, members=idx,
                                                                   scale=mu)))
         # axial friction of the radial contact on this trunnion: a force along the axis
         # through the axis, the same line as the end face's (opposite) push
-        radial_cols = [op.index(f"{joint_name}.{radial}.{c}") for c in
-                       (("e2", "e3") if axis == "e1" else ("e3", "e1"))]
+        radial_cols = list(radial.columns)
         normal = frameless[radial_cols]
         norm = np.linalg.norm(normal)
         normal = normal / norm if norm > 0 else np.zeros(2)
-        along = -sign * op.A[i][:, j]
-        extra.append(([(f"{joint_name}.{radial}.t_{axis}", along, 1.0)],
+        along = -face.side * op.A[i][:, j]
+        extra.append(([(f"{radial.name}.t_{axis}", along, 1.0)],
                       lambda idx, cols=radial_cols, w=mu * normal: SecondOrderCone(
                           apex=cols[0], members=idx, scale=w[0],
                           apex_terms=((cols[1], w[1]),))))
@@ -258,10 +294,6 @@ def _idle_faces(op: Operator, least: np.ndarray) -> list[int]:
     (the pair's columns are opposite, so exactly one of the two is >= 0 there).
     """
     return [a if least[b] - least[a] >= 0 else b for a, b in op.pairs]
-
-
-def _end_faces(op: Operator):
-    return [(j, name) for j, name in enumerate(op.names) if op.unilateral[j]]
 
 
 def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
@@ -285,7 +317,7 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     n0, n = len(op.names), A.shape[1]
     unilateral = np.concatenate([op.unilateral, np.zeros(n - n0, bool)])
     check = ForceChecks(A=A, b=op.b[i], names=tuple(names), unilateral=unilateral,
-                        pairs=op.pairs, cones=tuple(cones))
+                        pairs=op.pairs, cones=tuple(cones) + slip_cones(op, i))
     reduced, b_reduced = _independent_rows(A, op.b[i])
     held = np.eye(n)[list(idle)]
     blocks = [np.vstack([reduced, held])]
@@ -293,9 +325,10 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     rhs = [np.concatenate([b_reduced / scale, np.zeros(len(held))])]
     cone_list = [("zero", len(reduced) + len(held))]
     uni = np.flatnonzero(unilateral)
-    blocks.append(_minus_identity_rows(uni, n))
-    rhs.append(np.zeros(len(uni)))
-    cone_list.append(("nonneg", len(uni)))
+    G = slip_rows(op, i, n)
+    blocks.append(np.vstack([_minus_identity_rows(uni, n), G]))
+    rhs.append(np.zeros(len(uni) + len(G)))
+    cone_list.append(("nonneg", len(uni) + len(G)))
     for c in cones:
         soc = np.zeros((1 + len(c.members), n))
         soc[0] = -c.apex_row(n)
@@ -310,17 +343,14 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
 
 
 def _pin_frames(op: Operator, i: int) -> dict[str, np.ndarray]:
-    """Cross-pin frames (joints, 3) at instant ``i``, read back from the operator's
-    end-face columns (F4 pushes along +e1, F8 along +e2 on the pin).
-    """
-    n_shafts = len(op.scene.shafts)
-    e1, e2 = [], []
-    for k, joint in enumerate(op.scene.joints):
-        pin = slice(6 * (n_shafts + k), 6 * (n_shafts + k) + 3)
-        e1.append(op.A[i, pin, op.index(f"{joint.name}.F4")])
-        e2.append(op.A[i, pin, op.index(f"{joint.name}.F8")])
-    e1, e2 = np.array(e1), np.array(e2)
-    return {"e1": e1, "e2": e2, "e3": np.cross(e1, e2)}
+    """Cross-pin frames (joints, 3) at instant ``i``: the operator's ``pin_frames``."""
+    frames = op.pin_frames[:, i]
+    return {"e1": frames[:, 0], "e2": frames[:, 1], "e3": frames[:, 2]}
+
+
+def _normal_components(trunnion: str) -> tuple[str, str]:
+    """The pin-frame directions normal to a trunnion axis, in the operator's order."""
+    return ("e2", "e3") if trunnion == "e1" else ("e3", "e1")
 
 
 FORMULATIONS = {
@@ -336,20 +366,30 @@ FORMULATIONS = {
 
 
 def contact_laws(op: Operator) -> list[tuple[list[int], float, float]]:
-    """Per contact: (columns, Hertz K (N/m^n) or linear k (N/m) for bearings, gap (m))."""
+    """Per contact group (:func:`contacts`): (columns, Hertz K (N/m^n) or a linear k
+    (N/m; N m/rad for a slip joint's moments), gap (m)).
+
+    Bearings: the scene's bearing stiffness and clearance. Slip joints: taken as stiff
+    as a bearing, ``k`` for the shear and axial force and ``k r^2`` (``r`` the pitch
+    radius) for bending and torque, without gap: an assumption, the spline's own
+    compliance is not modelled.
+    """
     scene = op.scene
-    joints = {j.name: j for j in scene.joints}
+    k_b, gap_b = scene.contact.bearing_stiffness_N_m, scene.contact.bearing_clearance_m
     laws = []
-    for group in contacts(op):
-        name = op.names[group[0]]
-        if name.startswith("bearing."):
-            laws.append((group, scene.contact.bearing_stiffness_N_m,
-                         scene.contact.bearing_clearance_m))
+    for c in op.contacts:
+        if c.kind.startswith("bearing-"):
+            laws.append((list(c.columns), k_b, gap_b))
+        elif c.kind == "slip":
+            r = next(s for s in scene.slip_joints if s.name == c.name).pitch_radius_m
+            laws.append((list(c.columns[:2]), k_b, 0.0))
+            laws.append((list(c.columns[2:4]), k_b * r ** 2, 0.0))
+            laws.append(([c.columns[4]], k_b * r ** 2, 0.0))
+            laws.extend(([k], k_b, 0.0) for k in c.columns[5:])
         else:
-            joint = joints[name.split(".")[0]]
-            end_face = len(group) == 1
-            gap = joint.axial_clearance_m if end_face else joint.radial_clearance_m
-            laws.append((group, hertz_stiffness(scene, joint), gap))
+            joint = scene.joints[c.joint]
+            gap = joint.axial_clearance_m if c.kind == "end-face" else joint.radial_clearance_m
+            laws.append((list(c.columns), hertz_stiffness(scene, joint), gap))
     return laws
 
 
@@ -380,17 +420,19 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     laws = contact_laws(op)
     A, b = equalities(op, i)
     m, n = A.shape
-    is_bearing = [op.names[g[0]].startswith("bearing.") for g, _, _ in laws]
+    is_bearing = [_linear(op, g[0]) for g, _, _ in laws]
     name = "compliance" if law == "linear" else "compliance_hertz"
     sb = _load_scale(b)
     b = b / sb
     if law == "linear" and not use_gaps:
+        G = slip_rows(op, i)
         p = np.zeros(n)
         for (group, k, _), bearing in zip(laws, is_bearing):
             p[group] = 1.0 / (k if bearing else k * d_ref ** (n_exp - 1.0))
         return QP(checks=checks(op, i), formulation=name, to_forces=lambda z: sb * np.asarray(z),
                   P=np.diag(p / p.max()), q=np.zeros(n), A=A, b=b,
-                  lb=np.where(op.unilateral, 0.0, -np.inf))
+                  lb=np.where(op.unilateral, 0.0, -np.inf), G=G if len(G) else None,
+                  h=np.zeros(len(G)) if len(G) else None)
     # conic form: z = (x, r_c per contact, s_c per power-law contact); the second face
     # of each pair is held at 0, the first one signed
     merged = {b_: a_ for a_, b_ in op.pairs}
@@ -406,9 +448,10 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     rhs, cones = [np.concatenate([b, np.zeros(len(merged))])], [("zero", m + len(merged))]
     uni = [j for j in np.flatnonzero(op.unilateral) if j not in merged and j not in
            merged.values()]
-    blocks.append(_minus_identity_rows(uni, nz))
-    rhs.append(np.zeros(len(uni)))
-    cones.append(("nonneg", len(uni)))
+    G = slip_rows(op, i, nz)
+    blocks.append(np.vstack([_minus_identity_rows(uni, nz), G]))
+    rhs.append(np.zeros(len(uni) + len(G)))
+    cones.append(("nonneg", len(uni) + len(G)))
     for c, ((group, k, gap), bearing) in enumerate(zip(laws, is_bearing)):
         r = n + c
         soc = np.zeros((len(group) + 1, nz))
@@ -439,6 +482,12 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     return Conic(checks=checks(op, i), formulation=name, to_forces=to_forces, P=P / unit,
                  q=q / unit,
                  A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones))
+
+
+def _linear(op: Operator, column: int) -> bool:
+    """Whether a column's contact has a linear law (bearings, slip joints), not Hertz."""
+    kind = next(c.kind for c in op.contacts if column in c.columns)
+    return kind.startswith("bearing-") or kind == "slip"
 
 
 FORMULATIONS["compliance"] = compliance

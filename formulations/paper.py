@@ -43,7 +43,7 @@ from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.kinematics import rest_geometry
 from cardan_forces.driveline.scene import Scene
 
-from .convex import socp_face
+from .convex import NotApplicable, socp_face
 from .problems import NLS, ForceChecks
 
 CONVERGED = 1e-8
@@ -164,6 +164,28 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
     )
 
 
+def applies(op: Operator) -> None:
+    """Raise :class:`NotApplicable` unless the operator has the paper's layout: every
+    bearing locating (the paper merges a shaft's axial forces into one unknown), no
+    slip joint, and as many polar unknowns as equations (2 per bearing + 1 per shaft
+    with bearings + 12 per joint = 6 per body + 2 per joint; 34 for the paper's line).
+    """
+    kinds = {c.kind for c in op.contacts}
+    if "slip" in kinds or "bearing-floating" in kinds:
+        raise NotApplicable(
+            "the paper's method (34 polar unknowns, eqs. 49-62) does not apply to scenes "
+            "with slip joints or floating bearings: it writes every bearing as locating "
+            "and every joint as a cross-pin")
+    bearings = op.of_kind("bearing-locating")
+    unknowns = 2 * len(bearings) + len({c.shaft for c in bearings}) + 12 * len(op.scene.joints)
+    equations = op.A.shape[1] + 2 * len(op.scene.joints)
+    if unknowns != equations:
+        raise NotApplicable(
+            f"the paper's method does not apply to this layout: its polar unknowns "
+            f"({unknowns}) and equations ({equations}) differ (it is square, 34 x 34, for "
+            "the paper's 3 shafts, 2 joints and 2 bearings on each end shaft)")
+
+
 def _to_forces(lay: _Layout, z: np.ndarray) -> np.ndarray:
     """Polar unknowns -> the 36 Cartesian forces (eqs. 11-14, 37-38, 44-45)."""
     z = np.asarray(z, float)
@@ -240,6 +262,7 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
     ``paper_residual(z)`` is ``||F(z)|| / ||b||`` of the paper's equations.
     """
     scene = op.scene if scene is None else scene
+    applies(op)
     lay = _layout(op, i, scene)
     A, b = op.A[i], op.b[i]
     scale = max(float(np.linalg.norm(b)), 1e-12)
@@ -283,7 +306,7 @@ def _with_face_moments(lay: _Layout, face, op: Operator):
     """
     n = len(op.names)
     M = face.checks.A[:, n:]
-    owner = [face.checks.names.index(name.rsplit(".", 1)[0]) for name in face.checks.names[n:]]
+    owner = [cone.apex for cone in face.checks.cones for _ in cone.members]
 
     def to_forces(z):
         z = np.asarray(z, float)

@@ -1,0 +1,134 @@
+"""Typed elements of a real drive line: shaft segments cut by slip joints, and the
+checks that every part of the line is held (DESIGN §1).
+
+A slip joint cuts its shaft into two coaxial **segments**, ``<shaft>.upstream`` and
+``<shaft>.downstream``, each a rigid body of the equilibrium operator with the shaft's
+mass and axial inertia split by length, its centre of mass at its own middle. A shaft
+without a slip joint is one body named after the shaft. The 1-DOF motion is the same
+(the spline makes the segments turn together).
+
+Bad layouts raise :class:`~cardan_forces.driveline.scene.SceneError`:
+
+- a slip joint whose segment has no neighbour: neither a Cardan joint at its end nor a
+  bearing on it, so nothing but the spline holds it;
+- a line that can slide as a whole (or a part of it between slip joints): its
+  bearings are all floating along a common direction, no locating bearing holds it.
+  Checked by the translations the bearings, joints and splines allow (a small null
+  space): a floating bearing on a shaft with axis ``a`` stops translations normal to
+  ``a``, a locating one all, a Cardan joint makes its two shafts translate together,
+  a frictionless spline lets its segments slide relative to each other along ``a``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene import Scene, SceneError
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A rigid shaft body: shaft ``shaft`` (scene index) from ``lo_m`` to ``hi_m`` along
+    its axis (offsets from the shaft's centre, downstream positive)."""
+
+    name: str
+    shaft: int
+    lo_m: float
+    hi_m: float
+    fraction: float  # its share of the shaft's length, mass and axial inertia
+
+    @property
+    def middle_m(self) -> float:
+        """Its centre of mass: the middle of its span (m from the shaft's centre)."""
+        return 0.5 * (self.lo_m + self.hi_m)
+
+
+def shaft_segments(scene: Scene) -> list[Segment]:
+    """Every shaft body in chain order: one per shaft, two where a slip joint cuts it."""
+    cut = {s.shaft: s.offset_m for s in scene.slip_joints}
+    out = []
+    for k, shaft in enumerate(scene.shafts):
+        half = shaft.length_m / 2
+        if shaft.name in cut:
+            at = cut[shaft.name]
+            out.append(Segment(f"{shaft.name}.upstream", k, -half, at,
+                               (at + half) / shaft.length_m))
+            out.append(Segment(f"{shaft.name}.downstream", k, at, half,
+                               (half - at) / shaft.length_m))
+        else:
+            out.append(Segment(shaft.name, k, -half, half, 1.0))
+    return out
+
+
+def segment_of(segments: list[Segment], shaft: int, offset_m: float) -> int:
+    """Index (into ``segments``) of the segment of shaft ``shaft`` holding ``offset_m``."""
+    for g, seg in enumerate(segments):
+        if seg.shaft == shaft and seg.lo_m <= offset_m <= seg.hi_m:
+            return g
+    raise ValueError(f"offset {offset_m} m lies on no segment of shaft {shaft}")
+
+
+def check_elements(scene: Scene) -> None:
+    """Refuse slip joints with an unheld segment and lines free to slide (module doc)."""
+    segments = shaft_segments(scene)
+    last = len(scene.shafts) - 1
+    for slip in scene.slip_joints:
+        k = [s.name for s in scene.shafts].index(slip.shaft)
+        shaft = scene.shafts[k]
+        for side, has_joint, on in (("upstream", k > 0, lambda b: b.offset_m < slip.offset_m),
+                                    ("downstream", k < last,
+                                     lambda b: b.offset_m > slip.offset_m)):
+            if not has_joint and not any(on(b) for b in shaft.bearings):
+                raise SceneError(
+                    f"scene {scene.source}: slip joint {slip.name!r} on shaft {shaft.name!r}: "
+                    f"its {side} segment has no neighbour (no Cardan joint at its end, no "
+                    "bearing on it): nothing but the spline would hold it")
+    free = sliding_bodies(scene, segments)
+    if free:
+        raise SceneError(
+            f"scene {scene.source}: no axial support: {', '.join(free)} can slide along "
+            "their axis (a floating bearing carries no axial force; make one bearing "
+            "of that part of the line locating)")
+
+
+def sliding_bodies(scene: Scene, segments: list[Segment] | None = None) -> list[str]:
+    """Names of the shaft bodies that some rigid translation allowed by the bearings,
+    joints and splines moves (empty when the line is held)."""
+    from .kinematics import rest_geometry  # kinematics imports the scene module
+
+    segments = shaft_segments(scene) if segments is None else segments
+    axes = rest_geometry(scene).axes
+    n = 3 * len(segments)
+    rows = []
+
+    def block(g: int, matrix: np.ndarray, h: int | None = None) -> np.ndarray:
+        row = np.zeros((3, n))
+        row[:, 3 * g: 3 * g + 3] = matrix
+        if h is not None:
+            row[:, 3 * h: 3 * h + 3] = -matrix
+        return row
+
+    for k, shaft in enumerate(scene.shafts):
+        normal = np.eye(3) - np.outer(axes[k], axes[k])
+        for bearing in shaft.bearings:
+            g = segment_of(segments, k, bearing.offset_m)
+            rows.append(block(g, np.eye(3) if bearing.kind == "locating" else normal))
+        parts = [g for g, s in enumerate(segments) if s.shaft == k]
+        if len(parts) == 2:
+            slip = next(s for s in scene.slip_joints if s.shaft == shaft.name)
+            rows.append(block(parts[0], np.eye(3) if slip.friction_coefficient > 0 else normal,
+                              parts[1]))
+    for j in range(len(scene.joints)):
+        a = max(g for g, s in enumerate(segments) if s.shaft == j)
+        b = min(g for g, s in enumerate(segments) if s.shaft == j + 1)
+        rows.append(block(a, np.eye(3), b))
+    matrix = np.vstack(rows) if rows else np.zeros((1, n))
+    _, s, vt = np.linalg.svd(matrix)
+    rank = int(np.sum(s > 1e-9 * max(s[0], 1e-300)))
+    null = vt[rank:]
+    if not len(null):
+        return []
+    moved = np.linalg.norm(null.reshape(len(null), len(segments), 3), axis=(0, 2)) > 1e-9
+    return [seg.name for seg, m in zip(segments, moved) if m]
