@@ -12,6 +12,7 @@ Errors in the user's input end with one message on stderr and exit code 2.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -21,6 +22,12 @@ import numpy as np
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import DynamicsError, simulate
 from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.release import (
+    advise,
+    named_modes,
+    parse_release,
+    released_operator,
+)
 from cardan_forces.driveline.scene import SceneError, builtin_names, builtin_text, load_scene
 from cardan_forces.experiments import bench, hard, sweep
 from cardan_forces.experiments.analysis import intervals, solve_all
@@ -98,9 +105,13 @@ def _check_time(scene, t: float) -> None:
 def _cmd_sets(args) -> int:
     scene = load_scene(args.scene)
     _check_time(scene, args.t)
-    op = build_operator(simulate(scene, [args.t]))
+    motion = simulate(scene, [args.t])
+    if args.release:
+        return _cmd_release(args, motion)
+    op = _released(motion, args.apply)
     result = determinacy(op, 0)
     ranges = intervals(op, 0)
+    modes = named_modes(op_motion(motion, op), 0, op)
     starts = multistart(op, 0, n=args.multistart, rim=False)[:, : len(op.names)] \
         if args.multistart else None
     if args.json:
@@ -109,9 +120,16 @@ def _cmd_sets(args) -> int:
             entry.update(min=ranges[name]["min"], max=ranges[name]["max"])
             if starts is not None:
                 entry["paper_multistart"] = [float(v) for v in starts[:, j]]
+        report["modes"] = [m.to_json() for m in modes]
         print(json.dumps(report, indent=2))
         return 0
-    print(f"scene {scene.name}, t = {result.t:g} s: rank {result.rank}, nullity "
+    _print_sets(op.scene.name, result, ranges, starts, args.multistart)
+    _print_modes(modes)
+    return 0
+
+
+def _print_sets(name, result, ranges, starts=None, n_starts=0) -> None:
+    print(f"scene {name}, t = {result.t:g} s: rank {result.rank}, nullity "
           f"{result.nullity}, least-norm residual {result.residual:.1e}")
     print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; least-norm values in N "
           "(one member of the solution set where not determinate); interval over all "
@@ -119,7 +137,7 @@ def _cmd_sets(args) -> int:
     print(f"{'component':24s} {'determinate':>11s} {'least-norm N':>14s} {'min N':>12s} "
           f"{'max N':>12s}")
     if starts is not None:
-        print(f"paper method (fsolve, end faces on the axis) from {args.multistart} random "
+        print(f"paper method (fsolve, end faces on the axis) from {n_starts} random "
               f"starts: {len(starts)} converged; their spread per component at the right")
     for j, (name, det, value) in enumerate(zip(result.names, result.determinate,
                                                result.min_norm)):
@@ -130,6 +148,57 @@ def _cmd_sets(args) -> int:
             f"  paper: [{starts[:, j].min():.3f}, {starts[:, j].max():.3f}]"
         print(f"{name:24s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}"
               f"{spread}")
+
+
+# ---------------------------------------------------------------------------- modes, releases
+
+
+def op_motion(motion, op):
+    """The motion with the operator's (possibly released) scene."""
+    return dataclasses.replace(motion, scene=op.scene)
+
+
+def _released(motion, labels):
+    """The operator of ``motion``'s scene with the ``--apply`` releases (SceneError if
+    they leave a mechanism)."""
+    if not labels:
+        return build_operator(motion)
+    releases = [parse_release(text, motion.scene) for text in labels]
+    return released_operator(motion, releases)
+
+
+def _print_modes(modes) -> None:
+    print(f"modes (null-space directions): {len(modes)}")
+    for k, m in enumerate(modes, 1):
+        print(f"  {k}. {m.kind}: {m.description}")
+        shown = ", ".join(m.components[:6]) + (" ..." if len(m.components) > 6 else "")
+        print(f"     moves {shown}; release: {m.release}")
+
+
+def _cmd_release(args, motion) -> int:
+    """``cardan sets --release``: the advisor's release set and the released table."""
+    advice = advise(motion, 0)
+    ranges = intervals(advice.operator, 0)
+    if args.json:
+        report = advice.to_json()
+        report["modes"] = [m.to_json() for m in advice.modes]
+        released = advice.released.to_json()
+        for name, entry in released["components"].items():
+            entry.update(min=ranges[name]["min"], max=ranges[name]["max"])
+        released["modes"] = [m.to_json() for m in advice.released_modes]
+        report["released"] = released
+        print(json.dumps(report, indent=2))
+        return 0
+    _print_modes(advice.modes)
+    words = "; ".join(r.words for r in advice.releases) or "none: only end-face pair modes"
+    print(f"release advisor: {len(advice.releases)} release(s): {words}")
+    print(f"  ({len(advice.alternatives)} other set(s) of the same size also work; "
+          f"{advice.tried} set(s) built and checked by determinacy)")
+    if advice.releases:
+        print(f"  as --apply: {' '.join('--apply ' + r.label for r in advice.releases)}")
+    print()
+    _print_sets(advice.scene.name, advice.released, ranges)
+    _print_modes(advice.released_modes)
     return 0
 
 
@@ -212,6 +281,13 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--json", action="store_true", help="print JSON")
     st.add_argument("--multistart", type=int, default=0, metavar="N",
                     help="also run the paper's method from N seeded random starts")
+    st.add_argument("--release", action="store_true",
+                    help="propose the smallest set of releases (floating bearings, slip "
+                         "joints) that leaves only end-face pair modes; show the released "
+                         "line's table")
+    st.add_argument("--apply", action="append", metavar="RELEASE",
+                    help="apply a release first: float:<shaft>.<bearing> or slip:<shaft> "
+                         "(repeatable)")
     st.set_defaults(func=_cmd_sets)
 
     sv = sub.add_parser("solvers", help="solver backends present, with their problem classes")

@@ -1,0 +1,241 @@
+"""Releases: the design changes that remove a redundancy of the rigid model.
+
+Two kinds, the ways real drive lines avoid redundant constraints:
+
+- ``floating``: make a locating bearing floating (it keeps its radial support and
+  lets the shaft slide through it axially);
+- ``slip``: put a frictionless slip (spline) joint in a shaft, at its centre (or, if a
+  bearing sits there, midway between the centre and the nearest bearing downstream),
+  pitch radius :data:`SLIP_PITCH_RADIUS_M` (it enters only with friction or the
+  compliance formulation's spline stiffness).
+
+Neither changes the 1-DOF motion: the kinematics and the reduced inertia are those
+of the shafts, which turn as before; so a released operator is built on the same
+:class:`~cardan_forces.driveline.dynamics.Motion`. A release set that leaves a part of
+the line unheld is refused with a :class:`~cardan_forces.driveline.scene.SceneError`
+(the scene's own element checks, and the operator's rank: a line held with one
+degree of freedom has exactly one dependent Newton-Euler row, the motion's).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from itertools import combinations
+
+from .determinacy import Determinacy, determinacy
+from .dynamics import Motion
+from .elements import check_elements
+from .equilibrium import Operator, build_operator
+from .modes import Mode, counts, name_modes
+from .scene import Scene, SceneError, SlipJoint
+
+SLIP_PITCH_RADIUS_M = 0.02
+"""Pitch radius of a spline a release adds (m; an assumption, see the module doc)."""
+
+
+@dataclass(frozen=True)
+class Release:
+    """One release: ``kind`` ``floating`` (``shaft``, ``bearing``) or ``slip`` (``shaft``)."""
+
+    kind: str
+    shaft: str
+    bearing: str = ""
+
+    @property
+    def label(self) -> str:
+        """The release as typed on the command line: ``float:<shaft>.<bearing>`` or
+        ``slip:<shaft>``."""
+        return f"float:{self.shaft}.{self.bearing}" if self.kind == "floating" \
+            else f"slip:{self.shaft}"
+
+    @property
+    def words(self) -> str:
+        return (f"make bearing {self.shaft}.{self.bearing} floating" if self.kind == "floating"
+                else f"add a slip joint in shaft {self.shaft}")
+
+    def to_json(self) -> dict:
+        return {"release": self.label, "description": self.words}
+
+
+def parse_release(text: str, scene: Scene) -> Release:
+    """``float:<shaft>.<bearing>`` or ``slip:<shaft>``, checked against ``scene``."""
+    kind, _, target = text.partition(":")
+    shafts = {s.name: s for s in scene.shafts}
+    if kind == "slip" and target in shafts:
+        return Release("slip", target)
+    if kind == "float":
+        shaft, _, bearing = target.partition(".")
+        if shaft in shafts and bearing in {b.name for b in shafts[shaft].bearings}:
+            return Release("floating", shaft, bearing)
+    raise SceneError(f"release {text!r}: expected float:<shaft>.<bearing> or slip:<shaft> "
+                     f"with names of scene {scene.name!r}")
+
+
+def candidates(scene: Scene) -> list[Release]:
+    """Every single release the scene admits: each locating bearing floating, a slip joint
+    in each shaft that has none (slips first: a slip removes loops)."""
+    slipped = {s.shaft for s in scene.slip_joints}
+    out = [Release("slip", s.name) for s in scene.shafts if s.name not in slipped]
+    out += [Release("floating", s.name, b.name) for s in scene.shafts for b in s.bearings
+            if b.kind == "locating"]
+    return out
+
+
+def _slip_offset(shaft) -> float:
+    taken = sorted(b.offset_m for b in shaft.bearings)
+    if all(abs(o) > 1e-9 for o in taken):
+        return 0.0
+    above = [o for o in taken if o > 1e-9] + [shaft.length_m / 2]
+    return 0.5 * above[0]
+
+
+def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) -> Scene:
+    """``scene`` with ``releases`` applied (element checks re-run: SceneError if a part of
+    the line is left unheld)."""
+    shafts, slips = list(scene.shafts), list(scene.slip_joints)
+    for r in releases:
+        k = [s.name for s in shafts].index(r.shaft)
+        if r.kind == "floating":
+            bearings = tuple(dataclasses.replace(b, kind="floating") if b.name == r.bearing
+                             else b for b in shafts[k].bearings)
+            shafts[k] = dataclasses.replace(shafts[k], bearings=bearings)
+        elif all(s.shaft != r.shaft for s in slips):
+            slips.append(SlipJoint(name=f"slip_{r.shaft}", shaft=r.shaft,
+                                   offset_m=_slip_offset(shafts[k]),
+                                   pitch_radius_m=SLIP_PITCH_RADIUS_M))
+    order = {s.name: k for k, s in enumerate(shafts)}
+    slips.sort(key=lambda s: order[s.shaft])
+    labels = ", ".join(r.label for r in releases) or "none"
+    out = dataclasses.replace(scene, shafts=tuple(shafts), slip_joints=tuple(slips),
+                              name=f"{scene.name}+released",
+                              description=f"{scene.name} with releases: {labels}")
+    try:
+        check_elements(out)
+    except SceneError as err:
+        raise SceneError(f"releases {labels} leave a mechanism: {err}") from None
+    return out
+
+
+def released_operator(motion: Motion, releases) -> Operator:
+    """The operator of the released scene on the same motion; SceneError when the
+    releases leave a mechanism (more than the motion's one dependent row)."""
+    scene = released_scene(motion.scene, releases)
+    op = build_operator(dataclasses.replace(motion, scene=scene))
+    deficient = [op.A.shape[1] - np.linalg.matrix_rank(A, tol=1e-9 * np.linalg.norm(A, 2))
+                 for A in op.A]
+    if max(deficient) > 1:
+        labels = ", ".join(r.label for r in releases)
+        raise SceneError(f"releases {labels} leave a mechanism: {max(deficient) - 1} "
+                         "direction(s) in which the released line moves without deforming "
+                         "(besides its rotation)")
+    return op
+
+
+MAX_RELEASES = 4
+"""The advisor tries every set of up to this many releases."""
+
+
+@dataclass(frozen=True)
+class Advice:
+    """The smallest release set that leaves only end-face pair modes, verified.
+
+    ``modes``/``released_modes`` and ``determinacy``/``released`` before and after at
+    the same instant; ``alternatives``: other sets of the same size that also work;
+    ``tried``: release sets built and checked.
+    """
+
+    releases: tuple[Release, ...]
+    scene: Scene
+    modes: tuple[Mode, ...]
+    released_modes: tuple[Mode, ...]
+    determinacy: Determinacy
+    released: Determinacy
+    operator: Operator
+    alternatives: tuple[tuple[Release, ...], ...]
+    tried: int
+
+    def to_json(self) -> dict:
+        return {
+            "releases": [r.to_json() for r in self.releases],
+            "alternatives": [[r.label for r in alt] for alt in self.alternatives],
+            "tried": self.tried,
+            "before": {"rank": self.determinacy.rank, "nullity": self.determinacy.nullity,
+                       "modes": counts(list(self.modes))},
+            "after": {"rank": self.released.rank, "nullity": self.released.nullity,
+                      "modes": counts(list(self.released_modes))},
+        }
+
+
+def named_modes(motion: Motion, i: int, op: Operator | None = None) -> list[Mode]:
+    """The modes of ``motion``'s scene at instant ``i``, each closed loop with the single
+    releases that remove one loop (tried on the same motion)."""
+    op = build_operator(motion) if op is None else op
+    det = determinacy(op, i)
+    modes = name_modes(op, i, det)
+    loops = counts(modes)["closed loop"]
+    if not loops:
+        return modes
+    helps = []
+    for r in candidates(motion.scene):
+        after = _try(motion, (r,), i)
+        if after is not None and counts(after[1])["closed loop"] < loops:
+            helps.append(r.words)
+    text = "; or ".join(helps) or "no single release (combine several)"
+    return [dataclasses.replace(m, release=text) if m.kind == "closed loop" else m
+            for m in modes]
+
+
+def _try(motion: Motion, releases, i: int):
+    """(operator, modes) of the released line at instant ``i``, None if a mechanism."""
+    try:
+        op = released_operator(motion, releases)
+    except SceneError:
+        return None
+    det = determinacy(op, i)
+    return op, name_modes(op, i, det), det
+
+
+def _preference(scene: Scene, releases) -> tuple[int, int, int]:
+    """Smaller is better: shafts with bearings left without a locating one (a design
+    keeps one per shaft), slip joints added (a floating bearing is the cheaper release),
+    of them those in shafts with bearings (real lines put the spline in a propshaft)."""
+    shafts = {s.name: s for s in scene.shafts}
+    slips = [r for r in releases if r.kind == "slip"]
+    return (sum(bool(s.bearings) and all(b.kind == "floating" for b in s.bearings)
+                for s in scene.shafts),
+            len(slips), sum(bool(shafts[r.shaft].bearings) for r in slips))
+
+
+def advise(motion: Motion, i: int) -> Advice:
+    """Try release sets of growing size (at most :data:`MAX_RELEASES`) until one leaves
+    only end-face pair modes; among those of the smallest size prefer by
+    :func:`_preference`, then the first in :func:`candidates` order. Each set is verified by re-running determinacy on the
+    released scene. SceneError when no set of that size works.
+    """
+    op = build_operator(motion)
+    det = determinacy(op, i)
+    modes = named_modes(motion, i, op)
+    pool, tried = candidates(motion.scene), 0
+    for size in range(0, MAX_RELEASES + 1):
+        found = []
+        for combo in combinations(pool, size):
+            tried += 1
+            result = _try(motion, combo, i)
+            if result is None:
+                continue
+            c = counts(result[1])
+            if c["axial split"] == 0 and c["closed loop"] == 0:
+                found.append((_preference(result[0].scene, combo), combo, result))
+        if found:
+            found.sort(key=lambda f: f[0])  # stable: candidates order breaks ties
+            _, combo, (rop, rmodes, rdet) = found[0]
+            return Advice(releases=combo, scene=rop.scene, modes=tuple(modes),
+                          released_modes=tuple(rmodes), determinacy=det, released=rdet,
+                          operator=rop, alternatives=tuple(f[1] for f in found[1:]),
+                          tried=tried)
+    raise SceneError(f"scene {motion.scene.name!r}: no set of up to {MAX_RELEASES} releases "
+                     "leaves only end-face pair modes")
