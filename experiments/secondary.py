@@ -1,0 +1,144 @@
+"""Secondary-couple bearing loads over one revolution, against the handbook closed forms.
+
+A Cardan joint's frictionless cross can pass no moment about either trunnion, so the
+moment it transmits is ``m e3`` (``e3 = e1 x e2``); on a shaft whose axis is not
+``e3`` this leaves a bending moment, the **secondary couple**. For an input torque
+``T`` and joint angles ``b1``, ``b2`` (Dana Spicer, *Driveshaft / Universal Joint
+Service Manual* and SAE AE-7 *Universal Joint and Driveshaft Design Manual*, section
+on secondary couples; Klein, *Handbook of driveline components*, after
+Seherr-Thoss et al., *Universal Joints and Driveshafts*, Springer 2006, ch. 1):
+
+- at 90 deg (the driving trunnion normal to the articulation plane) the input shaft
+  carries the couple ``T tan b1``, reacted by its two bearings ``a`` apart:
+  ``+-T tan b1 / a``, normal to the articulation plane;
+- at 0 deg (the driving trunnion in the plane) the intermediate shaft (joint centres
+  ``L`` apart) carries the couples of both joints, ``T cos b1 (tan b1 -+ tan b2)``
+  (``-`` Z, ``+`` W), reacted by a shear ``S = T cos b1 (tan b1 -+ tan b2) / L``
+  through the joint centres, normal to the plane; on the input shaft (bearings ``a``
+  apart, the joint ``c`` beyond the near bearing) ``near = -S (a + c) / a``,
+  ``far = S c / a`` along ``+y``.
+
+Signs (derived from the moment balance of each shaft and checked against the
+operator in the tests): input torque about ``+x``, articulation towards ``+z``, the
+joint centre at ``+x`` of the input shaft. At 90 deg the cross passes ``m e3 = T
+a_mid / cos b1``, so the input shaft gets ``-T tan b1 z`` and its near bearing pushes
+``+T tan b1 / a`` along ``+y``; at 0 deg the intermediate shaft gets ``-T cos b1 (tan
+b1 -+ tan b2) u`` (``u`` its in-plane normal), balanced by ``+S y`` at joint 2 and
+``-S y`` at joint 1. :func:`handbook` states them along ``r2``, the plane's normal in
+the package's shaft frame (``-y`` here).
+
+These hold when the intermediate shaft carries no axial force: with a frictionless
+slip joint in it (``paper-slip``) every radial bearing load is determinate, and the
+in-plane ones vanish at 0 and 90 deg (no gravity). Loads are quasi-static (constant
+torque, no inertia, no gravity).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+
+from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.scene import Scene, load_scene, scene_from_dict
+
+STEPS = 72
+"""Instants per revolution (5 deg apart)."""
+
+
+def revolution_scene(base: str, arrangement: str, angles_deg: tuple[float, float],
+                     torque_N_m: float, steps: int = STEPS) -> Scene:
+    """``base`` quasi-static over one input revolution (1 rad/s, so ``t`` = angle), no
+    gravity, constant input torque, the given arrangement and joint angles."""
+    parent = load_scene(base)
+    joints = [{**dataclasses.asdict(j), "articulation_deg": a}
+              for j, a in zip(parent.joints, angles_deg)]
+    return scene_from_dict({
+        "extends": base, "name": f"{base}-{arrangement}-{angles_deg[0]:g}-{angles_deg[1]:g}",
+        "effects": [], "arrangement": arrangement, "joints": joints,
+        "torque": {"input": torque_N_m, "load": 0.0},
+        "initial": {"angle_rad": 0.0, "speed_rad_s": 1.0},
+        "time": {"start_s": 0.0, "stop_s": 2 * math.pi, "step_s": 2 * math.pi / steps}},
+        source=f"<revolution of {base}>")
+
+
+def bearing_loads(op: Operator) -> dict[str, np.ndarray]:
+    """Per bearing and instant: ``<shaft>.<bearing>.in_plane`` (along ``r1``) and
+    ``.normal`` (along ``r2``, the plane's normal), N, least-norm; NaN where the rigid
+    model does not determine it."""
+    out = {}
+    dets = [determinacy(op, i) for i in range(len(op.t))]
+    x = np.array([d.min_norm for d in dets])
+    for c in op.of_kind("bearing-locating", "bearing-floating"):
+        frame = op.shaft_frames[c.shaft]
+        cols = list(c.columns)
+        basis = np.eye(3) if c.frame == "global" else frame[:2]
+        for label, axis in (("in_plane", frame[0]), ("normal", frame[1])):
+            coeff = basis @ axis  # the component as a combination of the columns
+            free = np.array([np.linalg.norm(coeff @ d.null_basis[cols]) for d in dets])
+            out[f"{c.element}.{label}"] = np.where(free < DETERMINATE_TOL, x[:, cols] @ coeff,
+                                                   np.nan)
+    return out
+
+
+def handbook(torque: float, b1_deg: float, b2_deg: float, arrangement: str, a: float,
+             c: float, length: float) -> dict[str, float]:
+    """The closed forms of the module docstring (N): input bearings ``normal`` loads at
+    0 and 90 deg, and the intermediate shaft's shear ``S`` at 0 deg."""
+    b1, b2 = math.radians(b1_deg), math.radians(b2_deg)
+    sign = -1.0 if arrangement == "Z" else 1.0
+    shear = torque * math.cos(b1) * (math.tan(b1) + sign * math.tan(b2)) / length
+    couple = torque * math.tan(b1) / a
+    # along r2 = -y the bearing forces of the docstring change sign; the spline's shear
+    # on the downstream segment balances joint 2's +S y: it is -S y = +S r2
+    return {"shear_0": shear, "near_0": shear * (a + c) / a, "far_0": -shear * c / a,
+            "near_90": -couple, "far_90": couple}
+
+
+def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
+          out: Path) -> list[Path]:
+    """``secondary.csv`` (long format) and ``secondary.png`` (one panel per case)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "secondary.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["case", "bearing_load", "angle_deg", "force_N"])
+        for case, loads in results.items():
+            for name, values in loads.items():
+                w.writerows([case, name, f"{q:.6g}", f"{v:.9g}"]
+                            for q, v in zip(angle_deg, values))
+    fig, axes = plt.subplots(len(results), 1, figsize=(8, 3 * len(results)), squeeze=False)
+    for ax, (case, loads) in zip(axes[:, 0], results.items()):
+        for name, values in loads.items():
+            ax.plot(angle_deg, values, label=name, ls="-" if "normal" in name else "--")
+        ax.set_title(f"bearing loads over one revolution: {case}")
+        ax.set_xlabel("input angle (deg)")
+        ax.set_ylabel("N")
+        ax.legend(fontsize=6, ncols=2)
+    fig.tight_layout()
+    fig.savefig(out / "secondary.png", dpi=110)
+    plt.close(fig)
+    return [out / "secondary.csv", out / "secondary.png"]
+
+
+def run(base: str = "paper-slip", torque: float = 100.0, out: Path | None = None,
+        cases=(("Z", (30.0, 30.0)), ("W", (30.0, 30.0)), ("Z", (10.0, 40.0)),
+               ("W", (15.0, 25.0)))) -> dict[str, dict[str, np.ndarray]]:
+    """Bearing loads over one revolution for each (arrangement, angles) case."""
+    results = {}
+    for arrangement, angles in cases:
+        scene = revolution_scene(base, arrangement, angles, torque)
+        op = build_operator(simulate(scene))
+        results[f"{arrangement} {angles[0]:g}/{angles[1]:g} deg"] = bearing_loads(op)
+    if out is not None:
+        write(results, np.degrees(scene.time.instants()), Path(out))
+    return results

@@ -1,0 +1,178 @@
+"""Typed elements (floating bearings, slip joints), named modes, the release advisor and
+the secondary-couple loads against the handbook closed forms."""
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+import numpy as np
+import pytest
+
+from cardan_forces.cli import main
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.modes import counts
+from cardan_forces.driveline.release import advise, named_modes, released_operator
+from cardan_forces.driveline.scene import SceneError, builtin_text, load_scene, scene_from_dict
+from cardan_forces.experiments import secondary
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.solvers import solve
+
+
+def _op(name, t=0.5):
+    return build_operator(simulate(load_scene(name), [t]))
+
+
+def test_paper_slip_every_radial_bearing_load_is_determinate():
+    op = _op("paper-slip")
+    d = determinacy(op, 0)
+    assert (d.rank, d.nullity) == (35, 6)
+    for c in op.of_kind("bearing-locating"):
+        radial = [k for k, comp in zip(c.columns, c.components) if comp != "x"]
+        assert d.determinate[radial].all(), c.name
+    modes = counts(named_modes(simulate(load_scene("paper-slip"), [0.5]), 0, op))
+    assert modes == {"end-face pair": 4, "axial split": 2, "closed loop": 0}
+
+
+def test_paper_modes_are_named_and_count_the_nullity():
+    motion = simulate(load_scene("paper"), [0.5])
+    modes = named_modes(motion, 0)
+    assert counts(modes) == {"end-face pair": 4, "axial split": 2, "closed loop": 1}
+    loop = next(m for m in modes if m.kind == "closed loop")
+    assert "intermediate" in loop.description and "uj1.pin" in loop.description
+    assert loop.release == "add a slip joint in shaft intermediate"
+    op = build_operator(motion)
+    directions = np.array([m.direction for m in modes]).T
+    assert np.abs(op.A[0] @ directions).max() < 1e-9
+    assert np.linalg.matrix_rank(directions, tol=1e-9) == 7
+
+
+def test_propshaft_has_only_end_face_pair_modes():
+    motion = simulate(load_scene("propshaft"), [0.3])
+    op = build_operator(motion)
+    d = determinacy(op, 0)
+    assert counts(named_modes(motion, 0, op)) == {"end-face pair": 6, "axial split": 0,
+                                                  "closed loop": 0}
+    bearing_cols = [k for c in op.of_kind("bearing-locating", "bearing-floating")
+                    for k in c.columns]
+    assert d.determinate[bearing_cols].all()
+    assert d.residual < 1e-10
+
+
+@pytest.mark.parametrize("name, size", [("paper", 3), ("paper-slip", 2), ("propshaft", 0)])
+def test_advisor_releases_are_verified_by_determinacy(name, size):
+    motion = simulate(load_scene(name), [0.5])
+    advice = advise(motion, 0)
+    assert len(advice.releases) == size
+    # re-run determinacy on the released scene independently of the advisor
+    op = released_operator(motion, advice.releases)
+    d = determinacy(op, 0)
+    assert d.nullity == len(op.pairs)
+    assert d.residual < 1e-10
+    for c in op.of_kind("bearing-locating", "bearing-floating"):
+        assert d.determinate[list(c.columns)].all()
+
+
+def test_floating_bearing_has_two_radial_components():
+    op = build_operator(simulate(load_scene("propshaft"), [0.1]))
+    c = next(c for c in op.contacts if c.name == "bearing.gearbox.front")
+    assert c.kind == "bearing-floating" and c.components == ("r1", "r2")
+    axis = op.shaft_frames[c.shaft, 2]
+    # neither column pushes along the shaft axis
+    assert np.abs(op.A[0][6 * c.body: 6 * c.body + 3, list(c.columns)].T @ axis).max() < 1e-12
+
+
+def _slip(**fields):
+    base = {"name": "s", "shaft": "intermediate", "pitch_radius_m": 0.02}
+    return {"extends": "paper", "name": "bad", "slip_joints": [{**base, **fields}]}
+
+
+@pytest.mark.parametrize("raw, words", [
+    (_slip(friction_coefficient=-0.1), "must not be negative"),
+    (_slip(shaft="input", offset_m=-0.45), "no neighbour"),
+    (_slip(shaft="nope"), "no shaft"),
+    ({"extends": "paper", "name": "bad", "shafts": [
+        {**s, "bearings": [{**b, "kind": "floating"} for b in s["bearings"]]}
+        for s in tomllib.loads(builtin_text("paper"))["shafts"]]},
+     "no axial support"),
+])
+def test_bad_elements_are_refused(raw, words):
+    with pytest.raises(SceneError, match=words):
+        scene_from_dict(raw)
+
+
+def test_release_leaving_a_mechanism_exits_2(capsys):
+    args = ["sets", "paper", "--apply", "float:input.far", "--apply", "float:input.near",
+            "--apply", "float:output.far", "--apply", "float:output.near"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("cardan: error:") and "mechanism" in err
+
+
+def test_sets_json_lists_modes(capsys):
+    assert main(["sets", "paper", "--json"]) == 0
+    import json
+    report = json.loads(capsys.readouterr().out)
+    assert len(report["modes"]) == report["nullity"] == 7
+    assert {m["kind"] for m in report["modes"]} == {"end-face pair", "axial split",
+                                                    "closed loop"}
+
+
+def test_paper_method_says_it_does_not_apply():
+    for name in ("paper-slip", "propshaft"):
+        with pytest.raises(NotApplicable, match="does not apply"):
+            FORMULATIONS["paper"](_op(name, 0.1), 0)
+
+
+def test_slip_friction_bound_is_honoured():
+    scene = scene_from_dict({**_slip(offset_m=0.0, friction_coefficient=0.1),
+                             "name": "friction-slip"})
+    op = build_operator(simulate(scene, [0.5]))
+    (f,) = op.slip_friction
+    with pytest.raises(NotApplicable):
+        FORMULATIONS["min_norm"](op, 0)
+    for name, solver in (("positive", "clarabel"), ("min_max", "clarabel")):
+        record = solve(FORMULATIONS[name](op, 0), solver)
+        assert record.status == "solved"
+        x = record.x
+        assert abs(x[f.axial]) <= f.ratio_per_m * abs(x[f.torque]) * (1 + 1e-6) + 1e-9
+
+
+# ---------------------------------------------------------------------------- handbook
+
+TORQUE = 100.0
+
+
+@pytest.mark.parametrize("arrangement, angles", [("Z", (30.0, 30.0)), ("W", (30.0, 30.0)),
+                                                  ("Z", (10.0, 40.0)), ("W", (15.0, 25.0))])
+def test_secondary_couple_matches_the_handbook(arrangement, angles):
+    scene = secondary.revolution_scene("paper-slip", arrangement, angles, TORQUE, steps=4)
+    op = build_operator(simulate(scene))
+    loads = secondary.bearing_loads(op)
+    shaft = scene.shafts[0]
+    a = abs(shaft.bearings[1].offset_m - shaft.bearings[0].offset_m)
+    c = shaft.length_m / 2 - shaft.bearings[1].offset_m
+    expect = secondary.handbook(TORQUE, *angles, arrangement, a, c, scene.shafts[1].length_m)
+    tol = 1e-9 * TORQUE
+    # instant 0: input angle 0 deg; instant 1: 90 deg
+    assert loads["input.near.normal"][0] == pytest.approx(expect["near_0"], abs=tol)
+    assert loads["input.far.normal"][0] == pytest.approx(expect["far_0"], abs=tol)
+    assert loads["input.near.normal"][1] == pytest.approx(expect["near_90"], abs=tol)
+    assert loads["input.far.normal"][1] == pytest.approx(expect["far_90"], abs=tol)
+    x0 = determinacy(op, 0).min_norm
+    assert x0[op.index("slip.shear.r2")] == pytest.approx(expect["shear_0"], abs=tol)
+    # with the slip joint the in-plane loads are determinate too, and vanish at 0 and 90
+    for name, values in loads.items():
+        assert np.all(np.isfinite(values)), name
+        if name.endswith("in_plane"):
+            assert np.abs(values[:2]).max() < tol, name
+
+
+def test_secondary_writes_csv_and_png(tmp_path):
+    secondary.run(out=tmp_path, cases=(("Z", (30.0, 30.0)),))
+    assert (tmp_path / "secondary.png").stat().st_size > 0
+    text = (tmp_path / "secondary.csv").read_text().splitlines()
+    assert text[0] == "case,bearing_load,angle_deg,force_N" and len(text) > 100
