@@ -166,6 +166,14 @@ class Operator:
         """The contacts of the given kinds, in column order."""
         return [c for c in self.contacts if c.kind in kinds]
 
+    def bearing_force(self, contact: Link, x: np.ndarray) -> np.ndarray:
+        """A bearing's force on its shaft as a global vector (..., 3), N, from the
+        forces ``x`` (..., n): its x, y, z columns, or its r1, r2 in the shaft's frame."""
+        values = np.asarray(x)[..., list(contact.columns)]
+        if contact.frame == "global":
+            return values
+        return values @ self.shaft_frames[contact.shaft, :2]
+
     def body_rows(self, body: int, part: str = "moment") -> slice:
         """Rows of ``body``'s force or moment equations."""
         start = 6 * body + (3 if part == "moment" else 0)

@@ -1,10 +1,12 @@
 """``cardan hard``: the hard-case stability suite (DESIGN §4).
 
-Every case is a variant of the built-in ``paper`` scene (:data:`CASES`, one table).
+Every case is a variant of one scene, the built-in ``paper`` by default or any scene
+given (:data:`CASES`, one table); a case changes the scene's own shafts and joints
+(every joint, every middle shaft), so it applies to any chain.
 For each case x formulation x backend the suite solves a short window of instants
 and reports, per backend: the worst status, the worst residuals over the window, a
 NaN check, and how continuous the selected forces are in time: ``max_jump`` =
-``max_i max_j |x_{i+1,j} - x_{i,j}| / max_{i,j} |x_{i,j}|`` over the operator's 36
+``max_i max_j |x_{i+1,j} - x_{i,j}| / max_{i,j} |x_{i,j}|`` over the operator's
 contact forces (``inf`` when an instant has no forces).
 
 Formulations that genuinely cannot handle a case are listed once, with the reason, in
@@ -15,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import csv
+import dataclasses
 import json
 import math
 import sys
@@ -27,16 +30,11 @@ import numpy as np
 from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.driveline.scene import Scene, builtin_text, load_scene, scene_from_dict
+from cardan_forces.driveline.scene import Scene, load_scene, scene_from_dict
 from cardan_forces.experiments.analysis import solve_all
 from cardan_forces.experiments.environment import json_number
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers import STATUSES, Record
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
 
 RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
 
@@ -58,29 +56,46 @@ QUICK_SOLVERS = ("clarabel", "numpy-kkt", "qpsolvers-daqp", "lcp-lemke", "scipy-
 """The reduced backend set of ``--quick``: at least one per formulation."""
 
 
-def _paper() -> dict:
-    return tomllib.loads(builtin_text("paper"))
+def base_tables(base: str) -> dict:
+    """The ``shafts``, ``joints`` and ``effects`` of scene ``base`` as TOML-like tables
+    (``extends`` resolved), so that a case can override them entry by entry."""
+    scene = load_scene(base)
+
+    def plain(value):
+        if isinstance(value, (tuple, list)):
+            return [plain(v) for v in value]
+        if isinstance(value, dict):
+            return {k: plain(v) for k, v in value.items()}
+        return value
+
+    return {"shafts": plain([dataclasses.asdict(s) for s in scene.shafts]),
+            "joints": plain([dataclasses.asdict(j) for j in scene.joints]),
+            "effects": sorted(scene.effects), "input_harmonic":
+            scene.input_torque.amplitude_N_m != 0 or scene.input_torque.frequency_hz != 0}
 
 
 def _tables(key: str, **fields) -> Callable[[dict], dict]:
     """Overrides replacing every entry of the array ``key`` (``shafts``, ``joints``) with
-    its ``paper`` entry updated by ``fields`` (a value, or a list with one per entry).
+    the base's entry updated by ``fields`` (a value, or a list: entry ``k`` takes item
+    ``min(k, len - 1)``, so ``[10, 40]`` puts the first joint at 10 and the others at 40).
     """
-    def build(paper: dict) -> dict:
-        entries = copy.deepcopy(paper[key])
+    def build(base: dict) -> dict:
+        entries = copy.deepcopy(base[key])
         for k, entry in enumerate(entries):
-            entry.update({f: v[k] if isinstance(v, list) else v for f, v in fields.items()})
+            entry.update({f: v[min(k, len(v) - 1)] if isinstance(v, list) else v
+                          for f, v in fields.items()})
         return {key: entries}
     return build
 
 
 def _mass_ratio(ratio: float) -> Callable[[dict], dict]:
-    """The intermediate shaft's mass and all its principal moments times ``ratio``."""
-    def build(paper: dict) -> dict:
-        shafts = copy.deepcopy(paper["shafts"])
-        middle = shafts[1]
-        middle["mass_kg"] *= ratio
-        middle["inertia_kg_m2"] = [ratio * j for j in middle["inertia_kg_m2"]]
+    """The middle shafts' (all but the first and the last; the intermediate shaft in
+    ``paper``) mass and all their principal moments times ``ratio``."""
+    def build(base: dict) -> dict:
+        shafts = copy.deepcopy(base["shafts"])
+        for middle in shafts[1:-1]:
+            middle["mass_kg"] *= ratio
+            middle["inertia_kg_m2"] = [ratio * j for j in middle["inertia_kg_m2"]]
         return {"shafts": shafts}
     return build
 
@@ -89,8 +104,8 @@ def _stiffness_ratio(ratio: float) -> Callable[[dict], dict]:
     """Bearing stiffness = ``ratio`` x the joints' linear (secant) Hertz stiffness, the
     one the ``compliance`` formulation uses (K d_max^(n-1)).
     """
-    def build(paper: dict) -> dict:
-        scene = load_scene("paper")
+    def build(base: dict) -> dict:
+        scene = load_scene(base["name"])
         joint = hertz_stiffness(scene, scene.joints[0]) * \
             scene.contact.damping_full_depth_m ** (scene.contact.exponent - 1.0)
         return {"contact": {"bearing_stiffness_N_m": ratio * float(joint)}}
@@ -99,23 +114,29 @@ def _stiffness_ratio(ratio: float) -> Callable[[dict], dict]:
 
 def _clearance(gap_m: float) -> Callable[[dict], dict]:
     """Radial, axial and bearing clearances all ``gap_m``, the ``clearance`` effect on."""
-    def build(paper: dict) -> dict:
-        joints = copy.deepcopy(paper["joints"])
+    def build(base: dict) -> dict:
+        joints = copy.deepcopy(base["joints"])
         for j in joints:
             j.update(rb_m=j["rs_m"] + gap_m, hb_m=j["ht_m"] + gap_m)
-        return {"joints": joints, "effects": [*paper["effects"], "clearance"],
+        return {"joints": joints, "effects": [*base["effects"], "clearance"],
                 "contact": {"bearing_clearance_m": gap_m}}
     return build
 
 
 def _fixed(**overrides) -> Callable[[dict], dict]:
-    return lambda paper: overrides
+    return lambda base: overrides
+
+
+def _huge_torque(base: dict) -> dict:
+    """1e6 N m through the line: the mean of a harmonic input, or a constant one."""
+    drive = {"mean_N_m": 1e6} if base["input_harmonic"] else 1e6
+    return {"torque": {"input": drive, "load": 1e6}}
 
 
 @dataclass(frozen=True)
 class Case:
-    """A hard case: ``overrides(paper_dict)`` gives the keys that replace ``paper``'s;
-    instants are spread over ``[0, stop_s]``.
+    """A hard case: ``overrides(base_tables)`` gives the keys that replace the base
+    scene's; instants are spread over ``[start, start + stop_s]``.
     """
 
     name: str
@@ -123,9 +144,11 @@ class Case:
     overrides: Callable[[dict], dict]
     stop_s: float = 0.5
 
-    def scene(self) -> Scene:
-        return scene_from_dict({"extends": "paper", "name": f"hard-{self.name}",
-                                **self.overrides(_paper())}, source=f"<hard case {self.name}>")
+    def scene(self, base: str = "paper") -> Scene:
+        tables = {**base_tables(base), "name": base}
+        return scene_from_dict({"extends": base, "name": f"hard-{self.name}",
+                                **self.overrides(tables)},
+                               source=f"<hard case {self.name} of {base}>")
 
 
 CASES = (
@@ -135,14 +158,14 @@ CASES = (
          _tables("joints", articulation_deg=math.degrees(1e-6))),
     Case("articulation-89", "both joints at 89 deg", _tables("joints", articulation_deg=89.0)),
     Case("W", "W arrangement (input and output not parallel)", _fixed(arrangement="W")),
-    Case("unequal-10-40", "joint angles 10 and 40 deg (non-uniform output)",
+    Case("unequal-10-40", "joint angles 10 and 40 deg (the first 10, the others 40)",
          _tables("joints", articulation_deg=[10.0, 40.0])),
     Case("torque-0", "no input torque: at rest under gravity",
          _fixed(torque={"input": 0.0})),
     Case("torque-1e6", "1e6 N m mean input torque against a 1e6 N m load (transmitted)",
-         _fixed(torque={"input": {"mean_N_m": 1e6}, "load": 1e6})),
-    Case("mass-1e6", "intermediate shaft mass and inertia x 1e6", _mass_ratio(1e6)),
-    Case("mass-1e-6", "intermediate shaft mass and inertia x 1e-6", _mass_ratio(1e-6)),
+         _huge_torque),
+    Case("mass-1e6", "middle shafts' mass and inertia x 1e6", _mass_ratio(1e6)),
+    Case("mass-1e-6", "middle shafts' mass and inertia x 1e-6", _mass_ratio(1e-6)),
     Case("stiffness-1e6", "bearing stiffness 1e6 x the joints' (compliance)",
          _stiffness_ratio(1e6)),
     Case("stiffness-1e-6", "bearing stiffness 1e-6 x the joints' (compliance)",
@@ -242,12 +265,13 @@ class Run:
 
 
 def run_case(case: Case, formulations=None, solvers=None, instants: int = INSTANTS,
-             tol: float | None = TOL) -> list[Run]:
-    """Solve ``case`` at ``instants`` instants over its window with every requested
-    formulation and backend (``None``: all).
+             tol: float | None = TOL, base: str = "paper") -> list[Run]:
+    """Solve ``case`` (a variant of scene ``base``) at ``instants`` instants over its
+    window with every requested formulation and backend (``None``: all).
     """
-    t = np.linspace(0.0, case.stop_s, instants)
-    op = build_operator(simulate(case.scene(), t))
+    scene = case.scene(base)
+    t = scene.time.start_s + np.linspace(0.0, case.stop_s, instants)
+    op = build_operator(simulate(scene, t))
     by: dict[tuple[str, str], list] = {}
     for i, ti in enumerate(t):
         for r in solve_all(op, i, formulations, solvers, tol=tol):
@@ -325,7 +349,7 @@ def write_csv(runs: list[Run], path: Path) -> None:
 def write_md(rows: list[dict], path: Path, settings: str) -> None:
     """The Markdown report: cases, the summary table, known and unexpected failures."""
     lines = ["# Hard cases", "", settings, "",
-             "## Cases (variants of `paper`)", "", "| case | what | window (s) |", "|---|---|---|"]
+             "## Cases (variants of the scene)", "", "| case | what | window (s) |", "|---|---|---|"]
     lines += [f"| {c.name} | {c.what} | 0 .. {c.stop_s:g} |" for c in CASES]
     lines += ["", "## Case x formulation: the best backend", "",
               "| case | formulation | best backend | solved | worst residual | max jump | "
@@ -348,7 +372,8 @@ def write_md(rows: list[dict], path: Path, settings: str) -> None:
 def add_parser(subparsers) -> None:
     """Register ``cardan hard``."""
     p = subparsers.add_parser("hard", help="hard-case stability suite (every formulation x "
-                              "backend on extreme variants of the paper scene)")
+                              "backend on extreme variants of a scene, paper by default)")
+    p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     p.add_argument("--case", action="append", choices=[c.name for c in CASES],
                    help="one case (repeatable); default all")
     p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
@@ -366,13 +391,14 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     """Run the suite; text summary (or JSON) on stdout, progress on stderr."""
+    load_scene(args.scene)  # a bad scene: one message before any work
     cases = [c for c in CASES if not args.case or c.name in args.case]
     solvers = args.solver or (list(QUICK_SOLVERS) if args.quick else None)
     instants = QUICK_INSTANTS if args.quick else INSTANTS
     runs = []
     for k, case in enumerate(cases, 1):
         print(f"hard: case {k}/{len(cases)} {case.name}", file=sys.stderr, flush=True)
-        runs += run_case(case, args.formulation, solvers, instants, args.tol)
+        runs += run_case(case, args.formulation, solvers, instants, args.tol, args.scene)
     rows = summarize(runs)
     settings = (f"{instants} instants per window, tolerance {args.tol:g}, backends: "
                 f"{', '.join(solvers) if solvers else 'all available'}; forces judged by the "

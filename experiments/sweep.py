@@ -151,15 +151,14 @@ def peaks(op: Operator, geometry: Geometry, records: list[Record]) -> dict[str, 
     scene = op.scene
     out = {}
     for k, name in enumerate(("peak_joint1_N", "peak_joint2_N")):
-        groups: dict[str, list[int]] = {}
-        for c, col in enumerate(op.names):
-            if k < len(scene.joints) and col.startswith(f"{scene.joints[k].name}.F"):
-                groups.setdefault(col.split(".")[1], []).append(c)
-        out[name] = _max(np.linalg.norm(x[:, cols], axis=1) for cols in groups.values())
-    for k, radial in ((0, "peak_input_radial_N"), (-1, "peak_output_radial_N")):
-        shaft, axis = scene.shafts[k], geometry.axes[k]
-        loads = [x[:, [op.index(f"bearing.{shaft.name}.{b.name}.{a}") for a in "xyz"]]
-                 for b in shaft.bearings]
+        groups = [list(c.columns) for c in op.of_kind("trunnion-radial", "end-face")
+                  if c.joint == k]
+        out[name] = _max(np.linalg.norm(x[:, cols], axis=1) for cols in groups)
+    bearings = op.of_kind("bearing-locating", "bearing-floating")
+    for k, radial in ((0, "peak_input_radial_N"), (len(scene.shafts) - 1,
+                                                   "peak_output_radial_N")):
+        axis = geometry.axes[k]
+        loads = [op.bearing_force(c, x) for c in bearings if c.shaft == k]
         out[radial] = _max(np.linalg.norm(f - np.outer(f @ axis, axis), axis=1) for f in loads)
         if k == 0:
             out["peak_input_axial_N"] = _max([np.abs(sum(f @ axis for f in loads))]) \
