@@ -29,7 +29,7 @@ from cardan_forces.driveline.release import (
     released_operator,
 )
 from cardan_forces.driveline.scene import SceneError, builtin_names, builtin_text, load_scene
-from cardan_forces.experiments import bench, hard, sweep
+from cardan_forces.experiments import bench, hard, report, secondary, sweep
 from cardan_forces.experiments.analysis import intervals, solve_all
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
@@ -321,6 +321,8 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_parser(sub)
     hard.add_parser(sub)
     sweep.add_parser(sub)
+    report.add_parser(sub)
+    secondary.add_parser(sub)
     return p
 
 

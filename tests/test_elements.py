@@ -176,3 +176,30 @@ def test_secondary_writes_csv_and_png(tmp_path):
     assert (tmp_path / "secondary.png").stat().st_size > 0
     text = (tmp_path / "secondary.csv").read_text().splitlines()
     assert text[0] == "case,bearing_load,angle_deg,force_N" and len(text) > 100
+
+
+def test_report_on_the_propshaft(tmp_path):
+    from cardan_forces.experiments.report import run_report
+
+    paths = run_report("propshaft", tmp_path, instants=3)
+    assert all(p.stat().st_size > 0 for p in paths)
+    rows = (tmp_path / "report.csv").read_text().splitlines()
+    import csv as _csv
+    table = list(_csv.DictReader(rows))
+    # every bearing load of the propshaft is determinate: a point interval around the
+    # positive answer, at every instant
+    for row in table:
+        if row["kind"].startswith("bearing"):
+            assert row["determinate"] == "True"
+            lo, hi, v = float(row["min_N"]), float(row["max_N"]), float(row["positive_N"])
+            assert hi - lo <= 1e-6 * max(1.0, abs(v)) and lo - 1e-6 <= v <= hi + 1e-6
+
+
+def test_hard_case_of_another_scene():
+    from cardan_forces.experiments.hard import CASES, covered, run_case
+
+    case = next(c for c in CASES if c.name == "unequal-10-40")
+    scene = case.scene("propshaft")
+    assert [j.articulation_deg for j in scene.joints] == [10.0, 40.0, 40.0]
+    runs = run_case(case, ["positive"], ["qpsolvers-daqp"], instants=3, base="propshaft")
+    assert covered(runs)

@@ -1,0 +1,173 @@
+"""``cardan report``: one scene's bearing and joint loads over time, with the rigid
+solution set (DESIGN §4; any scene, its own names).
+
+At ``--instants`` instants spread over the scene's window: every contact force
+component of the operator, the member ``positive`` picks (least force, end faces
+pushing only), the interval ``[min, max]`` over every rigid solution with end faces
+>= 0 (two LPs per component, the band), and whether the component is determinate.
+Written as ``report.csv`` (long format), ``report.png`` (one panel per contact: a
+bearing, a slip joint, a trunnion, an end face) and ``report.md`` (the determinacy
+table and the named modes).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.release import named_modes
+from cardan_forces.driveline.scene import load_scene
+from cardan_forces.experiments.analysis import intervals
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.solvers import available, solve
+
+INSTANTS = 41
+"""Instants of the report by default (each costs two LPs per component)."""
+
+SELECTION = "positive"
+BACKENDS = ("qpsolvers-daqp", "clarabel")
+"""``positive`` is solved by the first of these present."""
+
+
+def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
+    """``value``, ``min``, ``max`` (T, n; NaN where unbounded or not solved) and
+    ``determinate`` (T, n) over the operator's instants."""
+    backend = next(b for b in BACKENDS if b in available())
+    T, n = len(op.t), len(op.names)
+    out = {k: np.full((T, n), np.nan) for k in ("value", "min", "max")}
+    out["determinate"] = np.zeros((T, n), bool)
+    for i in range(T):
+        if progress:
+            progress(f"report: instant {i + 1}/{T}")
+        record = solve(FORMULATIONS[SELECTION](op, i), backend)
+        if record.status == "solved":
+            out["value"][i] = record.x[:n]
+        ranges = intervals(op, i)
+        for j, name in enumerate(op.names):
+            for side in ("min", "max"):
+                v = ranges[name][side]
+                out[side][i, j] = math.nan if v is None else v
+        out["determinate"][i] = determinacy(op, i).determinate
+    return out
+
+
+def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["t_s", "component", "contact", "kind", f"{SELECTION}_N", "min_N", "max_N",
+                    "determinate"])
+        for c in op.contacts:
+            for j in c.columns:
+                for i, t in enumerate(op.t):
+                    w.writerow([f"{t:.6g}", op.names[j], c.name, c.kind,
+                                *(f"{h[k][i, j]:.9g}" for k in ("value", "min", "max")),
+                                bool(h["determinate"][i, j])])
+
+
+def write_png(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
+    """One panel per contact; the band runs to the panel's edge on an unbounded side
+    (the panel's title says so)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    contacts = op.contacts
+    cols = 4
+    rows = math.ceil(len(contacts) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.6 * rows), squeeze=False)
+    for ax, c in zip(axes.ravel(), contacts):
+        lines = [ax.plot(op.t, h["value"][:, j], lw=1.2,
+                         label=op.names[j][len(c.name) + 1:] or "force")[0] for j in c.columns]
+        bottom, top = ax.get_ylim()
+        unbounded = False
+        for line, j in zip(lines, c.columns):
+            lo, hi = h["min"][:, j], h["max"][:, j]
+            unbounded |= not (np.isfinite(lo).all() and np.isfinite(hi).all())
+            ax.fill_between(op.t, np.where(np.isfinite(lo), lo, bottom),
+                            np.where(np.isfinite(hi), hi, top), color=line.get_color(),
+                            alpha=0.12, lw=0)
+        ax.set_ylim(bottom, top)
+        ax.set_title(f"{c.name} ({c.kind})" + (", set unbounded" if unbounded else ""),
+                     fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=6)
+    for ax in axes.ravel()[len(contacts):]:
+        ax.set_visible(False)
+    fig.suptitle(f"{op.scene.name}: {SELECTION} (lines) and the rigid solution set (bands), "
+                 "N / N m against t (s)", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.97))
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path) -> None:
+    det = determinacy(op, 0)
+    lines = [f"# Loads of scene {op.scene.name}", "", op.scene.description, "",
+             f"{len(op.t)} instants from {op.t[0]:g} to {op.t[-1]:g} s; rank {det.rank}, "
+             f"nullity {det.nullity} at the first; `{SELECTION}` answer and the interval "
+             "over all rigid solutions with end faces >= 0.", "",
+             "| component | determinate (all instants) | largest interval width (N) |",
+             "|---|---|---|"]
+    width = np.nanmax(np.where(np.isfinite(h["max"] - h["min"]), h["max"] - h["min"], np.inf),
+                      axis=0)
+    for j, name in enumerate(op.names):
+        lines.append(f"| {name} | {'yes' if h['determinate'][:, j].all() else 'no'} | "
+                     f"{width[j]:.3g} |")
+    lines += ["", "## Modes (null-space directions)", ""]
+    lines += [f"- **{m.kind}**: {m.description}; release: {m.release}" for m in modes]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def run_report(scene_spec: str, out: Path, instants: int = INSTANTS,
+               progress=None) -> list[Path]:
+    """Write ``report.csv``, ``report.png`` and ``report.md`` for one scene into ``out``."""
+    scene = load_scene(scene_spec)
+    t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
+    motion = simulate(scene, t)
+    op = build_operator(motion)
+    h = histories(op, progress)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / "report.csv", out / "report.png", out / "report.md"]
+    write_csv(op, h, paths[0])
+    write_png(op, h, paths[1])
+    write_md(op, h, named_modes(motion, 0, op), paths[2])
+    return paths
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cardan report``."""
+    p = subparsers.add_parser("report", help="one scene's bearing and joint loads over time "
+                              "with the rigid solution set (CSV, PNG, Markdown)")
+    p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
+    p.add_argument("--out", default="results/report", help="output folder")
+    p.add_argument("--instants", type=_count, default=INSTANTS,
+                   help=f"instants over the scene's window (default {INSTANTS})")
+    p.set_defaults(func=run)
+
+
+def _count(text: str) -> int:
+    import argparse
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {text!r}")
+    return value
+
+
+def run(args) -> int:
+    """Write the report; the paths written on stdout, progress on stderr."""
+    for path in run_report(args.scene, Path(args.out), args.instants,
+                           progress=lambda m: print(m, file=sys.stderr, flush=True)):
+        print(path)
+    return 0
