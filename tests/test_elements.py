@@ -203,3 +203,18 @@ def test_hard_case_of_another_scene():
     assert [j.articulation_deg for j in scene.joints] == [10.0, 40.0, 40.0]
     runs = run_case(case, ["positive"], ["qpsolvers-daqp"], instants=3, base="propshaft")
     assert covered(runs)
+
+
+def test_penalty_simulation_refuses_the_new_elements():
+    from cardan_forces.driveline.penalty import simulate_penalty
+
+    scene = scene_from_dict({"extends": "paper-slip", "name": "slip-penalty",
+                             "effects": ["gravity", "inertia", "penalty_dynamics"]})
+    with pytest.raises(SceneError, match="does not apply"):
+        simulate_penalty(scene, [0.0])
+
+
+def test_scene_show_lists_kinds_and_slip_joints(capsys):
+    assert main(["scene", "show", "propshaft"]) == 0
+    out = capsys.readouterr().out
+    assert "(floating)" in out and "slip joint spline" in out
