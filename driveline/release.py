@@ -213,8 +213,9 @@ def _preference(scene: Scene, releases) -> tuple[int, int, int]:
 def advise(motion: Motion, i: int) -> Advice:
     """Try release sets of growing size (at most :data:`MAX_RELEASES`) until one leaves
     only end-face pair modes; among those of the smallest size prefer by
-    :func:`_preference`, then the first in :func:`candidates` order. Each set is verified by re-running determinacy on the
-    released scene. SceneError when no set of that size works.
+    :func:`_preference`, then the first in :func:`candidates` order. Each set is
+    verified by re-running determinacy on the released scene. SceneError when no set
+    of up to :data:`MAX_RELEASES` works.
     """
     op = build_operator(motion)
     det = determinacy(op, i)

@@ -349,7 +349,8 @@ def write_csv(runs: list[Run], path: Path) -> None:
 def write_md(rows: list[dict], path: Path, settings: str) -> None:
     """The Markdown report: cases, the summary table, known and unexpected failures."""
     lines = ["# Hard cases", "", settings, "",
-             "## Cases (variants of the scene)", "", "| case | what | window (s) |", "|---|---|---|"]
+             "## Cases (variants of the base scene)", "", "| case | what | window (s) |",
+             "|---|---|---|"]
     lines += [f"| {c.name} | {c.what} | 0 .. {c.stop_s:g} |" for c in CASES]
     lines += ["", "## Case x formulation: the best backend", "",
               "| case | formulation | best backend | solved | worst residual | max jump | "
