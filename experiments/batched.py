@@ -8,7 +8,8 @@ and ``B = A W^{-1/2}`` (T instants stacked):
 - least norm: ``y0 = B' mu`` with ``K mu = b``, ``K = B B' + delta I``. The rows of ``A``
   are dependent along the motion (rank 29 of 30), so ``K`` is singular; ``delta =
   GRAM_RTOL * trace(K) / rows`` biases ``y0`` by about ``delta / sigma_min^2`` of the
-  range (1e-12 relative in ``paper``) and the left null direction it inflates is
+  range (1e-12 relative in ``paper``, 1e-7 in ``propshaft``, whose scales differ), which
+  one step of iterative refinement removes; the left null direction it inflates is
   annihilated by ``B'``. A contact loads at most two bodies and the bodies form a chain
   (shaft, cross-pin, shaft, ...), so ``K`` is block tridiagonal in 6 x 6 body blocks:
   block elimination with one batched 6 x 6 inverse per body (:func:`chain_solve`).
@@ -118,6 +119,10 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     clock = _lap(stages, "gram", clock)
     Z = chain_solve(K, np.concatenate([b[:, :, None], U], axis=2), chain(A[0]))
     y = (Z[:, None, :, 0] @ B)[:, 0]
+    # one step of iterative refinement removes the bias of the regularization, whatever
+    # the scene's scales (without it: 1e-7 relative on the propshaft, 1e-14 on paper)
+    r = b - (B @ y[:, :, None])[:, :, 0]
+    y += (chain_solve(K, r[:, :, None], chain(A[0]))[:, None, :, 0] @ B)[:, 0]
     clock = _lap(stages, "factor+solve", clock)
     iterations, fallback = np.zeros(T, int), np.zeros(T, bool)
     if u.size:

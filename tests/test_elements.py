@@ -218,3 +218,12 @@ def test_scene_show_lists_kinds_and_slip_joints(capsys):
     assert main(["scene", "show", "propshaft"]) == 0
     out = capsys.readouterr().out
     assert "(floating)" in out and "slip joint spline" in out
+
+
+@pytest.mark.parametrize("name", ["paper", "propshaft"])
+def test_batched_least_norm_is_exact_on_any_scene(name):
+    from cardan_forces.experiments.batched import solve_batched
+
+    op = build_operator(simulate(load_scene(name), np.linspace(0.0, 0.5, 21)))
+    for formulation in ("min_norm", "positive"):
+        assert solve_batched(op, formulation).residuals["equilibrium"].max() < 1e-11
