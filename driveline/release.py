@@ -185,8 +185,16 @@ def named_modes(motion: Motion, i: int, op: Operator | None = None) -> list[Mode
         if after is not None and counts(after[1])["closed loop"] < loops:
             helps.append(r.words)
     text = "; or ".join(helps) or "no single release (combine several)"
-    return [dataclasses.replace(m, release=text) if m.kind == "closed loop" else m
-            for m in modes]
+    return [dataclasses.replace(m, release=_friction_words(op, m) + text)
+            if m.kind == "closed loop" else m for m in modes]
+
+
+def _friction_words(op: Operator, mode: Mode) -> str:
+    """A loop through a slip joint's friction force is bounded (``|axial| <= mu T / r``);
+    a frictionless spline removes it."""
+    slips = [f.slip for f in op.slip_friction if op.names[f.axial] in mode.components]
+    return "".join(f"bounded by the friction of slip joint {s}; a frictionless spline "
+                   "removes it; or " for s in slips)
 
 
 def _try(motion: Motion, releases, i: int):
