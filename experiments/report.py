@@ -4,7 +4,8 @@ solution set (DESIGN §4; any scene, its own names).
 At ``--instants`` instants spread over the scene's window: every contact force
 component of the operator, the member ``positive`` picks (least force, end faces
 pushing only), the interval ``[min, max]`` over every rigid solution with end faces
->= 0 (two LPs per component, the band), and whether the component is determinate.
+>= 0 (two LPs per component that is not determinate, the band; a determinate one's
+interval is its value), and whether the component is determinate.
 Written as ``report.csv`` (long format), ``report.png`` (one panel per contact: a
 bearing, a slip joint, a trunnion, an end face) and ``report.md`` (the determinacy
 table and the named modes).
@@ -24,7 +25,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.release import named_modes
 from cardan_forces.driveline.scene import load_scene
-from cardan_forces.experiments.analysis import intervals
+from cardan_forces.experiments.analysis import value_range
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers import available, solve
 
@@ -49,12 +50,14 @@ def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
         record = solve(FORMULATIONS[SELECTION](op, i), backend)
         if record.status == "solved":
             out["value"][i] = record.x[:n]
-        ranges = intervals(op, i)
-        for j, name in enumerate(op.names):
+        det = determinacy(op, i)
+        out["determinate"][i] = det.determinate
+        eye = np.eye(n)
+        for j in range(n):  # a determinate component's interval is its one value
+            ends = {"min": det.min_norm[j], "max": det.min_norm[j]} if det.determinate[j] \
+                else value_range(op, i, eye[j])
             for side in ("min", "max"):
-                v = ranges[name][side]
-                out[side][i, j] = math.nan if v is None else v
-        out["determinate"][i] = determinacy(op, i).determinate
+                out[side][i, j] = math.nan if ends[side] is None else ends[side]
     return out
 
 
