@@ -90,7 +90,6 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
     """Map the polar unknowns onto the operator's columns and rows at instant ``i``."""
     names, A = op.names, op.A[i]
     geo = rest_geometry(scene)
-    n_shafts = len(scene.shafts)
     towards = np.array(scene.frame.articulation_towards, float)
     z_names: list[str] = []
     P_cols, Q_cols, mag, ang, lin = [], [], [], [], []
@@ -122,11 +121,9 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
 
     n_rows = A.shape[0]
     rim_U, rim_V, rim_t, rim_f, rim_r, fb = [], [], [], [], [], []
+    yokes = {(c.joint, c.trunnion): (c.body, c.other) for c in op.of_kind("end-face")}
     for j, joint in enumerate(scene.joints):
-        pin = slice(6 * (n_shafts + j), 6 * (n_shafts + j) + 3)
-        e1 = A[pin, op.index(f"{joint.name}.F5.e1")]
-        e2 = A[pin, op.index(f"{joint.name}.F1.e2")]
-        e3 = A[pin, op.index(f"{joint.name}.F1.e3")]
+        e1, e2, e3 = op.pin_frames[j, i]
         theta = {t: add(f"{joint.name}.theta{t}") for t in (1, 2, 5, 6)}
         f = {n: add(f"{joint.name}.f{n}") for n in range(1, 9)}
         for n, (cos_c, sin_c) in {1: ("e2", "e3"), 2: ("e2", "e3"),
@@ -137,15 +134,15 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
             ang.append(theta[n])
         for n in (3, 4, 7, 8):
             lin.append((f[n], unit(op.index(f"{joint.name}.F{n}"))))
-        for yoke, (ta, tb), (fa, fb_), (cos_dir, sin_dir) in (
-            (j, (1, 2), (3, 4), (e2, e3)),
-            (j + 1, (5, 6), (7, 8), (e3, e1)),
+        for trunnion, (ta, tb), (fa, fb_), (cos_dir, sin_dir) in (
+            ("e1", (1, 2), (3, 4), (e2, e3)),
+            ("e2", (5, 6), (7, 8), (e3, e1)),
         ):
             U, V = np.zeros(n_rows), np.zeros(n_rows)
-            for body, sign in ((n_shafts + j, 1.0), (yoke, -1.0)):
-                moment = slice(6 * body + 3, 6 * body + 6)
-                U[moment] += sign * cos_dir
-                V[moment] += sign * sin_dir
+            pin, yoke = yokes[(j, trunnion)]
+            for body, sign in ((pin, 1.0), (yoke, -1.0)):
+                U[op.body_rows(body)] += sign * cos_dir
+                V[op.body_rows(body)] += sign * sin_dir
             rim_U.append(U)
             rim_V.append(V)
             rim_t.append((theta[ta], theta[tb]))
