@@ -365,14 +365,20 @@ FORMULATIONS = {
 """Builders by name: ``FORMULATIONS[name](op, i) -> problem``."""
 
 
+SLIP_LENGTH_M = 1.0
+"""Length that turns the bearing stiffness (N/m) into a slip joint's bending and torsion
+stiffness (N m/rad), as ``min_norm_scaled`` measures moments over 1 m."""
+
+
 def contact_laws(op: Operator) -> list[tuple[list[int], float, float]]:
     """Per contact group (:func:`contacts`): (columns, Hertz K (N/m^n) or a linear k
     (N/m; N m/rad for a slip joint's moments), gap (m)).
 
     Bearings: the scene's bearing stiffness and clearance. Slip joints: taken as stiff
-    as a bearing, ``k`` for the shear and axial force and ``k r^2`` (``r`` the pitch
-    radius) for bending and torque, without gap: an assumption, the spline's own
-    compliance is not modelled.
+    as a bearing, ``k`` for the shear and axial force and ``k * (1 m)^2`` for bending
+    and torque, without gap: an assumption (the spline's own compliance is not
+    modelled; its components are determinate in the built-in scenes, so the choice
+    changes no answer there, and a stiffer spline would only worsen the conditioning).
     """
     scene = op.scene
     k_b, gap_b = scene.contact.bearing_stiffness_N_m, scene.contact.bearing_clearance_m
@@ -381,10 +387,9 @@ def contact_laws(op: Operator) -> list[tuple[list[int], float, float]]:
         if c.kind.startswith("bearing-"):
             laws.append((list(c.columns), k_b, gap_b))
         elif c.kind == "slip":
-            r = next(s for s in scene.slip_joints if s.name == c.name).pitch_radius_m
             laws.append((list(c.columns[:2]), k_b, 0.0))
-            laws.append((list(c.columns[2:4]), k_b * r ** 2, 0.0))
-            laws.append(([c.columns[4]], k_b * r ** 2, 0.0))
+            laws.append((list(c.columns[2:4]), k_b * SLIP_LENGTH_M ** 2, 0.0))
+            laws.append(([c.columns[4]], k_b * SLIP_LENGTH_M ** 2, 0.0))
             laws.extend(([k], k_b, 0.0) for k in c.columns[5:])
         else:
             joint = scene.joints[c.joint]
