@@ -236,3 +236,16 @@ def test_batched_least_norm_is_exact_on_any_scene(name):
     op = build_operator(simulate(load_scene(name), np.linspace(0.0, 0.5, 21)))
     for formulation in ("min_norm", "positive"):
         assert solve_batched(op, formulation).residuals["equilibrium"].max() < 1e-11
+
+
+def test_sets_release_prints_the_advice_and_the_released_table(capsys):
+    assert main(["sets", "paper", "--release"]) == 0
+    out = capsys.readouterr().out
+    assert "release advisor: 3 release(s): add a slip joint in shaft intermediate" in out
+    assert "scene paper+released" in out and "rank 35, nullity 4" in out
+
+
+def test_report_refuses_too_few_instants(capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["report", "paper", "--instants", "1"])
+    assert exit_.value.code == 2
