@@ -208,12 +208,13 @@ def _try(motion: Motion, releases, i: int):
 
 
 def _preference(scene: Scene, releases) -> tuple[int, int, int]:
-    """Smaller is better: shafts with bearings left without a locating one (a design
-    keeps one per shaft), slip joints added (a floating bearing is the cheaper release),
-    of them those in shafts with bearings (real lines put the spline in a propshaft)."""
+    """Smaller is better: shafts with two or more bearings left without a locating one
+    (a design keeps one per such shaft; a lone centre bearing may float), slip joints
+    added (a floating bearing is the cheaper release), of them those in shafts with
+    bearings (real lines put the spline in a propshaft)."""
     shafts = {s.name: s for s in scene.shafts}
     slips = [r for r in releases if r.kind == "slip"]
-    return (sum(bool(s.bearings) and all(b.kind == "floating" for b in s.bearings)
+    return (sum(len(s.bearings) > 1 and all(b.kind == "floating" for b in s.bearings)
                 for s in scene.shafts),
             len(slips), sum(bool(shafts[r.shaft].bearings) for r in slips))
 

@@ -249,3 +249,20 @@ def test_report_refuses_too_few_instants(capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["report", "paper", "--instants", "1"])
     assert exit_.value.code == 2
+
+
+def test_advisor_recovers_the_propshaft_design_from_an_all_locating_line():
+    raw = tomllib.loads(builtin_text("propshaft"))
+    raw.pop("slip_joints")
+    for shaft in raw["shafts"]:
+        for bearing in shaft["bearings"]:
+            bearing["kind"] = "locating"
+    raw["name"] = "locked-propshaft"
+    motion = simulate(scene_from_dict(raw), [0.3])
+    before = determinacy(build_operator(motion), 0)
+    assert (before.rank, before.nullity) == (41, 10)  # 6 pairs, 2 splits, 2 loops
+    advice = advise(motion, 0)
+    labels = {r.label for r in advice.releases}
+    assert len(labels) == 4 and "slip:rear_prop" in labels
+    assert "float:front_prop.centre" in labels
+    assert advice.released.nullity == 6
