@@ -641,6 +641,9 @@ def _build(raw: dict, source: str) -> Scene:
                     tt.number("step_s", positive=True, kind="step_s"))
     if time.stop_s <= time.start_s:
         tt.fail("stop_s", f"must be after start_s ({time.start_s}), got {time.stop_s}")
+    if time.step_s > time.stop_s - time.start_s:
+        tt.fail("step_s", f"longer than the time span {time.stop_s - time.start_s:g} s, "
+                          f"got {time.step_s:g}")
     instants = round((time.stop_s - time.start_s) / time.step_s) + 1
     if instants > MAX_INSTANTS:
         tt.fail("step_s", f"gives {instants:.3g} instants from {time.start_s:g} to "

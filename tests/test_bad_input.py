@@ -135,7 +135,7 @@ SCENES = [
 
 
 @pytest.mark.parametrize("content,message", [c[1:] for c in SCENES], ids=[c[0] for c in SCENES])
-@pytest.mark.parametrize("command", ["scene check", "sets", "solve"])
+@pytest.mark.parametrize("command", ["scene check", "scene dump", "sets", "solve", "repro"])
 def test_bad_scene_is_one_line_exit_2(tmp_path, capsys, content, message, command):
     path = tmp_path / "bad.toml"
     (path.write_bytes if isinstance(content, bytes) else path.write_text)(content)
