@@ -213,11 +213,19 @@ def _cmd_solve(args) -> int:
     print(f"{'formulation':16s} {'solver':22s} {'status':10s} {'equil':>8s} {'sign':>8s} "
           f"{'compl':>8s} {'cone':>8s} {'ref':>8s} {'ms':>8s}")
     for r in records:
-        res = r.residuals
-        print(f"{r.formulation:16s} {r.solver:22s} {r.status:10s} {res['equilibrium']:8.1e} "
-              f"{res['sign']:8.1e} {res['complementarity']:8.1e} {res['cone']:8.1e} "
-              f"{res.get('reference', float('nan')):8.1e} {1e3 * (r.setup_s + r.solve_s):8.2f}")
+        res = [r.residuals.get(k, math.nan) for k in ("equilibrium", "sign", "complementarity",
+                                                     "cone", "reference")]
+        print(f"{r.formulation:16s} {r.solver:22s} {r.status:10s} "
+              + " ".join(_number(v, "8.1e") for v in res)
+              + f" {1e3 * (r.setup_s + r.solve_s):8.2f}")
     return 0
+
+
+def _number(value: float, spec: str) -> str:
+    """``value`` formatted, or ``-`` in the same width where it is not finite (a failed
+    record's residuals, a missing reference)."""
+    text = format(value, spec)
+    return text if math.isfinite(value) else "-".rjust(len(text))
 
 
 # ---------------------------------------------------------------------------- repro
