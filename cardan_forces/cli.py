@@ -390,10 +390,18 @@ def _heartbeat(command: str):
         done.set()
 
 
+UNDEFINED = ("nan", "inf", "-inf")
+"""How records spell a non-finite number in JSON (``Record.to_json``); printed as null."""
+
+
 def _finite(value):
-    """``value`` with every non-finite float replaced by ``None`` (JSON ``null``)."""
+    """``value`` with every non-finite number (a float, or a record's ``"nan"``,
+    ``"inf"``, ``"-inf"``) replaced by ``None`` (JSON ``null``).
+    """
     if isinstance(value, float):
         return value if math.isfinite(value) else None
+    if isinstance(value, str) and value in UNDEFINED:
+        return None
     if isinstance(value, dict):
         return {k: _finite(v) for k, v in value.items()}
     if isinstance(value, list):
@@ -402,7 +410,8 @@ def _finite(value):
 
 
 def strict_json(text: str) -> str:
-    """A command's JSON output as strict JSON: ``NaN``/``Infinity`` become ``null``."""
+    """A command's JSON output as strict JSON: numbers that are not finite become
+    ``null`` (each record's ``status`` says why)."""
     return json.dumps(_finite(json.loads(text)), indent=2, allow_nan=False) + "\n"
 
 

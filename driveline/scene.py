@@ -59,9 +59,11 @@ LIMITS = {
     "density_kg_m3": (1e-3, 1e5),
     "stiffness": (1e-3, 1e16),
     "ratio": (0.0, 1e3),
+    "number": (0.0, 1e15),
 }
 """Accepted magnitudes per kind of field, ``(least, most)``: a positive field must be at
-least ``least``, every field at most ``most`` in absolute value. The ranges hold any
+least ``least``, every field at most ``most`` in absolute value (``number``: a field
+read without a kind). The ranges hold any
 real drive line with room to spare (the hard cases scale masses and torques by 1e6)
 and keep every product the model forms finite."""
 
@@ -69,8 +71,10 @@ MAX_ARTICULATION_DEG = 89.0
 """Largest joint angle: the velocity ratio ``1/cos`` reaches 57 (eq. 3); closer to 90
 deg the motion is numerically singular."""
 
-MAX_SHAFTS = 20
-"""Largest number of shafts (the operator's SVD grows with the cube of the bodies)."""
+MAX_SHAFTS = 8
+"""Largest number of shafts: vehicle drive lines have up to four or five; the rigid
+set's intervals take two LPs per force component (about 200 LPs, tens of seconds, at
+eight shafts) and the operator's SVD grows with the cube of the bodies."""
 
 MAX_INSTANTS = 20_001
 """Largest time grid: operators are built over the whole grid (a 3-shaft line's takes
@@ -405,7 +409,7 @@ class _Table:
         return self.raw[key]
 
     def number(self, key: str, default=..., positive=False, nonnegative=False,
-               kind: str = "ratio") -> float:
+               kind: str = "number") -> float:
         """A finite number of ``kind`` (a key of :data:`LIMITS`): at most its ``most`` in
         magnitude; when ``positive``, at least its ``least``.
         """
@@ -582,6 +586,13 @@ def _joint(t: _Table) -> Joint:
     return joint
 
 
+def _scene_name(top: _Table) -> str:
+    name = top.string("name")
+    if not name.strip():
+        top.fail("name", "must not be empty")
+    return name
+
+
 def _build(raw: dict, source: str) -> Scene:
     top = _Table(raw, "", source)
     effects = top.get("effects", ["gravity", "inertia"])
@@ -663,23 +674,24 @@ def _build(raw: dict, source: str) -> Scene:
 
     ct = top.table("contact", {})
     contact = Contact(
-        exponent=ct.number("exponent", 1.5, positive=True),
+        exponent=ct.number("exponent", 1.5, positive=True, kind="ratio"),
         damping_full_depth_m=ct.number("damping_full_depth_m", 1e-5, positive=True,
                                        kind="length_m"),
         damping_fraction_of_stiffness=ct.number("damping_fraction_of_stiffness", 0.01,
-                                                nonnegative=True),
+                                                nonnegative=True, kind="ratio"),
         bearing_clearance_m=ct.number("bearing_clearance_m", 1e-5, nonnegative=True,
                                       kind="position_m"),
         bearing_stiffness_N_m=ct.number("bearing_stiffness_N_m", 1e9, positive=True,
                                         kind="stiffness"),
-        friction_coefficient=ct.number("friction_coefficient", 0.0, nonnegative=True),
+        friction_coefficient=ct.number("friction_coefficient", 0.0, nonnegative=True,
+                                          kind="ratio"),
     )
     if "friction" in effects and contact.friction_coefficient <= 0:
         ct.fail("friction_coefficient", "the 'friction' effect needs a positive coefficient")
     ct.done()
 
     scene = Scene(
-        name=top.string("name"),
+        name=_scene_name(top),
         description=top.string("description", ""),
         effects=frozenset(effects),
         arrangement=top.string("arrangement", "Z", choices=("Z", "W")),

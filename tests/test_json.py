@@ -34,7 +34,19 @@ def test_json_output_is_strict_and_alone(tmp_path, capfd, argv):
     code = main(argv.format(out=tmp_path).split())
     out, _ = capfd.readouterr()
     assert code == 0
-    _strict(out)
+    numbers = _numbers(_strict(out))
+    assert all(isinstance(v, (int, float)) for v in numbers)  # no "nan"/"inf" strings
+
+
+def _numbers(value):
+    """The JSON's leaves that are numbers or spell one (``"nan"``, ``"inf"``)."""
+    if isinstance(value, dict):
+        return [v for child in value.values() for v in _numbers(child)]
+    if isinstance(value, list):
+        return [v for child in value for v in _numbers(child)]
+    if isinstance(value, str):
+        return [value] if value.lower() in ("nan", "inf", "-inf", "infinity") else []
+    return [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else []
 
 
 def test_solver_banners_go_to_stderr():
@@ -50,7 +62,10 @@ def test_solver_banners_go_to_stderr():
 
 
 def test_undefined_numbers_become_null():
-    text = json.dumps({"residual": float("nan"), "rows": [{"max": float("inf"), "n": 3}]})
-    assert _strict(strict_json(text)) == {"residual": None, "rows": [{"max": None, "n": 3}]}
+    text = json.dumps({"residual": float("nan"), "rows": [{"max": float("inf"), "n": 3,
+                                                            "x": "-inf", "name": "nano"}]})
+    assert _strict(strict_json(text)) == {"residual": None,
+                                          "rows": [{"max": None, "n": 3, "x": None,
+                                                    "name": "nano"}]}
     with pytest.raises(ValueError):
         _strict(text)

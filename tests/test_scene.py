@@ -1,10 +1,12 @@
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from cardan_forces.driveline.scene import SceneError, builtin_names, builtin_text, load_scene, scene_from_dict
 from cardan_forces.cli import main
+from cardan_forces.driveline.kinematics import rest_geometry
 from tests.conftest import variant
 
 
@@ -121,9 +123,14 @@ def test_cli_bad_scene_exit_2_without_traceback(tmp_path):
     assert main(["sets", "no-such-scene"]) == 2
 
 
-def test_variant_helper_builds_valid_scene():
-    scene = variant(arrangement="W", gravity_m_s2=[0.0, 0.0, 0.0])
-    assert scene.arrangement == "W" and scene.articulation_signs() == (1, 1)
+@pytest.mark.parametrize("arrangement,output_angle_deg", [("Z", 0.0), ("W", 60.0)])
+def test_arrangement_sets_where_the_output_points(arrangement, output_angle_deg):
+    """Z (two 30 deg joints turning opposite ways) leaves the output parallel to the
+    input; W (the same way) turns it by 60 deg: read from the laid-out geometry."""
+    scene = variant(arrangement=arrangement)
+    axes = rest_geometry(scene).axes
+    angle = np.degrees(np.arccos(np.clip(axes[0] @ axes[-1], -1.0, 1.0)))
+    assert angle == pytest.approx(output_angle_deg, abs=1e-9)
 
 
 def test_extends_replaces_a_table_whose_kind_differs(tmp_path):
