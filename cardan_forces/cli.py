@@ -6,15 +6,27 @@ backends present), ``solve`` (formulations x solvers at one instant), ``repro`` 
 paper's figures), ``bench`` (throughput and accuracy vs time), ``hard`` (the hard-case
 stability suite).
 ``sweep`` (parameter studies, local processes or Dask; resumable CSV).
-Errors in the user's input end with one message on stderr and exit code 2.
+
+Errors in the user's input (scene or arguments) end with one line ``cardan: error:
+...`` on stderr and exit code 2, before any work; Ctrl-C ends a run with one line and
+exit code 130. With ``--json`` stdout carries strict JSON and nothing else: numbers
+that are not finite become ``null`` (the records' ``status`` says why), and whatever a
+solver library writes on file descriptor 1 (HiGHS's banner) goes to stderr.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import ctypes
 import dataclasses
+import io
 import json
+import math
+import os
 import sys
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +40,15 @@ from cardan_forces.driveline.release import (
     parse_release,
     released_operator,
 )
-from cardan_forces.driveline.scene import SceneError, builtin_names, builtin_text, load_scene
+from cardan_forces.driveline.scene import (
+    LIMITS,
+    MAX_ARTICULATION_DEG,
+    MAX_INSTANTS,
+    SceneError,
+    builtin_names,
+    builtin_text,
+    load_scene,
+)
 from cardan_forces.experiments import bench, hard, report, secondary, sweep
 from cardan_forces.experiments.analysis import intervals, solve_all
 from cardan_forces.formulations import FORMULATIONS
@@ -40,9 +60,32 @@ from cardan_forces.solvers.registry import known_backends
 
 FIGURES = (11, 12, 13, 14, 15)
 
+HEARTBEAT_S = 30.0
+"""A run still going after this many seconds says so on stderr, and again every as many."""
+
+ARGUMENTS = (
+    # attribute, flag, least, most, least allowed (else: above least)
+    ("t", "--t", 0.0, LIMITS["time_s"][1], True),
+    ("tol", "--tol", 0.0, 1.0, False),
+    ("multistart", "--multistart", 0, 1000, True),
+    ("budget_s", "--budget-s", 0.0, 1e5, False),
+    ("instants", "--instants", 1, MAX_INSTANTS, True),
+    ("stop", "--stop", 0.0, LIMITS["time_s"][1], False),
+    ("workers", "--workers", 1, 1024, True),
+    ("timeout", "--timeout", 0.0, 1e5, False),
+)
+"""Ranges of the numeric options, checked before any work (whichever command has them)."""
+
 
 class UsageError(ValueError):
     """A command-line request that cannot be carried out (exit code 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are :class:`UsageError` (one line, exit code 2)."""
+
+    def error(self, message: str):
+        raise UsageError(f"{message} (see '{self.prog} --help')")
 
 
 def _progress(message: str) -> None:
@@ -57,8 +100,9 @@ def _cmd_scene(args) -> int:
         for name in builtin_names():
             print(f"{name:20s} {load_scene(name).description}")
     elif args.action == "dump":
+        load_scene(args.name)  # a file that is no scene (binary, a folder): a clear error
         print(builtin_text(args.name) if args.name in builtin_names()
-              else Path(args.name).read_text(), end="")
+              else Path(args.name).read_text(encoding="utf-8-sig"), end="")
     else:
         scene = load_scene(args.name)
         if args.action == "check":
@@ -242,19 +286,52 @@ def _cmd_solve(args) -> int:
     print(f"{'formulation':16s} {'solver':22s} {'status':10s} {'equil':>8s} {'sign':>8s} "
           f"{'compl':>8s} {'cone':>8s} {'ref':>8s} {'ms':>8s}")
     for r in records:
-        res = r.residuals
-        print(f"{r.formulation:16s} {r.solver:22s} {r.status:10s} {res['equilibrium']:8.1e} "
-              f"{res['sign']:8.1e} {res['complementarity']:8.1e} {res['cone']:8.1e} "
-              f"{res.get('reference', float('nan')):8.1e} {1e3 * (r.setup_s + r.solve_s):8.2f}")
+        res = [r.residuals.get(k, math.nan) for k in ("equilibrium", "sign", "complementarity",
+                                                     "cone", "reference")]
+        print(f"{r.formulation:16s} {r.solver:22s} {r.status:10s} "
+              + " ".join(_number(v, "8.1e") for v in res)
+              + f" {1e3 * (r.setup_s + r.solve_s):8.2f}")
     return 0
+
+
+def _number(value: float, spec: str) -> str:
+    """``value`` formatted, or ``-`` in the same width where it is not finite (a failed
+    record's residuals, a missing reference)."""
+    text = format(value, spec)
+    return text if math.isfinite(value) else "-".rjust(len(text))
 
 
 # ---------------------------------------------------------------------------- repro
 
 
+def _check_paper_layout(spec: str) -> None:
+    """``cardan repro`` draws the paper's quantities by name: refuse a scene without the
+    paper's layout (three shafts, the first ``input`` with bearings ``far`` and ``near``,
+    the first joint ``uj1``) before any work.
+    """
+    scene = load_scene(spec)
+    missing = []
+    if len(scene.shafts) != 3:
+        missing.append(f"three shafts (it has {len(scene.shafts)})")
+    first = scene.shafts[0]
+    if first.name != "input":
+        missing.append(f"a first shaft named 'input' (it is {first.name!r})")
+    absent = sorted({"far", "near"} - {b.name for b in first.bearings})
+    if absent:
+        missing.append(f"bearings {' and '.join(map(repr, absent))} on the first shaft")
+    if scene.joints[0].name != "uj1":
+        missing.append(f"a first joint named 'uj1' (it is {scene.joints[0].name!r})")
+    if missing:
+        raise UsageError(f"scene {scene.source}: cardan repro needs the paper's layout; "
+                         f"missing: {'; '.join(missing)}")
+
+
 def _cmd_repro(args) -> int:
     from cardan_forces.paper_repro.repro import FIGURES, run_repro
 
+    _check_paper_layout(args.scene)
+    if 15 in (args.fig or FIGURES):
+        _check_paper_layout(args.fig15_scene)
     run_repro(args.scene, sorted(set(args.fig or FIGURES)), args.out, args.quick,
               args.fig15_scene, progress=_progress, penalty=args.penalty)
     return 0
@@ -264,7 +341,7 @@ def _cmd_repro(args) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="cardan",
         description="Reaction forces in drive shafts with two Cardan joints.",
     )
@@ -330,15 +407,122 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``cardan`` console script."""
-    args = _parser().parse_args(argv)
-    np.set_printoptions(precision=4, suppress=True)
+def _check_args(args) -> None:
+    """Every numeric option within its range (:data:`ARGUMENTS`), and a sweep's
+    articulations and amplitudes within the scene limits, before any work.
+    """
+    for attribute, flag, least, most, inclusive in ARGUMENTS:
+        value = getattr(args, attribute, None)
+        if value is None:
+            continue
+        low = value >= least if inclusive else value > least
+        if not (math.isfinite(value) and low and value <= most):
+            bound = f"[{least:g}, {most:g}]" if inclusive else f"({least:g}, {most:g}]"
+            raise UsageError(f"{flag} {value}: must be a finite number in {bound}")
+    if args.command == "sweep":
+        for value in sweep.grid((args.angle or []) + (args.angles or [])):
+            if abs(value) > MAX_ARTICULATION_DEG:
+                raise UsageError(f"--angle {value:g}: |articulation| must be at most "
+                                 f"{MAX_ARTICULATION_DEG:g} deg")
+        for value in sweep.grid(args.amplitude):
+            if abs(value) > LIMITS["torque_N_m"][1]:
+                raise UsageError(f"--amplitude {value:g}: must be at most "
+                                 f"{LIMITS['torque_N_m'][1]:g} N m in magnitude")
+
+
+@contextlib.contextmanager
+def _library_output_to_stderr():
+    """While a command runs, file descriptor 1 points at stderr, so that what solver
+    libraries write there (HiGHS prints a banner on stdout) never mixes with the
+    package's output, which the caller buffers and prints afterwards.
+    """
     try:
-        return args.func(args)
+        sys.stdout.flush()
+        saved = os.dup(1)
+    except (OSError, ValueError, AttributeError):  # no file descriptor 1 to protect
+        yield
+        return
+    os.dup2(2, 1)
+    try:
+        yield
+    finally:
+        try:  # C stdio buffers written by a library go out while fd 1 is still stderr
+            ctypes.CDLL(None).fflush(None)
+        except (OSError, AttributeError):
+            pass
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+@contextlib.contextmanager
+def _heartbeat(command: str):
+    """Say on stderr every :data:`HEARTBEAT_S` s that a long run is still going."""
+    done, started = threading.Event(), time.monotonic()
+
+    def beat():
+        while not done.wait(HEARTBEAT_S):
+            _progress(f"cardan {command}: still running after "
+                      f"{time.monotonic() - started:.0f} s (Ctrl-C stops it)")
+
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+
+
+UNDEFINED = ("nan", "inf", "-inf")
+"""How records spell a non-finite number in JSON (``Record.to_json``); printed as null."""
+
+
+def _finite(value):
+    """``value`` with every non-finite number (a float, or a record's ``"nan"``,
+    ``"inf"``, ``"-inf"``) replaced by ``None`` (JSON ``null``).
+    """
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, str) and value in UNDEFINED:
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    return value
+
+
+def strict_json(text: str) -> str:
+    """A command's JSON output as strict JSON: numbers that are not finite become
+    ``null`` (each record's ``status`` says why)."""
+    return json.dumps(_finite(json.loads(text)), indent=2, allow_nan=False) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``cardan`` console script: 0 done, 1 work that failed (hard
+    cases, lost sweep points), 2 bad input, 130 interrupted.
+    """
+    buffer = io.StringIO()
+    json_out = False
+    try:
+        args = _parser().parse_args(argv)
+        json_out = getattr(args, "json", False)
+        np.set_printoptions(precision=4, suppress=True)
+        _check_args(args)
+        with _heartbeat(args.command), _library_output_to_stderr(), \
+                contextlib.redirect_stdout(buffer):
+            code = args.func(args)
+        text = buffer.getvalue()
+        sys.stdout.write(strict_json(text) if json_out and text.strip() else text)
+        return code
+    except KeyboardInterrupt:
+        print("cardan: interrupted", file=sys.stderr)
+        return 130
     except (SceneError, UsageError, DynamicsError, SolverNotFound, NotApplicable,
-            OSError) as err:
-        print(f"cardan: error: {err}", file=sys.stderr)
+            sweep.SweepError, OSError) as err:
+        if not json_out:
+            sys.stdout.write(buffer.getvalue())
+        message = " ".join(str(err).split())
+        print(f"cardan: error: {message}", file=sys.stderr)
         return 2
 
 

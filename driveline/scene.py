@@ -1,17 +1,25 @@
 """Scenes: a drive line described in TOML, validated into frozen dataclasses.
 
 A scene argument is a built-in name (``paper``, ``paper-fig15``, ...) or a path to a
-TOML file. A file may start from another scene with ``extends = "NAME-or-path"``;
-its tables then override the parent's key by key (arrays are replaced whole).
+UTF-8 TOML file. A file may start from another scene with ``extends = "NAME-or-path"``
+(a path relative to the extending file). Merge rule: the child's tables override the
+parent's key by key, recursively; a table whose ``kind`` differs from the parent's
+table of the same name replaces it whole (a harmonic torque for a constant one);
+arrays (``shafts``, ``joints``, ``bearings``, vectors) and scalars are replaced whole.
 Every quantity is SI; a field's unit is in its name (``length_m``, ``mass_kg``).
 The built-in ``paper.toml`` documents each field and each convention once.
 
-Bad input raises :class:`SceneError` naming the file and the field.
+Bad input raises :class:`SceneError` naming the file, the field and the value, before
+any work: types, finiteness, the physical ranges of :data:`LIMITS` (so that nothing
+overflows or integrates for ever), the size of the time grid and of the motion over it,
+and the support check (:mod:`.support`: the line must turn with exactly one degree of
+freedom while its contacts hold it).
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -33,6 +41,59 @@ EFFECTS = (
     "penalty_dynamics",
 )
 """Effects a scene may call for (DESIGN §1); only those listed are built."""
+
+LIMITS = {
+    "length_m": (1e-6, 1e3),
+    "position_m": (0.0, 1e3),
+    "mass_kg": (1e-9, 1e9),
+    "inertia_kg_m2": (1e-12, 1e12),
+    "torque_N_m": (0.0, 1e9),
+    "frequency_hz": (0.0, 1e4),
+    "speed_rad_s": (0.0, 1e4),
+    "angle_rad": (0.0, 1e6),
+    "angle_deg": (0.0, 360.0),
+    "gravity_m_s2": (0.0, 1e3),
+    "time_s": (0.0, 1e6),
+    "step_s": (1e-9, 1e6),
+    "pressure_Pa": (1e3, 1e13),
+    "density_kg_m3": (1e-3, 1e5),
+    "stiffness": (1e-3, 1e16),
+    "ratio": (0.0, 1e3),
+    "number": (0.0, 1e15),
+}
+"""Accepted magnitudes per kind of field, ``(least, most)``: a positive field must be at
+least ``least``, every field at most ``most`` in absolute value (``number``: a field
+read without a kind). The ranges hold any
+real drive line with room to spare (the hard cases scale masses and torques by 1e6)
+and keep every product the model forms finite."""
+
+MAX_ARTICULATION_DEG = 89.0
+"""Largest joint angle: the velocity ratio ``1/cos`` reaches 57 (eq. 3); closer to 90
+deg the motion is numerically singular."""
+
+MAX_SHAFTS = 8
+"""Largest number of shafts: vehicle drive lines have up to four or five; the rigid
+set's intervals take two LPs per force component (about 200 LPs, tens of seconds, at
+eight shafts) and the operator's SVD grows with the cube of the bodies."""
+
+MAX_INSTANTS = 20_001
+"""Largest time grid: operators are built over the whole grid (a 3-shaft line's takes
+8.6 kB per instant)."""
+
+MAX_TURNS = 1_000.0
+"""Most revolutions the input may make over the time span (an upper estimate from the
+initial speed, the torques and the reduced inertia, :func:`.support.turns_bound`): the
+integrator resolves every turn, so this bounds its work."""
+
+MAX_CYCLES = 1_000.0
+"""Most periods of a harmonic torque over the time span, for the same reason."""
+
+MAX_FILE_BYTES = 10_000_000
+"""Largest scene file read."""
+
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")
+"""Names of shafts, joints and bearings: they become parts of dotted force names
+(``bearing.input.near.x``), so they hold no dot, space or other separator."""
 
 
 class SceneError(ValueError):
@@ -264,20 +325,39 @@ def _load_raw(spec: str, seen: tuple[str, ...]) -> tuple[dict, str]:
     if spec in builtin_names():
         text, source, folder = builtin_text(spec), f"{spec} (built-in)", Path(".")
     else:
-        path = Path(spec)
-        if not path.is_file():
-            raise SceneError(
-                f"scene {spec}: not a built-in name ({', '.join(builtin_names())}) "
-                "and no such file"
-            )
-        text, source, folder = path.read_text(), str(path), path.parent
+        text, source, folder = _read_text(Path(spec)), str(Path(spec)), Path(spec).parent
     if source in seen:
         raise SceneError(f"scene {source}: 'extends' loops back to itself")
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise SceneError(f"scene {source}: not valid TOML: {err}") from None
+    except RecursionError:
+        raise SceneError(f"scene {source}: not valid TOML: arrays or tables nested deeper "
+                         "than the parser can follow") from None
     return _resolve_extends(raw, source, folder, seen), source
+
+
+def _read_text(path: Path) -> str:
+    """A scene file's text: UTF-8 (TOML's encoding; a leading byte-order mark is
+    dropped), at most :data:`MAX_FILE_BYTES`.
+    """
+    if path.is_dir():
+        raise SceneError(f"scene {path}: is a directory, not a scene file")
+    if not path.is_file():
+        raise SceneError(f"scene {path}: not a built-in name ({', '.join(builtin_names())}) "
+                         "and no such file")
+    try:
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise SceneError(f"scene {path}: larger than {MAX_FILE_BYTES} bytes")
+        data = path.read_bytes()
+    except OSError as err:
+        raise SceneError(f"scene {path}: cannot be read: {err.strerror}") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        raise SceneError(f"scene {path}: not UTF-8 text (byte 0x{data[err.start]:02x} at "
+                         f"offset {err.start}); TOML files are UTF-8") from None
 
 
 def _resolve_extends(raw: dict, source: str, folder: Path, seen: tuple[str, ...]) -> dict:
@@ -289,18 +369,22 @@ def _resolve_extends(raw: dict, source: str, folder: Path, seen: tuple[str, ...]
         return raw
     if not isinstance(parent, str):
         raise SceneError(f"scene {source}: field 'extends': expected a scene name or path")
-    if parent not in builtin_names() and (folder / parent).is_file():
+    if parent not in builtin_names() and (folder / parent).exists():
         parent = str(folder / parent)
     base, _ = _load_raw(parent, seen + (source,))
     return _merge(base, raw)
 
 
 def _merge(base: dict, over: dict) -> dict:
-    """Tables merge key by key; anything else (arrays included) is replaced."""
+    """Tables merge key by key, unless the child's table names another ``kind`` than the
+    parent's (then it replaces it); anything else (arrays included) is replaced.
+    """
     out = dict(base)
     for key, value in over.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = _merge(out[key], value)
+        parent = out.get(key)
+        if isinstance(value, dict) and isinstance(parent, dict) and \
+                value.get("kind", parent.get("kind")) == parent.get("kind"):
+            out[key] = _merge(parent, value)
         else:
             out[key] = value
     return out
@@ -309,17 +393,34 @@ def _merge(base: dict, over: dict) -> dict:
 # ---------------------------------------------------------------------------- validation
 
 
+def _show(value) -> str:
+    """``repr(value)`` cut to 60 characters (a value may be huge or nested deep)."""
+    try:
+        text = repr(value)
+    except RecursionError:
+        text = f"a {type(value).__name__} nested too deep"
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _within(value: float, kind: str) -> bool:
+    return abs(value) <= LIMITS[kind][1]
+
+
 class _Table:
-    """Reads typed fields from one TOML table; remembers which keys were used."""
+    """Reads typed fields from one TOML table; remembers which keys were used.
+
+    Every accessor checks type, finiteness and the range of its kind of quantity
+    (:data:`LIMITS`), so that a field is validated where it is read.
+    """
 
     def __init__(self, raw, path: str, source: str):
         self.source, self.path = source, path
         if not isinstance(raw, dict):
-            self.fail("", "expected a table")
+            self.fail("", f"expected a table, got {type(raw).__name__} {_show(raw)}")
         self.raw, self.used = raw, set()
 
     def where(self, key: str) -> str:
-        return f"{self.path}.{key}" if self.path else key
+        return f"{self.path}.{key}" if self.path and key else self.path or key
 
     def fail(self, key: str, message: str):
         raise SceneError(f"scene {self.source}: field '{self.where(key)}': {message}")
@@ -332,51 +433,83 @@ class _Table:
             return default
         return self.raw[key]
 
-    def number(self, key: str, default=..., positive=False, nonnegative=False) -> float:
+    def number(self, key: str, default=..., positive=False, nonnegative=False,
+               kind: str = "number") -> float:
+        """A finite number of ``kind`` (a key of :data:`LIMITS`): at most its ``most`` in
+        magnitude; when ``positive``, at least its ``least``.
+        """
         value = self.get(key, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            self.fail(key, f"expected a number, got {type(value).__name__} {value!r}")
+            self.fail(key, f"expected a number, got {type(value).__name__} {_show(value)}")
+        try:
+            value = float(value)
+        except OverflowError:
+            self.fail(key, f"integer too large for a number, got {_show(value)}")
+        least, most = LIMITS[kind]
         if not math.isfinite(value):
             self.fail(key, f"must be finite, got {value}")
         if positive and value <= 0:
             self.fail(key, f"must be positive, got {value}")
         if nonnegative and value < 0:
             self.fail(key, f"must not be negative, got {value}")
-        return float(value)
-
-    def string(self, key: str, default=..., choices: tuple[str, ...] | None = None) -> str:
-        value = self.get(key, default)
-        if not isinstance(value, str):
-            self.fail(key, f"expected a string, got {type(value).__name__} {value!r}")
-        if choices is not None and value not in choices:
-            self.fail(key, f"must be one of {', '.join(choices)}, got {value!r}")
+        if positive and value < least:
+            self.fail(key, f"must be at least {least:g} (limit for {kind}), got {value:g}")
+        if abs(value) > most:
+            self.fail(key, f"must be at most {most:g} in magnitude (limit for {kind}), "
+                           f"got {value:g}")
         return value
 
-    def vector(self, key: str, size: int, default=..., unit=False) -> tuple[float, ...]:
+    def string(self, key: str, default=..., choices: tuple[str, ...] | None = None,
+               name: bool = False) -> str:
+        """A string; one of ``choices`` if given; a ``name`` matches :data:`NAME_PATTERN`."""
+        value = self.get(key, default)
+        if not isinstance(value, str):
+            self.fail(key, f"expected a string, got {type(value).__name__} {_show(value)}")
+        if choices is not None and value not in choices:
+            self.fail(key, f"must be one of {', '.join(choices)}, got {_show(value)}")
+        if name and not NAME_PATTERN.fullmatch(value):
+            self.fail(key, f"a name is letters, digits, '_' or '-' (it becomes part of "
+                           f"dotted force names), got {_show(value)}")
+        return value
+
+    def vector(self, key: str, size: int, default=..., unit=False,
+               kind: str = "position_m") -> tuple[float, ...]:
+        """``size`` finite numbers; a ``unit`` vector is a direction: any length above
+        zero, normalized without overflow or underflow; others stay within ``kind``'s
+        limit.
+        """
         value = self.get(key, default)
         if (
             not isinstance(value, list)
             or len(value) != size
             or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)
         ):
-            self.fail(key, f"expected a list of {size} numbers, got {value!r}")
-        if not all(math.isfinite(v) for v in value):
-            self.fail(key, "must be finite")
-        vec = tuple(float(v) for v in value)
+            self.fail(key, f"expected a list of {size} numbers, got {_show(value)}")
+        try:
+            vec = np.array(value, dtype=float)
+        except OverflowError:
+            self.fail(key, f"integer too large for a number in {_show(value)}")
+        if not np.all(np.isfinite(vec)):
+            self.fail(key, f"must be finite, got {_show(value)}")
         if unit:
-            norm = math.sqrt(sum(v * v for v in vec))
-            if norm == 0:
+            scale = np.abs(vec).max()
+            if scale == 0:
                 self.fail(key, "must not be the zero vector")
-            vec = tuple(v / norm for v in vec)
-        return vec
+            vec = vec / scale
+            vec = vec / np.linalg.norm(vec)
+        elif not all(_within(v, kind) for v in vec):
+            self.fail(key, f"components must be at most {LIMITS[kind][1]:g} in magnitude "
+                           f"(limit for {kind}), got {_show(value)}")
+        return tuple(float(v) for v in vec)
 
     def table(self, key: str, default=...) -> _Table:
         return _Table(self.get(key, default), self.where(key), self.source)
 
-    def tables(self, key: str) -> list[_Table]:
-        value = self.get(key)
+    def tables(self, key: str, default=...) -> list[_Table]:
+        value = self.get(key, default)
         if not isinstance(value, list):
-            self.fail(key, "expected an array of tables")
+            self.fail(key, f"expected an array of tables, got {type(value).__name__} "
+                           f"{_show(value)}")
         return [_Table(v, f"{self.where(key)}[{i}]", self.source) for i, v in enumerate(value)]
 
     def done(self) -> None:
@@ -389,13 +522,13 @@ class _Table:
 def _torque(t: _Table) -> TorqueLaw:
     kind = t.string("kind", choices=("constant", "harmonic"))
     if kind == "constant":
-        law = TorqueLaw(mean_N_m=t.number("value_N_m"))
+        law = TorqueLaw(mean_N_m=t.number("value_N_m", kind="torque_N_m"))
     else:
         law = TorqueLaw(
-            mean_N_m=t.number("mean_N_m"),
-            amplitude_N_m=t.number("amplitude_N_m"),
-            frequency_hz=t.number("frequency_hz", nonnegative=True),
-            phase_rad=t.number("phase_rad", 0.0),
+            mean_N_m=t.number("mean_N_m", kind="torque_N_m"),
+            amplitude_N_m=t.number("amplitude_N_m", kind="torque_N_m"),
+            frequency_hz=t.number("frequency_hz", nonnegative=True, kind="frequency_hz"),
+            phase_rad=t.number("phase_rad", 0.0, kind="angle_rad"),
         )
     t.done()
     return law
@@ -404,7 +537,7 @@ def _torque(t: _Table) -> TorqueLaw:
 def _torque_field(parent: _Table, key: str, default=...) -> TorqueLaw:
     value = parent.get(key, default)
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return TorqueLaw(mean_N_m=parent.number(key))
+        return TorqueLaw(mean_N_m=parent.number(key, kind="torque_N_m"))
     if not isinstance(value, dict):
         parent.fail(
             key,
@@ -415,9 +548,13 @@ def _torque_field(parent: _Table, key: str, default=...) -> TorqueLaw:
 
 
 def _inertia(t: _Table, key: str) -> tuple[float, float, float]:
-    j = t.vector(key, 3)
+    j = t.vector(key, 3, kind="inertia_kg_m2")
     if min(j) <= 0:
         t.fail(key, f"inertia must be positive definite (all principal moments > 0), got {j}")
+    least = LIMITS["inertia_kg_m2"][0]
+    if min(j) < least:
+        t.fail(key, f"principal moments must be at least {least:g} kg m^2 (limit for "
+                    f"inertia_kg_m2), got {j}")
     a, b, c = j
     if a + b < c * (1 - 1e-9) or b + c < a * (1 - 1e-9) or a + c < b * (1 - 1e-9):
         t.fail(key, f"principal moments {j} violate the triangle inequality of a rigid body")
@@ -425,15 +562,15 @@ def _inertia(t: _Table, key: str) -> tuple[float, float, float]:
 
 
 def _shaft(t: _Table) -> Shaft:
-    name = t.string("name")
-    length = t.number("length_m", positive=True)
+    name = t.string("name", name=True)
+    length = t.number("length_m", positive=True, kind="length_m")
     bearings = []
-    for i, b in enumerate(t.get("bearings", [])):
-        bt = _Table(b, f"{t.where('bearings')}[{i}]", t.source)
-        offset = bt.number("offset_m")
+    for bt in t.tables("bearings", []):
+        offset = bt.number("offset_m", kind="position_m")
         if abs(offset) > length / 2:
-            bt.fail("offset_m", f"bearing lies outside the shaft (|offset| > {length / 2} m)")
-        bearings.append(Bearing(name=bt.string("name"), offset_m=offset,
+            bt.fail("offset_m", f"bearing lies outside the shaft (|offset| > {length / 2} m), "
+                                f"got {offset:g}")
+        bearings.append(Bearing(name=bt.string("name", name=True), offset_m=offset,
                                 kind=bt.string("kind", "locating", choices=BEARING_KINDS)))
         bt.done()
     if len({b.name for b in bearings}) != len(bearings):
@@ -441,7 +578,7 @@ def _shaft(t: _Table) -> Shaft:
     shaft = Shaft(
         name=name,
         length_m=length,
-        mass_kg=t.number("mass_kg", positive=True),
+        mass_kg=t.number("mass_kg", positive=True, kind="mass_kg"),
         inertia_kg_m2=_inertia(t, "inertia_kg_m2"),
         bearings=tuple(bearings),
     )
@@ -450,20 +587,22 @@ def _shaft(t: _Table) -> Shaft:
 
 
 def _joint(t: _Table) -> Joint:
-    name = t.string("name")
-    gamma = t.number("articulation_deg")
-    if not abs(gamma) < 90.0:
-        t.fail("articulation_deg", f"|articulation| must be below 90 deg, got {gamma}")
+    name = t.string("name", name=True)
+    gamma = t.number("articulation_deg", kind="angle_deg")
+    if not abs(gamma) <= MAX_ARTICULATION_DEG:
+        t.fail("articulation_deg", f"|articulation| must be at most {MAX_ARTICULATION_DEG:g} "
+                                   f"deg (below 90: the velocity ratio 1/cos grows without "
+                                   f"bound), got {gamma:g}")
     joint = Joint(
         name=name,
         articulation_deg=gamma,
-        yoke_phase_deg=t.number("yoke_phase_deg", 0.0),
-        hs_m=t.number("hs_m", positive=True),
-        rs_m=t.number("rs_m", positive=True),
-        rb_m=t.number("rb_m", positive=True),
-        ht_m=t.number("ht_m", positive=True),
-        hb_m=t.number("hb_m", positive=True),
-        rt_m=t.number("rt_m", positive=True),
+        yoke_phase_deg=t.number("yoke_phase_deg", 0.0, kind="angle_deg"),
+        hs_m=t.number("hs_m", positive=True, kind="length_m"),
+        rs_m=t.number("rs_m", positive=True, kind="length_m"),
+        rb_m=t.number("rb_m", positive=True, kind="length_m"),
+        ht_m=t.number("ht_m", positive=True, kind="length_m"),
+        hb_m=t.number("hb_m", positive=True, kind="length_m"),
+        rt_m=t.number("rt_m", positive=True, kind="length_m"),
     )
     if joint.rb_m < joint.rs_m:
         t.fail("rb_m", f"housing bore {joint.rb_m} m is smaller than the trunnion {joint.rs_m} m")
@@ -471,6 +610,13 @@ def _joint(t: _Table) -> Joint:
         t.fail("hb_m", f"housing bottom {joint.hb_m} m is inside the trunnion end {joint.ht_m} m")
     t.done()
     return joint
+
+
+def _scene_name(top: _Table) -> str:
+    name = top.string("name")
+    if not name.strip():
+        top.fail("name", "must not be empty")
+    return name
 
 
 def _build(raw: dict, source: str) -> Scene:
@@ -490,7 +636,7 @@ def _build(raw: dict, source: str) -> Scene:
 
     frame_t = top.table("frame", {})
     frame = Frame(
-        input_start_m=frame_t.vector("input_start_m", 3, [0.0, 0.0, 0.0]),
+        input_start_m=frame_t.vector("input_start_m", 3, [0.0, 0.0, 0.0], kind="position_m"),
         input_axis=frame_t.vector("input_axis", 3, [1.0, 0.0, 0.0], unit=True),
         articulation_towards=frame_t.vector("articulation_towards", 3, [0.0, 0.0, 1.0],
                                             unit=True),
@@ -499,7 +645,10 @@ def _build(raw: dict, source: str) -> Scene:
         frame_t.fail("articulation_towards", "must not be parallel to input_axis")
     frame_t.done()
 
-    shafts = tuple(_shaft(t) for t in top.tables("shafts"))
+    shaft_tables = top.tables("shafts")
+    if len(shaft_tables) > MAX_SHAFTS:
+        top.fail("shafts", f"at most {MAX_SHAFTS} shafts, got {len(shaft_tables)}")
+    shafts = tuple(_shaft(t) for t in shaft_tables)
     joints = tuple(_joint(t) for t in top.tables("joints"))
     if len(shafts) < 2:
         top.fail("shafts", "a drive line needs at least two shafts")
@@ -510,7 +659,7 @@ def _build(raw: dict, source: str) -> Scene:
         top.fail("shafts", f"shaft and joint names must be unique, got {names}")
 
     cp = top.table("crosspin", {"mass_kg": 0.05, "inertia_kg_m2": [1e-5, 1e-5, 2e-5]})
-    crosspin = Crosspin(mass_kg=cp.number("mass_kg", positive=True),
+    crosspin = Crosspin(mass_kg=cp.number("mass_kg", positive=True, kind="mass_kg"),
                         inertia_kg_m2=_inertia(cp, "inertia_kg_m2"))
     cp.done()
 
@@ -520,21 +669,30 @@ def _build(raw: dict, source: str) -> Scene:
     torque.done()
 
     init = top.table("initial", {})
-    initial = (init.number("angle_rad", 0.0), init.number("speed_rad_s", 0.0))
+    initial = (init.number("angle_rad", 0.0, kind="angle_rad"),
+               init.number("speed_rad_s", 0.0, kind="speed_rad_s"))
     init.done()
 
     tt = top.table("time")
-    time = TimeGrid(tt.number("start_s", 0.0), tt.number("stop_s"), tt.number("step_s",
-                                                                              positive=True))
+    time = TimeGrid(tt.number("start_s", 0.0, kind="time_s"), tt.number("stop_s", kind="time_s"),
+                    tt.number("step_s", positive=True, kind="step_s"))
     if time.stop_s <= time.start_s:
         tt.fail("stop_s", f"must be after start_s ({time.start_s}), got {time.stop_s}")
+    if time.step_s > time.stop_s - time.start_s:
+        tt.fail("step_s", f"longer than the time span {time.stop_s - time.start_s:g} s, "
+                          f"got {time.step_s:g}")
+    instants = round((time.stop_s - time.start_s) / time.step_s) + 1
+    if instants > MAX_INSTANTS:
+        tt.fail("step_s", f"gives {instants:.3g} instants from {time.start_s:g} to "
+                          f"{time.stop_s:g} s; at most {MAX_INSTANTS}")
     tt.done()
 
     mt = top.table("material", {})
     material = Material(
-        youngs_modulus_Pa=mt.number("youngs_modulus_Pa", 2.07e11, positive=True),
+        youngs_modulus_Pa=mt.number("youngs_modulus_Pa", 2.07e11, positive=True,
+                                    kind="pressure_Pa"),
         poisson_ratio=mt.number("poisson_ratio", 0.29),
-        density_kg_m3=mt.number("density_kg_m3", 7850.0, positive=True),
+        density_kg_m3=mt.number("density_kg_m3", 7850.0, positive=True, kind="density_kg_m3"),
     )
     if not -1.0 < material.poisson_ratio < 0.5:
         mt.fail("poisson_ratio", f"must lie in (-1, 0.5), got {material.poisson_ratio}")
@@ -542,13 +700,17 @@ def _build(raw: dict, source: str) -> Scene:
 
     ct = top.table("contact", {})
     contact = Contact(
-        exponent=ct.number("exponent", 1.5, positive=True),
-        damping_full_depth_m=ct.number("damping_full_depth_m", 1e-5, positive=True),
+        exponent=ct.number("exponent", 1.5, positive=True, kind="ratio"),
+        damping_full_depth_m=ct.number("damping_full_depth_m", 1e-5, positive=True,
+                                       kind="length_m"),
         damping_fraction_of_stiffness=ct.number("damping_fraction_of_stiffness", 0.01,
-                                                nonnegative=True),
-        bearing_clearance_m=ct.number("bearing_clearance_m", 1e-5, nonnegative=True),
-        bearing_stiffness_N_m=ct.number("bearing_stiffness_N_m", 1e9, positive=True),
-        friction_coefficient=ct.number("friction_coefficient", 0.0, nonnegative=True),
+                                                nonnegative=True, kind="ratio"),
+        bearing_clearance_m=ct.number("bearing_clearance_m", 1e-5, nonnegative=True,
+                                      kind="position_m"),
+        bearing_stiffness_N_m=ct.number("bearing_stiffness_N_m", 1e9, positive=True,
+                                        kind="stiffness"),
+        friction_coefficient=ct.number("friction_coefficient", 0.0, nonnegative=True,
+                                          kind="ratio"),
     )
     if "friction" in effects and contact.friction_coefficient <= 0:
         ct.fail("friction_coefficient", "the 'friction' effect needs a positive coefficient")
@@ -556,11 +718,11 @@ def _build(raw: dict, source: str) -> Scene:
 
     slips = _slip_joints(top, shafts, names)
     scene = Scene(
-        name=top.string("name"),
+        name=_scene_name(top),
         description=top.string("description", ""),
         effects=frozenset(effects),
         arrangement=top.string("arrangement", "Z", choices=("Z", "W")),
-        gravity_m_s2=top.vector("gravity_m_s2", 3, [0.0, 0.0, -9.81]),
+        gravity_m_s2=top.vector("gravity_m_s2", 3, [0.0, 0.0, -9.81], kind="gravity_m_s2"),
         frame=frame,
         shafts=shafts,
         joints=joints,
@@ -576,7 +738,15 @@ def _build(raw: dict, source: str) -> Scene:
         slip_joints=slips,
     )
     top.done()
+    for key, law in (("input", scene.input_torque), ("load", scene.load_torque)):
+        periods = law.frequency_hz * (time.stop_s - time.start_s)
+        if periods > MAX_CYCLES:
+            torque.fail(key, f"{law.frequency_hz:g} Hz over the time span is {periods:.3g} "
+                             f"periods; at most {MAX_CYCLES:g}")
     _check_elements(scene)
+    from .support import check_scene  # support builds on equilibrium, which imports this
+
+    check_scene(scene)
     return scene
 
 
@@ -593,20 +763,21 @@ def _slip_joints(top: _Table, shafts: tuple[Shaft, ...], names: list[str]) -> tu
     by_name = {s.name: s for s in shafts}
     slips = []
     for t in top.tables("slip_joints"):
-        shaft_name = t.string("shaft")
+        shaft_name = t.string("shaft", name=True)
         if shaft_name not in by_name:
             t.fail("shaft", f"no shaft {shaft_name!r}; shafts: {', '.join(by_name)}")
         shaft = by_name[shaft_name]
-        offset = t.number("offset_m", 0.0)
+        offset = t.number("offset_m", 0.0, kind="position_m")
         if not abs(offset) < shaft.length_m / 2:
             t.fail("offset_m", f"the slip joint must lie inside shaft {shaft_name!r} "
                    f"(|offset| < {shaft.length_m / 2} m), got {offset}")
         if any(abs(b.offset_m - offset) < 1e-9 for b in shaft.bearings):
             t.fail("offset_m", "a slip joint cannot sit exactly at a bearing")
         slips.append(SlipJoint(
-            name=t.string("name"), shaft=shaft_name, offset_m=offset,
-            pitch_radius_m=t.number("pitch_radius_m", positive=True),
-            friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True)))
+            name=t.string("name", name=True), shaft=shaft_name, offset_m=offset,
+            pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m"),
+            friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True,
+                                          kind="ratio")))
         t.done()
     taken = names + [s.name for s in slips]
     if len(set(taken)) != len(taken):
@@ -619,7 +790,11 @@ def _slip_joints(top: _Table, shafts: tuple[Shaft, ...], names: list[str]) -> tu
 
 
 def _check_elements(scene: Scene) -> None:
-    """Slip joints and floating bearings that leave a part of the line unheld."""
+    """Slip joints and floating bearings that leave a part of the line unheld (a more
+    specific message than the general support check, for lines that have them)."""
+    if not scene.slip_joints and all(b.kind == "locating"
+                                     for s in scene.shafts for b in s.bearings):
+        return
     from .elements import check_elements  # needs the rest geometry, built from a Scene
 
     check_elements(scene)

@@ -409,12 +409,13 @@ def run(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
         write_csv(runs, out / "hard.csv")
         write_md(rows, out / "hard.md", settings)
+    failed = 1 if any(_verdict(r) == "FAIL" for r in rows) else 0  # unexpected failures
     if args.json:
         print(json.dumps({"cases": [r.to_json() for r in runs]}, indent=2))
-        return 0
+        return failed
     print(settings)
     print("\n".join(_table(rows)))
     for (case, formulation), reason in KNOWN_FAILURES.items():
         if case in {c.name for c in cases}:
             print(f"known failure {case} / {formulation}: {reason}")
-    return 0
+    return failed

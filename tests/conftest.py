@@ -1,6 +1,7 @@
 import copy
 
 import pytest
+from hypothesis import settings
 
 from cardan_forces.driveline.scene import builtin_text, load_scene, scene_from_dict
 
@@ -8,6 +9,11 @@ try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
+
+
+# Every property test is derandomized: the same examples on every run and machine.
+settings.register_profile("derandomized", derandomize=True, deadline=None)
+settings.load_profile("derandomized")
 
 
 @pytest.fixture(scope="session")

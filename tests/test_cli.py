@@ -126,3 +126,36 @@ def test_repro_overlays_the_penalty_simulation(tmp_path):
     assert compliance["bearings_smoothed"] < 0.1
     report = (tmp_path / "report.md").read_text()
     assert "s per simulated second" in report and "## Compliance vs penalty" in report
+
+
+def test_ctrl_c_ends_a_run_with_one_line_and_code_130(monkeypatch, capsys):
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("cardan_forces.cli._cmd_solvers", interrupted)
+    assert main(["solvers"]) == 130
+    assert capsys.readouterr().err == "cardan: interrupted\n"
+
+
+def test_hard_with_an_unexpected_failure_exits_1(monkeypatch, capsys):
+    from cardan_forces.experiments import hard
+
+    args = ["hard", "--quick", "--case", "articulation-0", "--formulation", "positive"]
+    assert main(args) == 0
+    monkeypatch.setattr(hard, "_verdict", lambda row: "FAIL")
+    assert main(args) == 1
+    assert main([*args, "--json"]) == 1
+
+
+def test_a_long_run_says_it_is_still_running(monkeypatch, capsys):
+    monkeypatch.setattr("cardan_forces.cli.HEARTBEAT_S", 0.05)
+
+    def slow(args):
+        import time
+
+        time.sleep(0.3)
+        return 0
+
+    monkeypatch.setattr("cardan_forces.cli._cmd_solvers", slow)
+    assert main(["solvers"]) == 0
+    assert "cardan solvers: still running after" in capsys.readouterr().err

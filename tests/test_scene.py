@@ -1,10 +1,12 @@
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from cardan_forces.driveline.scene import SceneError, builtin_names, builtin_text, load_scene, scene_from_dict
 from cardan_forces.cli import main
+from cardan_forces.driveline.kinematics import rest_geometry
 from tests.conftest import variant
 
 
@@ -89,11 +91,12 @@ def test_bad_shaft(paper_raw, key, value, field, text):
     assert f"'{field}'" in str(err.value)
 
 
-@pytest.mark.parametrize("gamma", [90.0, -90.0, 120.0])
+@pytest.mark.parametrize("gamma", [90.0, -90.0, 120.0, 89.5])
 def test_articulation_must_stay_below_90_degrees(paper_raw, gamma):
     joints = paper_raw["joints"]
     joints[1]["articulation_deg"] = gamma
-    with pytest.raises(SceneError, match=r"joints\[1\].articulation_deg"):
+    with pytest.raises(SceneError, match=r"joints\[1\].articulation_deg': \|articulation\| "
+                                         r"must be at most 89 deg"):
         scene_from_dict({"extends": "paper", "joints": joints})
 
 
@@ -120,6 +123,52 @@ def test_cli_bad_scene_exit_2_without_traceback(tmp_path):
     assert main(["sets", "no-such-scene"]) == 2
 
 
-def test_variant_helper_builds_valid_scene():
-    scene = variant(arrangement="W", gravity_m_s2=[0.0, 0.0, 0.0])
-    assert scene.arrangement == "W" and scene.articulation_signs() == (1, 1)
+@pytest.mark.parametrize("arrangement,output_angle_deg", [("Z", 0.0), ("W", 60.0)])
+def test_arrangement_sets_where_the_output_points(arrangement, output_angle_deg):
+    """Z (two 30 deg joints turning opposite ways) leaves the output parallel to the
+    input; W (the same way) turns it by 60 deg: read from the laid-out geometry."""
+    scene = variant(arrangement=arrangement)
+    axes = rest_geometry(scene).axes
+    angle = np.degrees(np.arccos(np.clip(axes[0] @ axes[-1], -1.0, 1.0)))
+    assert angle == pytest.approx(output_angle_deg, abs=1e-9)
+
+
+def test_extends_replaces_a_table_whose_kind_differs(tmp_path):
+    child = tmp_path / "child.toml"
+    child.write_text('extends = "paper"\nname = "child"\n[torque]\n'
+                     'input = { kind = "constant", value_N_m = 7.0 }\n'
+                     'load = { kind = "harmonic", mean_N_m = 1.0, amplitude_N_m = 0.5, '
+                     'frequency_hz = 2.0 }\n')
+    scene = load_scene(child)
+    assert scene.input_torque(0.3) == pytest.approx(7.0) and scene.input_torque.amplitude_N_m == 0
+    assert scene.load_torque(0.0) == pytest.approx(1.5) and scene.load_torque(0.25) == \
+        pytest.approx(0.5)
+
+
+def test_extends_merges_a_table_of_the_same_kind_key_by_key():
+    scene = variant(torque={"input": {"kind": "harmonic", "mean_N_m": 20.0}})
+    assert scene.input_torque(0.0) == pytest.approx(15.0)  # 20 - 5 cos 0: amplitude kept
+
+
+@pytest.mark.parametrize("axis", [[1e-170, 0.0, 0.0], [1e200, 0.0, 0.0], [5e-324, 0.0, 0.0]])
+def test_a_direction_of_any_finite_length_is_accepted(paper, axis):
+    scene = variant(frame={"input_axis": axis})
+    assert scene.frame.input_axis == (1.0, 0.0, 0.0)
+    tilted = variant(frame={"input_axis": [axis[0], axis[0], 0.0]})
+    assert tilted.frame.input_axis == pytest.approx((2**-0.5, 2**-0.5, 0.0), abs=1e-15)
+
+
+def test_the_limits_admit_the_hard_cases():
+    """The hard cases (masses and torques x 1e6, 89 deg, 1000 rad/s) load: the limits
+    leave room for what the package itself studies."""
+    from cardan_forces.experiments.hard import CASES
+
+    assert [c.scene().name for c in CASES] == [f"hard-{c.name}" for c in CASES]
+
+
+@pytest.mark.parametrize("gamma", [0.0, 89.0, -89.0])
+def test_articulation_up_to_89_degrees_loads(paper_raw, gamma):
+    joints = paper_raw["joints"]
+    joints[1]["articulation_deg"] = gamma
+    assert scene_from_dict({"extends": "paper", "joints": joints}).joints[1].articulation_deg \
+        == gamma

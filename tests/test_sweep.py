@@ -141,9 +141,8 @@ def test_unreachable_scheduler_is_one_message(tmp_path, capsys):
 
 
 def test_bad_requests_exit_2(tmp_path, capsys):
-    with pytest.raises(SystemExit) as exit_:
-        main(["sweep", "--formulation", "nonsense", "--out", str(tmp_path)])
-    assert exit_.value.code == 2
+    assert main(["sweep", "--formulation", "nonsense", "--out", str(tmp_path)]) == 2
+    assert "argument --formulation: invalid choice" in capsys.readouterr().err
     constant = tmp_path / "constant.toml"
     constant.write_text('extends = "paper"\n[torque]\ninput = 10.0\n')
     for extra, message in (
@@ -152,21 +151,27 @@ def test_bad_requests_exit_2(tmp_path, capsys):
         (["--solver", "no-such-backend"], "unknown backend"),
         (["--angles", "0:30"], "expected a number or a:b:n"),
         ([str(constant), "--amplitude", "5"], "input torque is constant"),
-        (["--instants", "0"], "at least 1"),
+        (["--instants", "0"], "--instants 0: must be a finite number in [1, 20001]"),
     ):
         assert main(["sweep", "--quick", "--out", str(tmp_path), *extra]) == 2, extra
         assert message in capsys.readouterr().err
     assert not (tmp_path / "sweep.csv").exists()
 
 
-def test_unphysical_angle_is_a_failed_row(tmp_path):
+def test_unphysical_angle_is_refused_and_a_failed_row(tmp_path, capsys):
+    """The command line refuses it before any work; a point that still meets it (a
+    worker's scene) ends as a failed row, not a crash."""
     assert main(["sweep", "--angles", "90:95:2", "--formulation", "min_norm", "--quick",
-                 "--workers", "1", "--out", str(tmp_path)]) == 0
-    table = rows(tmp_path)
-    assert [r["angle_deg"] for r in table] == ["90", "95"]
-    for r in table:
-        assert r["status"] == "failed" and r["max_equilibrium"] == "inf"
-        assert "must be below 90 deg" in r["message"] and r["peak_joint1_N"] == "nan"
+                 "--workers", "1", "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err == ("cardan: error: --angle 90: |articulation| must be at "
+                                       "most 89 deg\n")
+    parser = argparse.ArgumentParser()
+    sweep.add_parser(parser.add_subparsers())
+    study = sweep.plan(parser.parse_args(["sweep", "--angle", "10", "--formulation",
+                                          "min_norm", "--quick"]))
+    (row,) = sweep.run_point(study.task(95.0, 0.0, study.methods))
+    assert row["status"] == "failed" and row["max_equilibrium"] == math.inf
+    assert "must be at most 89 deg" in row["message"]
 
 
 def test_point_scene_sets_every_joint_and_the_amplitude():

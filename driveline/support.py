@@ -1,0 +1,178 @@
+"""Is a scene's drive line usable: held so that it turns with exactly one degree of
+freedom, and with a motion the integrator can follow?
+
+Decided from the structure, not by counting bearings: at one generic configuration
+(the kinematics at the scene's initial angle turned by :data:`GENERIC_TURN_RAD`) the
+equilibrium operator ``A`` has 6 rows per body and one column per contact force
+component. A left null vector ``y`` of ``A`` (``y^T A = 0``) is a set of body twists
+(velocity of each body's reference point on its force rows, angular velocity on its
+moment rows) along which no contact does work: a motion the contacts leave free. So
+
+- ``rows - rank(A) == 1``: the line's rotation is the only free motion (held);
+- ``> 1``: a mechanism: some body (or bodies) can move besides the rotation; the
+  extra left null vectors, mapped back to the rows of ``A``, name the free bodies and
+  directions;
+- ``0``: locked: the contacts do not let the line turn at all.
+
+Any element kind that adds or removes columns (or bodies, six rows each) of
+``build_operator``'s output is covered without change here.
+
+The motion check bounds the input's revolutions over the time span (see
+:func:`check_motion`): the integrator resolves every turn, so a line that would spin
+up to millions of revolutions is refused at load rather than integrated for hours.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from .dynamics import reduced_inertia, simulate
+from .equilibrium import build_operator
+from .kinematics import kinematics, rest_geometry
+from .scene import MAX_TURNS, Scene, SceneError
+
+GENERIC_TURN_RAD = 0.7
+"""Input angle added to the scene's initial angle: a configuration where no yoke lies in
+the articulation plane (those are where the paper's eq. 2 has its extremes)."""
+
+RANK_RTOL = 1e-9
+"""Singular values of the row- and column-equilibrated ``A`` below ``RANK_RTOL`` times
+the largest count as zero."""
+
+FREE_TOL = 1e-6
+"""A row of the extra free motions with a weight above this is reported as free."""
+
+
+@dataclass(frozen=True)
+class Support:
+    """The free motions of the line at one configuration: ``free`` (rows - rank of A),
+    ``rows`` (labels of the rows of A that move in a free motion beyond the line's
+    rotation; empty when held or locked).
+    """
+
+    free: int
+    rows: tuple[str, ...]
+
+    @property
+    def held(self) -> bool:
+        return self.free == 1
+
+
+def _equilibrated(A: np.ndarray) -> np.ndarray:
+    """``A`` with rows and columns scaled to unit norm (zero rows and columns kept zero),
+    so that the rank does not depend on units (moments in N m over lengths from 1e-6 m
+    to 1e3 m).
+    """
+    col = np.linalg.norm(A, axis=0)
+    A = A / np.where(col > 0, col, 1.0)
+    row = np.linalg.norm(A, axis=1)
+    return A / np.where(row > 0, row, 1.0)[:, None]
+
+
+def free_motions(A: np.ndarray, labels: tuple[str, ...]) -> Support:
+    """Count the motions ``A`` (rows x columns, 6 rows per body: force x, y, z, then
+    moment x, y, z) leaves free, and name the rows that move in the free motions besides
+    the line's rotation (the one free motion without translation: every body's reference
+    point sits on its fixed axis or joint centre). Translations are named when there are
+    any (a body not held in place), else rotations; rows under a tenth of the largest
+    weight are left out.
+    """
+    u, s, _ = np.linalg.svd(_equilibrated(A))
+    top = s[0] if s.size and s[0] > 0 else 1.0
+    null = u[:, int(np.sum(s > RANK_RTOL * top)):]  # left null space, rows x free
+    free = null.shape[1]
+    if free <= 1:
+        return Support(free=free, rows=())
+    force_rows = (np.arange(A.shape[0]) % 6) < 3
+    _, fs, fvt = np.linalg.svd(null[force_rows])
+    moving = int(np.sum(fs > FREE_TOL))
+    extra = null @ (fvt[:moving] if free - moving == 1 else fvt).T
+    weight = np.linalg.norm(extra, axis=1)
+    shown = force_rows if weight[force_rows].max() > FREE_TOL else ~force_rows
+    cut = 0.1 * weight[shown].max()
+    return Support(free=free, rows=tuple(label for label, w, keep in zip(labels, weight, shown)
+                                         if keep and w > cut))
+
+
+def _describe(rows: tuple[str, ...]) -> str:
+    """``input.force.y, input.force.z`` -> ``input (moves along y, z)``; moment rows ->
+    ``(turns about x)``.
+    """
+    bodies: dict[str, dict[str, list[str]]] = {}
+    for label in rows:
+        body, kind, axis = label.rsplit(".", 2)
+        bodies.setdefault(body, {}).setdefault(kind, []).append(axis)
+    verbs = {"force": "moves along", "moment": "turns about"}
+    parts = []
+    for body, kinds in bodies.items():
+        moves = "; ".join(f"{verbs[kind]} {', '.join(axes)}" for kind, axes in kinds.items())
+        parts.append(f"{body} ({moves})")
+    return ", ".join(parts)
+
+
+def support(scene: Scene) -> Support:
+    """The free motions of ``scene``'s line at a generic configuration (contact geometry
+    only: the loads ``b`` play no part).
+    """
+    motion = simulate(scene, [scene.time.start_s])
+    q = motion.q + GENERIC_TURN_RAD
+    op = build_operator(dataclasses.replace(motion, q=q, kin=kinematics(motion.geometry, q)))
+    return free_motions(op.A[0], op.rows)
+
+
+def check_support(scene: Scene) -> None:
+    """Raise :class:`SceneError` unless the line turns with exactly one degree of freedom
+    while its contacts hold it.
+    """
+    found = support(scene)
+    if found.held:
+        return
+    where = f"scene {scene.source}: field 'shafts'"
+    if found.free == 0:
+        raise SceneError(f"{where}: the line is locked: its contacts leave no free motion, "
+                         "so it cannot turn (one is needed, the line's rotation)")
+    raise SceneError(
+        f"{where}: the line is not held: its contacts leave {found.free} free motions where "
+        f"one (the line's rotation) is wanted; free besides it: {_describe(found.rows)}: "
+        "add bearings that hold these bodies")
+
+
+def turns_bound(scene: Scene) -> float:
+    """An upper estimate of the input's revolutions over the scene's time span:
+    ``(|w0| T + 1/2 a T^2) / 2 pi`` with ``a`` the largest net torque over the smallest
+    reduced inertia ``I(q)``, both sampled over one revolution (the net torque
+    ``M_in - M_load dphi_out/dq`` with each law's mean and amplitude at their worst).
+    Quasi-static scenes turn at the initial speed.
+    """
+    span = scene.time.stop_s - scene.time.start_s
+    speed = abs(scene.initial_speed_rad_s)
+    if not scene.has("inertia"):
+        return speed * span / (2 * np.pi)
+    kin = kinematics(rest_geometry(scene), np.linspace(0.0, 2 * np.pi, 73))
+    inertia, _ = reduced_inertia(scene, kin)
+    ratio = kin.ratio[-1]
+    m_in, m_load = scene.input_torque, scene.load_torque
+    net = (np.abs(m_in.mean_N_m - ratio * m_load.mean_N_m) + abs(m_in.amplitude_N_m)
+           + np.abs(ratio) * abs(m_load.amplitude_N_m))
+    accel = float(np.max(net) / np.min(inertia))
+    return (speed * span + 0.5 * accel * span**2) / (2 * np.pi)
+
+
+def check_motion(scene: Scene) -> None:
+    """Raise :class:`SceneError` when :func:`turns_bound` exceeds :data:`MAX_TURNS`."""
+    turns = turns_bound(scene)
+    if turns > MAX_TURNS:
+        raise SceneError(
+            f"scene {scene.source}: field 'time.stop_s': over {scene.time.stop_s - scene.time.start_s:g} s "
+            f"the line may turn {turns:.3g} revolutions (initial speed "
+            f"{scene.initial_speed_rad_s:g} rad/s and the torques); at most {MAX_TURNS:g}: "
+            "shorten the time span or lower the speed or torques")
+
+
+def check_scene(scene: Scene) -> None:
+    """Every structural check of a scene built from its file: motion, then support."""
+    check_motion(scene)
+    check_support(scene)

@@ -1,0 +1,75 @@
+"""The support check: the line must turn with exactly one degree of freedom while its
+contacts hold it, decided from the rank of the equilibrium operator."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cardan_forces.driveline.scene import SceneError, builtin_names, load_scene, scene_from_dict
+from cardan_forces.driveline.support import Support, check_support, free_motions, support
+
+ROWS = tuple(f"{body}.{kind}.{axis}" for body in ("a", "b") for kind in ("force", "moment")
+             for axis in "xyz")
+
+
+@pytest.mark.parametrize("name", builtin_names())
+def test_builtin_lines_are_held(name):
+    assert support(load_scene(name)) == Support(free=1, rows=())
+
+
+def _paper_with(paper_raw, bearings: list[list[dict]]):
+    for shaft, held in zip(paper_raw["shafts"], bearings):
+        shaft["bearings"] = held
+    return {"extends": "paper", "shafts": paper_raw["shafts"]}
+
+
+@pytest.mark.parametrize("bearings,free", [
+    ([[], [], []], 10),
+    ([[{"name": "near", "offset_m": 0.4}], [], []], 7),
+])
+def test_free_motions_agree_with_grubler_where_nothing_is_redundant(paper_raw, bearings, free):
+    """Five bodies (3 shafts, 2 cross-pins: 30 coordinates), four trunnion revolutes
+    (5 constraints each), each bearing a ball joint (3): Gruebler's count 30 - 20 - 3 n
+    is exact when no constraint is redundant, as here."""
+    raw = _paper_with(paper_raw, bearings)
+    with pytest.raises(SceneError, match=f"leave {free} free motions"):
+        scene_from_dict(raw, "line.toml")
+
+
+def test_two_bearings_in_one_place_are_one_bearing(paper_raw):
+    """Not a count of bearings: two bearings at the same point let the input shaft
+    swing about it, as one bearing would."""
+    same = [{"name": "far", "offset_m": 0.4}, {"name": "near", "offset_m": 0.4}]
+    raw = _paper_with(paper_raw, [same, [], paper_raw["shafts"][2]["bearings"]])
+    with pytest.raises(SceneError, match=r"field 'shafts': the line is not held: its "
+                                         r"contacts leave 2 free motions.*input \(moves along"):
+        scene_from_dict(raw, "line.toml")
+
+
+def test_a_bearing_on_the_intermediate_shaft_keeps_the_line_held(paper_raw):
+    middle = [{"name": "centre", "offset_m": 0.0}]
+    raw = _paper_with(paper_raw, [paper_raw["shafts"][0]["bearings"], middle,
+                                  paper_raw["shafts"][2]["bearings"]])
+    assert support(scene_from_dict(raw)).held
+
+
+def test_free_motions_of_small_operators():
+    """Body ``a`` held in every direction, ``b`` in none: six free motions, all of b's;
+    both held: locked (no motion left)."""
+    held_a = np.zeros((12, 6))
+    held_a[:6] = np.eye(6)
+    found = free_motions(held_a, ROWS)
+    assert found.free == 6
+    assert set(found.rows) == {"b.force.x", "b.force.y", "b.force.z"}
+    assert free_motions(np.eye(12), ROWS) == Support(free=0, rows=())
+    one = np.eye(12)[:, [0, 1, 2, 3, 4, 6, 7, 8, 9, 10, 11]]  # a turns about x
+    assert free_motions(one, ROWS) == Support(free=1, rows=())
+
+
+def test_a_locked_line_is_refused(monkeypatch, paper):
+    monkeypatch.setattr("cardan_forces.driveline.support.support",
+                        lambda scene: Support(free=0, rows=()))
+    with pytest.raises(SceneError, match="the line is locked: its contacts leave no free "
+                                         "motion, so it cannot turn"):
+        check_support(paper)
