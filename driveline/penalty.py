@@ -57,16 +57,25 @@ its floor): the O(1) quaternion components are controlled like positions, to
 ``atol_m`` times 1 m, not to ``rtol`` times 1, since penetrations are micrometres. The
 problem is stiff (a 0.05 kg pin on a contact of ~1e8 N/m with up to 1.5e7 N s/m), so
 it is integrated by an implicit method: SciPy's LSODA by default (its stiff branch is
-ODEPACK's BDF, the family of ADAMS's GSTIFF, stepped in Fortran: on ``paper-penalty``
-it takes about half the wall time of SciPy's ``BDF`` and a fifth of ``Radau``, which
-are there on request). The Jacobian is a forward difference in one vectorized call:
-the columns of bodies that share no contact neighbour are perturbed together (shaft,
-pin, shaft, ... along the chain: 3 groups of 13 columns), and its sparsity is the
-bodies' contact graph. The right-hand side evaluates every contact's geometry and
-relative velocity with one sparse product, since all are linear in the bodies'
-centres, velocities, rotation matrices and their rates. The integrator's own
-``OdeSolver`` is stepped here (as ``solve_ivp`` does) to report progress and to turn a
-failure into a status.
+ODEPACK's BDF, the family of ADAMS's GSTIFF, stepped in Fortran; SciPy's ``BDF`` and
+``Radau`` are there on request, but their steps are Python). The right-hand side and
+its Jacobian are compiled by numba (:mod:`~cardan_forces.driveline.penalty_kernels`:
+a few microseconds per state instead of ~0.1 ms of array calls); without numba the
+NumPy model here does the same (``kernel="numpy"``). The Jacobian is a complex step
+(exact to round-off, where a forward difference loses half the digits), with the
+columns of bodies that share no contact neighbour stepped together (shaft, pin, shaft,
+... along the chain: 3 groups of 13 columns); its sparsity is the bodies' contact
+graph. The NumPy right-hand side evaluates every contact's geometry and relative
+velocity with one sparse product, since all are linear in the bodies' centres,
+velocities, rotation matrices and their rates. The integrator's own ``OdeSolver`` is
+stepped here (as ``solve_ivp`` does) to report progress and to turn a failure into a
+status.
+
+**Cost.** The step count is set by the impacts (~10 us steps while a cross-pin
+rattles, 50,000-170,000 steps per simulated second on ``paper-penalty``, growing with
+the speed); LSODA takes a new Jacobian and LU factorization every 4-6 steps as the
+impacts change the contact set, so per step the cost is a right-hand side or two, a
+quarter of a Jacobian and a quarter of a 65 x 65 LU, and the integrator's own work.
 """
 
 from __future__ import annotations
@@ -80,6 +89,8 @@ from scipy import sparse
 from scipy.integrate import BDF, LSODA, Radau
 from scipy.spatial.transform import Rotation
 
+from . import penalty_kernels as kernels
+from .compiled import harmonic_law
 from .contact import hertz_stiffness
 from .dynamics import simulate
 from .kinematics import rest_geometry
@@ -89,6 +100,8 @@ DAMPING_LENGTH_UNIT_M = 1e-3
 """Length unit in which ``c_max = fraction * K`` is read (ADAMS's mm; see the module)."""
 
 METHODS = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA}
+KERNELS = ("numba", "numpy")
+"""Right-hand sides: compiled (:mod:`penalty_kernels`) or the NumPy array model."""
 
 _RTOL = 1e-10
 _TAU_S = 1e-3
@@ -108,6 +121,9 @@ class PenaltyResult:
     success, -1 on failure (then ``message`` says why and samples after the failure
     are NaN). ``nfev`` counts right-hand-side evaluations (a vectorized Jacobian call
     counts as one), ``njev`` Jacobians, ``nlu`` LU factorizations, ``nsteps`` steps.
+    ``kernel``: ``numba`` (compiled right-hand side and Jacobian) or ``numpy``;
+    ``rhs_s`` and ``jacobian_s``: wall time spent in them (the rest of ``wall_s`` is the
+    integrator's own work and the set-up).
     """
 
     scene: Scene
@@ -123,6 +139,9 @@ class PenaltyResult:
     method: str
     status: int
     message: str
+    kernel: str = "numpy"
+    rhs_s: float = 0.0
+    jacobian_s: float = 0.0
 
     @property
     def success(self) -> bool:
@@ -282,6 +301,20 @@ class _Model:
         inner = c.b < nb
         self.links[c.a[inner], c.b[inner]] = self.links[c.b[inner], c.a[inner]] = True
         self.jacobian_columns = self._colour()
+        self.kernel_args = self._packed(scene)
+
+    def _packed(self, scene: Scene) -> tuple:
+        """The model as the compiled kernels take it (:mod:`penalty_kernels`)."""
+        c, law = self.c, harmonic_law
+        return (
+            self.n_shafts,
+            np.column_stack([self.mass, self.inertia, self.rest_centre]),
+            np.column_stack([c.a, c.b, c.radial]).astype(np.int64),
+            np.column_stack([c.s, c.e, c.j, c.u]),
+            np.column_stack([c.offset, c.stiffness, c.exponent, c.c_max]).astype(float),
+            np.array([*self.gravity, *law(scene.input_torque), *law(scene.load_torque),
+                      self.d_max], float),
+        )
 
     def _contact_map(self) -> tuple[sparse.csr_matrix, np.ndarray]:
         """The sparse linear map (and constant) from the bodies' :data:`_FEATURES` to,
@@ -439,20 +472,34 @@ class _Model:
         return 13 * colour[body_of] + local, self.links[body_of][:, body_of]
 
     def tolerances(self, atol_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """Absolute tolerances and finite-difference steps per state component:
+        """Absolute tolerances and the Jacobian's complex steps per state component:
         ``atol_m`` on displacements and quaternions, ``atol_m / 1 ms`` on speeds.
         """
         nb = self.n_bodies
         atol = np.concatenate([np.full(7 * nb, atol_m), np.full(6 * nb, atol_m / _TAU_S)])
-        return atol, 0.1 * atol
+        return atol, kernels.COMPLEX_STEP * atol / atol_m
 
     def jacobian(self, t: float, y: np.ndarray, step: np.ndarray) -> np.ndarray:
-        """Forward-difference Jacobian, all coloured groups in one vectorized call."""
+        """Complex-step Jacobian (``step``: imaginary step per state), all coloured groups
+        in one vectorized call: exact to round-off, as :func:`penalty_kernels.jacobian`.
+        """
         column, sparsity = self.jacobian_columns
         shifts = np.zeros((self.n_state, column.max() + 1))
         shifts[np.arange(self.n_state), column] = step
-        f = self.rhs(t, np.column_stack([y, y[:, None] + shifts]))
-        return np.where(sparsity, (f[:, 1:] - f[:, :1])[:, column] / step, 0.0)
+        f = self.rhs(t, y[:, None] + 1j * shifts)
+        return np.where(sparsity, f.imag[:, column] / step, 0.0)
+
+    # ------------------------------------------------------------------ compiled
+
+    def rhs_compiled(self, t: float, y: np.ndarray) -> np.ndarray:
+        """:meth:`rhs` at one state by the compiled kernel."""
+        self.n_calls += 1
+        return kernels.rhs(t, y, *self.kernel_args)
+
+    def jacobian_compiled(self, t: float, y: np.ndarray, step: np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` by the compiled kernel."""
+        column, sparsity = self.jacobian_columns
+        return kernels.jacobian(t, y, step, column, sparsity, *self.kernel_args)
 
 
 def simulate_penalty(
@@ -464,6 +511,7 @@ def simulate_penalty(
     atol_m: float = 1e-8,
     progress_every_s: float = 0.1,
     damping_length_unit_m: float = DAMPING_LENGTH_UNIT_M,
+    kernel: str = "auto",
 ) -> PenaltyResult:
     """Integrate the released drive line from the scene's start to ``max(times)`` and
     sample it at ``times`` (s).
@@ -474,7 +522,9 @@ def simulate_penalty(
     tolerance on positions (m; velocities get ``atol_m / 1 ms``): 1e-7 and 1e-8 give the
     same statistics of forces and speeds on ``paper-penalty``. ``damping_length_unit_m``:
     the unit of "c_max = 1 % of K" (module docstring). ``progress(t)`` is called every
-    ``progress_every_s`` of simulated time. A failed integration returns
+    ``progress_every_s`` of simulated time. ``kernel``: ``numba`` (compiled, see
+    :mod:`~cardan_forces.driveline.penalty_kernels`), ``numpy`` (the array model, no
+    compiler needed) or ``auto`` (numba where installed). A failed integration returns
     ``status = -1`` and its message; it raises only for bad arguments.
     """
     if not scene.has("penalty_dynamics"):
@@ -485,11 +535,16 @@ def simulate_penalty(
         )
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
+    if kernel == "auto":
+        kernel = "numba" if kernels.HAVE_NUMBA else "numpy"
+    if kernel not in KERNELS or (kernel == "numba" and not kernels.HAVE_NUMBA):
+        raise ValueError(f"kernel {kernel!r} not available; available: "
+                         f"{', '.join(k for k in KERNELS if k != 'numba' or kernels.HAVE_NUMBA)}")
     t = np.atleast_1d(np.asarray(times, float))
     t0 = scene.time.start_s
     if np.any(t < t0):
         raise ValueError(f"instants before the scene's start {t0} s")
-    start = _time.perf_counter()
+    start, clock = _time.perf_counter(), {"rhs": 0.0, "jacobian": 0.0}
     model = _Model(scene, damping_length_unit_m)
     y0 = model.initial_state(t0)
     atol, step = model.tolerances(atol_m)
@@ -499,10 +554,11 @@ def simulate_penalty(
     status, message, solver, n_steps = 0, "no motion asked for", None, 0
     t_end = float(t.max())
     if t_end > t0:
-        solver = METHODS[method](
-            lambda time, y: model.rhs(time, y[:, None])[:, 0], t0, y0, t_end,
-            rtol=_RTOL, atol=atol, jac=lambda time, y: model.jacobian(time, y, step),
-        )
+        if kernel == "numba":  # load (or compile) the kernels before the clocks start
+            kernels.rhs(t0, y0, *model.kernel_args)
+            model.jacobian_compiled(t0, y0, step)
+        fun, jac = _timed(model, kernel, step, clock)
+        solver = METHODS[method](fun, t0, y0, t_end, rtol=_RTOL, atol=atol, jac=jac)
         mark, i = t0 + progress_every_s, int(np.searchsorted(t[order], t0, side="right"))
         try:
             while solver.status == "running":
@@ -530,8 +586,34 @@ def simulate_penalty(
         wall_s=_time.perf_counter() - start,
         nfev=model.n_calls, njev=int(solver.njev) if solver else 0,
         nlu=int(solver.nlu) if solver else 0, nsteps=n_steps, method=method, status=status,
-        message=message,
+        message=message, kernel=kernel, rhs_s=clock["rhs"], jacobian_s=clock["jacobian"],
     )
+
+
+def _timed(model: _Model, kernel: str, step: np.ndarray, clock: dict):
+    """The right-hand side and Jacobian of ``kernel`` for the integrator, adding the wall
+    time spent in each to ``clock``.
+    """
+    if kernel == "numba":
+        rhs, jacobian = model.rhs_compiled, model.jacobian_compiled
+    else:
+        rhs = lambda time, y: model.rhs(time, y[:, None])[:, 0]  # noqa: E731
+        jacobian = model.jacobian
+    tick = _time.perf_counter
+
+    def fun(time, y):
+        begin = tick()
+        out = rhs(time, y)
+        clock["rhs"] += tick() - begin
+        return out
+
+    def jac(time, y):
+        begin = tick()
+        out = jacobian(time, y, step)
+        clock["jacobian"] += tick() - begin
+        return out
+
+    return fun, jac
 
 
 def _sample(model: _Model, states: np.ndarray):
