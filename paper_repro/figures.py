@@ -6,8 +6,8 @@ into a folder, and returns the CSV's path. The PNG is always redrawn from the CS
 
 How they are drawn: the rigid-model methods first and on top, and the y axis fitted to
 them with a margin, since their differences of tens of newtons are what the figures
-compare; the penalty simulation as a light raw line (its impact peaks clipped, their
-range written in the panel) under its moving average over :data:`SMOOTH_S` (column
+compare; the penalty simulation as a light raw line (its impact peaks clipped, the
+ranges of raw and average written in the panel where they leave it) under its moving average over :data:`SMOOTH_S` (column
 ``..._penalty_avg``). The rigid
 solution set is shaded only where it is bounded on both sides; where it is not, the
 panel says so (and draws a finite bound as a dashed line).
@@ -35,7 +35,8 @@ PENALTY = "penalty"
 
 def moving_average(values: np.ndarray, t: np.ndarray, window_s: float = SMOOTH_S) -> np.ndarray:
     """Centred moving average over ``window_s`` along the first axis (instants ``t``; an
-    odd number of them, so the window is centred)."""
+    odd number of them, so the window is centred).
+    """
     size = 2 * int(round(0.5 * window_s / np.median(np.diff(t)))) + 1 if len(t) > 1 else 1
     return uniform_filter1d(np.asarray(values, float), size=size, axis=0, mode="nearest")
 
@@ -188,7 +189,7 @@ def _plot_grid(csv: Path, panels, ylabel: str, title: str, ncols: int,
                                                 zorder=1, label="penalty (raw)")
             handles[f"penalty ({SMOOTH_S:g} s average)"], = ax.plot(
                 t, avg, lw=2.2, color="C4", zorder=3, label=f"penalty ({SMOOTH_S:g} s average)")
-            _note_clipped(ax, raw, low, high)
+            _note_clipped(ax, {"raw": raw, "average": avg}, low, high)
         if sets:
             handles.update(_draw_set(ax, t, cols[f"{quantity}_set_min"],
                                      cols[f"{quantity}_set_max"], low, high))
@@ -210,22 +211,29 @@ def _plot_grid(csv: Path, panels, ylabel: str, title: str, ncols: int,
 
 
 def _limits(curves: list[np.ndarray]) -> tuple[float, float]:
-    """The y range of ``curves`` with a margin of 15 % of the range (at least 2 % of the
+    """The y range of ``curves`` with a margin of 15 % of the range (at least 5 % of the
     largest magnitude, so a flat line is not drawn as noise).
     """
     finite = np.concatenate([c[np.isfinite(c)] for c in curves] or [np.zeros(1)])
     finite = finite if finite.size else np.zeros(1)
     lo, hi = float(finite.min()), float(finite.max())
-    margin = max(0.15 * (hi - lo), 0.02 * max(abs(lo), abs(hi)), 1e-9)
+    margin = max(0.15 * (hi - lo), 0.05 * max(abs(lo), abs(hi)), 1e-9)
     return lo - margin, hi + margin
 
 
-def _note_clipped(ax, raw: np.ndarray, low: float, high: float) -> None:
-    """Write in the panel how far the raw penalty curve leaves the drawn range."""
-    ok = np.isfinite(raw)
-    if ok.any() and (raw[ok].max() > high or raw[ok].min() < low):
-        ax.text(0.995, 0.04, f"penalty raw: {raw[ok].min():.4g} to {raw[ok].max():.4g} (clipped)",
-                transform=ax.transAxes, fontsize=7, ha="right", color="0.3")
+def _note_clipped(ax, curves: dict[str, np.ndarray], low: float, high: float) -> None:
+    """Write in the panel how far the penalty curves leave the drawn range."""
+    notes = []
+    for name, values in curves.items():
+        ok = np.isfinite(values)
+        if ok.any() and (values[ok].max() > high or values[ok].min() < low):
+            lo, hi = values[ok].min(), values[ok].max()
+            tiny = 1e-9 * max(abs(lo), abs(hi))  # round-off about zero prints as 0
+            notes.append(f"{name} {lo if abs(lo) > tiny else 0.0:.4g} to {hi:.4g}")
+    if notes:
+        ax.text(0.995, 0.04, "penalty clipped: " + "; ".join(notes), transform=ax.transAxes,
+                fontsize=7, ha="right", color="0.3",
+                bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="none", alpha=0.8))
 
 
 def _draw_set(ax, t, set_min, set_max, low, high) -> dict:
@@ -248,8 +256,8 @@ def _draw_set(ax, t, set_min, set_max, low, high) -> dict:
                                 (hi, np.isfinite(hi) & ~bounded, "above")):
         if not finite.any():
             continue
-        notes.append(f"bounded {word} by {bound[finite].min():.4g} to "
-                     f"{bound[finite].max():.4g} N")
+        notes.append(f"{'lower' if word == 'below' else 'upper'} bound "
+                     f"{bound[finite].min():.3g} to {bound[finite].max():.3g} N")
         inside = finite & (bound >= low) & (bound <= high)
         if inside.any():
             notes[-1] += " (dashed)"
@@ -258,8 +266,8 @@ def _draw_set(ax, t, set_min, set_max, low, high) -> dict:
     above, below = np.mean(~np.isfinite(hi)), np.mean(~np.isfinite(lo))
     if above or below:
         side = ("above and below" if above and below else "above" if above else "below")
-        text = (f"rigid solution set unbounded {side} at {100 * max(above, below):.0f} % of "
-                f"the {checked.sum()} instants checked" + "".join(f"; {n}" for n in notes))
+        text = (f"rigid set unbounded {side} at {100 * max(above, below):.0f} % of "
+                f"{checked.sum()} instants" + "".join(f"; {n}" for n in notes))
         ax.text(0.005, 0.96, text, transform=ax.transAxes, fontsize=7.5, va="top",
                 color="0.25", bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.7",
                                         alpha=0.85))

@@ -101,7 +101,8 @@ def run_penalty(scene: Scene, times, progress: Callable[[str], None] | None = No
 
 def penalty_history(result: PenaltyResult, names: tuple[str, ...]) -> History:
     """A penalty simulation's forces as a History in the operator's ``names`` (NaN after
-    a failed integration)."""
+    a failed integration).
+    """
     forces = np.column_stack([result.forces[n] for n in names])
     statuses = tuple("solved" if np.all(np.isfinite(row)) else "failed" for row in forces)
     return History("penalty", f"scipy-{result.method}", forces, statuses, result.wall_s)

@@ -92,7 +92,8 @@ def _settled(t: np.ndarray) -> np.ndarray:
 
 def _classify(value: float, agree, disagree) -> str:
     """``agrees`` / ``disagrees`` where ``agree(value)`` / ``disagree(value)``, else
-    ``undecided`` (the band between the two thresholds)."""
+    ``undecided`` (the band between the two thresholds).
+    """
     if not np.isfinite(value):
         return "undecided"
     return "agrees" if agree(value) else "disagrees" if disagree(value) else "undecided"
@@ -189,7 +190,8 @@ def _larger_note(op: Operator, mags) -> list[str]:
              f"difference {100 * rel:+.0f} %" if n else "too few to test")
     return [f"- paper's text: apart from peaks, its method's forces are slightly larger than "
             f"ADAMS's. Paper method minus the penalty's {SMOOTH_S:g} s average, F1-F8 pooled, "
-            f"after {SETTLED_S:g} s, in {n} blocks of {SMOOTH_S:g} s: {found}. Criterion: \"larger\" needs p < {SIGNIFICANCE:g} (a share "
+            f"after {SETTLED_S:g} s, in {n} blocks of {SMOOTH_S:g} s: {found}. Criterion: "
+            f"\"larger\" needs p < {SIGNIFICANCE:g} (a share "
             "near 50 % is a coin toss), \"slightly\" a median difference of at most +25 %: "
             f"**{verdict}**."]
 
@@ -453,7 +455,8 @@ def _compliance_vs_penalty(runs: _Runs, scene: Scene, result, out: Path, progres
                "seconds": h.seconds}
         for g, cols in groups.items():
             for label, a, b in (("raw", h.forces, pen),
-                                ("smoothed", moving_average(h.forces, op.t), moving_average(pen, op.t))):
+                                ("smoothed", moving_average(h.forces, op.t),
+                                 moving_average(pen, op.t))):
                 dist = np.linalg.norm(a[:, cols] - b[:, cols], axis=1) / \
                     np.maximum(np.linalg.norm(b[:, cols], axis=1), 1e-9)
                 row[f"{g}_{label}"] = float(np.nanmedian(dist[ok])) if ok.any() else np.nan
