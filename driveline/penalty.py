@@ -61,32 +61,35 @@ ODEPACK's BDF, the family of ADAMS's GSTIFF, stepped in Fortran; SciPy's ``BDF``
 ``Radau`` are there on request, but their steps are Python). The right-hand side and
 its Jacobian are compiled by numba (:mod:`~cardan_forces.driveline.penalty_kernels`:
 a few microseconds per state instead of ~0.1 ms of array calls); without numba the
-NumPy model here does the same (``kernel="numpy"``). The Jacobian is a complex step
-(exact to round-off, where a forward difference loses half the digits), with the
-columns of bodies that share no contact neighbour stepped together (shaft, pin, shaft,
-... along the chain: 3 groups of 13 columns); its sparsity is the bodies' contact
-graph. The NumPy right-hand side evaluates every contact's geometry and relative
+NumPy model here does the same (``kernel="numpy"``). Both Jacobians are exact to
+round-off, where a forward difference loses half the digits: the compiled one by the
+chain rule (each contact's force law differentiated by complex steps, the geometry and
+the Newton-Euler equations by hand), the NumPy one by complex steps with the columns
+of bodies that share no contact neighbour stepped together (shaft, pin, shaft, ...
+along the chain: 3 groups of 13 columns); the tests hold the two to each other. The
+NumPy right-hand side evaluates every contact's geometry and relative
 velocity with one sparse product, since all are linear in the bodies' centres,
-velocities, rotation matrices and their rates. The integrator's own ``OdeSolver`` is
-stepped here (as ``solve_ivp`` does) to report progress and to turn a failure into a
-status.
+velocities, rotation matrices and their rates. LSODA runs through ``odeint`` (its
+stepping loop in Fortran); ``BDF`` and ``Radau`` are stepped here as ``solve_ivp``
+does. Either way progress is reported and a failure turned into a status.
 
 **Cost.** The step count is set by the impacts (~10 us steps while a cross-pin
 rattles, 50,000-170,000 steps per simulated second on ``paper-penalty``, growing with
-the speed); LSODA takes a new Jacobian and LU factorization every 4-6 steps as the
+the speed); LSODA takes a new Jacobian and LU factorization every 4-5 steps as the
 impacts change the contact set, so per step the cost is a right-hand side or two, a
-quarter of a Jacobian and a quarter of a 65 x 65 LU, and the integrator's own work.
+quarter of a Jacobian and of a 65 x 65 LU, and the integrator's own work.
 """
 
 from __future__ import annotations
 
 import time as _time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
-from scipy.integrate import BDF, LSODA, Radau
+from scipy.integrate import BDF, LSODA, ODEintWarning, Radau, odeint
 from scipy.spatial.transform import Rotation
 
 from . import penalty_kernels as kernels
@@ -496,10 +499,9 @@ class _Model:
         self.n_calls += 1
         return kernels.rhs(t, y, *self.kernel_args)
 
-    def jacobian_compiled(self, t: float, y: np.ndarray, step: np.ndarray) -> np.ndarray:
-        """:meth:`jacobian` by the compiled kernel."""
-        column, sparsity = self.jacobian_columns
-        return kernels.jacobian(t, y, step, column, sparsity, *self.kernel_args)
+    def jacobian_compiled(self, t: float, y: np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` by the compiled kernel (exact, by the chain rule)."""
+        return kernels.jacobian(t, y, *self.kernel_args)
 
 
 def simulate_penalty(
@@ -548,46 +550,103 @@ def simulate_penalty(
     model = _Model(scene, damping_length_unit_m)
     y0 = model.initial_state(t0)
     atol, step = model.tolerances(atol_m)
-    order = np.argsort(t)
     states = np.full((len(t), model.n_state), np.nan)
     states[t == t0] = y0
-    status, message, solver, n_steps = 0, "no motion asked for", None, 0
-    t_end = float(t.max())
-    if t_end > t0:
+    status, message, counts = 0, "no motion asked for", (0, 0, 0)
+    if t.max() > t0:
         if kernel == "numba":  # load (or compile) the kernels before the clocks start
             kernels.rhs(t0, y0, *model.kernel_args)
-            model.jacobian_compiled(t0, y0, step)
+            model.jacobian_compiled(t0, y0)
         fun, jac = _timed(model, kernel, step, clock)
-        solver = METHODS[method](fun, t0, y0, t_end, rtol=_RTOL, atol=atol, jac=jac)
-        mark, i = t0 + progress_every_s, int(np.searchsorted(t[order], t0, side="right"))
-        try:
-            while solver.status == "running":
-                message = solver.step()
-                n_steps += 1
-                if solver.status == "failed":
-                    break
-                if not np.all(np.isfinite(solver.y)):
-                    solver.status, message = "failed", f"non-finite state at t = {solver.t} s"
-                    break
-                stop = int(np.searchsorted(t[order], solver.t, side="right"))
-                if stop > i:
-                    states[order[i:stop]] = solver.dense_output()(t[order[i:stop]]).T
-                    i = stop
-                while progress is not None and solver.t >= mark - 1e-12:
-                    progress(mark)
-                    mark += progress_every_s
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as err:
-            solver.status, message = "failed", f"{type(err).__name__}: {err}"
-        status = 0 if solver.status == "finished" else -1
-        message = message or ("finished" if status == 0 else "failed")
+        marks = _Marks(progress, t0, float(t.max()), progress_every_s)
+        integrate = _odeint if method == "LSODA" else _stepped
+        status, message, counts = integrate(METHODS[method], fun, jac, t0, y0, t, atol, states,
+                                            marks)
     forces, omega, depth = _sample(model, states)
     return PenaltyResult(
         scene=scene, t=t, omega=omega, forces=forces, penetration=depth,
-        wall_s=_time.perf_counter() - start,
-        nfev=model.n_calls, njev=int(solver.njev) if solver else 0,
-        nlu=int(solver.nlu) if solver else 0, nsteps=n_steps, method=method, status=status,
-        message=message, kernel=kernel, rhs_s=clock["rhs"], jacobian_s=clock["jacobian"],
+        wall_s=_time.perf_counter() - start, nfev=model.n_calls, njev=counts[1],
+        nlu=counts[2], nsteps=counts[0], method=method, status=status, message=message,
+        kernel=kernel, rhs_s=clock["rhs"], jacobian_s=clock["jacobian"],
     )
+
+
+class _Marks:
+    """Calls ``progress(mark)`` once the integration has reached each mark, every
+    ``every`` seconds of simulated time up to ``end``.
+    """
+
+    def __init__(self, progress, t0: float, end: float, every: float):
+        self.progress, self.end, self.every = progress, end, every
+        self.next = t0 + every
+
+    def reached(self, time: float) -> None:
+        while self.progress is not None and time >= self.next - 1e-12 \
+                and self.next <= self.end + 1e-12:
+            self.progress(self.next)
+            self.next += self.every
+
+
+_FAILURES = (ArithmeticError, ValueError, np.linalg.LinAlgError)
+
+
+def _odeint(_, fun, jac, t0, y0, t, atol, states, marks: _Marks):
+    """LSODA through ``odeint``, whose stepping loop is Fortran (SciPy's ``LSODA`` class
+    is the same ODEPACK code stepped from Python, ~8 us more a step); ``states`` rows
+    are filled at the instants ``t``. Returns status, message and (steps, Jacobians,
+    LU factorizations: one with each Jacobian in LSODA).
+    """
+    order = np.argsort(t)
+    later = order[t[order] > t0]
+    grid = np.concatenate([[t0], t[later]])
+
+    def watched(time, y):
+        marks.reached(time)
+        return fun(time, y)
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ODEintWarning)
+            ys, info = odeint(watched, y0, grid, Dfun=jac, tfirst=True, rtol=_RTOL, atol=atol,
+                              full_output=True, mxstep=2**31 - 1)
+    except _FAILURES as err:
+        return -1, f"{type(err).__name__}: {err}", (0, 0, 0)
+    ok = info["message"] == "Integration successful."
+    reached = np.r_[True, info["tcur"] >= grid[1:] - 1e-12 * max(abs(grid[-1]), 1.0)]
+    valid = np.cumprod(reached & np.all(np.isfinite(ys), axis=1)).astype(bool)
+    states[later] = np.where(valid[1:, None], ys[1:], np.nan)
+    steps = int(info["nst"][-1]) if len(info["nst"]) else 0
+    jacobians = int(info["nje"][-1]) if len(info["nje"]) else 0
+    return (0 if ok and valid.all() else -1, "finished" if ok else str(info["message"]),
+            (steps, jacobians, jacobians))
+
+
+def _stepped(solver_class, fun, jac, t0, y0, t, atol, states, marks: _Marks):
+    """SciPy's ``OdeSolver`` (``BDF``, ``Radau``) stepped here, as ``solve_ivp`` does;
+    ``states`` rows are filled at the instants ``t`` from its dense output.
+    """
+    solver = solver_class(fun, t0, y0, float(t.max()), rtol=_RTOL, atol=atol, jac=jac)
+    order, n_steps, message = np.argsort(t), 0, None
+    i = int(np.searchsorted(t[order], t0, side="right"))
+    try:
+        while solver.status == "running":
+            message = solver.step()
+            n_steps += 1
+            if solver.status == "failed":
+                break
+            if not np.all(np.isfinite(solver.y)):
+                solver.status, message = "failed", f"non-finite state at t = {solver.t} s"
+                break
+            stop = int(np.searchsorted(t[order], solver.t, side="right"))
+            if stop > i:
+                states[order[i:stop]] = solver.dense_output()(t[order[i:stop]]).T
+                i = stop
+            marks.reached(solver.t)
+    except _FAILURES as err:
+        solver.status, message = "failed", f"{type(err).__name__}: {err}"
+    status = 0 if solver.status == "finished" else -1
+    return (status, message or ("finished" if status == 0 else "failed"),
+            (n_steps, int(solver.njev), int(solver.nlu)))
 
 
 def _timed(model: _Model, kernel: str, step: np.ndarray, clock: dict):
@@ -598,7 +657,7 @@ def _timed(model: _Model, kernel: str, step: np.ndarray, clock: dict):
         rhs, jacobian = model.rhs_compiled, model.jacobian_compiled
     else:
         rhs = lambda time, y: model.rhs(time, y[:, None])[:, 0]  # noqa: E731
-        jacobian = model.jacobian
+        jacobian = lambda time, y: model.jacobian(time, y, step)  # noqa: E731
     tick = _time.perf_counter
 
     def fun(time, y):
@@ -609,7 +668,7 @@ def _timed(model: _Model, kernel: str, step: np.ndarray, clock: dict):
 
     def jac(time, y):
         begin = tick()
-        out = jacobian(time, y, step)
+        out = jacobian(time, y)
         clock["jacobian"] += tick() - begin
         return out
 
