@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .compiled import njit
 from .scene import Scene
 
 
@@ -180,3 +181,54 @@ def kinematics(geometry: Geometry, q) -> Kinematics:
         pin_rate=np.array(rates).reshape(-1, len(q), 3),
         pin_rate_dq=np.array(rates_dq).reshape(-1, len(q), 3),
     )
+
+
+# ----------------------------------------------------------------- one instant, compiled
+
+
+@njit(cache=True)
+def _cross3(a, b):
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
+@njit(cache=True)
+def reduced_terms(q, axes, yoke_in, yoke_out, axial_inertia, pin_inertia):
+    """At one input angle ``q`` (rad): ``I(q)`` (kg m²), ``1/2 I'(q)`` and the last
+    shaft's ratio ``dphi_out/dq``; the construction of :func:`kinematics` for one
+    instant, compiled, for the equation of motion's right-hand side. ``pin_inertia``:
+    the cross-pins' principal inertias about (e1, e2, e3), or zeros without the
+    ``crosspin_inertia`` effect.
+    """
+    phi, j_in, h_in = q, 1.0, 0.0
+    inertia = axial_inertia[0]
+    half_slope = 0.0
+    for j in range(yoke_in.shape[0]):
+        a_in, a_out, y_out = axes[j], axes[j + 1], yoke_out[j]
+        e1 = yoke_in[j] * np.cos(phi) + _cross3(a_in, yoke_in[j]) * np.sin(phi)
+        w_out = _cross3(a_out, y_out)
+        raw = np.arctan2(-np.dot(e1, y_out), np.dot(e1, w_out))
+        psi = phi + np.mod(raw - phi + 0.5 * np.pi, np.pi) - 0.5 * np.pi
+        e2 = y_out * np.cos(psi) + w_out * np.sin(psi)
+        de1, de2 = _cross3(a_in, e1), _cross3(a_out, e2)
+        g_phi, g_psi = np.dot(de1, e2), np.dot(e1, de2)
+        rho = -g_phi / g_psi
+        rho_dphi = -(np.dot(_cross3(a_in, de1), e2) + 2.0 * np.dot(de1, de2) * rho
+                     + np.dot(e1, _cross3(a_out, de2)) * rho**2) / g_psi
+        j_out = rho * j_in
+        h_out = rho_dphi * j_in**2 + rho * h_in
+        inertia += axial_inertia[j + 1] * j_out**2
+        half_slope += axial_inertia[j + 1] * j_out * h_out
+        if pin_inertia[0] > 0.0:
+            c = np.dot(e1, a_out)
+            de1_dq = j_in * de1
+            rate = j_in * a_in + (j_out * c) * e1
+            rate_dq = (h_in * a_in + (h_out * c + j_out * np.dot(de1_dq, a_out)) * e1
+                       + (j_out * c) * de1_dq)
+            e3 = _cross3(e1, e2)
+            jw = (pin_inertia[0] * np.dot(e1, rate) * e1 + pin_inertia[1] * np.dot(e2, rate) * e2
+                  + pin_inertia[2] * np.dot(e3, rate) * e3)
+            inertia += np.dot(rate, jw)
+            half_slope += np.dot(rate_dq, jw)
+        phi, j_in, h_in = psi, j_out, h_out
+    return inertia, half_slope, j_in

@@ -57,29 +57,43 @@ its floor): the O(1) quaternion components are controlled like positions, to
 ``atol_m`` times 1 m, not to ``rtol`` times 1, since penetrations are micrometres. The
 problem is stiff (a 0.05 kg pin on a contact of ~1e8 N/m with up to 1.5e7 N s/m), so
 it is integrated by an implicit method: SciPy's LSODA by default (its stiff branch is
-ODEPACK's BDF, the family of ADAMS's GSTIFF, stepped in Fortran: on ``paper-penalty``
-it takes about half the wall time of SciPy's ``BDF`` and a fifth of ``Radau``, which
-are there on request). The Jacobian is a forward difference in one vectorized call:
-the columns of bodies that share no contact neighbour are perturbed together (shaft,
-pin, shaft, ... along the chain: 3 groups of 13 columns), and its sparsity is the
-bodies' contact graph. The right-hand side evaluates every contact's geometry and
-relative velocity with one sparse product, since all are linear in the bodies'
-centres, velocities, rotation matrices and their rates. The integrator's own
-``OdeSolver`` is stepped here (as ``solve_ivp`` does) to report progress and to turn a
-failure into a status.
+ODEPACK's BDF, the family of ADAMS's GSTIFF, stepped in Fortran; SciPy's ``BDF`` and
+``Radau`` are there on request, but their steps are Python). The right-hand side and
+its Jacobian are compiled by numba (:mod:`~cardan_forces.driveline.penalty_kernels`:
+a few microseconds per state instead of ~0.1 ms of array calls); without numba the
+NumPy model here does the same (``kernel="numpy"``). Both Jacobians are exact to
+round-off, where a forward difference loses half the digits: the compiled one by the
+chain rule (each contact's force law differentiated by complex steps, the geometry and
+the Newton-Euler equations by hand), the NumPy one by complex steps with the columns
+of bodies that share no contact neighbour stepped together (shaft, pin, shaft, ...
+along the chain: 3 groups of 13 columns); the tests hold the two to each other. The
+NumPy right-hand side evaluates every contact's geometry and relative
+velocity with one sparse product, since all are linear in the bodies' centres,
+velocities, rotation matrices and their rates. LSODA runs through ``odeint`` (its
+stepping loop in Fortran); ``BDF`` and ``Radau`` are stepped here as ``solve_ivp``
+does. Either way progress is reported and a failure turned into a status.
+
+**Cost.** The step count is set by the impacts (~10 us steps while a cross-pin
+rattles, 50,000-170,000 steps per simulated second on ``paper-penalty``, growing with
+the speed); LSODA takes a new Jacobian and LU factorization every 4-5 steps as the
+impacts change the contact set, so per step the cost is a right-hand side or two, a
+quarter of a Jacobian and of a 65 x 65 LU, and the integrator's own work.
 """
 
 from __future__ import annotations
 
 import time as _time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
-from scipy.integrate import BDF, LSODA, Radau
+from scipy.integrate import BDF, LSODA, ODEintWarning, Radau, odeint
 from scipy.spatial.transform import Rotation
 
+from . import penalty_kernels as kernels
+from .compiled import harmonic_law
 from .contact import hertz_stiffness
 from .dynamics import simulate
 from .kinematics import rest_geometry
@@ -89,6 +103,8 @@ DAMPING_LENGTH_UNIT_M = 1e-3
 """Length unit in which ``c_max = fraction * K`` is read (ADAMS's mm; see the module)."""
 
 METHODS = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA}
+KERNELS = ("numba", "numpy")
+"""Right-hand sides: compiled (:mod:`penalty_kernels`) or the NumPy array model."""
 
 _RTOL = 1e-10
 _TAU_S = 1e-3
@@ -108,6 +124,9 @@ class PenaltyResult:
     success, -1 on failure (then ``message`` says why and samples after the failure
     are NaN). ``nfev`` counts right-hand-side evaluations (a vectorized Jacobian call
     counts as one), ``njev`` Jacobians, ``nlu`` LU factorizations, ``nsteps`` steps.
+    ``kernel``: ``numba`` (compiled right-hand side and Jacobian) or ``numpy``;
+    ``rhs_s`` and ``jacobian_s``: wall time spent in them (the rest of ``wall_s`` is the
+    integrator's own work and the set-up).
     """
 
     scene: Scene
@@ -123,6 +142,9 @@ class PenaltyResult:
     method: str
     status: int
     message: str
+    kernel: str = "numpy"
+    rhs_s: float = 0.0
+    jacobian_s: float = 0.0
 
     @property
     def success(self) -> bool:
@@ -282,6 +304,20 @@ class _Model:
         inner = c.b < nb
         self.links[c.a[inner], c.b[inner]] = self.links[c.b[inner], c.a[inner]] = True
         self.jacobian_columns = self._colour()
+        self.kernel_args = self._packed(scene)
+
+    def _packed(self, scene: Scene) -> tuple:
+        """The model as the compiled kernels take it (:mod:`penalty_kernels`)."""
+        c, law = self.c, harmonic_law
+        return (
+            self.n_shafts,
+            np.column_stack([self.mass, self.inertia, self.rest_centre]),
+            np.column_stack([c.a, c.b, c.radial]).astype(np.int64),
+            np.column_stack([c.s, c.e, c.j, c.u]),
+            np.column_stack([c.offset, c.stiffness, c.exponent, c.c_max]).astype(float),
+            np.array([*self.gravity, *law(scene.input_torque), *law(scene.load_torque),
+                      self.d_max], float),
+        )
 
     def _contact_map(self) -> tuple[sparse.csr_matrix, np.ndarray]:
         """The sparse linear map (and constant) from the bodies' :data:`_FEATURES` to,
@@ -439,20 +475,33 @@ class _Model:
         return 13 * colour[body_of] + local, self.links[body_of][:, body_of]
 
     def tolerances(self, atol_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """Absolute tolerances and finite-difference steps per state component:
+        """Absolute tolerances and the Jacobian's complex steps per state component:
         ``atol_m`` on displacements and quaternions, ``atol_m / 1 ms`` on speeds.
         """
         nb = self.n_bodies
         atol = np.concatenate([np.full(7 * nb, atol_m), np.full(6 * nb, atol_m / _TAU_S)])
-        return atol, 0.1 * atol
+        return atol, kernels.COMPLEX_STEP * atol / atol_m
 
     def jacobian(self, t: float, y: np.ndarray, step: np.ndarray) -> np.ndarray:
-        """Forward-difference Jacobian, all coloured groups in one vectorized call."""
+        """Complex-step Jacobian (``step``: imaginary step per state), all coloured groups
+        in one vectorized call: exact to round-off, as :func:`penalty_kernels.jacobian`.
+        """
         column, sparsity = self.jacobian_columns
         shifts = np.zeros((self.n_state, column.max() + 1))
         shifts[np.arange(self.n_state), column] = step
-        f = self.rhs(t, np.column_stack([y, y[:, None] + shifts]))
-        return np.where(sparsity, (f[:, 1:] - f[:, :1])[:, column] / step, 0.0)
+        f = self.rhs(t, y[:, None] + 1j * shifts)
+        return np.where(sparsity, f.imag[:, column] / step, 0.0)
+
+    # ------------------------------------------------------------------ compiled
+
+    def rhs_compiled(self, t: float, y: np.ndarray) -> np.ndarray:
+        """:meth:`rhs` at one state by the compiled kernel."""
+        self.n_calls += 1
+        return kernels.rhs(t, y, *self.kernel_args)
+
+    def jacobian_compiled(self, t: float, y: np.ndarray) -> np.ndarray:
+        """:meth:`jacobian` by the compiled kernel (exact, by the chain rule)."""
+        return kernels.jacobian(t, y, *self.kernel_args)
 
 
 def simulate_penalty(
@@ -464,6 +513,7 @@ def simulate_penalty(
     atol_m: float = 1e-8,
     progress_every_s: float = 0.1,
     damping_length_unit_m: float = DAMPING_LENGTH_UNIT_M,
+    kernel: str = "auto",
 ) -> PenaltyResult:
     """Integrate the released drive line from the scene's start to ``max(times)`` and
     sample it at ``times`` (s).
@@ -474,7 +524,9 @@ def simulate_penalty(
     tolerance on positions (m; velocities get ``atol_m / 1 ms``): 1e-7 and 1e-8 give the
     same statistics of forces and speeds on ``paper-penalty``. ``damping_length_unit_m``:
     the unit of "c_max = 1 % of K" (module docstring). ``progress(t)`` is called every
-    ``progress_every_s`` of simulated time. A failed integration returns
+    ``progress_every_s`` of simulated time. ``kernel``: ``numba`` (compiled, see
+    :mod:`~cardan_forces.driveline.penalty_kernels`), ``numpy`` (the array model, no
+    compiler needed) or ``auto`` (numba where installed). A failed integration returns
     ``status = -1`` and its message; it raises only for bad arguments.
     """
     if not scene.has("penalty_dynamics"):
@@ -490,53 +542,142 @@ def simulate_penalty(
             "every joint as a cross-pin)")
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
+    if kernel == "auto":
+        kernel = "numba" if kernels.HAVE_NUMBA else "numpy"
+    if kernel not in KERNELS or (kernel == "numba" and not kernels.HAVE_NUMBA):
+        raise ValueError(f"kernel {kernel!r} not available; available: "
+                         f"{', '.join(k for k in KERNELS if k != 'numba' or kernels.HAVE_NUMBA)}")
     t = np.atleast_1d(np.asarray(times, float))
     t0 = scene.time.start_s
     if np.any(t < t0):
         raise ValueError(f"instants before the scene's start {t0} s")
-    start = _time.perf_counter()
+    start, clock = _time.perf_counter(), {"rhs": 0.0, "jacobian": 0.0}
     model = _Model(scene, damping_length_unit_m)
     y0 = model.initial_state(t0)
     atol, step = model.tolerances(atol_m)
-    order = np.argsort(t)
     states = np.full((len(t), model.n_state), np.nan)
     states[t == t0] = y0
-    status, message, solver, n_steps = 0, "no motion asked for", None, 0
-    t_end = float(t.max())
-    if t_end > t0:
-        solver = METHODS[method](
-            lambda time, y: model.rhs(time, y[:, None])[:, 0], t0, y0, t_end,
-            rtol=_RTOL, atol=atol, jac=lambda time, y: model.jacobian(time, y, step),
-        )
-        mark, i = t0 + progress_every_s, int(np.searchsorted(t[order], t0, side="right"))
-        try:
-            while solver.status == "running":
-                message = solver.step()
-                n_steps += 1
-                if solver.status == "failed":
-                    break
-                if not np.all(np.isfinite(solver.y)):
-                    solver.status, message = "failed", f"non-finite state at t = {solver.t} s"
-                    break
-                stop = int(np.searchsorted(t[order], solver.t, side="right"))
-                if stop > i:
-                    states[order[i:stop]] = solver.dense_output()(t[order[i:stop]]).T
-                    i = stop
-                while progress is not None and solver.t >= mark - 1e-12:
-                    progress(mark)
-                    mark += progress_every_s
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError) as err:
-            solver.status, message = "failed", f"{type(err).__name__}: {err}"
-        status = 0 if solver.status == "finished" else -1
-        message = message or ("finished" if status == 0 else "failed")
+    status, message, counts = 0, "no motion asked for", (0, 0, 0)
+    if t.max() > t0:
+        if kernel == "numba":  # load (or compile) the kernels before the clocks start
+            kernels.rhs(t0, y0, *model.kernel_args)
+            model.jacobian_compiled(t0, y0)
+        fun, jac = _timed(model, kernel, step, clock)
+        marks = _Marks(progress, t0, float(t.max()), progress_every_s)
+        integrate = _odeint if method == "LSODA" else _stepped
+        status, message, counts = integrate(METHODS[method], fun, jac, t0, y0, t, atol, states,
+                                            marks)
     forces, omega, depth = _sample(model, states)
     return PenaltyResult(
         scene=scene, t=t, omega=omega, forces=forces, penetration=depth,
-        wall_s=_time.perf_counter() - start,
-        nfev=model.n_calls, njev=int(solver.njev) if solver else 0,
-        nlu=int(solver.nlu) if solver else 0, nsteps=n_steps, method=method, status=status,
-        message=message,
+        wall_s=_time.perf_counter() - start, nfev=model.n_calls, njev=counts[1],
+        nlu=counts[2], nsteps=counts[0], method=method, status=status, message=message,
+        kernel=kernel, rhs_s=clock["rhs"], jacobian_s=clock["jacobian"],
     )
+
+
+class _Marks:
+    """Calls ``progress(mark)`` once the integration has reached each mark, every
+    ``every`` seconds of simulated time up to ``end``.
+    """
+
+    def __init__(self, progress, t0: float, end: float, every: float):
+        self.progress, self.end, self.every = progress, end, every
+        self.next = t0 + every
+
+    def reached(self, time: float) -> None:
+        while self.progress is not None and time >= self.next - 1e-12 \
+                and self.next <= self.end + 1e-12:
+            self.progress(self.next)
+            self.next += self.every
+
+
+_FAILURES = (ArithmeticError, ValueError, np.linalg.LinAlgError)
+
+
+def _odeint(_, fun, jac, t0, y0, t, atol, states, marks: _Marks):
+    """LSODA through ``odeint``, whose stepping loop is Fortran (SciPy's ``LSODA`` class
+    is the same ODEPACK code stepped from Python, ~8 us more a step); ``states`` rows
+    are filled at the instants ``t``. Returns status, message and (steps, Jacobians,
+    LU factorizations: one with each Jacobian in LSODA).
+    """
+    order = np.argsort(t)
+    later = order[t[order] > t0]
+    grid = np.concatenate([[t0], t[later]])
+
+    def watched(time, y):
+        marks.reached(time)
+        return fun(time, y)
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ODEintWarning)
+            ys, info = odeint(watched, y0, grid, Dfun=jac, tfirst=True, rtol=_RTOL, atol=atol,
+                              full_output=True, mxstep=2**31 - 1)
+    except _FAILURES as err:
+        return -1, f"{type(err).__name__}: {err}", (0, 0, 0)
+    ok = info["message"] == "Integration successful."
+    reached = np.r_[True, info["tcur"] >= grid[1:] - 1e-12 * max(abs(grid[-1]), 1.0)]
+    valid = np.cumprod(reached & np.all(np.isfinite(ys), axis=1)).astype(bool)
+    states[later] = np.where(valid[1:, None], ys[1:], np.nan)
+    steps = int(info["nst"][-1]) if len(info["nst"]) else 0
+    jacobians = int(info["nje"][-1]) if len(info["nje"]) else 0
+    return (0 if ok and valid.all() else -1, "finished" if ok else str(info["message"]),
+            (steps, jacobians, jacobians))
+
+
+def _stepped(solver_class, fun, jac, t0, y0, t, atol, states, marks: _Marks):
+    """SciPy's ``OdeSolver`` (``BDF``, ``Radau``) stepped here, as ``solve_ivp`` does;
+    ``states`` rows are filled at the instants ``t`` from its dense output.
+    """
+    solver = solver_class(fun, t0, y0, float(t.max()), rtol=_RTOL, atol=atol, jac=jac)
+    order, n_steps, message = np.argsort(t), 0, None
+    i = int(np.searchsorted(t[order], t0, side="right"))
+    try:
+        while solver.status == "running":
+            message = solver.step()
+            n_steps += 1
+            if solver.status == "failed":
+                break
+            if not np.all(np.isfinite(solver.y)):
+                solver.status, message = "failed", f"non-finite state at t = {solver.t} s"
+                break
+            stop = int(np.searchsorted(t[order], solver.t, side="right"))
+            if stop > i:
+                states[order[i:stop]] = solver.dense_output()(t[order[i:stop]]).T
+                i = stop
+            marks.reached(solver.t)
+    except _FAILURES as err:
+        solver.status, message = "failed", f"{type(err).__name__}: {err}"
+    status = 0 if solver.status == "finished" else -1
+    return (status, message or ("finished" if status == 0 else "failed"),
+            (n_steps, int(solver.njev), int(solver.nlu)))
+
+
+def _timed(model: _Model, kernel: str, step: np.ndarray, clock: dict):
+    """The right-hand side and Jacobian of ``kernel`` for the integrator, adding the wall
+    time spent in each to ``clock``.
+    """
+    if kernel == "numba":
+        rhs, jacobian = model.rhs_compiled, model.jacobian_compiled
+    else:
+        rhs = lambda time, y: model.rhs(time, y[:, None])[:, 0]  # noqa: E731
+        jacobian = lambda time, y: model.jacobian(time, y, step)  # noqa: E731
+    tick = _time.perf_counter
+
+    def fun(time, y):
+        begin = tick()
+        out = rhs(time, y)
+        clock["rhs"] += tick() - begin
+        return out
+
+    def jac(time, y):
+        begin = tick()
+        out = jacobian(time, y)
+        clock["jacobian"] += tick() - begin
+        return out
+
+    return fun, jac
 
 
 def _sample(model: _Model, states: np.ndarray):

@@ -3,6 +3,14 @@
 Each ``figNN`` function writes ``figNN.csv`` (first column ``t`` in s, the others named
 by quantity and, where several methods are compared, by method) and ``figNN.png``
 into a folder, and returns the CSV's path. The PNG is always redrawn from the CSV.
+
+How they are drawn: the rigid-model methods first and on top, and the y axis fitted to
+them with a margin, since their differences of tens of newtons are what the figures
+compare; the penalty simulation as a light raw line (its impact peaks clipped, the
+ranges of raw and average written in the panel where they leave it) under its moving average over :data:`SMOOTH_S` (column
+``..._penalty_avg``). The rigid
+solution set is shaded only where it is bounded on both sides; where it is not, the
+panel says so (and draws a finite bound as a dashed line).
 """
 
 from __future__ import annotations
@@ -14,8 +22,23 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from scipy.ndimage import uniform_filter1d  # noqa: E402
 
 from cardan_forces.driveline.dynamics import Motion  # noqa: E402
+
+SMOOTH_S = 0.1
+"""Moving-average window (s) for the penalty simulation: the released line rattles in
+its clearances, the rigid model does not."""
+PENALTY = "penalty"
+"""The method name of the penalty-contact simulation in histories and columns."""
+
+
+def moving_average(values: np.ndarray, t: np.ndarray, window_s: float = SMOOTH_S) -> np.ndarray:
+    """Centred moving average over ``window_s`` along the first axis (instants ``t``; an
+    odd number of them, so the window is centred).
+    """
+    size = 2 * int(round(0.5 * window_s / np.median(np.diff(t)))) + 1 if len(t) > 1 else 1
+    return uniform_filter1d(np.asarray(values, float), size=size, axis=0, mode="nearest")
 
 
 def write_csv(path: Path, columns: dict[str, np.ndarray]) -> Path:
@@ -32,6 +55,16 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     return {name: data[name] for name in data.dtype.names}
 
 
+def _with_average(columns: dict[str, np.ndarray], t: np.ndarray) -> dict[str, np.ndarray]:
+    """Add ``<name>_avg`` (moving average) after every ``..._penalty`` column."""
+    out = {}
+    for name, values in columns.items():
+        out[name] = values
+        if name.endswith(f"_{PENALTY}"):
+            out[f"{name}_avg"] = moving_average(values, t)
+    return out
+
+
 def fig11(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None) -> Path:
     """Fig. 11: angular velocities of the input and output shafts (rad/s); with
     ``penalty_omega`` (shafts, T) the penalty simulation's beside the rigid model's.
@@ -40,17 +73,11 @@ def fig11(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None) ->
     if penalty_omega is not None:
         columns |= {"omega_input_penalty": penalty_omega[0],
                     "omega_output_penalty": penalty_omega[-1]}
-    csv = write_csv(Path(out) / "fig11.csv", columns)
-    _plot_grid(
-        csv,
-        [(f"({p}) {name} shaft", [(c, label) for c, label in
-                                  ((f"omega_{name}", "rigid model"),
-                                   (f"omega_{name}_penalty", "penalty")) if c in columns])
-         for p, name in (("a", "input"), ("b", "output"))],
-        "angular velocity [rad/s]",
-        f"Fig. 11: input and output angular velocity ({motion.scene.name})",
-        ncols=1,
-    )
+    csv = write_csv(Path(out) / "fig11.csv", _with_average(columns, motion.t))
+    _plot_grid(csv, [(f"({p}) {name} shaft", f"omega_{name}", {"": "rigid model"})
+                     for p, name in (("a", "input"), ("b", "output"))],
+               "angular velocity [rad/s]",
+               f"Fig. 11: input and output angular velocity ({motion.scene.name})", ncols=1)
     return csv
 
 
@@ -59,16 +86,10 @@ def fig12(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None) ->
     columns = {"t": motion.t, "omega_intermediate": motion.omega[1]}
     if penalty_omega is not None:
         columns["omega_intermediate_penalty"] = penalty_omega[1]
-    csv = write_csv(Path(out) / "fig12.csv", columns)
-    _plot_grid(
-        csv,
-        [("intermediate shaft", [(c, label) for c, label in
-                                 (("omega_intermediate", "rigid model"),
-                                  ("omega_intermediate_penalty", "penalty")) if c in columns])],
-        "angular velocity [rad/s]",
-        f"Fig. 12: intermediate shaft angular velocity ({motion.scene.name})",
-        ncols=1,
-    )
+    csv = write_csv(Path(out) / "fig12.csv", _with_average(columns, motion.t))
+    _plot_grid(csv, [("intermediate shaft", "omega_intermediate", {"": "rigid model"})],
+               "angular velocity [rad/s]",
+               f"Fig. 12: intermediate shaft angular velocity ({motion.scene.name})", ncols=1)
     return csv
 
 
@@ -107,11 +128,12 @@ def fig13(t: np.ndarray, names: tuple[str, ...], histories: dict[str, np.ndarray
     for method, forces in histories.items():
         for label, values in joint_magnitudes(names, forces).items():
             columns[f"{label}_{method}"] = values
-    csv = write_csv(Path(out) / "fig13.csv", columns)
+    csv = write_csv(Path(out) / "fig13.csv", _with_average(columns, t))
     titles = {1: "radial", 2: "radial", 3: "axial", 4: "axial", 5: "radial", 6: "radial",
               7: "axial", 8: "axial"}
-    panels = [(f"({'abcdefgh'[k - 1]}) {titles[k]} contact force F{k}",
-               [(f"F{k}_{m}", m) for m in histories]) for k in range(1, 9)]
+    rigid = {m: m for m in histories if m != PENALTY}
+    panels = [(f"({'abcdefgh'[k - 1]}) {titles[k]} contact force F{k}", f"F{k}", rigid)
+              for k in range(1, 9)]
     _plot_grid(csv, panels, "force [N]",
                f"Fig. 13: contact forces of joint 1 on its cross-pin ({scene_name})", ncols=2)
     return csv
@@ -122,7 +144,7 @@ def fig14(t: np.ndarray, names: tuple[str, ...], histories: dict[str, np.ndarray
           number: int = 14) -> Path:
     """Fig. 14 (15 with horizontal gravity): the input shaft's bearing loads per method,
     with the rigid solution set's interval (``bounds``: quantity -> (low, high), NaN where
-    not computed, inf where unbounded) shaded.
+    not computed, inf where unbounded).
     """
     columns = {"t": t}
     for method, forces in histories.items():
@@ -130,50 +152,123 @@ def fig14(t: np.ndarray, names: tuple[str, ...], histories: dict[str, np.ndarray
             columns[f"{q}_{method}"] = values
     for q, (low, high) in bounds.items():
         columns[f"{q}_set_min"], columns[f"{q}_set_max"] = low, high
-    csv = write_csv(Path(out) / f"fig{number}.csv", columns)
+    csv = write_csv(Path(out) / f"fig{number}.csv", _with_average(columns, t))
     labels = {"far_radial": "(a) left (far) bearing, radial",
               "near_radial": "(b) right (near) bearing, radial",
               "axial": "(c) axial (sum of both bearings)"}
-    panels = [(labels[q], [(f"{q}_{m}", m) for m in histories]) for q in labels]
-    _plot_grid(csv, panels, "force [N]",
-               f"Fig. {number}: input shaft bearing loads ({scene_name})", ncols=1,
-               shade={labels[q]: q for q in labels})
+    rigid = {m: m for m in histories if m != PENALTY}
+    _plot_grid(csv, [(labels[q], q, rigid) for q in labels], "force [N]",
+               f"Fig. {number}: input shaft bearing loads ({scene_name})", ncols=1, sets=True)
     return csv
 
 
 def _plot_grid(csv: Path, panels, ylabel: str, title: str, ncols: int,
-               shade: dict[str, str] | None = None) -> Path:
-    """Panels of lines from the CSV; ``shade`` maps a panel title to the quantity whose
-    ``_set_min``/``_set_max`` columns are drawn as the solution set (clipped to the
-    drawn lines' range, hatched where unbounded).
+               sets: bool = False) -> Path:
+    """Panels from the CSV. A panel is ``(title, quantity, {suffix: label})``: the rigid
+    columns ``quantity`` + suffix (``_method``, or none), then the penalty's
+    ``quantity_penalty`` (raw, light) and ``quantity_penalty_avg`` where present; with
+    ``sets``, the ``quantity_set_min/max`` columns as the rigid solution set.
     """
     cols = read_csv(csv)
     nrows = -(-len(panels) // ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(6.5 * ncols, 2.6 * nrows), squeeze=False)
-    for ax, (panel_title, lines) in zip(axes.ravel(), panels):
-        for column, label in lines:
-            ax.plot(cols["t"], cols[column], label=label, lw=1.0)
-        if shade and panel_title in shade:
-            q = shade[panel_title]
-            low, high = cols[f"{q}_set_min"], cols[f"{q}_set_max"]
-            ok = np.isfinite(low) | np.isfinite(high) | np.isinf(low) | np.isinf(high)
-            ok &= ~(np.isnan(low) | np.isnan(high))
-            y0, y1 = ax.get_ylim()
-            ax.fill_between(cols["t"][ok], np.clip(low[ok], y0, y1), np.clip(high[ok], y0, y1),
-                            color="grey", alpha=0.25, lw=0, label="rigid solution set")
-            if np.any(np.isinf(high[ok])):
-                ax.text(0.01, 0.92, "set unbounded above", transform=ax.transAxes, fontsize=7)
-            ax.set_ylim(y0, y1)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(6.5 * ncols, 2.5 * nrows + 0.6),
+                             squeeze=False)
+    handles: dict[str, object] = {}
+    for ax, (panel_title, quantity, rigid) in zip(axes.ravel(), panels):
+        t = cols["t"]
+        rigid_values = []
+        for k, (suffix, label) in enumerate(rigid.items()):
+            values = cols[f"{quantity}_{suffix}" if suffix else quantity]
+            rigid_values.append(values)
+            handles[label], = ax.plot(t, values, lw=1.3, color=f"C{k}", zorder=4,
+                                      ls=("-", "--", "-.", ":")[k % 4], label=label)
+        raw, avg = cols.get(f"{quantity}_{PENALTY}"), cols.get(f"{quantity}_{PENALTY}_avg")
+        low, high = _limits(rigid_values)
+        if raw is not None:
+            handles["penalty (raw)"], = ax.plot(t, raw, lw=0.5, color="0.45", alpha=0.45,
+                                                zorder=1, label="penalty (raw)")
+            handles[f"penalty ({SMOOTH_S:g} s average)"], = ax.plot(
+                t, avg, lw=2.2, color="C4", zorder=3, label=f"penalty ({SMOOTH_S:g} s average)")
+            _note_clipped(ax, {"raw": raw, "average": avg}, low, high)
+        if sets:
+            handles.update(_draw_set(ax, t, cols[f"{quantity}_set_min"],
+                                     cols[f"{quantity}_set_max"], low, high))
+        ax.set_ylim(low, high)
         ax.set_title(panel_title, fontsize=9)
         ax.set_xlabel("time t [s]")
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6, ncol=3)
     for ax in axes.ravel()[len(panels):]:
         ax.axis("off")
     fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
+    fig.legend(list(handles.values()), list(handles), loc="lower center",
+               ncol=min(len(handles), 4), fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0, 0.07 if len(handles) > 4 else 0.045, 1, 1))
     png = csv.with_suffix(".png")
     fig.savefig(png, dpi=110)
     plt.close(fig)
     return png
+
+
+def _limits(curves: list[np.ndarray]) -> tuple[float, float]:
+    """The y range of ``curves`` with a margin of 15 % of the range (at least 5 % of the
+    largest magnitude, so a flat line is not drawn as noise).
+    """
+    finite = np.concatenate([c[np.isfinite(c)] for c in curves] or [np.zeros(1)])
+    finite = finite if finite.size else np.zeros(1)
+    lo, hi = float(finite.min()), float(finite.max())
+    margin = max(0.15 * (hi - lo), 0.05 * max(abs(lo), abs(hi)), 1e-9)
+    return lo - margin, hi + margin
+
+
+def _note_clipped(ax, curves: dict[str, np.ndarray], low: float, high: float) -> None:
+    """Write in the panel how far the penalty curves leave the drawn range."""
+    notes = []
+    for name, values in curves.items():
+        ok = np.isfinite(values)
+        if ok.any() and (values[ok].max() > high or values[ok].min() < low):
+            lo, hi = values[ok].min(), values[ok].max()
+            tiny = 1e-9 * max(abs(lo), abs(hi))  # round-off about zero prints as 0
+            notes.append(f"{name} {lo if abs(lo) > tiny else 0.0:.4g} to {hi:.4g}")
+    if notes:
+        ax.text(0.995, 0.04, "penalty clipped: " + "; ".join(notes), transform=ax.transAxes,
+                fontsize=7, ha="right", color="0.3",
+                bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="none", alpha=0.8))
+
+
+def _draw_set(ax, t, set_min, set_max, low, high) -> dict:
+    """Shade the rigid solution set where it is bounded on both sides; write where it is
+    unbounded, drawing a finite bound as a dashed line. Returns legend handles.
+    """
+    checked = ~(np.isnan(set_min) | np.isnan(set_max))
+    if not checked.any():
+        return {}
+    lo, hi, tc = set_min[checked], set_max[checked], t[checked]
+    bounded = np.isfinite(lo) & np.isfinite(hi)
+    handles = {}
+    if bounded.any():
+        handles["rigid solution set"] = ax.fill_between(
+            tc, np.clip(np.where(bounded, lo, np.nan), low, high),
+            np.clip(np.where(bounded, hi, np.nan), low, high), color="0.6", alpha=0.3, lw=0,
+            zorder=0)
+    notes = []
+    for bound, finite, word in ((lo, np.isfinite(lo) & ~bounded, "below"),
+                                (hi, np.isfinite(hi) & ~bounded, "above")):
+        if not finite.any():
+            continue
+        notes.append(f"{'lower' if word == 'below' else 'upper'} bound "
+                     f"{bound[finite].min():.3g} to {bound[finite].max():.3g} N")
+        inside = finite & (bound >= low) & (bound <= high)
+        if inside.any():
+            notes[-1] += " (dashed)"
+            handles["finite bound of the rigid set"], = ax.plot(
+                tc, np.where(inside, bound, np.nan), ls="--", lw=1.0, color="0.35", zorder=2)
+    above, below = np.mean(~np.isfinite(hi)), np.mean(~np.isfinite(lo))
+    if above or below:
+        side = ("above and below" if above and below else "above" if above else "below")
+        text = (f"rigid set unbounded {side} at {100 * max(above, below):.0f} % of "
+                f"{checked.sum()} instants" + "".join(f"; {n}" for n in notes))
+        ax.text(0.005, 0.96, text, transform=ax.transAxes, fontsize=7.5, va="top",
+                color="0.25", bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.7",
+                                        alpha=0.85))
+    return handles

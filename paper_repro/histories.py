@@ -89,17 +89,20 @@ def released(scene: Scene) -> Scene:
         description=f"{scene.description}; joints released (penalty contacts)")
 
 
-def penalty_history(scene: Scene, names: tuple[str, ...], times,
-                    progress: Callable[[str], None] | None = None
-                    ) -> tuple[History, PenaltyResult]:
-    """The penalty simulation of ``released(scene)`` sampled at ``times`` as a History
-    in the operator's ``names`` (NaN after a failed integration), and its raw result.
-    """
+def run_penalty(scene: Scene, times, progress: Callable[[str], None] | None = None
+                ) -> PenaltyResult:
+    """The penalty simulation of ``released(scene)`` sampled at ``times``."""
     scene = released(scene)
     end = float(np.max(times))
     report = None if progress is None else (
         lambda t: progress(f"repro: penalty simulation of {scene.name} at {t:.2f} of {end:g} s"))
-    result = simulate_penalty(scene, times, report, progress_every_s=max(end / 10, 0.05))
+    return simulate_penalty(scene, times, report, progress_every_s=max(end / 10, 0.05))
+
+
+def penalty_history(result: PenaltyResult, names: tuple[str, ...]) -> History:
+    """A penalty simulation's forces as a History in the operator's ``names`` (NaN after
+    a failed integration).
+    """
     forces = np.column_stack([result.forces[n] for n in names])
     statuses = tuple("solved" if np.all(np.isfinite(row)) else "failed" for row in forces)
-    return History("penalty", f"scipy-{result.method}", forces, statuses, result.wall_s), result
+    return History("penalty", f"scipy-{result.method}", forces, statuses, result.wall_s)

@@ -5,6 +5,8 @@ import pytest
 from scipy.integrate import simpson
 
 from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline import dynamics
+from cardan_forces.driveline.compiled import HAVE_NUMBA
 from cardan_forces.driveline.dynamics import reduced_inertia, simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from tests.conftest import variant
@@ -57,3 +59,46 @@ def test_torque_ratio_across_each_joint_quasi_static(g1, g2):
         torque = op.A[i, rows][:, driven_side] @ x[driven_side] @ m.geometry.axes[1]
         assert torque == pytest.approx(m.input_torque[i] / m.kin.ratio[1][i], rel=1e-9)
         assert m.load_torque[i] == pytest.approx(m.input_torque[i] / m.kin.ratio[2][i])
+
+
+def _array_path(monkeypatch):
+    monkeypatch.setattr(dynamics, "HAVE_NUMBA", False)
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+@pytest.mark.parametrize("effects", [["inertia", "gravity"], ["inertia", "crosspin_inertia"]])
+def test_compiled_motion_equals_the_array_path(effects, monkeypatch):
+    """The compiled one-instant kinematics in the equation of motion gives the array
+    path's motion (vectorized kinematics at every stage) to 1e-10, with and without
+    cross-pin inertia, on a chain with unequal angles and a yoke phase.
+    """
+    joints = [dict(name=n, articulation_deg=g, yoke_phase_deg=p, hs_m=0.03, rs_m=0.005,
+                   rb_m=0.005, ht_m=0.02, hb_m=0.02, rt_m=0.006)
+              for n, g, p in (("uj1", 25.0, 0.0), ("uj2", 40.0, 15.0))]
+    scene = variant(effects=effects, joints=joints, time={"stop_s": 2.0})
+    t = np.linspace(0.0, 2.0, 101)
+    compiled = simulate(scene, t)
+    _array_path(monkeypatch)
+    array = simulate(scene, t)
+    for name in ("q", "qd", "qdd"):
+        a, b = getattr(compiled, name), getattr(array, name)
+        assert np.abs(a - b).max() <= 1e-10 * np.abs(b).max()
+
+
+@pytest.mark.skipif(not HAVE_NUMBA, reason="numba not installed")
+def test_a_chain_the_compiled_copy_gets_wrong_falls_back(paper, monkeypatch):
+    """If the compiled kinematics disagree with the array kinematics (a kind of joint it
+    does not know), the equation of motion uses the array path: same motion."""
+    t = np.linspace(0.0, 0.5, 11)
+    calls = []
+
+    def wrong(t, y, *args):
+        calls.append(t)
+        return np.array([y[1], 1.0])
+
+    monkeypatch.setattr(dynamics, "_compiled_rhs", wrong)
+    wrong_copy = simulate(paper, t)
+    assert len(calls) == 4  # the probe only
+    _array_path(monkeypatch)
+    array = simulate(paper, t)
+    assert np.allclose(wrong_copy.qd, array.qd, rtol=1e-12, atol=0.0)
