@@ -14,6 +14,8 @@ The small public API, in the order a study uses it::
     motion = cf.simulate(scene)             # the 1-DOF motion on the scene's time grid
     op = cf.build_operator(motion)          # A(t) x = b(t) over named contact forces
     det = cf.determinacy(op, 100)           # rank, null space, determinate components
+    modes = cf.named_modes(motion, 100)     # each null-space direction in words
+    advice = cf.advise(motion, 100)         # the smallest releases that make it unique
     problem = cf.build_formulation("positive", op, 100)
     record = cf.solve(problem, "clarabel")  # status and residuals computed here
 """
@@ -23,6 +25,7 @@ from __future__ import annotations
 from .driveline.determinacy import Determinacy, determinacy
 from .driveline.dynamics import Motion, simulate
 from .driveline.equilibrium import Operator, build_operator
+from .driveline.release import advise, named_modes
 from .driveline.scene import Scene, SceneError, load_scene
 from .formulations import FORMULATIONS
 from .solvers import Record, SolverNotFound, available, solve
@@ -49,11 +52,13 @@ __all__ = [
     "Scene",
     "SceneError",
     "SolverNotFound",
+    "advise",
     "available",
     "build_formulation",
     "build_operator",
     "determinacy",
     "load_scene",
+    "named_modes",
     "simulate",
     "solve",
 ]

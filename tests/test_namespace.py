@@ -39,4 +39,6 @@ def test_readme_python_example_runs(capsys):
     block = re.search(r"## From Python.*?```python\n(.*?)```", text, flags=re.S).group(1)
     exec(compile(block, "README.md", "exec"), {})
     lines = capsys.readouterr().out.splitlines()
-    assert lines == ["29 7", "solved True"]
+    assert lines[:2] == ["29 7", "4"]
+    assert lines[2].count("float:") == 2 and "slip:intermediate" in lines[2]
+    assert lines[3] == "solved True"
