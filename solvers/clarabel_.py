@@ -66,7 +66,7 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
                    iterations=int(sol.iterations),
                    message="" if status_name == "Solved" else f"Clarabel status {status_name}",
                    objective=sol.obj_val, setup_s=setup_done - start,
-                   solve_s=time.perf_counter() - setup_done)
+                   solve_s=time.perf_counter() - setup_done, duals=np.asarray(sol.z))
 
 
 def backends() -> list[Backend]:

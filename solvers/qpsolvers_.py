@@ -84,6 +84,27 @@ def bounds_as_rows(problem: QP) -> QP:
     return dataclasses.replace(problem, G=G, h=h, lb=None, ub=None)
 
 
+def conic_duals(problem: QP, sol) -> np.ndarray | None:
+    """qpsolvers' multipliers (``P z + q + A'y + G'z + z_box = 0``) in the rows of
+    ``problem.as_conic()``: equalities, ``G``, finite lower bounds, finite upper bounds
+    (a lower bound's multiplier is ``-z_box``, an upper bound's ``z_box``). ``None`` when
+    the solver reported some of them not.
+    """
+    parts = []
+    for rows, duals in ((problem.A, sol.y), (problem.G, sol.z)):
+        if rows is not None:
+            if duals is None or len(duals) != len(rows):
+                return None
+            parts.append(np.asarray(duals, float))
+    for bound, sign in ((problem.lb, -1.0), (problem.ub, 1.0)):
+        if bound is not None:
+            if sol.z_box is None:
+                return None
+            keep = np.isfinite(bound)
+            parts.append(np.maximum(sign * np.asarray(sol.z_box, float)[keep], 0.0))
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
 def _solve_with(solver: str):
     """The adapter function for one qpsolvers solver."""
 
@@ -118,7 +139,8 @@ def _solve_with(solver: str):
         z = sol.x
         objective = None if z is None else 0.5 * z @ P @ z + q @ z
         return Outcome(status, z, iterations=_iterations(extras), message=text,
-                       objective=objective, setup_s=setup_done - start + build, solve_s=solve_s)
+                       objective=objective, setup_s=setup_done - start + build, solve_s=solve_s,
+                       duals=conic_duals(problem, sol))
 
     return solve_qp
 

@@ -134,6 +134,7 @@ def solve(
     tol: float | None = None,
     initvals: np.ndarray | None = None,
     reference: np.ndarray | None = None,
+    optimal_value: float | None = None,
     **options,
 ) -> Record:
     """Solve ``problem`` with backend ``solver`` and return the package-judged record.
@@ -141,6 +142,8 @@ def solve(
     ``tol`` is translated by :mod:`cardan_forces.solvers.settings` (None: the solver's defaults);
     ``initvals`` is a start in the solver's variable (ignored where the backend cannot
     warm-start); ``reference`` is the force vector the record is compared with;
+    ``optimal_value`` the problem's optimal objective (for the objective gap of a
+    backend without duals);
     ``options`` go to the backend unchanged and override ``tol``. Solver failures of any
     kind (exceptions, NaN, iteration limits) come back as records; only an unknown
     backend (:class:`SolverNotFound`) or a problem class it cannot take
@@ -174,4 +177,5 @@ def solve(
     if notes:
         message = "; ".join(filter(None, [outcome.message, *notes]))
         outcome = dataclasses.replace(outcome, message=message)
-    return finalize(problem, solver, outcome, reference=reference, extra_setup_s=convert_s)
+    return finalize(problem, solver, outcome, reference=reference, extra_setup_s=convert_s,
+                    optimal_value=optimal_value)

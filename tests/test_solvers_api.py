@@ -27,7 +27,7 @@ from cardan_forces.solvers.reference_problems import references
 
 REFS = {ref.name: ref for ref in references()}
 JSON_KEYS = {"formulation", "solver", "status", "residuals", "forces", "setup_s", "solve_s",
-             "iterations", "message"}
+             "iterations", "message", "optimality", "duals", "gap_kind"}
 
 
 def _nan_ls():
