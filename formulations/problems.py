@@ -93,25 +93,47 @@ class ForceChecks:
         - ``cone``: largest cone violation, over ``||b||``
         """
         x = np.asarray(x, float)
-        if x.shape != (len(self.names),) or not np.all(np.isfinite(x)):
-            return {k: float("inf") for k in ("equilibrium", "sign", "complementarity", "cone")}
-        s = self.scale
-        xu = x[np.asarray(self.unilateral, bool)]
-        sign = max(0.0, float(-xu.min())) if xu.size else 0.0
-        comp = max((max(0.0, float(min(x[i], x[j]))) for i, j in self.pairs), default=0.0)
-        cone = max(
-            (
-                max(0.0, float(np.linalg.norm(x[list(c.members)]) - c.apex_row(len(x)) @ x))
-                for c in self.cones
-            ),
-            default=0.0,
-        )
-        return {
-            "equilibrium": float(np.linalg.norm(self.A @ x - self.b)) / s,
-            "sign": sign / s,
-            "complementarity": comp / s,
-            "cone": cone / s,
-        }
+        if x.shape != (len(self.names),):
+            return dict.fromkeys(RESIDUALS, float("inf"))
+        found = residuals_batch(self.A[None], self.b[None], x[None], self.unilateral,
+                                self.pairs, self.cones)
+        return {k: float(v[0]) for k, v in found.items()}
+
+
+RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
+"""The keys of :meth:`ForceChecks.residuals`."""
+
+
+def residuals_batch(A: np.ndarray, b: np.ndarray, X: np.ndarray, unilateral, pairs=(),
+                    cones=()) -> dict[str, np.ndarray]:
+    """:meth:`ForceChecks.residuals` of T answers at once (the one residual code of the
+    package): ``A`` (T, m, n) or (m, n), ``b`` (T, m), ``X`` (T, n); (T,) arrays, ``inf``
+    where an answer is not finite.
+    """
+    X = np.asarray(X, float)
+    T = len(X)
+    bad = ~np.all(np.isfinite(X), axis=1)
+    X = np.where(bad[:, None], 0.0, X)
+    scale = np.maximum(np.linalg.norm(b, axis=-1), 1e-12)
+    xu = X[:, np.asarray(unilateral, bool)]
+    sign = np.maximum(0.0, -xu.min(axis=1, initial=np.inf)) if xu.shape[1] else np.zeros(T)
+    pair = np.asarray(pairs, int).reshape(-1, 2)
+    comp = np.maximum(0.0, np.minimum(X[:, pair[:, 0]], X[:, pair[:, 1]])).max(
+        axis=1, initial=0.0)
+    cone = np.zeros(T)
+    for c in cones:
+        apex = X @ c.apex_row(X.shape[1])
+        cone = np.maximum(cone, np.linalg.norm(X[:, list(c.members)], axis=1) - apex)
+    AX = X @ A.T if np.ndim(A) == 2 else np.einsum("tmn,tn->tm", A, X)
+    out = {
+        "equilibrium": np.linalg.norm(AX - b, axis=1) / scale,
+        "sign": sign / scale,
+        "complementarity": comp / scale,
+        "cone": cone / scale,
+    }
+    for value in out.values():
+        value[bad] = np.inf
+    return out
 
 
 def _identity(z: np.ndarray) -> np.ndarray:

@@ -15,9 +15,12 @@ from cardan_forces.formulations.problems import Conic
 
 from . import settings
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"clarabel": None}
+
+TOLERANCES = ("tol_gap_abs", "tol_gap_rel", "tol_feas")
+"""Clarabel's settings a requested tolerance sets."""
 
 STATUS = {
     "Solved": "solved",
@@ -55,7 +58,7 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
     A = spa.csc_matrix(np.asarray(problem.A, float))
     opts = clarabel.DefaultSettings()
     opts.verbose = False
-    for key, value in (settings.options_for("clarabel", tol) | options).items():
+    for key, value in (settings.options_for(TOLERANCES, tol) | options).items():
         setattr(opts, key, value)
     solver = clarabel.DefaultSolver(P_upper, np.asarray(problem.q, float), A,
                                     np.asarray(problem.b, float), _cones(clarabel, problem), opts)
@@ -75,4 +78,5 @@ def backends() -> list[Backend]:
         import clarabel  # noqa: F401
     except ImportError:
         return []
-    return [Backend("clarabel", (Conic,), solve_conic, dist_version("clarabel"), None, "clarabel")]
+    return [Backend("clarabel", (Conic,), solve_conic, ("clarabel",), None, "clarabel",
+                    tolerances=TOLERANCES)]

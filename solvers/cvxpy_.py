@@ -17,7 +17,7 @@ from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 from . import settings
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 SOLVERS: dict[str, tuple[str, str, str | None]] = {
     "cvxpy-clarabel": ("CLARABEL", "clarabel", None),
@@ -28,6 +28,14 @@ SOLVERS: dict[str, tuple[str, str, str | None]] = {
 """Backend name -> (cvxpy solver name, settings key and distribution, pip extra)."""
 
 EXTRAS: dict[str, str | None] = {name: extra for name, (_, _, extra) in SOLVERS.items()}
+
+TOLERANCES: dict[str, tuple[str, ...]] = {
+    "clarabel": ("tol_gap_abs", "tol_gap_rel", "tol_feas"),
+    "ecos": ("abstol", "reltol", "feastol"),
+    "scs": ("eps_abs", "eps_rel"),
+    "osqp": ("eps_abs", "eps_rel"),
+}
+"""Each solver's own parameters a requested tolerance sets (cvxpy passes them on)."""
 
 STATUS = {
     "optimal": "solved",
@@ -112,7 +120,7 @@ def _solve_with(name: str):
             z.value = np.asarray(initvals, float)
         built = time.perf_counter()
         prob.solve(solver=cvx_name, warm_start=initvals is not None,
-                   **(settings.options_for(key, tol) | options))
+                   **(settings.options_for(TOLERANCES[key], tol) | options))
         wall = time.perf_counter() - built
         compile_s = prob.compilation_time or 0.0
         stats = prob.solver_stats
@@ -142,6 +150,6 @@ def backends() -> list[Backend]:
             continue
         accepts = (LS, QP) if key == "osqp" else (LS, QP, LP, Conic)
         limits = {"supports": _no_power_cone} if key == "ecos" else {}
-        found.append(Backend(name, accepts, _solve_with(name), dist_version("cvxpy", key),
-                             extra, "cvxpy", **limits))
+        found.append(Backend(name, accepts, _solve_with(name), ("cvxpy", key), extra, "cvxpy",
+                             tolerances=TOLERANCES[key], **limits))
     return found

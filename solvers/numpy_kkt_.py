@@ -17,7 +17,7 @@ import numpy as np
 from cardan_forces.formulations.problems import LS
 
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"numpy-kkt": None}
 
@@ -50,4 +50,4 @@ def solve_ls(problem: LS, tol: float | None = None, initvals=None,
 
 def backends() -> list[Backend]:
     """The SVD backend (NumPy is a core dependency, always present)."""
-    return [Backend("numpy-kkt", (LS,), solve_ls, dist_version("numpy"), None, "numpy")]
+    return [Backend("numpy-kkt", (LS,), solve_ls, ("numpy",), None, "numpy")]

@@ -82,14 +82,21 @@ def measures(P, q, A, b, cones, z, y) -> dict[str, np.ndarray]:
 
     ``objective`` is the primal objective ``1/2 z'Pz + q'z`` (for an objective gap).
     """
-    Pz = _Pz(P, z)
-    Aty = np.einsum("tmn,tm->tn", A, y)
-    stationarity = _inf(Pz + q + Aty) / np.maximum.reduce([_inf(Pz), _inf(q), _inf(Aty),
-                                                           np.full(len(z), TINY)])
-    cone = dual_cone_violation(cones, y) / np.maximum(_inf(y), TINY)
+    return combine(_Pz(P, z), q, np.einsum("tmn,tm->tn", A, y), np.einsum("tm,tm->t", b, y),
+                   z, y, dual_cone_violation(cones, y))
+
+
+def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
+    """The measures from their parts (``P z``, ``q``, ``A'y``, ``b'y``, the dual-cone
+    violation), for a backend whose problem form gives them more cheaply than
+    :func:`measures`' dense products.
+    """
+    floor = np.full(len(z), TINY)
+    stationarity = _inf(Pz + q + Aty) / np.maximum.reduce([_inf(Pz), _inf(q), _inf(Aty), floor])
+    cone = cone_violation / np.maximum(_inf(y), TINY)
     quad = np.einsum("ti,ti->t", z, Pz)
     primal = 0.5 * quad + np.einsum("ti,ti->t", q, z)
-    dual_obj = -0.5 * quad - np.einsum("ti,ti->t", b, y)
+    dual_obj = -0.5 * quad - bty
     gap = np.abs(primal - dual_obj) / np.maximum(np.maximum(np.abs(primal), np.abs(dual_obj)),
                                                  TINY)
     bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))

@@ -1,9 +1,10 @@
-"""Least-norm formulations solved for all instants at once (vectorized NumPy).
+"""Backend ``numpy-batched``: the least-norm family for all instants at once (NumPy).
 
 ``min_norm``, ``min_norm_scaled``, ``positive``, ``lcp`` and ``compliance`` (linear law,
 no gaps) all pick the point of ``A x = b`` that is least in a diagonal norm
-``1/2 x'Wx``; the last three also keep the end faces ``x_u >= 0``. With ``y = W^{1/2} x``
-and ``B = A W^{-1/2}`` (T instants stacked):
+``1/2 x'Wx`` (:class:`~cardan_forces.formulations.batch.LeastNormBatch`); the last three
+also keep the end faces ``x_u >= 0``. With ``y = W^{1/2} x`` and ``B = A W^{-1/2}``
+(T instants stacked):
 
 - least norm: ``y0 = B' mu`` with ``K mu = b``, ``K = B B' + delta I``. The rows of ``A``
   are dependent along the motion (rank 29 of 30), so ``K`` is singular; ``delta =
@@ -14,27 +15,30 @@ and ``B = A W^{-1/2}`` (T instants stacked):
   block elimination with one batched 6 x 6 inverse per body (:func:`chain_solve`).
 - end faces >= 0: with ``U = B[:, u]`` the KKT conditions reduce to the LCP of the
   formulation ``lcp``, ``0 <= lam ⟂ w = M lam + q >= 0`` with ``M = I - U' K^+ U``
-  (``= N_u N_u'`` for any orthonormal null basis ``N``) and ``q = y0_u``, here built
-  from the same factorization (right-hand sides ``[b, U]``) without a null basis. It is
-  solved for all instants at once by a primal-dual active-set method (semismooth
+  and ``q = y0_u``, built from the same factorization (right-hand sides ``[b, U]``).
+  It is solved for all instants at once by a primal-dual active-set method (semismooth
   Newton on ``min(lam, w) = 0``), started from the faces that pull in ``y0``; an
   instant whose active set has not settled after ``max_iter`` steps is solved by the
-  package's Lemke method. Then ``y = y0 + E_u lam - B' K^+ U lam``.
+  package's Lemke method. Then ``y = B'(K^-1 (b - U lam)) + E_u lam``.
 
-Every answer is judged by :func:`residuals`, the vectorized ``ForceChecks.residuals``.
+The multipliers come out of the same solve: ``W x = A' mu + E_u nu`` with
+``mu = K^-1 (b - U lam)`` and ``nu_u = sqrt(w_u) lam``, so every record has the solver's
+duals. A direct method: ``tol`` is ignored.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
-from cardan_forces.driveline.equilibrium import Operator
-from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.formulations.problems import QP
-from cardan_forces.solvers.lcp_ import lemke
+from cardan_forces.formulations.batch import LeastNormBatch
+
+from .batch import BatchOutcome
+from .lcp_ import lemke
+from .registry import Backend
+
+EXTRAS: dict[str, str | None] = {"numpy-batched": None}
 
 GRAM_RTOL = 1e-15
 """Regularization of the Gram matrix, relative to its mean diagonal."""
@@ -46,65 +50,26 @@ LCP_DELTA = 1e-14
 """Regularization of the active block of ``M`` (singular when more faces are pinned
 than the null space has directions)."""
 
-BATCHED = ("min_norm", "min_norm_scaled", "positive", "lcp", "compliance")
-"""Formulations with a batched path (``compliance`` only where it is a QP)."""
+MAX_ITER = 30
+"""Active-set steps before an instant falls back to Lemke."""
 
 
-@dataclass(frozen=True)
-class Batch:
-    """Forces ``x`` (T, n) of one formulation over the instants, with its own checks.
-
-    ``residuals`` holds (T,) arrays of ``ForceChecks.residuals``' keys; ``iterations``
-    the active-set steps per instant (0 without end faces); ``fallback`` marks instants
-    solved by Lemke; ``stages`` the wall time (s) of each stage.
-    """
-
-    formulation: str
-    instants: np.ndarray
-    x: np.ndarray
-    residuals: dict[str, np.ndarray]
-    iterations: np.ndarray
-    fallback: np.ndarray
-    stages: dict[str, float]
-
-
-def supports(op: Operator, formulation: str) -> bool:
-    """Whether ``formulation`` has a batched path on ``op``."""
-    if formulation not in BATCHED:
-        return False
-    try:
-        chain(op.A[0])
-    except ValueError:
-        return False
-    return _batchable(formulation, FORMULATIONS[formulation](op, 0))
-
-
-def _batchable(formulation: str, problem) -> bool:
-    """``compliance`` only as a QP with a diagonal ``P`` (no gaps, linear law)."""
-    if formulation != "compliance":
-        return formulation in BATCHED
-    return isinstance(problem, QP) and not np.any(problem.P - np.diag(np.diag(problem.P)))
-
-
-def weights(formulation: str, problem, A: np.ndarray) -> np.ndarray | None:
-    """Diagonal ``W`` of the norm (T, n) for the stacked ``A``; ``None`` for the plain norm.
-
-    ``min_norm_scaled``: squared column norms of ``A`` (its default reference length of
-    1 m leaves the moment rows as they are); ``compliance``: the QP's ``diag(P)``
-    (``problem`` at any instant: it depends on the scene only).
-    """
-    if formulation == "min_norm_scaled":
-        return np.einsum("tij,tij->tj", A, A)
-    if formulation == "compliance":
-        p = np.diag(problem.P)
-        return np.broadcast_to(p, (len(A), len(p)))
-    return None
+def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> BatchOutcome:
+    """The batch's least norm (with signs where it has them), forces and multipliers."""
+    x, mu, nu, iterations, fallback, stages = least_norm(batch.A, batch.b, batch.weights,
+                                                         batch.signed, max_iter)
+    duals = np.concatenate([-mu, nu[:, np.flatnonzero(batch.signed)]], axis=1)
+    T = len(x)
+    messages = tuple(np.where(fallback, "Lemke fallback", "")) if fallback.any() else ()
+    solve_s = sum(stages.values())
+    return BatchOutcome(np.full(T, "solved", object), x, duals, iterations, 0.0, solve_s,
+                        stages=stages, messages=messages)
 
 
 def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
-               unilateral: np.ndarray | None = None, max_iter: int = 30):
+               signed: np.ndarray | None = None, max_iter: int = MAX_ITER):
     """Least ``1/2 x'Wx`` on ``A x = b`` (stacked, ``A`` (T, m, n)), optionally with
-    ``x[unilateral] >= 0``: ``(x, iterations, fallback, stages)``.
+    ``x[signed] >= 0``: ``(x, mu, nu, iterations, fallback, stages)``.
     """
     stages = {}
     clock = time.perf_counter()
@@ -113,20 +78,27 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     B = A if root is None else A / root[:, None, :]
     K = B @ B.transpose(0, 2, 1)
     K[:, np.arange(m), np.arange(m)] += (GRAM_RTOL / m) * np.trace(K, axis1=1, axis2=2)[:, None]
-    u = np.flatnonzero(unilateral) if unilateral is not None else np.zeros(0, int)
+    u = np.flatnonzero(signed) if signed is not None else np.zeros(0, int)
     U = B[:, :, u]
     clock = _lap(stages, "gram", clock)
     Z = chain_solve(K, np.concatenate([b[:, :, None], U], axis=2), chain(A[0]))
-    y = (Z[:, None, :, 0] @ B)[:, 0]
+    mu = Z[:, :, 0]
     clock = _lap(stages, "factor+solve", clock)
     iterations, fallback = np.zeros(T, int), np.zeros(T, bool)
+    nu = np.zeros((T, n))
     if u.size:
         M = np.eye(len(u)) - U.transpose(0, 2, 1) @ Z[:, :, 1:]
-        lam, iterations, fallback = _active_set(M, y[:, u], max_iter)
-        y[:, u] += lam
-        y -= ((Z[:, :, 1:] @ lam[:, :, None]).transpose(0, 2, 1) @ B)[:, 0]
+        q = np.einsum("tmk,tm->tk", U, mu)
+        lam, iterations, fallback = _active_set(M, q, max_iter)
+        mu = mu - np.einsum("tmk,tk->tm", Z[:, :, 1:], lam)
+        nu[:, u] = lam
         clock = _lap(stages, "lcp", clock)
-    return (y if root is None else y / root), iterations, fallback, stages
+    y = np.einsum("tmn,tm->tn", B, mu) + nu
+    if root is not None:
+        nu *= root
+    x = y if root is None else y / root
+    _lap(stages, "forces", clock)
+    return x, mu, nu, iterations, fallback, stages
 
 
 def chain(A: np.ndarray) -> list[slice]:
@@ -136,6 +108,8 @@ def chain(A: np.ndarray) -> list[slice]:
     A contact acts on at most two bodies, each with a nonzero force part, so the
     coupling of bodies is structural; ``ValueError`` if it is not a path.
     """
+    if A.shape[0] % 6:
+        raise ValueError("the rows are not 6 per body")
     touches = np.any(A.reshape(-1, 6, A.shape[1]) != 0, axis=1).astype(int)
     linked = touches @ touches.T > 0
     np.fill_diagonal(linked, False)
@@ -209,47 +183,15 @@ def _active_set(M: np.ndarray, q: np.ndarray, max_iter: int):
     return lam, iterations, fallback
 
 
-def residuals(A: np.ndarray, b: np.ndarray, x: np.ndarray, unilateral: np.ndarray,
-              pairs: tuple[tuple[int, int], ...]) -> dict[str, np.ndarray]:
-    """``ForceChecks.residuals`` for every instant at once: (T,) arrays, ``inf`` where
-    ``x`` is not finite; no cones (none of the batched formulations has one).
-    """
-    scale = np.maximum(np.linalg.norm(b, axis=1), 1e-12)
-    xu = x[:, np.asarray(unilateral, bool)]
-    sign = np.maximum(0.0, -xu.min(axis=1, initial=np.inf)) if xu.shape[1] else np.zeros(len(x))
-    pair = np.asarray(pairs, int).reshape(-1, 2)
-    comp = np.maximum(0.0, np.minimum(x[:, pair[:, 0]], x[:, pair[:, 1]])).max(axis=1, initial=0.0)
-    out = {
-        "equilibrium": np.linalg.norm((A @ x[:, :, None])[:, :, 0] - b, axis=1) / scale,
-        "sign": sign / scale,
-        "complementarity": comp / scale,
-        "cone": np.zeros(len(x)),
-    }
-    bad = ~np.all(np.isfinite(x), axis=1)
-    for value in out.values():
-        value[bad] = np.inf
-    return out
+def _chain_shaped(batch) -> bool:
+    try:
+        chain(batch.A[0])
+    except ValueError:
+        return False
+    return True
 
 
-def solve_batched(op: Operator, formulation: str, instants=None) -> Batch:
-    """One batched formulation at ``instants`` (default all), checked by the package's
-    residuals in the formulation's own terms (signs and pairs only where it imposes
-    them).
-    """
-    clock = time.perf_counter()
-    every = instants is None
-    instants = np.arange(len(op.t)) if every else np.asarray(instants, int)
-    problem = FORMULATIONS[formulation](op, int(instants[0]))
-    if not _batchable(formulation, problem):
-        raise ValueError(f"no batched path for {formulation!r} on this scene")
-    A, b = (op.A, op.b) if every else (op.A[instants], op.b[instants])
-    w = weights(formulation, problem, A)
-    stages = {"setup": time.perf_counter() - clock}
-    signed = formulation in ("positive", "lcp", "compliance")
-    x, iterations, fallback, solve_stages = least_norm(
-        A, b, w, op.unilateral if signed else None)
-    stages.update(solve_stages)
-    clock = time.perf_counter()
-    res = residuals(A, b, x, problem.checks.unilateral, problem.checks.pairs)
-    stages["check"] = time.perf_counter() - clock
-    return Batch(formulation, instants, x, res, iterations, fallback, stages)
+def backends() -> list[Backend]:
+    """The batched least-norm backend (NumPy only, always present)."""
+    return [Backend("numpy-batched", (), None, ("cardan-forces", "numpy"), None, "numpy",
+                    supports=_chain_shaped, batch=solve_batch, batch_accepts=(LeastNormBatch,))]
