@@ -22,6 +22,7 @@ Classes:
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -101,6 +102,19 @@ class ForceChecks:
 
 
 RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
+
+
+@functools.lru_cache(maxsize=64)
+def _cone_arrays(cones: tuple, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cones as arrays: apex rows (k, n), member indices padded to the longest (k, w)
+    and their mask (k, w), so all cones are checked in one vectorized step."""
+    width = max(len(c.members) for c in cones)
+    members = np.zeros((len(cones), width), int)
+    mask = np.zeros((len(cones), width))
+    for k, c in enumerate(cones):
+        members[k, :len(c.members)] = c.members
+        mask[k, :len(c.members)] = 1.0
+    return np.array([c.apex_row(n) for c in cones]), members, mask
 """The keys of :meth:`ForceChecks.residuals`."""
 
 
@@ -121,9 +135,10 @@ def residuals_batch(A: np.ndarray, b: np.ndarray, X: np.ndarray, unilateral, pai
     comp = np.maximum(0.0, np.minimum(X[:, pair[:, 0]], X[:, pair[:, 1]])).max(
         axis=1, initial=0.0)
     cone = np.zeros(T)
-    for c in cones:
-        apex = X @ c.apex_row(X.shape[1])
-        cone = np.maximum(cone, np.linalg.norm(X[:, list(c.members)], axis=1) - apex)
+    if cones:
+        apex, members, mask = _cone_arrays(tuple(cones), X.shape[1])
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", X[:, members] * mask, X[:, members] * mask))
+        cone = np.maximum(0.0, (spread - X @ apex.T).max(axis=1))
     AX = X @ A.T if np.ndim(A) == 2 else np.einsum("tmn,tn->tm", A, X)
     out = {
         "equilibrium": np.linalg.norm(AX - b, axis=1) / scale,

@@ -48,7 +48,7 @@ class BatchRecord:
     """The records of T instants as arrays (see :class:`~.record.Record` for the fields).
 
     ``setup_s``, ``solve_s`` and ``checks_s`` are for the whole batch; ``stages`` the
-    backend's own split of them.
+    backend's own split of them; ``z`` the solver's variable (T, nz).
     """
 
     formulation: str
@@ -66,6 +66,7 @@ class BatchRecord:
     checks_s: float
     stages: dict[str, float]
     messages: tuple[str, ...]
+    z: np.ndarray | None = None
 
     def within(self, level: float) -> np.ndarray:
         """Per instant: an answer with every optimality measure <= ``level``."""
@@ -84,7 +85,8 @@ class BatchRecord:
             residuals={key: float(v[k]) for key, v in self.residuals.items()},
             message=self.messages[k] if self.messages else "",
             optimality={key: float(v[k]) for key, v in self.optimality.items()},
-            duals=self.duals, gap_kind="duality", checks_s=self.checks_s / T)
+            duals=self.duals, gap_kind="duality", checks_s=self.checks_s / T,
+            z=None if self.z is None or not self.z.size else self.z[k])
 
 
 def _forces(batch, outcome: BatchOutcome, answered: np.ndarray) -> np.ndarray:
@@ -168,7 +170,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
         optimality=optimality, iterations=np.asarray(outcome.iterations, int), duals=source,
         setup_s=outcome.setup_s, solve_s=outcome.solve_s,
         checks_s=time.perf_counter() - began, stages=dict(outcome.stages),
-        messages=tuple(outcome.messages))
+        messages=tuple(outcome.messages), z=np.asarray(outcome.z))
 
 
 def supports_batch(backend, batch) -> bool:

@@ -78,7 +78,7 @@ def _settings(tol, batch_size: int, options: dict):
     import moreau
 
     ipm = moreau.IPMSettings(**dict.fromkeys(TOLERANCES, tol)) if tol is not None else None
-    return moreau.Settings(device="cpu", batch_size=batch_size, solver="ipm",
+    return moreau.Settings(device="cpu", batch_size=batch_size,
                            **({"ipm_settings": ipm} if ipm else {}), **options)
 
 

@@ -26,6 +26,8 @@ All functions take a batch: ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m), ``z`` (
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 ACTIVE_RTOL = 1e-7
@@ -56,24 +58,48 @@ def _inf(v: np.ndarray) -> np.ndarray:
     return np.abs(v).max(axis=-1, initial=0.0)
 
 
+@functools.lru_cache(maxsize=64)
+def _layout(cones: tuple) -> tuple:
+    """Row indices of the cone kinds: nonneg rows, second-order blocks padded to the
+    longest (apex, members, mask), power blocks (k, 3) and their alphas."""
+    nonneg, socs, pows, alphas = [], [], [], []
+    for kind, size, rows in blocks(cones):
+        idx = list(range(rows.start, rows.stop))
+        if kind == "nonneg":
+            nonneg += idx
+        elif kind == "soc":
+            socs.append(idx)
+        elif kind == "pow":
+            pows.append(idx)
+            alphas.append(float(size))
+    width = max((len(r) - 1 for r in socs), default=0)
+    members = np.zeros((len(socs), width), int)
+    mask = np.zeros((len(socs), width))
+    for k, r in enumerate(socs):
+        members[k, :len(r) - 1] = r[1:]
+        mask[k, :len(r) - 1] = 1.0
+    apex = np.array([r[0] for r in socs], int)
+    return (np.array(nonneg, int), apex, members, mask, np.array(pows, int).reshape(-1, 3),
+            np.array(alphas))
+
+
 def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
     """Distance-like violation of ``y in K*`` per instant (absolute, (T,)).
 
     K* of the zero cone is free; the nonnegative and second-order cones are self-dual;
     the dual power cone is ``(u/a)^a (v/(1-a))^(1-a) >= |w|, u, v >= 0``.
     """
-    worst = np.zeros(len(y))
-    for kind, alpha, rows in blocks(cones):
-        block = y[:, rows]
-        if kind == "nonneg":
-            worst = np.maximum(worst, np.maximum(0.0, -block).max(axis=1, initial=0.0))
-        elif kind == "soc":
-            worst = np.maximum(worst, np.linalg.norm(block[:, 1:], axis=1) - block[:, 0])
-        elif kind == "pow":
-            u, v, w = np.maximum(block[:, 0], 0.0), np.maximum(block[:, 1], 0.0), block[:, 2]
-            mean = (u / alpha) ** alpha * (v / (1.0 - alpha)) ** (1.0 - alpha)
-            negative = np.maximum(0.0, -block[:, :2]).max(axis=1)
-            worst = np.maximum(worst, np.maximum(np.abs(w) - mean, negative))
+    nonneg, apex, members, mask, pows, alphas = _layout(tuple(cones))
+    worst = np.maximum(0.0, -y[:, nonneg]).max(axis=1, initial=0.0)
+    if len(apex):
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", y[:, members] * mask, y[:, members] * mask))
+        worst = np.maximum(worst, (spread - y[:, apex]).max(axis=1))
+    if len(pows):
+        u, v, w = (np.maximum(y[:, pows[:, 0]], 0.0), np.maximum(y[:, pows[:, 1]], 0.0),
+                   y[:, pows[:, 2]])
+        mean = (u / alphas) ** alphas * (v / (1.0 - alphas)) ** (1.0 - alphas)
+        negative = np.maximum(0.0, -np.minimum(y[:, pows[:, 0]], y[:, pows[:, 1]]))
+        worst = np.maximum(worst, np.maximum(np.abs(w) - mean, negative).max(axis=1))
     return np.maximum(worst, 0.0)
 
 
@@ -184,3 +210,16 @@ def unique_optimum(problem) -> bool:
             return False
         return True
     return False
+
+
+def objective_value(problem, z) -> float | None:
+    """The objective ``1/2 z'Pz + q'z`` of an LS, QP, LP or conic problem at ``z`` (in
+    its conic form; the same value along every conversion), ``None`` for the others."""
+    from .conversions import convert
+    from cardan_forces.formulations.problems import Conic
+
+    conic = convert(problem, (Conic,))
+    if conic is None or z is None:
+        return None
+    z = np.asarray(z, float)
+    return float(0.5 * z @ _Pz(conic.P, z[None])[0] + np.asarray(conic.q, float) @ z)
