@@ -1,10 +1,11 @@
-"""Compiled block-tridiagonal solve for ``numpy-batched`` (numba, optional extra ``numba``).
+"""Compiled Gram and block-tridiagonal solve for ``numpy-batched`` (numba, extra ``numba``).
 
 The same block elimination as ``numpy_batched_.chain_solve`` — ``D_k = K_kk - K_k,k-1
 D_k-1^{-1} K_k-1,k`` along the chain of 6 x 6 body blocks, here with a Cholesky factor
 of each ``D_k`` (positive definite for a positive definite ``K``) — written as loops over
 the instants that numba compiles: NumPy's batched 6 x 6 inverses and products pay a
-LAPACK or loop overhead per matrix that is larger than the arithmetic.
+LAPACK or loop overhead per matrix that is larger than the arithmetic. Only the nonzero
+blocks of ``K = B B'`` are formed (a contact column loads at most two bodies).
 """
 
 from __future__ import annotations
@@ -48,42 +49,75 @@ def _cho_solve(L, X):
 
 
 @njit(cache=True)
-def chain_solve(K, R, starts):
-    """``K^{-1} R`` for (T, m, m) ``K`` block tridiagonal along the 6-row blocks that
-    start at ``starts`` (chain order); ``R`` (T, m, r)."""
-    T, r, nb = K.shape[0], R.shape[2], len(starts)
+def _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, delta, Kd, Ko):
+    """The nonzero blocks of ``K = B B' + delta I`` at instant ``t``: diagonal ``Kd[k]``
+    from the columns touching block ``k``, off-diagonal ``Ko[k] = K[k, k+1]`` from the
+    columns touching both (a contact loads at most two bodies)."""
+    nb = len(starts)
+    for k in range(nb):
+        s = starts[k]
+        for i in range(B):
+            for j in range(B):
+                acc = 0.0
+                for q in range(n_own[k]):
+                    c = own[k, q]
+                    acc += Bt[t, s + i, c] * Bt[t, s + j, c]
+                Kd[k, i, j] = acc
+            Kd[k, i, i] += delta
+        if k < nb - 1:
+            n = starts[k + 1]
+            for i in range(B):
+                for j in range(B):
+                    acc = 0.0
+                    for q in range(n_shared[k]):
+                        c = shared[k, q]
+                        acc += Bt[t, s + i, c] * Bt[t, n + j, c]
+                    Ko[k, i, j] = acc
+
+
+@njit(cache=True)
+def gram_chain_solve(Bt, R, starts, own, n_own, shared, n_shared, rtol):
+    """``(B B' + delta I)^{-1} R`` per instant without forming ``B B'``: its blocks from
+    the columns each body touches, then the block elimination of :func:`chain_solve`;
+    ``delta = rtol * trace(B B') / rows``."""
+    T, m, r, nb = Bt.shape[0], Bt.shape[1], R.shape[2], len(starts)
     out = np.empty_like(R)
+    Kd = np.empty((nb, B, B))
+    Ko = np.empty((max(nb - 1, 1), B, B))
     L = np.empty((B, B))
     G = np.empty((nb, B, B))
     Y = np.empty((nb, B, r))
     for t in range(T):
+        trace = 0.0
+        for i in range(m):
+            for j in range(Bt.shape[2]):
+                trace += Bt[t, i, j] * Bt[t, i, j]
+        _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol * trace / m, Kd, Ko)
         for k in range(nb):
             s = starts[k]
             for i in range(B):
                 for j in range(B):
-                    L[i, j] = K[t, s + i, s + j]
+                    L[i, j] = Kd[k, i, j]
                 for c in range(r):
                     Y[k, i, c] = R[t, s + i, c]
-            if k > 0:
-                p = starts[k - 1]
+            if k > 0:  # K[k, k-1] = Ko[k-1]'
                 for i in range(B):
                     for j in range(B):
                         acc = 0.0
                         for q in range(B):
-                            acc += K[t, s + i, p + q] * G[k - 1, q, j]
+                            acc += Ko[k - 1, q, i] * G[k - 1, q, j]
                         L[i, j] -= acc
                     for c in range(r):
                         acc = 0.0
                         for q in range(B):
-                            acc += K[t, s + i, p + q] * Y[k - 1, q, c]
+                            acc += Ko[k - 1, q, i] * Y[k - 1, q, c]
                         Y[k, i, c] -= acc
             _cholesky(L)
             _cho_solve(L, Y[k])
             if k < nb - 1:
-                n = starts[k + 1]
                 for i in range(B):
                     for j in range(B):
-                        G[k, i, j] = K[t, s + i, n + j]
+                        G[k, i, j] = Ko[k, i, j]
                 _cho_solve(L, G[k])
         for k in range(nb - 1, -1, -1):
             s = starts[k]

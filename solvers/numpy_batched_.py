@@ -23,9 +23,9 @@ also keep the end faces ``x_u >= 0``. With ``y = W^{1/2} x`` and ``B = A W^{-1/2
 
 The multipliers come out of the same solve: ``W x = A' mu + E_u nu`` with
 ``mu = K^-1 (b - U lam)`` and ``nu_u = sqrt(w_u) lam``, so every record has the solver's
-duals. A direct method: ``tol`` is ignored. With numba installed the block elimination
-runs compiled (:mod:`._chain_kernel`; NumPy pays a per-matrix overhead on 6 x 6 blocks
-larger than their arithmetic).
+duals. A direct method: ``tol`` is ignored. With numba installed the Gram blocks and
+the block elimination run compiled (:mod:`._chain_kernel`; NumPy pays a per-matrix
+overhead on 6 x 6 blocks larger than their arithmetic, and forms all of ``B B'``).
 """
 
 from __future__ import annotations
@@ -78,12 +78,12 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     T, m, n = A.shape
     root = None if w is None else np.sqrt(w)
     B = A if root is None else A / root[:, None, :]
-    K = B @ B.transpose(0, 2, 1)
-    K[:, np.arange(m), np.arange(m)] += (GRAM_RTOL / m) * np.trace(K, axis1=1, axis2=2)[:, None]
     u = np.flatnonzero(signed) if signed is not None else np.zeros(0, int)
     U = B[:, :, u]
-    clock = _lap(stages, "gram", clock)
-    Z = _solve_chain(K, np.concatenate([b[:, :, None], U], axis=2), chain(A[0]))
+    R = np.concatenate([b[:, :, None], U], axis=2)
+    clock = _lap(stages, "scale", clock)
+    Z = _gram_solve(B, R, chain(A[0]))
+    clock = _lap(stages, "gram+factor+solve", clock)
     mu = Z[:, :, 0]
     clock = _lap(stages, "factor+solve", clock)
     iterations, fallback = np.zeros(T, int), np.zeros(T, bool)
@@ -145,13 +145,39 @@ def chain_solve(K: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray
     return out
 
 
-def _solve_chain(K: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray:
-    """:func:`chain_solve`, compiled by numba where it is installed (extra ``numba``)."""
+def _gram_solve(B: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray:
+    """``(B B' + delta I)^{-1} R``: compiled by numba where installed (extra ``numba``),
+    forming only the nonzero blocks of ``B B'``; else NumPy's Gram and :func:`chain_solve`.
+    """
     try:
-        from ._chain_kernel import chain_solve as compiled
+        from ._chain_kernel import gram_chain_solve
     except ImportError:
+        m = B.shape[1]
+        K = B @ B.transpose(0, 2, 1)
+        K[:, np.arange(m), np.arange(m)] += (GRAM_RTOL / m) * np.trace(K, axis1=1,
+                                                                     axis2=2)[:, None]
         return chain_solve(K, R, blocks)
-    return compiled(K, np.ascontiguousarray(R), np.array([b.start for b in blocks]))
+    own, n_own, shared, n_shared = _block_columns(B, blocks)
+    return gram_chain_solve(np.ascontiguousarray(B), np.ascontiguousarray(R),
+                            np.array([b.start for b in blocks]), own, n_own, shared, n_shared,
+                            GRAM_RTOL)
+
+
+def _block_columns(B: np.ndarray, blocks: list[slice]):
+    """Per block in chain order the columns that touch it, and per neighbouring pair
+    the columns that touch both, padded (index arrays and counts)."""
+    touch = np.any(B.reshape(len(B), -1, 6, B.shape[2]) != 0, axis=(0, 2))
+    order = [b.start // 6 for b in blocks]
+    own = [np.flatnonzero(touch[k]) for k in order]
+    shared = [np.flatnonzero(touch[a] & touch[c]) for a, c in zip(order, order[1:])] or [[]]
+
+    def pad(lists):
+        out = np.zeros((len(lists), max(max(len(x) for x in lists), 1)), np.int64)
+        for i, x in enumerate(lists):
+            out[i, :len(x)] = x
+        return out, np.array([len(x) for x in lists], np.int64)
+
+    return (*pad(own), *pad(shared))
 
 
 def _lap(stages: dict[str, float], name: str, since: float) -> float:

@@ -146,3 +146,21 @@ def test_clarabel_structure_reuse_gives_the_answers_of_a_fresh_solver(op, monkey
         fresh = solve(p, "clarabel", tol=1e-9)
         assert first.status == fresh.status == "solved"
         assert np.linalg.norm(first.x - fresh.x) <= 1e-9 * np.linalg.norm(fresh.x)
+
+
+def test_compiled_gram_solve_equals_the_numpy_path(op):
+    pytest.importorskip("numba")
+    from cardan_forces.solvers._chain_kernel import gram_chain_solve
+
+    A = np.ascontiguousarray(op.A)
+    blocks = nb.chain(A[0])
+    R = np.ascontiguousarray(np.concatenate([op.b[:, :, None], A[:, :, op.unilateral]], 2))
+    m = A.shape[1]
+    K = A @ A.transpose(0, 2, 1)
+    K[:, np.arange(m), np.arange(m)] += nb.GRAM_RTOL / m * np.trace(K, axis1=1, axis2=2)[:, None]
+    compiled = gram_chain_solve(A, R, np.array([b.start for b in blocks]),
+                                *nb._block_columns(A, blocks), nb.GRAM_RTOL)
+    plain = nb.chain_solve(K, R, blocks)
+    # K is singular along the rows' dependency; B' removes that direction
+    At = A.transpose(0, 2, 1)
+    assert np.abs(At @ (compiled - plain)).max() <= 1e-9 * np.abs(At @ plain).max()
