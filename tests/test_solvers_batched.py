@@ -164,3 +164,19 @@ def test_compiled_gram_solve_equals_the_numpy_path(op):
     # K is singular along the rows' dependency; B' removes that direction
     At = A.transpose(0, 2, 1)
     assert np.abs(At @ (compiled - plain)).max() <= 1e-9 * np.abs(At @ plain).max()
+
+
+def test_cvxpy_compiled_once_gives_the_answers_of_a_fresh_problem(op, monkeypatch):
+    """Parameters updated per instant: the same answers as a problem built anew."""
+    if "cvxpy-clarabel" not in available():
+        pytest.skip("cvxpy with Clarabel not installed")
+    from cardan_forces.solvers import cvxpy_
+
+    problems = fbatch.build_problems(op, "min_norm_scaled", range(0, 41, 10))
+    reused = [solve(p, "cvxpy-clarabel", tol=1e-9) for p in problems]
+    monkeypatch.setattr(cvxpy_, "CACHE_SIZE", 0)
+    monkeypatch.setattr(cvxpy_, "_PROBLEMS", {})
+    for p, first in zip(problems, reused):
+        fresh = solve(p, "cvxpy-clarabel", tol=1e-9)
+        assert first.status == fresh.status == "solved"
+        assert np.linalg.norm(first.x - fresh.x) <= 1e-8 * np.linalg.norm(fresh.x)
