@@ -24,7 +24,7 @@ also keep the end faces ``x_u >= 0``. With ``y = W^{1/2} x`` and ``B = A W^{-1/2
 The multipliers come out of the same solve: ``W x = A' mu + E_u nu`` with
 ``mu = K^-1 (b - U lam)`` and ``nu_u = sqrt(w_u) lam``, so every record has the solver's
 duals. A direct method: ``tol`` is ignored. With numba installed the Gram blocks and
-the block elimination run compiled (:mod:`._chain_kernel`; NumPy pays a per-matrix
+the block elimination run compiled (:mod:`._batched_kernels`; NumPy pays a per-matrix
 overhead on 6 x 6 blocks larger than their arithmetic, and forms all of ``B B'``).
 """
 
@@ -85,7 +85,6 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     Z = _gram_solve(B, R, chain(A[0]))
     clock = _lap(stages, "gram+factor+solve", clock)
     mu = Z[:, :, 0]
-    clock = _lap(stages, "factor+solve", clock)
     iterations, fallback = np.zeros(T, int), np.zeros(T, bool)
     nu = np.zeros((T, n))
     if u.size:
@@ -150,7 +149,7 @@ def _gram_solve(B: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray
     forming only the nonzero blocks of ``B B'``; else NumPy's Gram and :func:`chain_solve`.
     """
     try:
-        from ._chain_kernel import gram_chain_solve
+        from ._batched_kernels import gram_chain_solve
     except ImportError:
         m = B.shape[1]
         K = B @ B.transpose(0, 2, 1)
@@ -191,8 +190,20 @@ def _active_set(M: np.ndarray, q: np.ndarray, max_iter: int):
 
     Pinned faces ``P`` solve ``M_PP lam_P = -q_P`` with ``lam = 0`` elsewhere; the next
     set keeps the pinned faces with ``lam > 0`` and adds the free ones with ``w < 0``.
-    An instant is done when its set repeats.
+    An instant is done when its set repeats; one that has not after ``max_iter`` steps
+    is solved by Lemke's method. Compiled by numba where installed.
     """
+    try:
+        from ._batched_kernels import active_set
+    except ImportError:
+        return _active_set_numpy(M, q, max_iter)
+    lam, iterations, settled = active_set(np.ascontiguousarray(M), np.ascontiguousarray(q),
+                                          max_iter, LCP_RTOL, LCP_DELTA)
+    return _lemke_fallback(M, q, lam, iterations, np.flatnonzero(~settled))
+
+
+def _active_set_numpy(M: np.ndarray, q: np.ndarray, max_iter: int):
+    """:func:`_active_set` in NumPy, all instants per step (without numba)."""
     T, k = q.shape
     eps = LCP_RTOL * np.maximum(1.0, np.abs(q).max(axis=1, initial=0.0))[:, None]
     pinned = q < 0
@@ -213,7 +224,12 @@ def _active_set(M: np.ndarray, q: np.ndarray, max_iter: int):
         todo = todo[~settled]
         if not todo.size:
             break
-    fallback = np.zeros(T, bool)
+    return _lemke_fallback(M, q, lam, iterations, todo)
+
+
+def _lemke_fallback(M, q, lam, iterations, todo):
+    """Lemke's method at the instants ``todo`` whose active set did not settle."""
+    fallback = np.zeros(len(q), bool)
     fallback[todo] = True
     for i in todo:
         lam[i] = lemke(M[i], q[i]).z

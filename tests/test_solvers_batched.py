@@ -150,7 +150,7 @@ def test_clarabel_structure_reuse_gives_the_answers_of_a_fresh_solver(op, monkey
 
 def test_compiled_gram_solve_equals_the_numpy_path(op):
     pytest.importorskip("numba")
-    from cardan_forces.solvers._chain_kernel import gram_chain_solve
+    from cardan_forces.solvers._batched_kernels import gram_chain_solve
 
     A = np.ascontiguousarray(op.A)
     blocks = nb.chain(A[0])
@@ -180,3 +180,16 @@ def test_cvxpy_compiled_once_gives_the_answers_of_a_fresh_problem(op, monkeypatc
         fresh = solve(p, "cvxpy-clarabel", tol=1e-9)
         assert first.status == fresh.status == "solved"
         assert np.linalg.norm(first.x - fresh.x) <= 1e-8 * np.linalg.norm(fresh.x)
+
+
+def test_compiled_active_set_equals_the_numpy_one():
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(11)
+    N = rng.standard_normal((200, 8, 7))
+    M = N @ N.transpose(0, 2, 1)
+    q = rng.uniform(0, 5, (200, 8)) - (N @ (10 * rng.standard_normal((200, 7, 1))))[:, :, 0]
+    compiled = nb._active_set(M, q, 30)
+    plain = nb._active_set_numpy(M, q, 30)
+    assert np.array_equal(compiled[1], plain[1]) and np.array_equal(compiled[2], plain[2])
+    assert np.allclose(np.einsum("tij,tj->ti", N.transpose(0, 2, 1), compiled[0]),
+                       np.einsum("tij,tj->ti", N.transpose(0, 2, 1), plain[0]), atol=1e-9)

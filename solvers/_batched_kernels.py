@@ -130,3 +130,66 @@ def gram_chain_solve(Bt, R, starts, own, n_own, shared, n_shared, rtol):
                             acc -= G[k, i, q] * out[t, n + q, c]
                     out[t, s + i, c] = acc
     return out
+
+
+@njit(cache=True)
+def _solve_pinned(M, q, pinned, lam, delta):
+    """``lam_P = -(M_PP + delta I)^-1 q_P``, zero elsewhere (Gaussian elimination with
+    partial pivoting on the pinned block)."""
+    idx = np.flatnonzero(pinned)
+    p = len(idx)
+    S = np.empty((p, p + 1))
+    for i in range(p):
+        for j in range(p):
+            S[i, j] = M[idx[i], idx[j]]
+        S[i, i] += delta
+        S[i, p] = -q[idx[i]]
+    for c in range(p):
+        piv = c + np.argmax(np.abs(S[c:, c]))
+        if piv != c:
+            for j in range(p + 1):
+                S[c, j], S[piv, j] = S[piv, j], S[c, j]
+        for r in range(c + 1, p):
+            f = S[r, c] / S[c, c]
+            for j in range(c, p + 1):
+                S[r, j] -= f * S[c, j]
+    lam[:] = 0.0
+    for i in range(p - 1, -1, -1):
+        acc = S[i, p]
+        for j in range(i + 1, p):
+            acc -= S[i, j] * lam[idx[j]]
+        lam[idx[i]] = acc / S[i, i]
+
+
+@njit(cache=True)
+def active_set(M, q, max_iter, rtol, delta):
+    """The primal-dual active-set method of ``numpy_batched_._active_set`` compiled, one
+    instant after the other: ``(lam, iterations, settled)``."""
+    T, k = q.shape
+    lam = np.zeros((T, k))
+    iterations = np.zeros(T, np.int64)
+    settled = np.zeros(T, np.bool_)
+    pinned = np.empty(k, np.bool_)
+    nxt = np.empty(k, np.bool_)
+    for t in range(T):
+        eps = rtol * max(1.0, np.abs(q[t]).max())
+        for i in range(k):
+            pinned[i] = q[t, i] < 0
+        for step in range(1, max_iter + 1):
+            _solve_pinned(M[t], q[t], pinned, lam[t], delta)
+            same = True
+            for i in range(k):
+                if pinned[i]:
+                    nxt[i] = lam[t, i] > -eps
+                else:
+                    w = q[t, i]
+                    for j in range(k):
+                        w += M[t, i, j] * lam[t, j]
+                    nxt[i] = w < -eps
+                same = same and nxt[i] == pinned[i]
+            iterations[t] = step
+            pinned[:] = nxt
+            if same:
+                settled[t] = True
+                break
+    return lam, iterations, settled
