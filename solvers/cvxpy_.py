@@ -175,6 +175,23 @@ def _compiled(cp, problem, cvx_name: str):
     return cached
 
 
+def conic_duals(problem, constraints) -> np.ndarray | None:
+    """cvxpy's multipliers in the rows of the problem's conic form (``None`` if cvxpy
+    gave none). cvxpy's duals of ``A z == b``, ``G z <= h``, ``z >= lb``, ``s >= 0`` and
+    of the cones on ``s = b - A z`` are the conic ones; that of ``s == 0`` changes sign.
+    """
+    parts = []
+    for con in constraints:
+        value = con.dual_value
+        if value is None:
+            return None
+        flat = np.concatenate([np.ravel(v) for v in value]) if isinstance(value, list) \
+            else np.ravel(value)
+        sign = -1.0 if isinstance(problem, Conic) and type(con).__name__ == "Equality" else 1.0
+        parts.append(sign * np.asarray(flat, float))
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
 def _solve_with(name: str):
     """The adapter function for one cvxpy solver."""
     cvx_name, key, _ = SOLVERS[name]
@@ -196,7 +213,9 @@ def _solve_with(name: str):
                        iterations=stats.num_iters,
                        message="" if prob.status == "optimal" else f"cvxpy status {prob.status}",
                        objective=prob.value, setup_s=built - start + compile_s,
-                       solve_s=wall - compile_s)
+                       solve_s=wall - compile_s,
+                       duals=conic_duals(problem, prob.constraints) if z.value is not None
+                       else None)
 
     return solve_cvxpy
 
