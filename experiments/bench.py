@@ -61,11 +61,12 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
 def evaluate(measured: dict, ladder, wall_s: float | None) -> dict:
     """Every metric of the report from the measured rows."""
     summary = metrics.summarize(measured["rows"], measured["setup"])
-    success = metrics.success(measured["acc_rows"], ladder)
+    success = metrics.success(measured["acc_rows"],
+                              sorted({*ladder, metrics.MIN_MAX_LEVEL}, reverse=True))
     return measured | {
         "summary": summary, "points": metrics.pareto(measured["acc_rows"]),
         "success": success, "profiles": metrics.profiles(measured["acc_rows"], ladder),
-        "targets": metrics.targets(summary, measured["acc_rows"], measured["conic"], wall_s),
+        "targets": metrics.targets(summary, success, measured["conic"], wall_s),
     }
 
 

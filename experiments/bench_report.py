@@ -119,7 +119,8 @@ def report(results: dict, settings: dict) -> str:
     lines += _best(results["summary"])
     lines += _conic_split(results["summary"])
     lines += _targets(results["targets"])
-    lines += _success(results["success"], settings["ladder"])
+    lines += _success(results["success"],
+                      sorted({r["level"] for r in results["success"]}, reverse=True))
     lines += _profiles(results["profiles"])
     lines += _pareto(results["points"], results["references"])
     lines += _stages(results["stages"])
@@ -222,7 +223,7 @@ def _targets(rows) -> list[str]:
 
 def _success(rows, ladder) -> list[str]:
     lines = ["", "## Success per accuracy level (all optimality measures <= level, in the "
-             "run at that tolerance)", "",
+             "backend's best run: its defaults or a tolerance of the ladder)", "",
              "| formulation | solver | " + " | ".join(f"{t:g}" for t in ladder) + " |",
              "|---|---|" + "---:|" * len(ladder)]
     table: dict[tuple, dict] = {}

@@ -35,7 +35,7 @@ QUICK_INSTANTS = 41
 BUDGET_S = 2.0
 """Seconds after which a per-instant run stops (not the paper's, the baseline)."""
 REPEATS = 20
-BATCH_BUDGET_S = 1.0
+BATCH_BUDGET_S = 0.5
 """A batched run is repeated up to ``REPEATS`` times or this long after one warm-up run
 (numba compiles on a process's first call); its time is the median."""
 

@@ -48,22 +48,25 @@ def _cho_solve(L, X):
             X[i, c] = s / L[i, i]
 
 
-@njit(cache=True)
-def _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, delta, Kd, Ko):
-    """The nonzero blocks of ``K = B B' + delta I`` at instant ``t``: diagonal ``Kd[k]``
-    from the columns touching block ``k``, off-diagonal ``Ko[k] = K[k, k+1]`` from the
-    columns touching both (a contact loads at most two bodies)."""
+@njit(cache=True, fastmath=True)
+def _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol, Kd, Ko):
+    """The nonzero blocks of ``K = B B' + delta I`` at instant ``t``, ``delta = rtol *
+    trace(K) / rows``: diagonal ``Kd[k]`` (symmetric) from the columns touching block
+    ``k``, off-diagonal ``Ko[k] = K[k, k+1]`` from the columns touching both (a contact
+    loads at most two bodies)."""
     nb = len(starts)
+    trace = 0.0
     for k in range(nb):
         s = starts[k]
         for i in range(B):
-            for j in range(B):
+            for j in range(i, B):
                 acc = 0.0
                 for q in range(n_own[k]):
                     c = own[k, q]
                     acc += Bt[t, s + i, c] * Bt[t, s + j, c]
                 Kd[k, i, j] = acc
-            Kd[k, i, i] += delta
+                Kd[k, j, i] = acc
+            trace += Kd[k, i, i]
         if k < nb - 1:
             n = starts[k + 1]
             for i in range(B):
@@ -73,14 +76,18 @@ def _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, delta, Kd, Ko):
                         c = shared[k, q]
                         acc += Bt[t, s + i, c] * Bt[t, n + j, c]
                     Ko[k, i, j] = acc
+    delta = rtol * trace / (nb * B)
+    for k in range(nb):
+        for i in range(B):
+            Kd[k, i, i] += delta
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def gram_chain_solve(Bt, R, starts, own, n_own, shared, n_shared, rtol):
     """``(B B' + delta I)^{-1} R`` per instant without forming ``B B'``: its blocks from
     the columns each body touches, then the block elimination of :func:`chain_solve`;
     ``delta = rtol * trace(B B') / rows``."""
-    T, m, r, nb = Bt.shape[0], Bt.shape[1], R.shape[2], len(starts)
+    T, r, nb = Bt.shape[0], R.shape[2], len(starts)
     out = np.empty_like(R)
     Kd = np.empty((nb, B, B))
     Ko = np.empty((max(nb - 1, 1), B, B))
@@ -88,11 +95,7 @@ def gram_chain_solve(Bt, R, starts, own, n_own, shared, n_shared, rtol):
     G = np.empty((nb, B, B))
     Y = np.empty((nb, B, r))
     for t in range(T):
-        trace = 0.0
-        for i in range(m):
-            for j in range(Bt.shape[2]):
-                trace += Bt[t, i, j] * Bt[t, i, j]
-        _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol * trace / m, Kd, Ko)
+        _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol, Kd, Ko)
         for k in range(nb):
             s = starts[k]
             for i in range(B):

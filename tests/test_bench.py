@@ -75,8 +75,12 @@ def test_success_needs_every_measure_and_ignores_the_absent_ones():
     assert not bench_metrics.within(_row("a", 0, 1.0, distance=1e-5), 1e-6)
     assert not bench_metrics.within(_row("a", 0, 1.0, ok=False), 1.0)
     rows = [_row("a", i, 1.0, tol=1e-6, gap=g) for i, g in enumerate((1e-7, 1e-5))]
-    rates = bench_metrics.success(rows, (1e-6,))
-    assert rates == [{"formulation": "f", "solver": "a", "level": 1e-6, "rate": 0.5}]
+    rows += [_row("a", i, 1.0, tol=1e-8, gap=g) for i, g in enumerate((1e-9, 1e-7))]
+    rates = bench_metrics.success(rows, (1e-6, 1e-8))  # the best run per level
+    assert rates == [{"formulation": "f", "solver": "a", "level": 1e-6, "rate": 1.0,
+                      "tol": 1e-8},
+                     {"formulation": "f", "solver": "a", "level": 1e-8, "rate": 0.5,
+                      "tol": 1e-8}]
 
 
 def test_pareto_front_keeps_the_points_nothing_beats():
@@ -103,7 +107,8 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     assert {"formulation", "solver", "mode", "instants_per_s", "success_rate",
             "time_split_s"} <= set(out["throughput"][0])
     assert set(out["throughput"][0]["time_split_s"]) >= set(bench_run.SPLIT)
-    assert {"formulation", "solver", "level", "rate"} == set(out["success"][0])
+    assert {"formulation", "solver", "level", "rate", "tol"} == set(out["success"][0])
+    assert {r["level"] for r in out["success"]} >= {1e-4, 1e-6, 1e-8}
     modes = {(e["formulation"], e["mode"]) for e in out["throughput"]}
     assert {("paper", "cold"), ("paper", "warm"), ("min_norm", "batched"),
             ("positive", "batched")} <= modes
