@@ -21,7 +21,10 @@ strict-JSON object.
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
+import sys
 import time
 from pathlib import Path
 
@@ -90,7 +93,8 @@ def run(args) -> int:
     samples = np.unique(np.linspace(0, len(times) - 1, runs.QUICK_SAMPLES if args.quick
                                     else runs.SAMPLES).round().astype(int))
     backends = runs.plan(op, args.formulation, args.solver, args.quick)
-    measured = measure(op, backends, samples, ladder, args.budget_s)
+    with _stdout_to_stderr() if args.json else contextlib.nullcontext():
+        measured = measure(op, backends, samples, ladder, args.budget_s)
     results = evaluate(measured, ladder, time.perf_counter() - started)
     _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
@@ -105,6 +109,21 @@ def run(args) -> int:
             print(f"{e['formulation']:16s} {e['solver']:20s} {e['mode']:7s} "
                   f"{e['instants_per_s']:10.1f}/s  solved {100 * e['success_rate']:5.1f}%")
     return 0
+
+
+@contextlib.contextmanager
+def _stdout_to_stderr():
+    """Send what solvers print (HiGHS's banner comes from its C++ library) to stderr,
+    at the file-descriptor level, so ``--json`` leaves stdout to the JSON object."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    os.dup2(2, 1)
+    try:
+        yield
+    finally:
+        sys.stdout.flush()
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 def _write(folder: Path, results: dict, settings: dict) -> None:

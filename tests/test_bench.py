@@ -178,3 +178,14 @@ def test_json_is_strict_with_inf_and_nan():
     text = json.dumps(bench_report.json_object(results), allow_nan=False)
     assert '"inf"' in text and '"nan"' in text
     assert np.isfinite(json.loads(text)["profiles"][0]["level"])
+
+
+def test_json_stdout_is_only_json_even_when_a_solver_prints(tmp_path, capfd):
+    """HiGHS prints a banner from C++: --json must still leave stdout strict JSON."""
+    if "qpsolvers-highs" not in registry.available():
+        pytest.skip("HiGHS not installed")
+    args = _args("--quick", "--json", "--formulation", "positive", "--solver",
+                 "qpsolvers-highs", "--out", str(tmp_path))
+    assert args.func(args) == 0
+    out = json.loads(capfd.readouterr().out)
+    assert out["throughput"][0]["solver"] == "qpsolvers-highs"
