@@ -47,7 +47,7 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
     by formulation (its problems built once, then dropped)."""
     rows, acc_rows, stages, references, setup, conic = [], [], {}, {}, {}, set()
     for name, solvers in backends.items():
-        runs._progress(f"bench: building {name} at {len(op.t)} instants ...")
+        runs.progress(f"bench: building {name} at {len(op.t)} instants ...")
         prepared = runs.prepare(op, name, np.arange(len(op.t)))
         setup[name] = prepared.build_s
         if isinstance(prepared.problems[0], Conic):
@@ -85,7 +85,7 @@ def run(args) -> int:
     folder = Path(args.out)
     folder.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
-    runs._progress(f"bench: simulating {scene.name} over {len(times)} instants ...")
+    runs.progress(f"bench: simulating {scene.name} over {len(times)} instants ...")
     motion = simulate(scene, times)
     simulated = time.perf_counter()
     op = build_operator(motion)
@@ -101,7 +101,7 @@ def run(args) -> int:
         "budget_s": args.budget_s, "samples": len(samples), "ladder": ladder,
         "quick": args.quick, "simulate_s": simulated - started, "operator_s": operator_s,
         "wall_s": time.perf_counter() - started})
-    runs._progress(f"bench: wrote {folder} in {time.perf_counter() - started:.0f} s")
+    runs.progress(f"bench: wrote {folder} in {time.perf_counter() - started:.0f} s")
     if args.json:
         print(json.dumps(out.json_object(results), indent=2, allow_nan=False))
     else:

@@ -48,7 +48,7 @@ SPLIT = ("build_s", "convert_s", "solve_s", "checks_s")
 """Time per instant: taking the problem, conversion and setup, the solver, the checks."""
 
 
-def _progress(message: str) -> None:
+def progress(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
@@ -226,7 +226,7 @@ def _report_progress(rows: list[dict]) -> None:
     r = rows[0]
     rate = len(rows) / max(sum(x["time_s"] for x in rows), 1e-12)
     solved = sum(x["status"] == "solved" for x in rows)
-    _progress(f"bench: {r['formulation']:16s} {r['solver']:20s} {r['mode']:7s} "
+    progress(f"bench: {r['formulation']:16s} {r['solver']:20s} {r['mode']:7s} "
               f"{len(rows):5d} instants {rate:10.1f}/s, {solved} solved")
 
 
@@ -276,5 +276,5 @@ def accuracy(prepared: Prepared, solvers: list[str], samples, ladder, budget_s: 
                 new = run_instants(prepared, solver, usable, tol=tol, budget_s=budget_s,
                                    references=refs)
             rows += [r | {"tol": "default" if tol is None else tol} for r in new]
-        _progress(f"bench: accuracy {prepared.name:16s} {solver:20s} done")
+        progress(f"bench: accuracy {prepared.name:16s} {solver:20s} done")
     return rows, (name, unsolved)
