@@ -48,7 +48,8 @@ class BatchRecord:
     """The records of T instants as arrays (see :class:`~.record.Record` for the fields).
 
     ``setup_s``, ``solve_s`` and ``checks_s`` are for the whole batch; ``stages`` the
-    backend's own split of them; ``z`` the solver's variable (T, nz).
+    backend's own split of them; ``z`` the solver's variable (T, nz), ``y`` the
+    multipliers the optimality was measured with (solver's or recovered).
     """
 
     formulation: str
@@ -67,6 +68,7 @@ class BatchRecord:
     stages: dict[str, float]
     messages: tuple[str, ...]
     z: np.ndarray | None = None
+    y: np.ndarray | None = None
 
     def within(self, level: float) -> np.ndarray:
         """Per instant: an answer with every optimality measure <= ``level``."""
@@ -114,7 +116,7 @@ def _least_norm_measures(batch: LeastNormBatch, x: np.ndarray, y: np.ndarray):
 def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
     if not answered.any():
         inf = np.full(len(answered), np.inf)
-        return {"primal": primal, "dual": inf, "gap": inf.copy()}, "none"
+        return {"primal": primal, "dual": inf, "gap": inf.copy()}, "none", None
     z = np.where(answered[:, None], outcome.z, 0.0)
     if isinstance(batch, LeastNormBatch):
         found = _least_norm_measures(batch, np.where(answered[:, None], x, 0.0),
@@ -130,7 +132,7 @@ def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
     out = {"primal": primal, "dual": found["dual"], "gap": found["gap"]}
     for value in out.values():
         value[~answered] = np.inf
-    return out, source
+    return out, source, outcome.duals if isinstance(batch, LeastNormBatch) else y
 
 
 def _unique(batch) -> bool:
@@ -156,7 +158,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
     residuals = batch.checks.residuals(x)
     primal = np.max(np.array(list(residuals.values())), axis=0)
     status = judge(status, primal)
-    optimality, source = _optimality(batch, outcome, x, answered, primal.copy())
+    optimality, source, y = _optimality(batch, outcome, x, answered, primal.copy())
     if reference is not None:
         ref = np.asarray(reference, float)
         residuals["reference"] = (np.linalg.norm(x - ref, axis=1)
@@ -170,7 +172,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
         optimality=optimality, iterations=np.asarray(outcome.iterations, int), duals=source,
         setup_s=outcome.setup_s, solve_s=outcome.solve_s,
         checks_s=time.perf_counter() - began, stages=dict(outcome.stages),
-        messages=tuple(outcome.messages), z=np.asarray(outcome.z))
+        messages=tuple(outcome.messages), z=np.asarray(outcome.z), y=y)
 
 
 def supports_batch(backend, batch) -> bool:

@@ -193,3 +193,25 @@ def test_compiled_active_set_equals_the_numpy_one():
     assert np.array_equal(compiled[1], plain[1]) and np.array_equal(compiled[2], plain[2])
     assert np.allclose(np.einsum("tij,tj->ti", N.transpose(0, 2, 1), compiled[0]),
                        np.einsum("tij,tj->ti", N.transpose(0, 2, 1), plain[0]), atol=1e-9)
+
+
+def test_a_batched_record_is_the_per_instant_record_of_the_same_answer(op):
+    """One residual code, one status rule, one optimality code: finalizing instant k of
+    a moreau batch on its own gives the same record as the batch's."""
+    if "moreau" not in available():
+        pytest.skip("moreau not installed")
+    from cardan_forces.solvers.record import Outcome, finalize
+
+    instants = np.arange(0, 41, 10)
+    problems = fbatch.build_problems(op, "socp_face", instants)
+    batch = fbatch.conic_batch(problems, instants)
+    result = solve_batch(batch, "moreau")
+    for k, problem in enumerate(problems):
+        outcome = Outcome(str(result.status[k]), result.z[k], duals=result.y[k])
+        alone = finalize(problem, "moreau", outcome)
+        batched = result.record(k)
+        assert alone.status == batched.status
+        for key, value in alone.residuals.items():
+            assert batched.residuals[key] == pytest.approx(value, rel=1e-9, abs=1e-18)
+        for key, value in alone.optimality.items():
+            assert batched.optimality[key] == pytest.approx(value, rel=1e-9, abs=1e-18)
