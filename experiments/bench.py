@@ -21,8 +21,10 @@ strict-JSON object.
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import json
+import math
 import os
 import sys
 import time
@@ -136,6 +138,17 @@ def _write(folder: Path, results: dict, settings: dict) -> None:
     (folder / "report.md").write_text(out.report(results, settings))
 
 
+def _seconds(text: str) -> float:
+    """A positive, finite number of seconds (argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
 def add_parser(subparsers) -> None:
     """Register ``cardan bench`` on the command line's subparsers."""
     p = subparsers.add_parser("bench", help="throughput and accuracy-vs-time of formulations "
@@ -152,7 +165,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--solver", action="append",
                    help="one backend (repeatable; batched ones too, e.g. numpy-batched); "
                         "default all")
-    p.add_argument("--budget-s", type=float, default=runs.BUDGET_S,
+    p.add_argument("--budget-s", type=_seconds, default=runs.BUDGET_S,
                    help=f"seconds per per-instant run before it stops (default "
                         f"{runs.BUDGET_S:g})")
     p.set_defaults(func=run)

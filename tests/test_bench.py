@@ -189,3 +189,11 @@ def test_json_stdout_is_only_json_even_when_a_solver_prints(tmp_path, capfd):
     assert args.func(args) == 0
     out = json.loads(capfd.readouterr().out)
     assert out["throughput"][0]["solver"] == "qpsolvers-highs"
+
+
+@pytest.mark.parametrize("budget", ["nan", "-1", "0", "inf", "soon"])
+def test_a_budget_that_is_not_a_positive_number_is_refused(budget, capsys):
+    with pytest.raises(SystemExit) as stop:
+        _args("--budget-s", budget)
+    assert stop.value.code == 2
+    assert "positive number of seconds" in capsys.readouterr().err
