@@ -10,7 +10,7 @@ import os
 import platform
 from pathlib import Path
 
-from cardan_forces.solvers.qpsolvers_ import DISTRIBUTIONS
+from cardan_forces.solvers import available
 
 
 def machine() -> str:
@@ -28,10 +28,11 @@ def machine() -> str:
 
 
 def versions() -> str:
-    """Installed versions of NumPy, SciPy, the solver packages and Matplotlib."""
+    """Installed versions of NumPy, SciPy, the distributions every available backend
+    declares it runs on, and Matplotlib."""
     found = []
-    for dist in dict.fromkeys(("numpy", "scipy", "cvxpy", "qpsolvers", *DISTRIBUTIONS.values(),
-                               "matplotlib")):
+    declared = [d for backend in available().values() for d in backend.distributions]
+    for dist in dict.fromkeys(("numpy", "scipy", *declared, "matplotlib")):
         try:
             found.append(f"{dist} {importlib.metadata.version(dist)}")
         except importlib.metadata.PackageNotFoundError:

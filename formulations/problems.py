@@ -22,6 +22,7 @@ Classes:
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -93,25 +94,61 @@ class ForceChecks:
         - ``cone``: largest cone violation, over ``||b||``
         """
         x = np.asarray(x, float)
-        if x.shape != (len(self.names),) or not np.all(np.isfinite(x)):
-            return {k: float("inf") for k in ("equilibrium", "sign", "complementarity", "cone")}
-        s = self.scale
-        xu = x[np.asarray(self.unilateral, bool)]
-        sign = max(0.0, float(-xu.min())) if xu.size else 0.0
-        comp = max((max(0.0, float(min(x[i], x[j]))) for i, j in self.pairs), default=0.0)
-        cone = max(
-            (
-                max(0.0, float(np.linalg.norm(x[list(c.members)]) - c.apex_row(len(x)) @ x))
-                for c in self.cones
-            ),
-            default=0.0,
-        )
-        return {
-            "equilibrium": float(np.linalg.norm(self.A @ x - self.b)) / s,
-            "sign": sign / s,
-            "complementarity": comp / s,
-            "cone": cone / s,
-        }
+        if x.shape != (len(self.names),):
+            return dict.fromkeys(RESIDUALS, float("inf"))
+        found = residuals_batch(self.A[None], self.b[None], x[None], self.unilateral,
+                                self.pairs, self.cones)
+        return {k: float(v[0]) for k, v in found.items()}
+
+
+RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
+
+
+@functools.lru_cache(maxsize=64)
+def _cone_arrays(cones: tuple, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cones as arrays: apex rows (k, n), member indices padded to the longest (k, w)
+    and their mask (k, w), so all cones are checked in one vectorized step."""
+    width = max(len(c.members) for c in cones)
+    members = np.zeros((len(cones), width), int)
+    mask = np.zeros((len(cones), width))
+    for k, c in enumerate(cones):
+        members[k, :len(c.members)] = c.members
+        mask[k, :len(c.members)] = 1.0
+    return np.array([c.apex_row(n) for c in cones]), members, mask
+"""The keys of :meth:`ForceChecks.residuals`."""
+
+
+def residuals_batch(A: np.ndarray, b: np.ndarray, X: np.ndarray, unilateral, pairs=(),
+                    cones=()) -> dict[str, np.ndarray]:
+    """:meth:`ForceChecks.residuals` of T answers at once (the one residual code of the
+    package): ``A`` (T, m, n) or (m, n), ``b`` (T, m), ``X`` (T, n); (T,) arrays, ``inf``
+    where an answer is not finite.
+    """
+    X = np.asarray(X, float)
+    T = len(X)
+    bad = ~np.all(np.isfinite(X), axis=1)
+    X = np.where(bad[:, None], 0.0, X)
+    scale = np.maximum(np.linalg.norm(b, axis=-1), 1e-12)
+    xu = X[:, np.asarray(unilateral, bool)]
+    sign = np.maximum(0.0, -xu.min(axis=1, initial=np.inf)) if xu.shape[1] else np.zeros(T)
+    pair = np.asarray(pairs, int).reshape(-1, 2)
+    comp = np.maximum(0.0, np.minimum(X[:, pair[:, 0]], X[:, pair[:, 1]])).max(
+        axis=1, initial=0.0)
+    cone = np.zeros(T)
+    if cones:
+        apex, members, mask = _cone_arrays(tuple(cones), X.shape[1])
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", X[:, members] * mask, X[:, members] * mask))
+        cone = np.maximum(0.0, (spread - X @ apex.T).max(axis=1))
+    AX = X @ A.T if np.ndim(A) == 2 else np.einsum("tmn,tn->tm", A, X)
+    out = {
+        "equilibrium": np.linalg.norm(AX - b, axis=1) / scale,
+        "sign": sign / scale,
+        "complementarity": comp / scale,
+        "cone": cone / scale,
+    }
+    for value in out.values():
+        value[bad] = np.inf
+    return out
 
 
 def _identity(z: np.ndarray) -> np.ndarray:

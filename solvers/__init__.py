@@ -5,7 +5,9 @@
 >>> record.status, record.forces(), record.residuals   # doctest: +SKIP
 
 Every call returns a :class:`Record` whose status the package decides from its own
-residuals; solver failures are records, never exceptions.
+residuals, with its optimality measured from the problem data; solver failures are
+records, never exceptions. :func:`solve_batch` solves all instants of a formulation's
+batch (``cardan_forces.formulations.batch``) with a batched backend.
 """
 
 from .record import ACCEPT, STATUSES, Record, failed_record
@@ -15,9 +17,11 @@ from .registry import (
     UnsupportedProblem,
     available,
     backends_for,
+    batch_backends,
     get,
     known_backends,
     solve,
+    solve_batch,
 )
 
 __all__ = [
@@ -29,8 +33,10 @@ __all__ = [
     "UnsupportedProblem",
     "available",
     "backends_for",
+    "batch_backends",
     "failed_record",
     "get",
     "known_backends",
     "solve",
+    "solve_batch",
 ]

@@ -5,6 +5,10 @@ Each problem class becomes a cvxpy problem directly (no conversion): cones of a
 soc: ``cp.SOC``, pow: ``cp.PowCone3D``). "Defaults" here are cvxpy's defaults for each
 solver (cvxpy itself sets e.g. OSQP's and SCS's eps to 1e-5). ``setup_s`` is building
 the expressions plus cvxpy's compilation; ``solve_s`` the rest of ``Problem.solve``.
+
+The data that change between the instants of one formulation are cvxpy Parameters, so a
+problem of a structure already seen (the same sizes, cones, ``P`` and bounds) is not
+rebuilt: its parameters get the new values and cvxpy reuses its compilation (DPP).
 """
 
 from __future__ import annotations
@@ -17,7 +21,7 @@ from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 from . import settings
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 SOLVERS: dict[str, tuple[str, str, str | None]] = {
     "cvxpy-clarabel": ("CLARABEL", "clarabel", None),
@@ -28,6 +32,14 @@ SOLVERS: dict[str, tuple[str, str, str | None]] = {
 """Backend name -> (cvxpy solver name, settings key and distribution, pip extra)."""
 
 EXTRAS: dict[str, str | None] = {name: extra for name, (_, _, extra) in SOLVERS.items()}
+
+TOLERANCES: dict[str, tuple[str, ...]] = {
+    "clarabel": ("tol_gap_abs", "tol_gap_rel", "tol_feas"),
+    "ecos": ("abstol", "reltol", "feastol"),
+    "scs": ("eps_abs", "eps_rel"),
+    "osqp": ("eps_abs", "eps_rel"),
+}
+"""Each solver's own parameters a requested tolerance sets (cvxpy passes them on)."""
 
 STATUS = {
     "optimal": "solved",
@@ -41,12 +53,12 @@ STATUS = {
 """cvxpy status -> ours; anything else (solver_error, infeasible_or_unbounded) is failed."""
 
 
-def _linear_constraints(z, problem) -> list:
+def _linear_constraints(z, problem, param) -> list:
     cons = []
     if problem.A is not None:
-        cons.append(np.asarray(problem.A, float) @ z == np.asarray(problem.b, float))
+        cons.append(param("A") @ z == param("b"))
     if problem.G is not None:
-        cons.append(np.asarray(problem.G, float) @ z <= np.asarray(problem.h, float))
+        cons.append(param("G") @ z <= param("h"))
     for bound, sign in ((problem.lb, 1.0), (problem.ub, -1.0)):
         if bound is not None:
             keep = np.flatnonzero(np.isfinite(bound))
@@ -60,10 +72,10 @@ def _quadratic(cp, z, P) -> object:
     return 0.5 * cp.quad_form(z, 0.5 * (P + P.T), assume_PSD=True)
 
 
-def _conic_constraints(cp, z, problem: Conic) -> list:
-    s = np.asarray(problem.b, float) - np.asarray(problem.A, float) @ z
+def _conic_constraints(cp, z, s, cones) -> list:
+    """The cones on the slack ``s = b - A z``, block by block."""
     cons, row = [], 0
-    for kind, size in problem.cones:
+    for kind, size in cones:
         rows = 3 if kind == "pow" else int(size)
         block = s[row:row + rows]
         if kind == "zero":
@@ -78,25 +90,106 @@ def _conic_constraints(cp, z, problem: Conic) -> list:
     return cons
 
 
-def build(cp, problem) -> tuple[object, object]:
-    """The cvxpy problem for an LS, QP, LP or Conic, and its variable."""
+def _diagonal(P) -> bool:
+    P = np.asarray(P, float)
+    return not np.any(P - np.diag(np.diag(P))) and bool(np.all(np.diag(P) >= 0))
+
+
+def _field(name: str):
+    if name == "P":
+        return lambda problem: np.diag(np.asarray(problem.P, float))
+    return lambda problem: np.asarray(getattr(problem, name), float)
+
+
+def build(cp, problem) -> tuple[object, object, list]:
+    """The cvxpy problem for an LS, QP, LP or Conic, its variable, and its parameters:
+    ``[(Parameter, getter)]`` for the data that change between instants of one
+    formulation (``A, b, q, c, G, h``, least-norm weights, a diagonal ``P``); a
+    non-diagonal ``P`` and the bounds stay constants of the structure.
+    """
     z = cp.Variable(problem.n)
+    params = []
+
+    def param(name, nonneg=False):
+        getter = _field(name)
+        value = getter(problem)
+        p = cp.Parameter(value.shape, nonneg=nonneg, value=value)
+        params.append((p, getter))
+        return p
+
+    def quadratic(P):
+        if _diagonal(P):
+            return 0.5 * cp.sum(cp.multiply(param("P", nonneg=True), cp.square(z)))
+        return _quadratic(cp, z, P)
+
     if isinstance(problem, LS):
-        w = np.ones(problem.n) if problem.weights is None else np.asarray(problem.weights, float)
+        w = (np.ones(problem.n) if problem.weights is None else param("weights", nonneg=True))
         objective = 0.5 * cp.sum(cp.multiply(w, cp.square(z)))
-        cons = [np.asarray(problem.A, float) @ z == np.asarray(problem.b, float)]
-    elif isinstance(problem, QP):
-        objective = _quadratic(cp, z, problem.P) + np.asarray(problem.q, float) @ z
-        cons = _linear_constraints(z, problem)
-    elif isinstance(problem, LP):
-        objective = np.asarray(problem.c, float) @ z
-        cons = _linear_constraints(z, problem)
+        cons = [param("A") @ z == param("b")]
+    elif isinstance(problem, (QP, LP)):
+        linear = param("q" if isinstance(problem, QP) else "c") @ z
+        objective = linear + (quadratic(problem.P) if isinstance(problem, QP) else 0)
+        cons = _linear_constraints(z, problem, param)
     else:
-        objective = np.asarray(problem.q, float) @ z
+        objective = param("q") @ z
         if problem.P is not None:
-            objective = objective + _quadratic(cp, z, problem.P)
-        cons = _conic_constraints(cp, z, problem)
-    return cp.Problem(cp.Minimize(objective), cons), z
+            objective = objective + quadratic(problem.P)
+        cons = _conic_constraints(cp, z, param("b") - param("A") @ z, problem.cones)
+    return cp.Problem(cp.Minimize(objective), cons), z, params
+
+
+def _structure_key(problem, cvx_name: str) -> tuple:
+    """What a compiled problem depends on besides its parameters."""
+    def data(name):
+        value = getattr(problem, name, None)
+        if value is None:
+            return None
+        if name == "P" and _diagonal(value):
+            return "diagonal"
+        return np.shape(value), np.asarray(value, float).tobytes()
+
+    shapes = tuple(np.shape(getattr(problem, f, None)) for f in ("A", "G", "weights"))
+    return (type(problem).__name__, cvx_name, problem.n, shapes,
+            getattr(problem, "cones", None), data("P"), data("lb"), data("ub"))
+
+
+CACHE_SIZE = 16
+"""Compiled cvxpy problems kept, one per structure."""
+
+_PROBLEMS: dict[tuple, tuple] = {}
+
+
+def _compiled(cp, problem, cvx_name: str):
+    """The cached problem of this structure with this instant's numbers, or a new one."""
+    key = _structure_key(problem, cvx_name)
+    cached = _PROBLEMS.get(key)
+    if cached is None:
+        cached = build(cp, problem)
+        if CACHE_SIZE > 0:
+            while len(_PROBLEMS) >= CACHE_SIZE:
+                _PROBLEMS.pop(next(iter(_PROBLEMS)))
+            _PROBLEMS[key] = cached
+        return cached
+    for p, getter in cached[2]:
+        p.value = getter(problem)
+    return cached
+
+
+def conic_duals(problem, constraints) -> np.ndarray | None:
+    """cvxpy's multipliers in the rows of the problem's conic form (``None`` if cvxpy
+    gave none). cvxpy's duals of ``A z == b``, ``G z <= h``, ``z >= lb``, ``s >= 0`` and
+    of the cones on ``s = b - A z`` are the conic ones; that of ``s == 0`` changes sign.
+    """
+    parts = []
+    for con in constraints:
+        value = con.dual_value
+        if value is None:
+            return None
+        flat = np.concatenate([np.ravel(v) for v in value]) if isinstance(value, list) \
+            else np.ravel(value)
+        sign = -1.0 if isinstance(problem, Conic) and type(con).__name__ == "Equality" else 1.0
+        parts.append(sign * np.asarray(flat, float))
+    return np.concatenate(parts) if parts else np.zeros(0)
 
 
 def _solve_with(name: str):
@@ -107,12 +200,12 @@ def _solve_with(name: str):
         import cvxpy as cp
 
         start = time.perf_counter()
-        prob, z = build(cp, problem)
+        prob, z, _ = _compiled(cp, problem, cvx_name)
         if initvals is not None:
             z.value = np.asarray(initvals, float)
         built = time.perf_counter()
         prob.solve(solver=cvx_name, warm_start=initvals is not None,
-                   **(settings.options_for(key, tol) | options))
+                   **(settings.options_for(TOLERANCES[key], tol) | options))
         wall = time.perf_counter() - built
         compile_s = prob.compilation_time or 0.0
         stats = prob.solver_stats
@@ -120,7 +213,9 @@ def _solve_with(name: str):
                        iterations=stats.num_iters,
                        message="" if prob.status == "optimal" else f"cvxpy status {prob.status}",
                        objective=prob.value, setup_s=built - start + compile_s,
-                       solve_s=wall - compile_s)
+                       solve_s=wall - compile_s,
+                       duals=conic_duals(problem, prob.constraints) if z.value is not None
+                       else None)
 
     return solve_cvxpy
 
@@ -142,6 +237,6 @@ def backends() -> list[Backend]:
             continue
         accepts = (LS, QP) if key == "osqp" else (LS, QP, LP, Conic)
         limits = {"supports": _no_power_cone} if key == "ecos" else {}
-        found.append(Backend(name, accepts, _solve_with(name), dist_version("cvxpy", key),
-                             extra, "cvxpy", **limits))
+        found.append(Backend(name, accepts, _solve_with(name), ("cvxpy", key), extra, "cvxpy",
+                             tolerances=TOLERANCES[key], **limits))
     return found

@@ -24,7 +24,7 @@ from cardan_forces.formulations.problems import LCP
 
 from . import settings
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 EXTRAS: dict[str, str | None] = dict.fromkeys(("lcp-lemke", "lcp-pgs", "lcp-fb-newton"))
 
@@ -148,13 +148,18 @@ def fb_newton(M: np.ndarray, q: np.ndarray, z0: np.ndarray | None = None, tol: f
     return LCPResult(z, "inaccurate", max_iter, f"max_iter reached, ||Phi||_inf {norm:.1e}")
 
 
+TOLERANCES: dict[str, tuple[str, ...]] = {"lcp-lemke": (), "lcp-pgs": ("tol",),
+                                          "lcp-fb-newton": ("tol",)}
+"""Each method's tolerance parameter (Lemke: a pivoting method, none)."""
+
+
 def _adapter(method, key: str, warm: bool):
     """Wrap one method as a backend function (``initvals`` used only by ``warm`` methods)."""
 
     def solve_lcp(problem: LCP, tol=None, initvals=None, **options) -> Outcome:
         start = time.perf_counter()
         M, q = np.asarray(problem.M, float), np.asarray(problem.q, float)
-        kwargs = settings.options_for(key, tol) | options
+        kwargs = settings.options_for(TOLERANCES[key], tol) | options
         if warm and initvals is not None:
             kwargs["z0"] = initvals
         setup_done = time.perf_counter()
@@ -168,10 +173,10 @@ def _adapter(method, key: str, warm: bool):
 
 def backends() -> list[Backend]:
     """The three LCP methods (NumPy only, always present)."""
-    version = f"cardan-forces ({dist_version('numpy')})"
+    dist = ("cardan-forces", "numpy")
     return [
-        Backend("lcp-lemke", (LCP,), _adapter(lemke, "lcp-lemke", False), version, None, "lcp"),
-        Backend("lcp-pgs", (LCP,), _adapter(pgs, "lcp-pgs", True), version, None, "lcp"),
-        Backend("lcp-fb-newton", (LCP,), _adapter(fb_newton, "lcp-fb-newton", True), version,
-                None, "lcp"),
+        Backend(name, (LCP,), _adapter(method, name, warm), dist, None, "lcp",
+                tolerances=TOLERANCES[name], warm_start=warm)
+        for name, method, warm in (("lcp-lemke", lemke, False), ("lcp-pgs", pgs, True),
+                                   ("lcp-fb-newton", fb_newton, True))
     ]

@@ -17,7 +17,7 @@ import numpy as np
 from cardan_forces.formulations.problems import LS
 
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"numpy-kkt": None}
 
@@ -37,8 +37,10 @@ def solve_ls(problem: LS, tol: float | None = None, initvals=None,
     rank = int(np.sum(sigma > cutoff))
     y = Vt[:rank].T @ ((U[:, :rank].T @ b) / sigma[:rank])
     z = scale * y
+    # W z = A' mu with mu = U S^-1 V' y; in the conic form (P z + A'y = 0) the dual is -mu
+    mu = U[:, :rank] @ ((Vt[:rank] @ y) / sigma[:rank])
     return Outcome(
-        "solved", z,
+        "solved", z, duals=-mu,
         message=f"rank {rank} of {min(A.shape)}",
         objective=0.5 * float(z @ (w * z)),
         setup_s=setup_done - start,
@@ -48,4 +50,4 @@ def solve_ls(problem: LS, tol: float | None = None, initvals=None,
 
 def backends() -> list[Backend]:
     """The SVD backend (NumPy is a core dependency, always present)."""
-    return [Backend("numpy-kkt", (LS,), solve_ls, dist_version("numpy"), None, "numpy")]
+    return [Backend("numpy-kkt", (LS,), solve_ls, ("numpy",), None, "numpy")]

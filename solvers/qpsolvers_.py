@@ -16,7 +16,7 @@ from cardan_forces.formulations.problems import QP
 
 from . import settings
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 DISTRIBUTIONS: dict[str, str] = {
     "clarabel": "clarabel", "daqp": "daqp", "ecos": "ecos", "highs": "highspy", "osqp": "osqp",
@@ -30,6 +30,25 @@ CORE = ("clarabel", "osqp")
 EXTRAS: dict[str, str | None] = {
     f"qpsolvers-{name}": None if name in CORE else name for name in DISTRIBUTIONS
 }
+
+TOLERANCES: dict[str, tuple[str, ...]] = {
+    "clarabel": ("tol_gap_abs", "tol_gap_rel", "tol_feas"),
+    "daqp": ("primal_tol",),
+    "ecos": ("abstol", "reltol", "feastol"),
+    "highs": ("primal_feasibility_tolerance", "dual_feasibility_tolerance"),
+    "osqp": ("eps_abs", "eps_rel"),
+    "piqp": ("eps_abs", "eps_rel"),
+    "proxqp": ("eps_abs",),
+    "quadprog": (),
+    "scs": ("eps_abs", "eps_rel"),
+}
+"""Each solver's own parameters a requested tolerance sets (quadprog: a direct method)."""
+
+SMALLEST_TOL = {"highs": 1e-10}
+"""Smallest tolerance a solver accepts (HiGHS rejects smaller ones)."""
+
+WARM_STARTS = ("osqp", "proxqp", "scs")
+"""Solvers to which qpsolvers passes ``initvals``."""
 
 BOUNDS_AS_ROWS = ("ecos",)
 """Solvers that reject infinite bounds; their finite bounds are passed as rows of G."""
@@ -84,6 +103,27 @@ def bounds_as_rows(problem: QP) -> QP:
     return dataclasses.replace(problem, G=G, h=h, lb=None, ub=None)
 
 
+def conic_duals(problem: QP, sol) -> np.ndarray | None:
+    """qpsolvers' multipliers (``P z + q + A'y + G'z + z_box = 0``) in the rows of
+    ``problem.as_conic()``: equalities, ``G``, finite lower bounds, finite upper bounds
+    (a lower bound's multiplier is ``-z_box``, an upper bound's ``z_box``). ``None`` when
+    the solver reported some of them not.
+    """
+    parts = []
+    for rows, duals in ((problem.A, sol.y), (problem.G, sol.z)):
+        if rows is not None:
+            if duals is None or len(duals) != len(rows):
+                return None
+            parts.append(np.asarray(duals, float))
+    for bound, sign in ((problem.lb, -1.0), (problem.ub, 1.0)):
+        if bound is not None:
+            if sol.z_box is None:
+                return None
+            keep = np.isfinite(bound)
+            parts.append(np.maximum(sign * np.asarray(sol.z_box, float)[keep], 0.0))
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
 def _solve_with(solver: str):
     """The adapter function for one qpsolvers solver."""
 
@@ -105,7 +145,8 @@ def _solve_with(solver: str):
         P, q = np.asarray(problem.P, float), vec(problem.q)
         qp = qpsolvers.Problem(mat(P), q, mat(problem.G), vec(problem.h), mat(problem.A),
                                vec(problem.b), vec(problem.lb), vec(problem.ub))
-        kwargs = settings.options_for(solver, tol)
+        kwargs = settings.options_for(TOLERANCES.get(solver, ()), tol,
+                                      SMALLEST_TOL.get(solver, 0.0))
         if solver == "osqp":
             kwargs["raise_error"] = False  # today's behaviour, without osqp's FutureWarning
         setup_done = time.perf_counter()
@@ -118,7 +159,8 @@ def _solve_with(solver: str):
         z = sol.x
         objective = None if z is None else 0.5 * z @ P @ z + q @ z
         return Outcome(status, z, iterations=_iterations(extras), message=text,
-                       objective=objective, setup_s=setup_done - start + build, solve_s=solve_s)
+                       objective=objective, setup_s=setup_done - start + build, solve_s=solve_s,
+                       duals=conic_duals(problem, sol))
 
     return solve_qp
 
@@ -131,7 +173,9 @@ def backends() -> list[Backend]:
         return []
     return [
         Backend(f"qpsolvers-{name}", (QP,), _solve_with(name),
-                dist_version("qpsolvers", DISTRIBUTIONS.get(name, name)),
-                EXTRAS.get(f"qpsolvers-{name}"), "qpsolvers")
+                ("qpsolvers", DISTRIBUTIONS.get(name, name)),
+                EXTRAS.get(f"qpsolvers-{name}"), "qpsolvers",
+                tolerances=TOLERANCES.get(name, ()), smallest_tol=SMALLEST_TOL.get(name, 0.0),
+                warm_start=name in WARM_STARTS)
         for name in qpsolvers.available_solvers
     ]

@@ -10,9 +10,15 @@ upper bound: a reported success whose residuals exceed :data:`ACCEPT` becomes
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from cardan_forces.formulations.problems import Conic
+
+from .conversions import convert
+from .optimality import measures, recover, unique_optimum
 
 STATUSES = ("solved", "inaccurate", "unbounded", "infeasible", "failed")
 """Every status a record can carry, from best to worst (a run over several instants
@@ -28,8 +34,11 @@ _WITH_ANSWER = ("solved", "inaccurate")
 class Outcome:
     """What an adapter hands back: the solver's own status mapped to :data:`STATUSES`.
 
-    ``z`` is the solver's variable (``None`` when it returned none); ``setup_s`` is the
-    time spent building matrices and solver objects, ``solve_s`` the time in the solver.
+    ``z`` is the solver's variable (``None`` when it returned none); ``duals`` the
+    solver's multipliers in the rows of the problem's conic form (``convert(problem,
+    (Conic,))``, Clarabel's sign convention ``P z + q + A'y = 0``), ``None`` when the
+    solver gives none; ``setup_s`` is the time spent building matrices and solver
+    objects, ``solve_s`` the time in the solver.
     """
 
     status: str
@@ -39,6 +48,7 @@ class Outcome:
     objective: float | None = None
     setup_s: float = 0.0
     solve_s: float = 0.0
+    duals: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -50,7 +60,14 @@ class Record:
     returned). ``residuals`` are relative (see ``ForceChecks.residuals``), ``inf`` for a
     record without forces; ``"reference"`` is ``||x - x_ref|| / max(||x_ref||, 1e-12)``,
     present only when a reference was given. ``iterations`` is the solver's own count,
-    ``None`` when it reports none (MINPACK, SVD).
+    ``None`` when it reports none (MINPACK, SVD). ``optimality`` holds the three
+    measures of :mod:`cardan_forces.solvers.optimality` (``primal``: the worst residual;
+    ``dual``; ``gap``) and ``distance`` (to the reference, only where the optimum is
+    unique); a measure the record has none of is absent (the paper's root finding has
+    only ``primal``). ``duals`` says where the multipliers came from: ``"solver"``,
+    ``"recovered"`` (least squares on the active constraints), ``"lcp"`` (the LCP's own
+    ``w``) or ``"none"``; ``gap_kind`` whether ``gap`` is the duality gap or the
+    objective gap to a given optimal value. ``checks_s`` is the time of these checks.
     """
 
     formulation: str
@@ -65,6 +82,15 @@ class Record:
     message: str = ""
     z: np.ndarray | None = field(default=None, repr=False)
     objective: float | None = None
+    optimality: dict[str, float] = field(default_factory=dict)
+    duals: str = "none"
+    gap_kind: str = ""
+    checks_s: float = 0.0
+
+    def within(self, level: float) -> bool:
+        """Success at accuracy ``level``: an answer, and every measure it has <= level."""
+        return (self.status in _WITH_ANSWER and bool(self.optimality)
+                and all(v <= level for v in self.optimality.values()))
 
     @property
     def solved(self) -> bool:
@@ -90,6 +116,9 @@ class Record:
             "solve_s": _json_float(self.solve_s),
             "iterations": self.iterations,
             "message": self.message,
+            "optimality": {k: _json_float(v) for k, v in self.optimality.items()},
+            "duals": self.duals,
+            "gap_kind": self.gap_kind,
         }
 
 
@@ -118,14 +147,27 @@ def failed_record(
     return finalize(problem, solver, outcome, reference=reference)
 
 
+def judge(status, worst):
+    """The package's status rule, elementwise: a reported ``"solved"`` whose worst
+    residual exceeds :data:`ACCEPT` becomes ``"inaccurate"`` (every path, per instant or
+    batched, decides by this one rule)."""
+    status, worst = np.asarray(status, object), np.asarray(worst, float)
+    return np.where((status == "solved") & ~(worst <= ACCEPT), "inaccurate", status)
+
+
 def finalize(
     problem,
     solver: str,
     outcome: Outcome,
     reference: np.ndarray | None = None,
     extra_setup_s: float = 0.0,
+    optimal_value: float | None = None,
 ) -> Record:
-    """Turn an adapter's outcome into a record, deciding the final status from residuals."""
+    """Turn an adapter's outcome into a record, deciding the final status from residuals
+    and measuring optimality (``optimal_value``: the problem's optimal objective from a
+    high-precision solve, for the objective gap of a record without solver duals).
+    """
+    began = time.perf_counter()
     names = problem.checks.names
     status, notes = outcome.status, [outcome.message] if outcome.message else []
     if status not in STATUSES:
@@ -145,12 +187,18 @@ def finalize(
             status, notes = "failed", [*notes, f"{type(exc).__name__}: {exc}"]
     residuals = problem.checks.residuals(x)
     worst = max(residuals, key=residuals.get)
-    if status == "solved" and residuals[worst] > ACCEPT:
-        status = "inaccurate"
+    decided = str(judge(status, residuals[worst]))
+    if decided != status:
         notes.append(f"{worst} residual {residuals[worst]:.1e} > {ACCEPT:.0e}")
+    status = decided
     if reference is not None:
         residuals["reference"] = _reference_distance(x, reference)
-    objective = outcome.objective if status in _WITH_ANSWER else None
+    answered = status in _WITH_ANSWER
+    optimality, duals, gap_kind = _optimality(problem, outcome if answered else None,
+                                              residuals[worst], optimal_value)
+    if reference is not None and unique_optimum(problem):
+        optimality["distance"] = residuals["reference"]
+    objective = outcome.objective if answered else None
     return Record(
         formulation=problem.formulation,
         solver=solver,
@@ -164,4 +212,40 @@ def finalize(
         message="; ".join(notes),
         z=None if outcome.z is None else np.asarray(outcome.z),
         objective=None if objective is None else float(objective),
+        optimality=optimality,
+        duals=duals,
+        gap_kind=gap_kind,
+        checks_s=time.perf_counter() - began,
     )
+
+
+def _optimality(problem, outcome, primal: float, optimal_value):
+    """``(measures, duals source, gap kind)`` of an answered outcome (``None``: none)."""
+    from cardan_forces.formulations.problems import LCP, NLS
+
+    if outcome is None:
+        return {"primal": math.inf, "dual": math.inf, "gap": math.inf}, "none", ""
+    if isinstance(problem, NLS):
+        return {"primal": primal}, "none", ""
+    z = np.asarray(outcome.z, float)
+    if isinstance(problem, LCP):
+        w = np.asarray(problem.M, float) @ z + np.asarray(problem.q, float)
+        unit = max(float(np.abs(problem.q).max(initial=0.0)), float(np.abs(z).max(initial=0.0)),
+                   1e-300)
+        return {"primal": primal, "dual": max(0.0, -float(w.min(initial=0.0))) / unit,
+                "gap": abs(float(z @ w)) / unit ** 2}, "lcp", "complementarity"
+    conic = convert(problem, (Conic,))
+    if conic is None:
+        return {"primal": primal}, "none", ""
+    source = "solver" if outcome.duals is not None else "recovered"
+    y = outcome.duals if source == "solver" else recover(conic.P, conic.q, conic.A, conic.b,
+                                                          conic.cones, z)
+    found = measures(conic.P, conic.q[None], np.asarray(conic.A, float)[None],
+                     np.asarray(conic.b, float)[None], conic.cones, z[None],
+                     np.asarray(y, float)[None])
+    gap, kind = float(found["gap"][0]), "duality"
+    if source != "solver" and optimal_value is not None:
+        objective = float(found["objective"][0])
+        gap = abs(objective - optimal_value) / max(abs(optimal_value), 1e-300)
+        kind = "objective"
+    return {"primal": primal, "dual": float(found["dual"][0]), "gap": gap}, source, kind

@@ -5,6 +5,11 @@ provide and the pip extra that installs it, ``None`` for core dependencies) and
 ``backends()``, which imports its package and returns ``[]`` when it is missing. A
 missing package therefore makes its backends absent, never an import error, and asking
 for one raises :class:`SolverNotFound` with the install hint.
+
+A backend declares everything the rest of the package asks about it (:class:`Backend`):
+its tolerance parameters, whether it warm-starts, whether it solves batches, the
+distributions it runs on. Adding a backend is one adapter file and one entry in
+:data:`ADAPTERS`; no list elsewhere changes.
 """
 
 from __future__ import annotations
@@ -19,10 +24,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import settings
 from .conversions import convert, reachable
+from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
 from .record import Outcome, Record, failed_record, finalize
 
-ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "lcp_")
+ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "lcp_",
+            "numpy_batched_", "moreau_")
 """Adapter modules of this package, loaded lazily by :func:`available`."""
 
 
@@ -40,20 +48,40 @@ def _always(problem) -> bool:
 
 @dataclass(frozen=True)
 class Backend:
-    """One named way to solve problems.
+    """One named way to solve problems, and what it declares about itself.
 
     ``solve(problem, tol, initvals, **options) -> Outcome`` receives a problem of one of
     the ``accepts`` classes for which ``supports(problem)`` holds (e.g. no power cone
-    for ECOS). ``extra`` is the pip extra that installs it (``None``: core dependency).
+    for ECOS); ``None`` for a backend that only batches. ``distributions`` are the
+    installed distributions it runs on (its version), ``extra`` the pip extra that
+    installs it (``None``: core dependency). ``tolerances`` are the solver's own
+    parameters a requested tolerance sets (empty: a direct method, ``tol`` ignored),
+    clamped below at ``smallest_tol``; ``warm_start`` whether ``initvals`` reach the
+    solver; ``batch(batch, tol, **options) -> BatchOutcome`` solves all instants of a
+    formulation's batch of one of the ``batch_accepts`` classes at once.
     """
 
     name: str
     accepts: tuple[type, ...]
-    solve: Callable[..., Outcome]
-    version: str
+    solve: Callable[..., Outcome] | None
+    distributions: tuple[str, ...]
     extra: str | None
     family: str
     supports: Callable[[object], bool] = _always
+    tolerances: tuple[str, ...] = ()
+    smallest_tol: float = 0.0
+    warm_start: bool = False
+    batch: Callable | None = None
+    batch_accepts: tuple[type, ...] = ()
+
+    @property
+    def version(self) -> str:
+        """``"name version"`` of its distributions, joined by ``" + "``."""
+        return dist_version(*self.distributions)
+
+    def options(self, tol: float | None) -> dict[str, float]:
+        """The solver's own keyword arguments for tolerance ``tol`` (none for ``None``)."""
+        return settings.options_for(self.tolerances, tol, self.smallest_tol)
 
 
 def dist_version(*dists: str) -> str:
@@ -115,7 +143,7 @@ def backends_for(problem) -> list[str]:
     """Names of the backends that can solve ``problem`` (directly or after conversion)."""
     names, converted = [], {}
     for backend in available().values():
-        if not reachable(type(problem), backend.accepts):
+        if backend.solve is None or not reachable(type(problem), backend.accepts):
             continue
         key = backend.accepts
         if key not in converted:
@@ -134,6 +162,7 @@ def solve(
     tol: float | None = None,
     initvals: np.ndarray | None = None,
     reference: np.ndarray | None = None,
+    optimal_value: float | None = None,
     **options,
 ) -> Record:
     """Solve ``problem`` with backend ``solver`` and return the package-judged record.
@@ -141,13 +170,15 @@ def solve(
     ``tol`` is translated by :mod:`cardan_forces.solvers.settings` (None: the solver's defaults);
     ``initvals`` is a start in the solver's variable (ignored where the backend cannot
     warm-start); ``reference`` is the force vector the record is compared with;
+    ``optimal_value`` the problem's optimal objective (for the objective gap of a
+    backend without duals);
     ``options`` go to the backend unchanged and override ``tol``. Solver failures of any
     kind (exceptions, NaN, iteration limits) come back as records; only an unknown
     backend (:class:`SolverNotFound`) or a problem class it cannot take
     (:class:`UnsupportedProblem`) raise.
     """
     backend = get(solver)
-    if not reachable(type(problem), backend.accepts):
+    if backend.solve is None or not reachable(type(problem), backend.accepts):
         raise UnsupportedProblem(f"{solver} takes {[c.__name__ for c in backend.accepts]}, "
                                  f"not {type(problem).__name__}")
     start = time.perf_counter()
@@ -174,4 +205,31 @@ def solve(
     if notes:
         message = "; ".join(filter(None, [outcome.message, *notes]))
         outcome = dataclasses.replace(outcome, message=message)
-    return finalize(problem, solver, outcome, reference=reference, extra_setup_s=convert_s)
+    return finalize(problem, solver, outcome, reference=reference, extra_setup_s=convert_s,
+                    optimal_value=optimal_value)
+
+
+def batch_backends(batch) -> list[str]:
+    """Names of the backends that solve ``batch`` (a formulation's batch) as one batch."""
+    return [b.name for b in available().values() if supports_batch(b, batch)]
+
+
+def solve_batch(batch, solver: str, tol: float | None = None,
+                reference: np.ndarray | None = None, **options) -> BatchRecord:
+    """Solve every instant of ``batch`` at once with backend ``solver``: the records of
+    all instants as arrays, judged as :func:`solve` judges one (failures are records).
+    """
+    backend = get(solver)
+    if not supports_batch(backend, batch):
+        raise UnsupportedProblem(f"{solver} does not solve a {type(batch).__name__} batch")
+    T = len(batch.instants)
+    start = time.perf_counter()
+    try:
+        outcome = backend.batch(batch, tol=tol, **options)
+    except (KeyboardInterrupt, SystemExit):
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a failing solver is a failed batch
+        outcome = BatchOutcome(np.full(T, "failed", object), np.zeros((T, 0)), None,
+                               np.zeros(T, int), 0.0, time.perf_counter() - start,
+                               messages=(f"{type(exc).__name__}: {exc}",) * T)
+    return finalize_batch(batch, solver, outcome, reference=reference)

@@ -24,11 +24,22 @@ from cardan_forces.formulations.problems import LP, LS, NLS, QP
 
 from . import settings
 from .record import Outcome
-from .registry import Backend, dist_version
+from .registry import Backend
 
 EXTRAS: dict[str, str | None] = dict.fromkeys(
     ("scipy-lsq_linear", "scipy-highs", "scipy-fsolve", "scipy-root-lm")
 )
+
+TOLERANCES: dict[str, tuple[str, ...]] = {
+    "lsq_linear": ("tol",),
+    "highs": ("primal_feasibility_tolerance", "dual_feasibility_tolerance"),
+    "fsolve": ("xtol",),
+    "root-lm": ("xtol", "ftol"),
+}
+"""Each method's own parameters a requested tolerance sets."""
+
+HIGHS_SMALLEST = 1e-10
+"""Smallest tolerance HiGHS accepts."""
 
 LINPROG_STATUS = {0: "solved", 1: "inaccurate", 2: "infeasible", 3: "unbounded", 4: "failed"}
 """``scipy.optimize.linprog`` status codes (1: iteration limit, 4: numerical trouble)."""
@@ -59,7 +70,7 @@ def solve_lsq_linear(problem: LS | QP, tol=None, initvals=None, **options) -> Ou
     lb = np.full(n, -np.inf) if problem.lb is None else problem.lb
     ub = np.full(n, np.inf) if problem.ub is None else problem.ub
     setup_done = time.perf_counter()
-    kwargs = {"method": "bvls"} | settings.options_for("lsq_linear", tol) | options
+    kwargs = {"method": "bvls"} | settings.options_for(TOLERANCES["lsq_linear"], tol) | options
     res = lsq_linear(R, r, bounds=(lb, ub), **kwargs)
     status = "solved" if res.status > 0 else ("inaccurate" if res.status == 0 else "failed")
     z = res.x
@@ -79,7 +90,7 @@ def solve_highs(problem: LP, tol=None, initvals=None, **options) -> Outcome:
     setup_done = time.perf_counter()
     res = linprog(problem.c, A_ub=problem.G, b_ub=problem.h, A_eq=problem.A, b_eq=problem.b,
                   bounds=np.column_stack([lb, ub]), method="highs",
-                  options=settings.options_for("highs", tol) | options)
+                  options=settings.options_for(TOLERANCES["highs"], tol, HIGHS_SMALLEST) | options)
     return Outcome(LINPROG_STATUS.get(res.status, "failed"), res.x, iterations=int(res.nit),
                    message=res.message, objective=res.fun,
                    setup_s=setup_done - start, solve_s=time.perf_counter() - setup_done)
@@ -106,7 +117,7 @@ def solve_fsolve(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
     z0 = problem.z0 if initvals is None else initvals
     start = time.perf_counter()
     z, info, ier, mesg = fsolve(problem.fun, np.asarray(z0, float), fprime=problem.jac,
-                                full_output=True, **(settings.options_for("fsolve", tol) | options))
+                                full_output=True, **(settings.options_for(TOLERANCES["fsolve"], tol) | options))
     status = "solved" if ier == 1 and np.all(np.isfinite(info["fvec"])) else "failed"
     solve_s = time.perf_counter() - start
     return Outcome(status, z, message=f"{mesg.strip()} (nfev {info['nfev']}, ier {ier})"
@@ -120,7 +131,7 @@ def solve_root_lm(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
     z0 = problem.z0 if initvals is None else initvals
     start = time.perf_counter()
     sol = root(problem.fun, np.asarray(z0, float), jac=problem.jac, method="lm",
-               options=settings.options_for("root-lm", tol) | options)
+               options=settings.options_for(TOLERANCES["root-lm"], tol) | options)
     if not (sol.success and np.all(np.isfinite(sol.fun))):
         status = "failed"
     else:  # status 4: a stationary point of ||F||^2, not necessarily a root
@@ -136,11 +147,14 @@ def backends() -> list[Backend]:
         import scipy.optimize  # noqa: F401
     except ImportError:
         return []
-    version = dist_version("scipy")
+    dist = ("scipy",)
     return [
-        Backend("scipy-lsq_linear", (LS, QP), solve_lsq_linear, version, None, "scipy",
-                supports=_no_inequalities),
-        Backend("scipy-highs", (LP,), solve_highs, version, None, "scipy"),
-        Backend("scipy-fsolve", (NLS,), solve_fsolve, version, None, "scipy"),
-        Backend("scipy-root-lm", (NLS,), solve_root_lm, version, None, "scipy"),
+        Backend("scipy-lsq_linear", (LS, QP), solve_lsq_linear, dist, None, "scipy",
+                supports=_no_inequalities, tolerances=TOLERANCES["lsq_linear"]),
+        Backend("scipy-highs", (LP,), solve_highs, dist, None, "scipy",
+                tolerances=TOLERANCES["highs"], smallest_tol=HIGHS_SMALLEST),
+        Backend("scipy-fsolve", (NLS,), solve_fsolve, dist, None, "scipy",
+                tolerances=TOLERANCES["fsolve"], warm_start=True),
+        Backend("scipy-root-lm", (NLS,), solve_root_lm, dist, None, "scipy",
+                tolerances=TOLERANCES["root-lm"], warm_start=True),
     ]

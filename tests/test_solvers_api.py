@@ -27,7 +27,7 @@ from cardan_forces.solvers.reference_problems import references
 
 REFS = {ref.name: ref for ref in references()}
 JSON_KEYS = {"formulation", "solver", "status", "residuals", "forces", "setup_s", "solve_s",
-             "iterations", "message"}
+             "iterations", "message", "optimality", "duals", "gap_kind"}
 
 
 def _nan_ls():
@@ -43,8 +43,8 @@ def fake_backend(monkeypatch):
 
     def register(solve_fn):
         available()  # load the real ones first
-        backend = Backend("fake", (REFS["ls_min_norm"].problem.__class__,), solve_fn, "0",
-                          None, "test")
+        backend = Backend("fake", (REFS["ls_min_norm"].problem.__class__,), solve_fn,
+                          ("numpy",), None, "test")
         monkeypatch.setitem(registry._CACHE, "fake", backend)
 
     return register
@@ -165,11 +165,11 @@ def test_initvals_reach_warm_startable_solvers():
 
 
 def test_tol_none_changes_nothing():
-    assert all(settings.options_for(key, None) == {} for key in settings.TOLERANCE_PARAMETERS)
-    assert settings.options_for("osqp", 1e-7) == {"eps_abs": 1e-7, "eps_rel": 1e-7}
-    assert settings.options_for("highs", 1e-13)["primal_feasibility_tolerance"] == 1e-10
-    with pytest.raises(KeyError):
-        settings.options_for("unknown-solver", 1e-6)
+    assert all(b.options(None) == {} for b in available().values())
+    assert settings.options_for(("eps_abs", "eps_rel"), 1e-7) == {"eps_abs": 1e-7,
+                                                                  "eps_rel": 1e-7}
+    assert available()["scipy-highs"].options(1e-13)["primal_feasibility_tolerance"] == 1e-10
+    assert available()["numpy-kkt"].options(1e-6) == {}  # a direct method has none
 
 
 def test_tol_reaches_the_solver():

@@ -1,0 +1,341 @@
+"""Output of ``cardan bench``: CSV files, figures, the Markdown report and the JSON object."""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import math
+from pathlib import Path
+
+from .bench_metrics import PROFILES, SHIFT_S, TAUS, best_runs
+from .environment import json_number, machine, versions
+
+THROUGHPUT_COLUMNS = ("formulation", "solver", "mode", "instant", "t_s", "status", "time_s",
+                      "build_s", "convert_s", "solve_s", "checks_s", "iterations", "primal",
+                      "dual", "gap", "distance", "equilibrium", "sign", "complementarity",
+                      "cone")
+ACCURACY_COLUMNS = ("formulation", "solver", "tol", "instant", "t_s", "status", "time_s",
+                    "primal", "dual", "gap", "distance", "equilibrium", "sign",
+                    "complementarity", "cone", "iterations")
+PROFILE_COLUMNS = ("formulation", "profile", "level", "solver", "solved", "sgm_ratio", "tau",
+                   "fraction")
+
+
+def write_csv(path: Path, rows: list[dict], columns: tuple[str, ...]) -> None:
+    """Long-format CSV with fixed ``columns`` (floats with 4 significant digits)."""
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(columns)
+        for r in rows:
+            writer.writerow([_cell(r.get(c, "")) for c in columns])
+
+
+def _cell(value):
+    if value is None:
+        return ""
+    return f"{value:.4g}" if isinstance(value, float) else value
+
+
+def profile_rows(profiles: list[dict]) -> list[dict]:
+    """The profiles in long format, one row per curve point."""
+    return [{k: p[k] for k in PROFILE_COLUMNS[:6]} | {"tau": float(tau), "fraction": frac}
+            for p in profiles for tau, frac in zip(TAUS, p["curve"])]
+
+
+def _figure(panels: int, cols: int = 3):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cols = max(1, min(cols, panels))
+    rows = math.ceil(panels / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5 * cols, 4 * rows), squeeze=False)
+    for ax in axes.flat[panels:]:
+        ax.set_visible(False)
+    return plt, fig, axes
+
+
+def plot_pareto(points: list[dict], path: Path) -> None:
+    """Log-log time per instant vs worst optimality measure, one panel per formulation,
+    one marker per backend, the front as a step line; 0 is drawn at 1e-17."""
+    names = list(dict.fromkeys(p["formulation"] for p in points))
+    plt, fig, axes = _figure(len(names))
+    markers = "os^vD<>phX*P8"
+    for ax, name in zip(axes.flat, names):
+        mine = [p for p in points if p["formulation"] == name and math.isfinite(p["error"])]
+        for k, solver in enumerate(dict.fromkeys(p["solver"] for p in mine)):
+            pts = sorted((p for p in mine if p["solver"] == solver), key=lambda p: p["time_s"])
+            ax.plot([p["time_s"] for p in pts], [max(p["error"], 1e-17) for p in pts],
+                    markers[k % len(markers)], ls=":", lw=0.8, label=solver)
+        front = sorted((p for p in mine if p["front"]), key=lambda p: p["time_s"])
+        if front:
+            ax.step([p["time_s"] for p in front], [max(p["error"], 1e-17) for p in front],
+                    "k-", where="post", lw=1.2, label="front")
+        ax.set(xscale="log", yscale="log", title=name, xlabel="time per instant (s)",
+               ylabel="worst optimality measure")
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_profiles(profiles: list[dict], path: Path) -> None:
+    """Dolan-Moré curves, one panel per formulation x profile."""
+    panels = list(dict.fromkeys((p["formulation"], p["profile"]) for p in profiles))
+    plt, fig, axes = _figure(len(panels), cols=4)
+    for ax, (formulation, name) in zip(axes.flat, panels):
+        for p in profiles:
+            if (p["formulation"], p["profile"]) == (formulation, name):
+                ax.step(TAUS, p["curve"], where="post", lw=1.0, label=p["solver"])
+        level = next(p["level"] for p in profiles if p["profile"] == name)
+        ax.set(xscale="log", ylim=(-0.02, 1.02), title=f"{formulation}, {name} ({level:g})",
+               xlabel="tau (time / fastest)", ylabel="share of instants")
+        ax.legend(fontsize=5)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def _fmt(value: float, digits: int = 2) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    return "inf" if value == math.inf else f"{value:.{digits}e}"
+
+
+def _us(seconds: float) -> str:
+    return f"{seconds * 1e6:.1f}"
+
+
+def _one_line(text: str, width: int = 120) -> str:
+    """A message as one table cell: whitespace collapsed, no pipes, at most ``width``."""
+    return " ".join(str(text).replace("|", "/").split())[:width]
+
+
+def report(results: dict, settings: dict) -> str:
+    """The Markdown report (each table under a one-line title)."""
+    lines = _header(results, settings)
+    lines += _throughput(results["summary"])
+    lines += _best(results["summary"])
+    lines += _conic_split(results["summary"])
+    lines += _targets(results["targets"])
+    lines += _success(results["success"],
+                      sorted({r["level"] for r in results["success"]}, reverse=True))
+    lines += _profiles(results["profiles"])
+    lines += _pareto(results["points"], results["references"])
+    lines += _stages(results["stages"])
+    lines += _unsolved(results["summary"])
+    lines += ["", "## Known limitations", "", *_limitations(results, settings)]
+    return "\n".join(lines) + "\n"
+
+
+def _header(results, settings) -> list[str]:
+    builds = ", ".join(f"{k} {v:.2f} s" for k, v in results["setup"].items())
+    return [
+        f"# cardan bench: scene {settings['scene']}", "",
+        f"- date: {datetime.datetime.now().isoformat(timespec='seconds')}",
+        f"- machine: {machine()}",
+        f"- versions: {versions()}",
+        f"- settings: {settings['instants']} instants ({settings['span']}), budget "
+        f"{settings['budget_s']:g} s per per-instant run, accuracy on {settings['samples']} "
+        f"evenly spaced instants over the ladder "
+        f"{', '.join(f'{t:g}' for t in settings['ladder'])} and each backend's defaults"
+        f"{', quick' if settings['quick'] else ''}; wall time {settings['wall_s']:.0f} s",
+        f"- one-time setup: motion {settings['simulate_s']:.2f} s, operator "
+        f"{settings['operator_s'] * 1e3:.1f} ms; every formulation's problems built once "
+        f"per operator: {builds}",
+        "- time per instant = taking the prebuilt problem (build) + conversion and setup "
+        "(the package's and the adapter's matrices) + the solver + the package's checks "
+        "(residuals, optimality); batched: the median of repeated runs over all instants, "
+        "divided by their number",
+        "- accuracy = optimality from the problem data: primal residual, dual residual, "
+        "duality gap (objective gap to a high-precision solve for records without solver "
+        "duals), and the distance to the reference only where the optimum is unique; a row "
+        "succeeds at a level when all its measures are within it",
+        f"- sgm: shifted geometric mean of the time per instant, shift {SHIFT_S:g} s",
+        "- all times are wall-clock on a machine shared with other work: read them as "
+        "ratios within this run",
+    ]
+
+
+def _throughput(summary) -> list[str]:
+    lines = ["", "## Throughput per formulation x backend x mode (time split in us per "
+             "instant)", "",
+             "| formulation | solver | mode | instants | instants/s | sgm ms | solved | build "
+             "| conversion | solver | checks | other | solver share |",
+             "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for e in summary:
+        s = e["split_s"]
+        lines.append(
+            f"| {e['formulation']} | {e['solver']} | {e['mode']} | {e['instants']} | "
+            f"{e['instants_per_s']:.1f} | {e['sgm_s'] * 1e3:.3f} | "
+            f"{100 * e['success_rate']:.1f}% | {_us(s['build_s'])} | {_us(s['convert_s'])} | "
+            f"{_us(s['solve_s'])} | {_us(s['checks_s'])} | {_us(s['other_s'])} | "
+            f"{100 * e['solver_share']:.0f}% |")
+    return lines
+
+
+def best_table(summary) -> list[dict]:
+    """Per formulation: its best run (solving every instant) and its ratio to the
+    paper method's fastest run of the same benchmark."""
+    best = best_runs(summary)
+    paper = max((e for e in summary if e["formulation"] == "paper"),
+                key=lambda e: e["instants_per_s"], default=None)
+    return [{"formulation": name, "solver": e["solver"], "mode": e["mode"],
+             "instants_per_s": e["instants_per_s"],
+             "paper_ratio": e["instants_per_s"] / paper["instants_per_s"] if paper else None}
+            for name, e in best.items()]
+
+
+def _best(summary) -> list[str]:
+    lines = ["", "## Best backend per formulation (runs that solved every instant) and ratio "
+             "to the paper method", "",
+             "| formulation | best backend | mode | instants/s | x paper |",
+             "|---|---|---|---:|---:|"]
+    for b in best_table(summary):
+        ratio = "" if b["paper_ratio"] is None else f"{b['paper_ratio']:.1f}"
+        lines.append(f"| {b['formulation']} | {b['solver']} | {b['mode']} | "
+                     f"{b['instants_per_s']:.0f} | {ratio} |")
+    return lines
+
+
+def _conic_split(summary) -> list[str]:
+    rows = [e for e in summary if e["solver"] == "clarabel" and e["mode"] == "cold"]
+    lines = ["", "## Whose time: one conic instant (clarabel, per instant)", ""]
+    for e in rows:
+        s = e["split_s"]
+        lines.append(f"- `{e['formulation']}`: build {_us(s['build_s'])} us, conversion "
+                     f"{_us(s['convert_s'])} us, solver {_us(s['solve_s'])} us, checks "
+                     f"{_us(s['checks_s'])} us, other {_us(s['other_s'])} us: the solver's "
+                     f"share {100 * e['solver_share']:.0f}%")
+    return lines if rows else []
+
+
+def _targets(rows) -> list[str]:
+    lines = ["", "## Targets (measured in this run)", "",
+             "| target | measured | wanted | met | detail |", "|---|---:|---:|---|---|"]
+    for t in rows:
+        value = "not run" if t["value"] is None else f"{t['value']:.3g}"
+        met = "" if t["met"] is None else ("met" if t["met"] else "NOT met")
+        lines.append(f"| {t['name']} | {value} | {t['wanted']:g} | {met} | {t['detail']} |")
+    return lines
+
+
+def _success(rows, ladder) -> list[str]:
+    lines = ["", "## Success per accuracy level (all optimality measures <= level, in the "
+             "backend's best run: its defaults or a tolerance of the ladder)", "",
+             "| formulation | solver | " + " | ".join(f"{t:g}" for t in ladder) + " |",
+             "|---|---|" + "---:|" * len(ladder)]
+    table: dict[tuple, dict] = {}
+    for r in rows:
+        table.setdefault((r["formulation"], r["solver"]), {})[r["level"]] = r["rate"]
+    for (formulation, solver), rates in table.items():
+        cells = " | ".join(f"{100 * rates[t]:.0f}%" if t in rates else "" for t in ladder)
+        lines.append(f"| {formulation} | {solver} | {cells} |")
+    return lines
+
+
+def _profiles(profiles) -> list[str]:
+    names = " / ".join(f"{n} ({'defaults' if t is None else 'smallest tol'}, level {lv:g})"
+                       for n, t, lv in PROFILES)
+    lines = ["", f"## Performance profiles: {names}", "",
+             "Shifted geometric mean time over the best backend's (failures counted at 10x "
+             "the slowest success); curves in `bench_profiles.png`, points in "
+             "`bench_profiles.csv`.", "",
+             "| formulation | profile | solver | solved | sgm ratio | share within 10x |",
+             "|---|---|---|---:|---:|---:|"]
+    ten = int(abs(TAUS - 10.0).argmin())
+    for p in sorted(profiles, key=lambda p: (p["formulation"], p["profile"], p["sgm_ratio"])):
+        lines.append(f"| {p['formulation']} | {p['profile']} | {p['solver']} | "
+                     f"{100 * p['solved']:.0f}% | {p['sgm_ratio']:.2f} | "
+                     f"{100 * p['curve'][ten]:.0f}% |")
+    return lines
+
+
+def _pareto(points, references) -> list[str]:
+    lines = ["", "## Pareto front per formulation (time sgm vs worst optimality measure)", "",
+             "Figure: `bench_pareto.png`.", "",
+             "| formulation | reference | solver | tol | time ms | worst measure | median | "
+             "max equil |", "|---|---|---|---|---:|---:|---:|---:|"]
+    for p in sorted((p for p in points if p["front"]),
+                    key=lambda p: (p["formulation"], p["time_s"])):
+        lines.append(f"| {p['formulation']} | {references[p['formulation']][0]} | "
+                     f"{p['solver']} | {p['tol']} | {p['time_s'] * 1e3:.3f} | "
+                     f"{_fmt(p['error'])} | {_fmt(p['error_median'])} | "
+                     f"{_fmt(p['equilibrium'])} |")
+    return lines
+
+
+def _stages(stages) -> list[str]:
+    lines = ["", "## Batched runs: where the time goes (us per instant)", ""]
+    for (formulation, solver), parts in stages.items():
+        lines.append(f"- `{formulation}` {solver}: "
+                     + ", ".join(f"{k} {_us(v)}" for k, v in parts.items()))
+    return lines
+
+
+def _unsolved(summary) -> list[str]:
+    lines = ["", "## Runs not always solved", "",
+             "| formulation | solver | mode | solved | first message |", "|---|---|---|---:|---|"]
+    for e in summary:
+        if e["success_rate"] < 1.0:
+            lines.append(f"| {e['formulation']} | {e['solver']} | {e['mode']} | "
+                         f"{100 * e['success_rate']:.1f}% | {_one_line(e['note'])} |")
+    return lines
+
+
+def _limitations(results, settings) -> list[str]:
+    cut = [f"{e['formulation']}/{e['solver']}/{e['mode']} ({e['instants']})"
+           for e in results["summary"] if e["instants"] < settings["instants"]]
+    unsolved = [f"{name} {n}" for name, (_, n) in results["references"].items() if n]
+    return [
+        f"- Per-instant runs stop after {settings['budget_s']:g} s (not the paper's); these "
+        f"ran on the first instants only (count in brackets): {', '.join(cut) or 'none'}.",
+        "- cvxpy compiles one parametrized problem per structure (DPP) and reuses it; that "
+        "first compilation (up to seconds for a conic form) falls in the run's first "
+        "instant. Clarabel keeps one solver per structure and updates its data; moreau "
+        "one compiled structure per batch shape.",
+        "- The time split of a batched row spreads the batch's time evenly over its "
+        "instants; its `conversion` is the layout and setup of the batch.",
+        "- References (for the objective gap and, where the optimum is unique, the "
+        "distance): the SVD for least norm and quadprog for QPs are exact; conic references "
+        f"are Clarabel at 1e-10, not `solved` at: {', '.join(unsolved) or 'no sample'}.",
+        "- The paper's root finding and the LCP have no objective: their accuracy is their "
+        "own residuals (and, for the LCP, its complementarity).",
+        "- Wall-clock times of one process on a shared machine; single runs of the "
+        "per-instant loops, so rates carry noise: compare ratios within one run.",
+    ]
+
+
+def json_object(results: dict) -> dict:
+    """The strict-JSON summary: throughput, pareto, success, profiles, targets, best."""
+    def num(value):
+        return None if value is None else json_number(value)
+
+    return {
+        "throughput": [{"formulation": e["formulation"], "solver": e["solver"],
+                        "mode": e["mode"], "instants": e["instants"],
+                        "instants_per_s": num(e["instants_per_s"]),
+                        "success_rate": num(e["success_rate"]),
+                        "setup_s": num(e["setup_s"]),
+                        "max_equilibrium": num(e["max_equilibrium"]),
+                        "solver_share": num(e["solver_share"]),
+                        "time_split_s": {k: num(v) for k, v in e["split_s"].items()}}
+                       for e in results["summary"]],
+        "pareto": [{"formulation": p["formulation"], "solver": p["solver"],
+                    "tol": None if p["tol"] == "default" else p["tol"],
+                    "time_s": num(p["time_s"]), "error": num(p["error"]),
+                    "equilibrium": num(p["equilibrium"])}
+                   for p in results["points"] if p["front"]],
+        "success": [{k: num(r[k]) if isinstance(r[k], float) else r[k] for k in r}
+                    for r in results["success"]],
+        "profiles": [{"formulation": p["formulation"], "profile": p["profile"],
+                      "level": p["level"], "solver": p["solver"], "solved": num(p["solved"]),
+                      "sgm_ratio": num(p["sgm_ratio"]),
+                      "tau": [float(t) for t in TAUS], "curve": p["curve"]}
+                     for p in results["profiles"]],
+        "targets": [{k: num(v) if isinstance(v, float) else v for k, v in t.items()}
+                    for t in results["targets"]],
+        "best": [{k: num(v) if isinstance(v, float) else v for k, v in b.items()}
+                 for b in best_table(results["summary"])],
+    }

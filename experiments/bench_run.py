@@ -1,0 +1,280 @@
+"""Running ``cardan bench``: every formulation x backend x mode over an operator's instants.
+
+Each formulation's problems are built once per operator (:func:`prepare`, reported as
+one-time setup); a per-instant run then takes its problem and spends its time in the
+package's ``solve`` only, split into conversion (the package's and the adapter's
+matrices), solver, and checks (residuals and optimality). Batched backends solve the
+formulation's batch (:mod:`cardan_forces.formulations.batch`) at once.
+
+Rows are dicts, one per run and instant (a failed run is a row with ``inf`` measures).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.formulations.problems import LCP, LS, NLS, QP
+from cardan_forces.solvers import available, backends_for, solve
+from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.optimality import objective_value
+from cardan_forces.solvers.registry import batch_backends, solve_batch
+
+LADDER = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
+QUICK_LADDER = (1e-4, 1e-8)
+SAMPLES, QUICK_SAMPLES = 15, 5
+"""Evenly spaced instants of the accuracy runs."""
+QUICK_INSTANTS = 41
+BUDGET_S = 2.0
+"""Seconds after which a per-instant run stops (not the paper's, the baseline)."""
+REPEATS = 20
+BATCH_BUDGET_S = 0.5
+"""A batched run is repeated up to ``REPEATS`` times or this long after one warm-up run
+(numba compiles on a process's first call); its time is the median."""
+
+QUICK_SOLVERS = ("scipy-fsolve", "numpy-kkt", "qpsolvers-osqp", "clarabel", "lcp-lemke",
+                 "lcp-pgs", "numpy-batched", "moreau")
+
+RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
+MEASURES = ("primal", "dual", "gap", "distance")
+SPLIT = ("build_s", "convert_s", "solve_s", "checks_s")
+"""Time per instant: taking the problem, conversion and setup, the solver, the checks."""
+
+
+def progress(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+@dataclass
+class Prepared:
+    """One formulation built once per operator: its problems at every instant, the
+    build time, and its batches (built on demand, with their build time)."""
+
+    name: str
+    op: object
+    instants: np.ndarray
+    problems: list
+    build_s: float
+    batch_s: dict = field(default_factory=dict)
+
+    def batch(self, kind: str, instants=None):
+        """The ``"least_norm"`` or ``"conic"`` batch at ``instants`` (default all)."""
+        chosen = self.instants if instants is None else np.asarray(instants, int)
+        began = time.perf_counter()
+        if kind == "least_norm":
+            out = fbatch.least_norm_batch(self.op, self.name, chosen)
+        else:
+            out = fbatch.conic_batch([self.problems[int(i)] for i in chosen], chosen)
+        self.batch_s.setdefault(kind, time.perf_counter() - began)
+        return out
+
+
+def prepare(op, name: str, instants) -> Prepared:
+    """Build the formulation's problem at every instant once (timed)."""
+    began = time.perf_counter()
+    problems = fbatch.build_problems(op, name, instants)
+    return Prepared(name, op, np.asarray(instants, int), problems, time.perf_counter() - began)
+
+
+def batch_kind(solver: str, prepared: Prepared) -> str | None:
+    """Which batch of the formulation the batched backend ``solver`` takes, if any."""
+    accepts = get_backend(solver).batch_accepts
+    if fbatch.LeastNormBatch in accepts and prepared.name in fbatch.LEAST_NORM:
+        return "least_norm"
+    return "conic" if fbatch.ConicBatch in accepts else None
+
+
+def plan(op, formulations=None, solvers=None, quick=False) -> dict[str, list[str]]:
+    """Backends per formulation: per-instant ones that take its problem, then batched
+    ones that take its batch; limited to ``solvers`` if given, to :data:`QUICK_SOLVERS`
+    when ``quick``. Without ``formulations``, every one the scene calls for.
+    """
+    out = {}
+    wanted = QUICK_SOLVERS if quick and solvers is None else solvers
+    for name in formulations or FORMULATIONS:
+        try:
+            problems = fbatch.build_problems(op, name, [0, 1])
+        except NotApplicable:
+            if formulations:
+                raise
+            continue
+        usable = backends_for(problems[0]) + _batched(op, name, problems)
+        out[name] = usable if wanted is None else [s for s in usable if s in wanted]
+    return out
+
+
+def _batched(op, name: str, problems) -> list[str]:
+    found = []
+    for make in (lambda: fbatch.least_norm_batch(op, name, [0, 1]),
+                 lambda: fbatch.conic_batch(problems, [0, 1])):
+        try:
+            found += [s for s in batch_backends(make()) if s not in found]
+        except ValueError:
+            continue
+    return found
+
+
+def _row(formulation, solver, mode, instant, t, status, time_s, split, residuals,
+         optimality, iterations=None, message="") -> dict:
+    return {"formulation": formulation, "solver": solver, "mode": mode,
+            "instant": int(instant), "t_s": float(t), "status": status, "time_s": time_s,
+            **split, **{k: float(residuals.get(k, math.inf)) for k in RESIDUALS},
+            **{k: float(optimality[k]) if k in optimality else math.nan for k in MEASURES},
+            "iterations": iterations, "message": message}
+
+
+def run_instants(prepared: Prepared, solver: str, instants, *, mode="cold", tol=None,
+                 budget_s=math.inf, references=None) -> list[dict]:
+    """One backend on the prepared problems at ``instants`` in order, one row each.
+
+    ``mode="warm"``: the previous instant's answer is the start. ``references`` maps an
+    instant to ``(forces, optimal value)`` of a high-precision solve.
+    """
+    rows, start, previous = [], time.perf_counter(), None
+    t = prepared.op.t
+    for i in instants:
+        if rows and time.perf_counter() - start > budget_s:
+            break
+        ref, best = (None, None) if references is None else references.get(int(i), (None, None))
+        began = time.perf_counter()
+        problem = prepared.problems[int(i)]
+        built = time.perf_counter()
+        try:
+            record = solve(problem, solver, tol=tol,
+                           initvals=previous if mode == "warm" else None, reference=ref,
+                           optimal_value=best)
+        except Exception as exc:  # a run that raises is a failed row, never a crash
+            rows.append(_row(prepared.name, solver, mode, i, t[i], "failed",
+                             time.perf_counter() - began, dict.fromkeys(SPLIT, 0.0), {},
+                             dict.fromkeys(MEASURES[:3], math.inf),
+                             message=f"{type(exc).__name__}: {exc}"))
+            previous = None
+            continue
+        wall = time.perf_counter() - began
+        split = {"build_s": built - began, "convert_s": record.setup_s,
+                 "solve_s": record.solve_s, "checks_s": record.checks_s}
+        rows.append(_row(prepared.name, solver, mode, i, t[i], record.status, wall, split,
+                         record.residuals, record.optimality, record.iterations,
+                         record.message))
+        answered = record.status in ("solved", "inaccurate") and record.z is not None
+        previous = np.asarray(record.z, float) if answered else None
+    return rows
+
+
+def run_batched(prepared: Prepared, solver: str, instants=None, tol=None,
+                references=None, repeats: int = REPEATS) -> tuple[list[dict], dict[str, float]]:
+    """A batched backend on the formulation's batch: rows (the median wall time of up
+    to ``repeats`` runs within :data:`BATCH_BUDGET_S` after a warm-up run, spread evenly
+    over the instants) and its stage times per instant.
+    """
+    batch = prepared.batch(batch_kind(solver, prepared), instants)
+    ref = None
+    if references is not None:
+        ref = np.array([references[int(i)][0] for i in batch.instants])
+    solve_batch(batch, solver, tol=tol, reference=ref)  # warm-up, not timed
+    runs, spent = [], 0.0
+    while len(runs) < repeats and (spent < BATCH_BUDGET_S or len(runs) < 1):
+        began = time.perf_counter()
+        result = solve_batch(batch, solver, tol=tol, reference=ref)
+        runs.append((time.perf_counter() - began, result))
+        spent += runs[-1][0]
+    wall, result = sorted(runs, key=lambda run: run[0])[len(runs) // 2]
+    T = len(batch.instants)
+    other = wall - result.setup_s - result.solve_s - result.checks_s
+    split = {"build_s": 0.0, "convert_s": (result.setup_s + max(other, 0.0)) / T,
+             "solve_s": result.solve_s / T, "checks_s": result.checks_s / T}
+    rows = [_row(prepared.name, solver, "batched", i, prepared.op.t[i], result.status[k],
+                 wall / T, split, {key: v[k] for key, v in result.residuals.items()},
+                 {key: v[k] for key, v in result.optimality.items()},
+                 int(result.iterations[k]), result.messages[k] if result.messages else "")
+            for k, i in enumerate(batch.instants)]
+    stages = {stage: seconds / T for stage, seconds in result.stages.items()}
+    return rows, stages | {"checks": result.checks_s / T}
+
+
+def _is_batched(solver: str) -> bool:
+    return get_backend(solver).solve is None
+
+
+def throughput(prepared: Prepared, solvers: list[str], budget_s: float):
+    """Rows of every backend x mode on all instants, and the batched stage times.
+    Per-instant runs stop after ``budget_s``, except the paper's (the baseline)."""
+    rows, stages = [], {}
+    limit = math.inf if prepared.name == "paper" else budget_s
+    for solver in solvers:
+        if _is_batched(solver):
+            new, stages[solver] = run_batched(prepared, solver)
+            rows += new
+            _report_progress(new)
+            continue
+        modes = ("cold", "warm") if get_backend(solver).warm_start else ("cold",)
+        for mode in modes:
+            new = run_instants(prepared, solver, prepared.instants, mode=mode, budget_s=limit)
+            rows += new
+            _report_progress(new)
+    return rows, stages
+
+
+def _report_progress(rows: list[dict]) -> None:
+    r = rows[0]
+    rate = len(rows) / max(sum(x["time_s"] for x in rows), 1e-12)
+    solved = sum(x["status"] == "solved" for x in rows)
+    progress(f"bench: {r['formulation']:16s} {r['solver']:20s} {r['mode']:7s} "
+              f"{len(rows):5d} instants {rate:10.1f}/s, {solved} solved")
+
+
+def references(prepared: Prepared, samples) -> tuple[dict | None, str, int]:
+    """High-precision answers at ``samples``: ``{instant: (forces, optimal value)}``, the
+    method's name, and the number of samples where it is not ``solved``.
+
+    Least norm: the SVD (``numpy-kkt``); QP: quadprog's dual active set where installed,
+    else Clarabel at 1e-10; conic: Clarabel at 1e-10. The paper's root finding and the
+    LCP have no objective (their optimality is their own residuals): none.
+    """
+    problem = prepared.problems[int(samples[0])]
+    if isinstance(problem, (NLS, LCP)):
+        return None, "none (own residuals)", 0
+    if isinstance(problem, LS):
+        solver, tol = "numpy-kkt", None
+    elif isinstance(problem, QP) and "qpsolvers-quadprog" in available():
+        solver, tol = "qpsolvers-quadprog", None
+    else:
+        solver, tol = "clarabel", 1e-10
+    refs, unsolved = {}, 0
+    for i in samples:
+        record = solve(prepared.problems[int(i)], solver, tol=tol)
+        unsolved += record.status != "solved"
+        if record.status in ("solved", "inaccurate"):
+            refs[int(i)] = (record.x, objective_value(prepared.problems[int(i)], record.z))
+    return refs, solver if tol is None else f"{solver} tol {tol:g}", unsolved
+
+
+def tolerances(solver: str, ladder) -> list[float | None]:
+    """The solver's defaults, then the ladder where the backend declares tolerances."""
+    return [None, *ladder] if get_backend(solver).tolerances else [None]
+
+
+def accuracy(prepared: Prepared, solvers: list[str], samples, ladder, budget_s: float):
+    """Rows of every backend x tolerance at ``samples`` (less those without a
+    reference answer), and the reference used ``(name, samples where not solved)``."""
+    refs, name, unsolved = references(prepared, samples)
+    usable = samples if refs is None else np.array([i for i in samples if int(i) in refs])
+    rows = []
+    for solver in solvers:
+        for tol in tolerances(solver, ladder):
+            if _is_batched(solver):
+                new = run_batched(prepared, solver, usable, tol=tol, references=refs,
+                                  repeats=3)[0]
+            else:
+                new = run_instants(prepared, solver, usable, tol=tol, budget_s=budget_s,
+                                   references=refs)
+            rows += [r | {"tol": "default" if tol is None else tol} for r in new]
+        progress(f"bench: accuracy {prepared.name:16s} {solver:20s} done")
+    return rows, (name, unsolved)

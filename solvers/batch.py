@@ -1,0 +1,185 @@
+"""Records of a batched solve: all instants of a formulation at once (DESIGN §3).
+
+A batched backend returns a :class:`BatchOutcome` for a formulation's batch
+(:mod:`cardan_forces.formulations.batch`); :func:`finalize_batch` judges it with the
+same residual code (``residuals_batch``), the same status rule (:func:`~.record.judge`)
+and the same optimality measures (:mod:`.optimality`) as a per-instant record, one
+array per measure; :meth:`BatchRecord.record` gives instant ``k`` as a :class:`Record`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
+
+from .optimality import combine, measures, recover, unique_optimum
+from .record import Record, judge
+
+_WITH_ANSWER = ("solved", "inaccurate")
+
+
+@dataclass(frozen=True)
+class BatchOutcome:
+    """What a batched backend hands back, per instant (T rows).
+
+    ``z`` is the solver's variable (the forces in N for a :class:`LeastNormBatch`);
+    ``duals`` the multipliers in the batch's conic rows (Clarabel's sign convention; for
+    a :class:`LeastNormBatch` the rows ``A x = b`` then ``-x_j <= 0`` for the signed
+    columns), ``None`` if the solver gives none; ``stages`` seconds per stage of the
+    whole batch; ``messages`` one per instant (or empty).
+    """
+
+    status: np.ndarray
+    z: np.ndarray
+    duals: np.ndarray | None
+    iterations: np.ndarray
+    setup_s: float
+    solve_s: float
+    stages: dict[str, float] = field(default_factory=dict)
+    messages: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class BatchRecord:
+    """The records of T instants as arrays (see :class:`~.record.Record` for the fields).
+
+    ``setup_s``, ``solve_s`` and ``checks_s`` are for the whole batch; ``stages`` the
+    backend's own split of them; ``z`` the solver's variable (T, nz), ``y`` the
+    multipliers the optimality was measured with (solver's or recovered).
+    """
+
+    formulation: str
+    solver: str
+    instants: np.ndarray
+    names: tuple[str, ...]
+    status: np.ndarray
+    x: np.ndarray
+    residuals: dict[str, np.ndarray]
+    optimality: dict[str, np.ndarray]
+    iterations: np.ndarray
+    duals: str
+    setup_s: float
+    solve_s: float
+    checks_s: float
+    stages: dict[str, float]
+    messages: tuple[str, ...]
+    z: np.ndarray | None = None
+    y: np.ndarray | None = None
+
+    def within(self, level: float) -> np.ndarray:
+        """Per instant: an answer with every optimality measure <= ``level``."""
+        ok = np.isin(self.status, _WITH_ANSWER)
+        for value in self.optimality.values():
+            ok &= value <= level
+        return ok
+
+    def record(self, k: int) -> Record:
+        """Instant ``k`` as a per-instant record (times are the batch's per instant)."""
+        T = len(self.instants)
+        return Record(
+            formulation=self.formulation, solver=self.solver, status=str(self.status[k]),
+            x=self.x[k], names=self.names, iterations=int(self.iterations[k]),
+            setup_s=self.setup_s / T, solve_s=self.solve_s / T,
+            residuals={key: float(v[k]) for key, v in self.residuals.items()},
+            message=self.messages[k] if self.messages else "",
+            optimality={key: float(v[k]) for key, v in self.optimality.items()},
+            duals=self.duals, gap_kind="duality", checks_s=self.checks_s / T,
+            z=None if self.z is None or not self.z.size else self.z[k])
+
+
+def _forces(batch, outcome: BatchOutcome, answered: np.ndarray) -> np.ndarray:
+    if isinstance(batch, LeastNormBatch):
+        return np.where(answered[:, None], outcome.z, np.nan)
+    X = np.full((len(outcome.z), len(batch.checks.names)), np.nan)
+    for k in np.flatnonzero(answered):
+        X[k] = batch.problems[k].to_forces(outcome.z[k])
+    return X
+
+
+def _least_norm_measures(batch: LeastNormBatch, x: np.ndarray, y: np.ndarray):
+    """Optimality of ``min 1/2 x'Wx, A x = b, x_signed >= 0`` with conic multipliers ``y``
+    (rows ``A``, then ``-e_j`` per signed column)."""
+    m = batch.A.shape[1]
+    signed = np.flatnonzero(batch.signed)
+    Wx = x if batch.weights is None else batch.weights * x
+    Aty = np.einsum("tmn,tm->tn", batch.A, y[:, :m])
+    Aty[:, signed] -= y[:, m:]
+    bty = np.einsum("tm,tm->t", batch.b, y[:, :m])
+    cone = np.maximum(0.0, -y[:, m:]).max(axis=1, initial=0.0)
+    return combine(Wx, np.zeros_like(x), Aty, bty, x, y, cone)
+
+
+def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
+    if not answered.any():
+        inf = np.full(len(answered), np.inf)
+        return {"primal": primal, "dual": inf, "gap": inf.copy()}, "none", None
+    z = np.where(answered[:, None], outcome.z, 0.0)
+    if isinstance(batch, LeastNormBatch):
+        found = _least_norm_measures(batch, np.where(answered[:, None], x, 0.0),
+                                     outcome.duals)
+        source = "solver"
+    else:
+        source = "solver" if outcome.duals is not None else "recovered"
+        y = outcome.duals if outcome.duals is not None else np.array(
+            [recover(batch.P if np.ndim(batch.P) != 3 else batch.P[k], batch.q[k],
+                     batch.A[k], batch.b[k], batch.cones, z[k]) if answered[k] else
+             np.zeros(batch.A.shape[1]) for k in range(len(z))])
+        found = measures(batch.P, batch.q, batch.A, batch.b, batch.cones, z, y)
+    out = {"primal": primal, "dual": found["dual"], "gap": found["gap"]}
+    for value in out.values():
+        value[~answered] = np.inf
+    return out, source, outcome.duals if isinstance(batch, LeastNormBatch) else y
+
+
+def _unique(batch) -> bool:
+    if isinstance(batch, LeastNormBatch):
+        return True
+    return unique_optimum(batch.problems[0]) if np.ndim(batch.P) != 3 else False
+
+
+def finalize_batch(batch, solver: str, outcome: BatchOutcome,
+                   reference: np.ndarray | None = None) -> BatchRecord:
+    """Judge a batched outcome like :func:`~.record.finalize` judges one instant.
+
+    ``reference`` (T, n): reference forces, giving ``distance`` where the optimum is
+    unique (:func:`~.optimality.unique_optimum`).
+    """
+    began = time.perf_counter()
+    status = np.asarray(outcome.status, object).copy()
+    answered = np.isin(status, _WITH_ANSWER)
+    x = _forces(batch, outcome, answered)
+    bad = answered & ~np.all(np.isfinite(x), axis=1)
+    status[bad], answered[bad] = "failed", False
+    x[bad] = np.nan
+    residuals = batch.checks.residuals(x)
+    primal = np.max(np.array(list(residuals.values())), axis=0)
+    status = judge(status, primal)
+    optimality, source, y = _optimality(batch, outcome, x, answered, primal.copy())
+    if reference is not None:
+        ref = np.asarray(reference, float)
+        residuals["reference"] = (np.linalg.norm(x - ref, axis=1)
+                                  / np.maximum(np.linalg.norm(ref, axis=1), 1e-12))
+        residuals["reference"][~answered] = np.inf
+        if _unique(batch):
+            optimality["distance"] = residuals["reference"]
+    return BatchRecord(
+        formulation=batch.formulation, solver=solver, instants=batch.instants,
+        names=batch.checks.names, status=status.astype(str), x=x, residuals=residuals,
+        optimality=optimality, iterations=np.asarray(outcome.iterations, int), duals=source,
+        setup_s=outcome.setup_s, solve_s=outcome.solve_s,
+        checks_s=time.perf_counter() - began, stages=dict(outcome.stages),
+        messages=tuple(outcome.messages), z=np.asarray(outcome.z), y=y)
+
+
+def supports_batch(backend, batch) -> bool:
+    """Whether ``backend`` solves ``batch`` as one batch."""
+    return backend.batch is not None and isinstance(batch, backend.batch_accepts) and (
+        backend.supports(batch))
+
+
+__all__ = ["BatchOutcome", "BatchRecord", "ConicBatch", "LeastNormBatch", "finalize_batch",
+           "supports_batch"]

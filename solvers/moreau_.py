@@ -1,0 +1,154 @@
+"""Backend ``moreau``: moreau's ``CompiledSolver`` on a formulation's conic batch.
+
+moreau (Clarabel's interior-point algorithm for batches) compiles one structure — the
+sparsity of ``P`` and ``A`` and the cones — and solves every instant with its own
+numbers. Two layout facts of its API decide whether a batch is solved right:
+
+- ``moreau.Cones`` gives the cones by count (zero, nonnegative, second-order sizes,
+  power ``alpha``s), so the rows of ``A`` must come grouped in that order. The
+  package's conic form interleaves the blocks (``compliance_hertz``: a second-order
+  cone then a power cone per contact); passed as they are, moreau reads the wrong rows
+  as power cones and reports ``PrimalInfeasible``. Here the rows are permuted into
+  moreau's order and the multipliers permuted back.
+- ``P`` is given as the full symmetric matrix (not its upper triangle as in Clarabel);
+  the sparsity is the union of the nonzeros over all instants, so an entry that is
+  zero at one instant stays in the structure.
+
+The power cone is the same in both (``x^a y^(1-a) >= |z|``, ``x, y >= 0``). The
+compiled solver of a structure is kept and reused: a later batch of the same structure
+pays only for its numbers (``setup``) and the solve.
+Optional extra ``moreau``; absent when moreau is not installed.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from cardan_forces.formulations.batch import ConicBatch
+
+from .batch import BatchOutcome
+from .registry import Backend
+
+EXTRAS: dict[str, str | None] = {"moreau": "moreau"}
+
+TOLERANCES = ("tol_gap_abs", "tol_gap_rel", "tol_feas")
+"""moreau's interior-point settings a requested tolerance sets."""
+
+ORDER = ("zero", "nonneg", "soc", "pow")
+"""The row order ``moreau.Cones`` implies."""
+
+STATUS = {
+    "Solved": "solved", "AlmostSolved": "inaccurate", "MaxIterations": "inaccurate",
+    "MaxTime": "inaccurate", "InsufficientProgress": "inaccurate",
+    "PrimalInfeasible": "infeasible", "AlmostPrimalInfeasible": "infeasible",
+    "DualInfeasible": "unbounded", "AlmostDualInfeasible": "unbounded",
+}
+"""moreau status name -> ours; anything else is failed."""
+
+
+def grouped_rows(cones) -> tuple[np.ndarray, object]:
+    """The row permutation that groups the cone blocks in :data:`ORDER` (stable within a
+    kind) and the matching ``moreau.Cones``."""
+    import moreau
+
+    rows = {kind: [] for kind in ORDER}
+    start = 0
+    for kind, size in cones:
+        count = 3 if kind == "pow" else int(size)
+        rows[kind].append((np.arange(start, start + count), size))
+        start += count
+    order = np.concatenate([r for kind in ORDER for r, _ in rows[kind]] or [np.zeros(0, int)])
+    spec = moreau.Cones(
+        num_zero_cones=sum(len(r) for r, _ in rows["zero"]),
+        num_nonneg_cones=sum(len(r) for r, _ in rows["nonneg"]),
+        so_cone_dims=[len(r) for r, _ in rows["soc"]],
+        power_alphas=[float(size) for _, size in rows["pow"]])
+    return order.astype(int), spec
+
+
+def _pattern(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """CSR structure of the union of nonzeros of a (T, r, c) stack, and its (row, col)."""
+    mask = np.any(stack != 0, axis=0)
+    rows, cols = np.nonzero(mask)
+    offsets = np.concatenate([[0], np.cumsum(mask.sum(axis=1))])
+    return offsets, cols, rows, cols
+
+
+def _settings(tol, batch_size: int, options: dict):
+    import moreau
+
+    ipm = moreau.IPMSettings(**dict.fromkeys(TOLERANCES, tol)) if tol is not None else None
+    return moreau.Settings(device="cpu", batch_size=batch_size,
+                           **({"ipm_settings": ipm} if ipm else {}), **options)
+
+
+CACHE_SIZE = 8
+"""Compiled solvers kept, one per structure (sizes, sparsity, cones, batch size, tol)."""
+
+_COMPILED: dict[tuple, object] = {}
+
+
+def _compiled(n, m, patterns, cones, T, tol, options):
+    """The compiled solver of this structure: built once, then reused (only the numbers
+    change between calls: ``setup`` and ``solve``)."""
+    import moreau
+
+    (p_off, p_col), (a_off, a_col) = patterns
+    key = (n, m, p_off.tobytes(), p_col.tobytes(), a_off.tobytes(), a_col.tobytes(),
+           repr(cones), T, tol, tuple(sorted(options.items())))
+    solver = _COMPILED.get(key)
+    if solver is None:
+        solver = moreau.CompiledSolver(n=n, m=m, P_row_offsets=p_off, P_col_indices=p_col,
+                                       A_row_offsets=a_off, A_col_indices=a_col, cones=cones,
+                                       settings=_settings(tol, T, options))
+        if CACHE_SIZE > 0:
+            while len(_COMPILED) >= CACHE_SIZE:
+                _COMPILED.pop(next(iter(_COMPILED)))
+            _COMPILED[key] = solver
+    return solver
+
+
+def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
+    """Every instant of the batch with one compiled structure (compiled on the first
+    call for a structure, reused after)."""
+    start = time.perf_counter()
+    T, m, n = batch.A.shape
+    order, cones = grouped_rows(batch.cones)
+    A, b = batch.A[:, order], batch.b[:, order]
+    P = (np.zeros((n, n)) if batch.P is None else np.asarray(batch.P, float))
+    P = P if P.ndim == 3 else P[None]
+    p_off, p_col, p_r, p_c = _pattern(P)
+    a_off, a_col, a_r, a_c = _pattern(A)
+    converted = time.perf_counter()
+    solver = _compiled(n, m, ((p_off, p_col), (a_off, a_col)), cones, T, tol, options)
+    compiled = time.perf_counter()
+    # per-instant values for both (moreau 0.4.1 mishandles a shared P with per-instant A)
+    P_values = np.ascontiguousarray(np.broadcast_to(P[:, p_r, p_c], (T, len(p_r))))
+    solver.setup(P_values, A[:, a_r, a_c])
+    setup_done = time.perf_counter()
+    sol = solver.solve(batch.q, b)
+    solve_s = time.perf_counter() - setup_done
+    names = [s.name for s in solver.info.status]
+    duals = np.empty((T, m))
+    duals[:, order] = np.asarray(sol.z)
+    iterations = np.broadcast_to(np.asarray(solver.info.iterations), (T,)).astype(int)
+    messages = tuple("" if s == "Solved" else f"moreau status {s}" for s in names)
+    # the package's share is the row layout; compiling, setup and solve are moreau's
+    return BatchOutcome(np.array([STATUS.get(s, "failed") for s in names], object),
+                        np.asarray(sol.x), duals, iterations, converted - start,
+                        time.perf_counter() - converted,
+                        stages={"layout": converted - start, "compile": compiled - converted,
+                                "setup": setup_done - compiled, "solve": solve_s},
+                        messages=messages)
+
+
+def backends() -> list[Backend]:
+    """The moreau backend, if moreau is installed."""
+    try:
+        import moreau  # noqa: F401
+    except ImportError:
+        return []
+    return [Backend("moreau", (), None, ("moreau",), "moreau", "moreau",
+                    tolerances=TOLERANCES, batch=solve_batch, batch_accepts=(ConicBatch,))]

@@ -1,0 +1,255 @@
+"""Backend ``numpy-batched``: the least-norm family for all instants at once (NumPy).
+
+``min_norm``, ``min_norm_scaled``, ``positive``, ``lcp`` and ``compliance`` (linear law,
+no gaps) all pick the point of ``A x = b`` that is least in a diagonal norm
+``1/2 x'Wx`` (:class:`~cardan_forces.formulations.batch.LeastNormBatch`); the last three
+also keep the end faces ``x_u >= 0``. With ``y = W^{1/2} x`` and ``B = A W^{-1/2}``
+(T instants stacked):
+
+- least norm: ``y0 = B' mu`` with ``K mu = b``, ``K = B B' + delta I``. The rows of ``A``
+  are dependent along the motion (rank 29 of 30), so ``K`` is singular; ``delta =
+  GRAM_RTOL * trace(K) / rows`` biases ``y0`` by about ``delta / sigma_min^2`` of the
+  range (1e-12 relative in ``paper``, 1e-7 in ``propshaft``, whose scales differ), which
+  one step of iterative refinement removes; the left null direction it inflates is
+  annihilated by ``B'``. A contact loads at most two bodies and the bodies form a chain
+  (shaft, cross-pin, shaft, ...), so ``K`` is block tridiagonal in 6 x 6 body blocks:
+  block elimination with one batched 6 x 6 inverse per body (:func:`chain_solve`).
+- end faces >= 0: with ``U = B[:, u]`` the KKT conditions reduce to the LCP of the
+  formulation ``lcp``, ``0 <= lam ⟂ w = M lam + q >= 0`` with ``M = I - U' K^+ U``
+  and ``q = y0_u``, built from the same factorization (right-hand sides ``[b, U]``).
+  It is solved for all instants at once by a primal-dual active-set method (semismooth
+  Newton on ``min(lam, w) = 0``), started from the faces that pull in ``y0``; an
+  instant whose active set has not settled after ``max_iter`` steps is solved by the
+  package's Lemke method. Then ``y = B'(K^-1 (b - U lam)) + E_u lam``.
+
+The multipliers come out of the same solve: ``W x = A' mu + E_u nu`` with
+``mu = K^-1 (b - U lam)`` and ``nu_u = sqrt(w_u) lam``, so every record has the solver's
+duals. A direct method: ``tol`` is ignored. With numba installed the Gram blocks and
+the block elimination run compiled (:mod:`._batched_kernels`; NumPy pays a per-matrix
+overhead on 6 x 6 blocks larger than their arithmetic, and forms all of ``B B'``).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from cardan_forces.formulations.batch import LeastNormBatch
+
+from .batch import BatchOutcome
+from .lcp_ import lemke
+from .registry import Backend
+
+EXTRAS: dict[str, str | None] = {"numpy-batched": None}
+
+GRAM_RTOL = 1e-15
+"""Regularization of the Gram matrix, relative to its mean diagonal."""
+
+LCP_RTOL = 1e-12
+"""Sign tolerance of the active-set steps, relative to ``max(1, max |q|)``."""
+
+LCP_DELTA = 1e-14
+"""Regularization of the active block of ``M`` (singular when more faces are pinned
+than the null space has directions)."""
+
+MAX_ITER = 30
+"""Active-set steps before an instant falls back to Lemke."""
+
+
+def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> BatchOutcome:
+    """The batch's least norm (with signs where it has them), forces and multipliers."""
+    x, mu, nu, iterations, fallback, stages = least_norm(batch.A, batch.b, batch.weights,
+                                                         batch.signed, max_iter)
+    duals = np.concatenate([-mu, nu[:, np.flatnonzero(batch.signed)]], axis=1)
+    T = len(x)
+    messages = tuple(np.where(fallback, "Lemke fallback", "")) if fallback.any() else ()
+    solve_s = sum(stages.values())
+    return BatchOutcome(np.full(T, "solved", object), x, duals, iterations, 0.0, solve_s,
+                        stages=stages, messages=messages)
+
+
+def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
+               signed: np.ndarray | None = None, max_iter: int = MAX_ITER):
+    """Least ``1/2 x'Wx`` on ``A x = b`` (stacked, ``A`` (T, m, n)), optionally with
+    ``x[signed] >= 0``: ``(x, mu, nu, iterations, fallback, stages)``.
+    """
+    stages = {}
+    clock = time.perf_counter()
+    T, m, n = A.shape
+    root = None if w is None else np.sqrt(w)
+    B = A if root is None else A / root[:, None, :]
+    u = np.flatnonzero(signed) if signed is not None else np.zeros(0, int)
+    U = B[:, :, u]
+    R = np.concatenate([b[:, :, None], U], axis=2)
+    clock = _lap(stages, "scale", clock)
+    blocks = chain(A[0])
+    Z = _gram_solve(B, R, blocks)
+    # one step of iterative refinement on B B' Z = R removes the bias of delta whatever
+    # the scene's scales (without it 1e-7 relative on the propshaft, 1e-14 on paper)
+    Z += _gram_solve(B, R - B @ (B.transpose(0, 2, 1) @ Z), blocks)
+    clock = _lap(stages, "gram+factor+solve", clock)
+    mu = Z[:, :, 0]
+    iterations, fallback = np.zeros(T, int), np.zeros(T, bool)
+    nu = np.zeros((T, n))
+    if u.size:
+        M = np.eye(len(u)) - U.transpose(0, 2, 1) @ Z[:, :, 1:]
+        q = np.einsum("tmk,tm->tk", U, mu)
+        lam, iterations, fallback = _active_set(M, q, max_iter)
+        mu = mu - np.einsum("tmk,tk->tm", Z[:, :, 1:], lam)
+        nu[:, u] = lam
+        clock = _lap(stages, "lcp", clock)
+    y = np.einsum("tmn,tm->tn", B, mu) + nu
+    if root is not None:
+        nu *= root
+    x = y if root is None else y / root
+    _lap(stages, "forces", clock)
+    return x, mu, nu, iterations, fallback, stages
+
+
+def chain(A: np.ndarray) -> list[slice]:
+    """The bodies' row blocks (6 rows each) in order along the chain that their shared
+    contact columns form (shaft, cross-pin, shaft, ...), from one instant's ``A``.
+
+    A contact acts on at most two bodies, each with a nonzero force part, so the
+    coupling of bodies is structural; ``ValueError`` if it is not a path.
+    """
+    if A.shape[0] % 6:
+        raise ValueError("the rows are not 6 per body")
+    touches = np.any(A.reshape(-1, 6, A.shape[1]) != 0, axis=1).astype(int)
+    linked = touches @ touches.T > 0
+    np.fill_diagonal(linked, False)
+    degree = linked.sum(axis=1)
+    ends = np.flatnonzero(degree <= 1)
+    if len(degree) > 1 and (degree.max() > 2 or len(ends) != 2 or degree.min() == 0):
+        raise ValueError("the bodies do not form a chain")
+    order = [int(ends[0])]
+    while len(order) < len(degree):
+        order.append(int(next(k for k in np.flatnonzero(linked[order[-1]]) if k not in order)))
+    return [slice(6 * k, 6 * k + 6) for k in order]
+
+
+def chain_solve(K: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray:
+    """``K^{-1} R`` for a stack of matrices that are block tridiagonal along ``blocks``:
+    block elimination (``D_k = K_kk - K_k,k-1 D_k-1^{-1} K_k-1,k``, positive definite
+    for a positive definite ``K``), one batched inverse per block (for 6 x 6 blocks and
+    several right-hand sides NumPy inverts faster than it solves).
+    """
+    inverse = np.linalg.inv(K[:, blocks[0], blocks[0]])
+    nxt, rhs = [], [inverse @ R[:, blocks[0]]]
+    for prev, rows in zip(blocks, blocks[1:]):
+        nxt.append(inverse @ K[:, prev, rows])
+        coupling = K[:, rows, prev]
+        inverse = np.linalg.inv(K[:, rows, rows] - coupling @ nxt[-1])
+        rhs.append(inverse @ (R[:, rows] - coupling @ rhs[-1]))
+    out = np.empty_like(R)
+    out[:, blocks[-1]] = rhs[-1]
+    for k in range(len(blocks) - 2, -1, -1):
+        out[:, blocks[k]] = rhs[k] - nxt[k] @ out[:, blocks[k + 1]]
+    return out
+
+
+def _gram_solve(B: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray:
+    """``(B B' + delta I)^{-1} R``: compiled by numba where installed (extra ``numba``),
+    forming only the nonzero blocks of ``B B'``; else NumPy's Gram and :func:`chain_solve`.
+    """
+    try:
+        from ._batched_kernels import gram_chain_solve
+    except ImportError:
+        m = B.shape[1]
+        K = B @ B.transpose(0, 2, 1)
+        K[:, np.arange(m), np.arange(m)] += (GRAM_RTOL / m) * np.trace(K, axis1=1,
+                                                                     axis2=2)[:, None]
+        return chain_solve(K, R, blocks)
+    own, n_own, shared, n_shared = _block_columns(B, blocks)
+    return gram_chain_solve(np.ascontiguousarray(B), np.ascontiguousarray(R),
+                            np.array([b.start for b in blocks]), own, n_own, shared, n_shared,
+                            GRAM_RTOL)
+
+
+def _block_columns(B: np.ndarray, blocks: list[slice]):
+    """Per block in chain order the columns that touch it, and per neighbouring pair
+    the columns that touch both, padded (index arrays and counts)."""
+    touch = np.any(B.reshape(len(B), -1, 6, B.shape[2]) != 0, axis=(0, 2))
+    order = [b.start // 6 for b in blocks]
+    own = [np.flatnonzero(touch[k]) for k in order]
+    shared = [np.flatnonzero(touch[a] & touch[c]) for a, c in zip(order, order[1:])] or [[]]
+
+    def pad(lists):
+        out = np.zeros((len(lists), max(max(len(x) for x in lists), 1)), np.int64)
+        for i, x in enumerate(lists):
+            out[i, :len(x)] = x
+        return out, np.array([len(x) for x in lists], np.int64)
+
+    return (*pad(own), *pad(shared))
+
+
+def _lap(stages: dict[str, float], name: str, since: float) -> float:
+    now = time.perf_counter()
+    stages[name] = now - since
+    return now
+
+
+def _active_set(M: np.ndarray, q: np.ndarray, max_iter: int):
+    """``0 <= lam ⟂ M lam + q >= 0`` for every instant: primal-dual active set.
+
+    Pinned faces ``P`` solve ``M_PP lam_P = -q_P`` with ``lam = 0`` elsewhere; the next
+    set keeps the pinned faces with ``lam > 0`` and adds the free ones with ``w < 0``.
+    An instant is done when its set repeats; one that has not after ``max_iter`` steps
+    is solved by Lemke's method. Compiled by numba where installed.
+    """
+    try:
+        from ._batched_kernels import active_set
+    except ImportError:
+        return _active_set_numpy(M, q, max_iter)
+    lam, iterations, settled = active_set(np.ascontiguousarray(M), np.ascontiguousarray(q),
+                                          max_iter, LCP_RTOL, LCP_DELTA)
+    return _lemke_fallback(M, q, lam, iterations, np.flatnonzero(~settled))
+
+
+def _active_set_numpy(M: np.ndarray, q: np.ndarray, max_iter: int):
+    """:func:`_active_set` in NumPy, all instants per step (without numba)."""
+    T, k = q.shape
+    eps = LCP_RTOL * np.maximum(1.0, np.abs(q).max(axis=1, initial=0.0))[:, None]
+    pinned = q < 0
+    lam = np.zeros((T, k))
+    iterations = np.zeros(T, int)
+    todo = np.arange(T)
+    eye = np.eye(k)
+    for step in range(1, max_iter + 1):
+        P = pinned[todo]
+        both = P[:, :, None] & P[:, None, :]
+        system = np.where(both, M[todo] + LCP_DELTA * eye, 0.0) + eye * ~P[:, None, :]
+        lam[todo] = np.linalg.solve(system, np.where(P, -q[todo], 0.0)[:, :, None])[:, :, 0]
+        w = np.einsum("tij,tj->ti", M[todo], lam[todo]) + q[todo]
+        nxt = np.where(P, lam[todo] > -eps[todo], w < -eps[todo])
+        settled = np.all(nxt == P, axis=1)
+        iterations[todo] = step
+        pinned[todo] = nxt
+        todo = todo[~settled]
+        if not todo.size:
+            break
+    return _lemke_fallback(M, q, lam, iterations, todo)
+
+
+def _lemke_fallback(M, q, lam, iterations, todo):
+    """Lemke's method at the instants ``todo`` whose active set did not settle."""
+    fallback = np.zeros(len(q), bool)
+    fallback[todo] = True
+    for i in todo:
+        lam[i] = lemke(M[i], q[i]).z
+    return lam, iterations, fallback
+
+
+def _chain_shaped(batch) -> bool:
+    try:
+        chain(batch.A[0])
+    except ValueError:
+        return False
+    return True
+
+
+def backends() -> list[Backend]:
+    """The batched least-norm backend (NumPy only, always present)."""
+    return [Backend("numpy-batched", (), None, ("cardan-forces", "numpy"), None, "numpy",
+                    supports=_chain_shaped, batch=solve_batch, batch_accepts=(LeastNormBatch,))]

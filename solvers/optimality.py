@@ -1,0 +1,225 @@
+"""Optimality of an answer measured from the problem data (qpbenchmark's three measures).
+
+Every convex problem the package builds reaches Clarabel's standard form (``LS -> QP ->
+Conic``, ``LP -> Conic``), ``min 1/2 z'Pz + q'z s.t. A z + s = b, s in K``, whose
+optimality conditions with multipliers ``y`` are
+
+- primal feasibility: ``s = b - A z in K`` (the package's force residuals, ``ForceChecks``);
+- dual feasibility: ``P z + q + A'y = 0`` (stationarity of the Lagrangian) and
+  ``y in K*`` (the dual cone);
+- zero duality gap: ``(1/2 z'Pz + q'z) - (-1/2 z'Pz - b'y) = 0``.
+
+``dual`` is the largest of the stationarity residual ``||Pz + q + A'y||_inf`` relative to
+the largest of ``||Pz||_inf, ||q||_inf, ||A'y||_inf`` and the dual-cone violation
+relative to ``||y||_inf``; ``gap`` is the duality gap relative to the larger objective.
+Both are dimensionless, so a level such as 1e-6 means the same for a problem in N and
+for one in units of the load.
+
+Where a backend returns no multipliers they are recovered (:func:`recover`) by a
+nonnegative least-squares solve of stationarity on the constraints active at ``z``: a
+row of the nonnegative cone with ``s_i = 0``, a cone block on its boundary (one
+multiplier along the block's normal there), a block at its apex (the whole block).
+
+All functions take a batch: ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m), ``z`` (T, n),
+``y`` (T, m); ``P`` (n, n), (T, n, n) or ``None``.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+ACTIVE_RTOL = 1e-7
+"""A constraint counts as active when its slack is below this, relative to
+``max(1, ||b||_inf, ||A z||_inf)``."""
+
+TINY = 1e-300
+
+
+def blocks(cones) -> list[tuple[str, float, slice]]:
+    """``(kind, parameter, rows)`` per cone block of ``cones`` in row order."""
+    out, row = [], 0
+    for kind, size in cones:
+        rows = 3 if kind == "pow" else int(size)
+        out.append((kind, size, slice(row, row + rows)))
+        row += rows
+    return out
+
+
+def _Pz(P, z: np.ndarray) -> np.ndarray:
+    if P is None:
+        return np.zeros_like(z)
+    P = np.asarray(P, float)
+    return z @ P.T if P.ndim == 2 else np.einsum("tij,tj->ti", P, z)
+
+
+def _inf(v: np.ndarray) -> np.ndarray:
+    return np.abs(v).max(axis=-1, initial=0.0)
+
+
+@functools.lru_cache(maxsize=64)
+def _layout(cones: tuple) -> tuple:
+    """Row indices of the cone kinds: nonneg rows, second-order blocks padded to the
+    longest (apex, members, mask), power blocks (k, 3) and their alphas."""
+    nonneg, socs, pows, alphas = [], [], [], []
+    for kind, size, rows in blocks(cones):
+        idx = list(range(rows.start, rows.stop))
+        if kind == "nonneg":
+            nonneg += idx
+        elif kind == "soc":
+            socs.append(idx)
+        elif kind == "pow":
+            pows.append(idx)
+            alphas.append(float(size))
+    width = max((len(r) - 1 for r in socs), default=0)
+    members = np.zeros((len(socs), width), int)
+    mask = np.zeros((len(socs), width))
+    for k, r in enumerate(socs):
+        members[k, :len(r) - 1] = r[1:]
+        mask[k, :len(r) - 1] = 1.0
+    apex = np.array([r[0] for r in socs], int)
+    return (np.array(nonneg, int), apex, members, mask, np.array(pows, int).reshape(-1, 3),
+            np.array(alphas))
+
+
+def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
+    """Distance-like violation of ``y in K*`` per instant (absolute, (T,)).
+
+    K* of the zero cone is free; the nonnegative and second-order cones are self-dual;
+    the dual power cone is ``(u/a)^a (v/(1-a))^(1-a) >= |w|, u, v >= 0``.
+    """
+    nonneg, apex, members, mask, pows, alphas = _layout(tuple(cones))
+    worst = np.maximum(0.0, -y[:, nonneg]).max(axis=1, initial=0.0)
+    if len(apex):
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", y[:, members] * mask, y[:, members] * mask))
+        worst = np.maximum(worst, (spread - y[:, apex]).max(axis=1))
+    if len(pows):
+        u, v, w = (np.maximum(y[:, pows[:, 0]], 0.0), np.maximum(y[:, pows[:, 1]], 0.0),
+                   y[:, pows[:, 2]])
+        mean = (u / alphas) ** alphas * (v / (1.0 - alphas)) ** (1.0 - alphas)
+        negative = np.maximum(0.0, -np.minimum(y[:, pows[:, 0]], y[:, pows[:, 1]]))
+        worst = np.maximum(worst, np.maximum(np.abs(w) - mean, negative).max(axis=1))
+    return np.maximum(worst, 0.0)
+
+
+def measures(P, q, A, b, cones, z, y) -> dict[str, np.ndarray]:
+    """``{"dual", "gap", "objective"}`` per instant ((T,) arrays; see the module docstring).
+
+    ``objective`` is the primal objective ``1/2 z'Pz + q'z`` (for an objective gap).
+    """
+    return combine(_Pz(P, z), q, np.einsum("tmn,tm->tn", A, y), np.einsum("tm,tm->t", b, y),
+                   z, y, dual_cone_violation(cones, y))
+
+
+def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
+    """The measures from their parts (``P z``, ``q``, ``A'y``, ``b'y``, the dual-cone
+    violation), for a backend whose problem form gives them more cheaply than
+    :func:`measures`' dense products.
+    """
+    floor = np.full(len(z), TINY)
+    stationarity = _inf(Pz + q + Aty) / np.maximum.reduce([_inf(Pz), _inf(q), _inf(Aty), floor])
+    cone = cone_violation / np.maximum(_inf(y), TINY)
+    quad = np.einsum("ti,ti->t", z, Pz)
+    primal = 0.5 * quad + np.einsum("ti,ti->t", q, z)
+    dual_obj = -0.5 * quad - bty
+    gap = np.abs(primal - dual_obj) / np.maximum(np.maximum(np.abs(primal), np.abs(dual_obj)),
+                                                 TINY)
+    bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
+    dual = np.maximum(stationarity, cone)
+    dual[bad], gap[bad] = np.inf, np.inf
+    return {"dual": dual, "gap": gap, "objective": primal}
+
+
+def _normal(kind: str, alpha: float, s: np.ndarray) -> np.ndarray | None:
+    """The outward normal of a cone block's boundary at ``s`` (a direction in K*
+    orthogonal to ``s``), or ``None`` at the apex."""
+    if kind == "soc":
+        return None if not np.any(s) else np.concatenate([[s[0]], -s[1:]])
+    x, v, w = s
+    if x <= 0 or v <= 0:
+        return None
+    mean = x ** alpha * v ** (1.0 - alpha)
+    return np.array([alpha * mean / x, (1.0 - alpha) * mean / v, -np.sign(w)])
+
+
+def recover(P, q, A, b, cones, z) -> np.ndarray:
+    """Multipliers ``y`` (m,) for one instance: nonnegative least squares of
+    ``A_act' y_act = -(P z + q)`` on the constraints active at ``z`` (see the module
+    docstring); zero on inactive rows.
+    """
+    from scipy.optimize import lsq_linear
+
+    z, b = np.asarray(z, float), np.asarray(b, float)
+    A = np.asarray(A, float)
+    s = b - A @ z
+    level = ACTIVE_RTOL * max(1.0, float(_inf(b)), float(_inf(A @ z)))
+    columns, lower, owners = [], [], []  # owners: (rows, direction or None)
+    for kind, alpha, rows in blocks(cones):
+        block = s[rows]
+        if kind == "zero":
+            cols = [A[r] for r in range(rows.start, rows.stop)]
+            columns += cols
+            lower += [-np.inf] * len(cols)
+            owners += [(slice(r, r + 1), None) for r in range(rows.start, rows.stop)]
+        elif kind == "nonneg":
+            for r in np.flatnonzero(block <= level) + rows.start:
+                columns.append(A[r])
+                lower.append(0.0)
+                owners.append((slice(r, r + 1), None))
+        else:
+            margin = (block[0] - np.linalg.norm(block[1:]) if kind == "soc" else
+                      np.clip(block[0], 0, None) ** alpha * np.clip(block[1], 0, None)
+                      ** (1 - alpha) - abs(block[2]))
+            if margin > level:
+                continue
+            normal = _normal(kind, alpha, block) if _inf(block) > level else None
+            if normal is None:  # apex: every multiplier of the block, checked by K* later
+                for r in range(rows.start, rows.stop):
+                    columns.append(A[r])
+                    lower.append(-np.inf)
+                    owners.append((slice(r, r + 1), None))
+            else:
+                columns.append(normal @ A[rows])
+                lower.append(0.0)
+                owners.append((rows, normal))
+    y = np.zeros(len(b))
+    if not columns:
+        return y
+    target = -(_Pz(P, z[None])[0] + np.asarray(q, float))
+    M = np.array(columns).T
+    coef = lsq_linear(M, target, bounds=(np.array(lower), np.inf), method="bvls").x
+    for value, (rows, normal) in zip(coef, owners):
+        y[rows] = value if normal is None else value * normal
+    return y
+
+
+def unique_optimum(problem) -> bool:
+    """Whether the problem's optimum is one point, known from its data: a least norm
+    (positive weights) or a positive definite ``P`` (strictly convex objective).
+    A distance to a reference point means something only then.
+    """
+    from cardan_forces.formulations.problems import LS, QP, Conic
+
+    if isinstance(problem, LS):
+        return True
+    if isinstance(problem, (QP, Conic)) and problem.P is not None:
+        try:
+            np.linalg.cholesky(np.asarray(problem.P, float))
+        except np.linalg.LinAlgError:
+            return False
+        return True
+    return False
+
+
+def objective_value(problem, z) -> float | None:
+    """The objective ``1/2 z'Pz + q'z`` of an LS, QP, LP or conic problem at ``z`` (in
+    its conic form; the same value along every conversion), ``None`` for the others."""
+    from .conversions import convert
+    from cardan_forces.formulations.problems import Conic
+
+    conic = convert(problem, (Conic,))
+    if conic is None or z is None:
+        return None
+    z = np.asarray(z, float)
+    return float(0.5 * z @ _Pz(conic.P, z[None])[0] + np.asarray(conic.q, float) @ z)

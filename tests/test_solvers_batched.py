@@ -1,0 +1,217 @@
+"""Batched backends: the same answers and records as the per-instant ones."""
+
+import numpy as np
+import pytest
+
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.solvers import available, solve
+from cardan_forces.solvers import numpy_batched_ as nb
+from cardan_forces.solvers.lcp_ import lemke
+from cardan_forces.solvers.optimality import objective_value
+from cardan_forces.solvers.registry import UnsupportedProblem, batch_backends, solve_batch
+
+
+@pytest.fixture(scope="module")
+def op(paper):
+    return build_operator(simulate(paper, paper.time.instants()[:41]))
+
+
+def _quadprog():
+    if "qpsolvers-quadprog" not in available():
+        pytest.skip("quadprog not installed")
+    return "qpsolvers-quadprog"
+
+
+@pytest.mark.parametrize("formulation, reference, solver", [
+    ("min_norm", "min_norm", "numpy-kkt"),
+    ("min_norm_scaled", "min_norm_scaled", "numpy-kkt"),
+    ("positive", "lcp", "lcp-lemke"),
+    ("lcp", "lcp", "lcp-lemke"),
+    ("positive", "positive", None),
+    ("compliance", "compliance", None),
+])
+def test_numpy_batched_equals_per_instant_answers(op, formulation, reference, solver):
+    solver = solver or _quadprog()
+    batch = fbatch.least_norm_batch(op, formulation)
+    assert "numpy-batched" in batch_backends(batch)
+    result = solve_batch(batch, "numpy-batched")
+    assert result.duals == "solver"
+    for i in range(0, 41, 5):
+        expected = solve(FORMULATIONS[reference](op, i), solver)
+        assert expected.status == "solved"
+        x = result.x[i]
+        assert np.linalg.norm(x - expected.x) <= 1e-9 * np.linalg.norm(expected.x)
+        checked = FORMULATIONS[formulation](op, i).checks.residuals(x)
+        assert max(checked.values()) <= 1e-9
+        for key, value in checked.items():  # one residual code for both paths
+            assert result.residuals[key][i] == pytest.approx(value, rel=1e-9, abs=1e-16)
+        record = result.record(i)
+        assert record.status == "solved" and record.within(1e-9)
+    assert result.within(1e-9).all()
+
+
+def test_batched_subset_of_instants_matches_the_full_run(op):
+    full = solve_batch(fbatch.least_norm_batch(op, "positive"), "numpy-batched")
+    some = solve_batch(fbatch.least_norm_batch(op, "positive", [3, 17, 40]), "numpy-batched")
+    assert np.allclose(some.x, full.x[[3, 17, 40]], rtol=1e-12, atol=1e-9)
+    assert list(some.instants) == [3, 17, 40]
+
+
+def test_a_conic_formulation_has_no_least_norm_batch(op):
+    with pytest.raises(ValueError):
+        fbatch.least_norm_batch(op, "min_max")
+    batch = fbatch.conic_batch(fbatch.build_problems(op, "min_max", [0, 1]), [0, 1])
+    assert "numpy-batched" not in batch_backends(batch)
+    with pytest.raises(UnsupportedProblem):
+        solve_batch(batch, "numpy-batched")
+
+
+@pytest.mark.parametrize("formulation", ["socp_face", "min_max", "compliance_hertz"])
+def test_moreau_batch_agrees_with_clarabel(op, formulation):
+    """One compiled structure for all instants; the rows are regrouped for moreau's
+    cone layout (compliance_hertz interleaves second-order and power cones)."""
+    if "moreau" not in available():
+        pytest.skip("moreau not installed")
+    instants = np.arange(0, 41, 4)
+    problems = fbatch.build_problems(op, formulation, instants)
+    result = solve_batch(fbatch.conic_batch(problems, instants), "moreau", tol=1e-9)
+    assert result.duals == "solver"
+    assert (result.status == "solved").all(), result.messages
+    for k, problem in enumerate(problems):
+        expected = solve(problem, "clarabel", tol=1e-9)
+        assert expected.status in ("solved", "inaccurate")
+        # the same optimal value (min_max's forces are a set: compare values, optimality)
+        ours, theirs = (objective_value(problem, z) for z in (result.z[k], expected.z))
+        assert ours == pytest.approx(theirs, rel=1e-6, abs=1e-9)
+        assert result.optimality["gap"][k] <= 1e-6 and result.optimality["dual"][k] <= 1e-6
+        if formulation != "min_max":
+            assert np.linalg.norm(result.x[k] - expected.x) <= 1e-5 * np.linalg.norm(expected.x)
+
+
+def test_active_set_solves_random_lcps_and_falls_back_to_lemke():
+    rng = np.random.default_rng(7)
+    T, k = 300, 8
+    N = rng.standard_normal((T, k, 7))
+    M = N @ N.transpose(0, 2, 1)  # positive semidefinite and singular, like positive's LCP
+    # q = s - N z with s >= 0: the QP behind the LCP is feasible, so it has a solution
+    q = rng.uniform(0, 5, (T, k)) - (N @ (10 * rng.standard_normal((T, 7, 1))))[:, :, 0]
+    for max_iter in (30, 1):
+        lam, iterations, fallback = nb._active_set(M, q, max_iter)
+        assert iterations.max() <= max_iter
+        w = np.einsum("tij,tj->ti", M, lam) + q
+        assert lam.min() >= -1e-9 and w.min() >= -1e-9
+        assert np.abs(lam * w).max() <= 1e-8
+        for i in range(0, T, 30):  # y = N' lam is unique even where lam is not
+            exact = lemke(M[i], q[i]).z
+            assert np.allclose(N[i].T @ lam[i], N[i].T @ exact, atol=1e-8)
+    assert fallback.any()  # one step is too few for some instants: Lemke solved them
+
+
+def test_chain_orders_the_bodies_and_rejects_other_graphs(op):
+    blocks = nb.chain(op.A[0])
+    bodies = [op.rows[b.start].split(".force")[0] for b in blocks]
+    assert bodies in (["input", "uj1.pin", "intermediate", "uj2.pin", "output"],
+                      ["output", "uj2.pin", "intermediate", "uj1.pin", "input"])
+    star = np.zeros((24, 3))
+    for column, body in enumerate((1, 2, 3)):  # body 0 linked to three others
+        star[0, column] = star[6 * body, column] = 1.0
+    with pytest.raises(ValueError, match="chain"):
+        nb.chain(star)
+
+
+def test_chain_solve_equals_a_dense_solve():
+    rng = np.random.default_rng(3)
+    blocks = [slice(6 * k, 6 * k + 6) for k in (2, 0, 1)]
+    A = np.zeros((4, 18, 12))
+    for c, (a, b) in enumerate([(2, 0)] * 6 + [(0, 1)] * 6):
+        A[:, 6 * a: 6 * a + 6, c] = rng.standard_normal((4, 6))
+        A[:, 6 * b: 6 * b + 6, c] = rng.standard_normal((4, 6))
+    K = A @ A.transpose(0, 2, 1) + np.eye(18)
+    R = rng.standard_normal((4, 18, 3))
+    assert np.allclose(nb.chain_solve(K, R, blocks), np.linalg.solve(K, R), atol=1e-12)
+
+
+def test_clarabel_structure_reuse_gives_the_answers_of_a_fresh_solver(op, monkeypatch):
+    """The cached solver updated with each instant's numbers equals a new solver."""
+    from cardan_forces.solvers import clarabel_
+
+    problems = fbatch.build_problems(op, "socp_face", range(0, 41, 8))
+    reused = [solve(p, "clarabel", tol=1e-9) for p in problems]
+    monkeypatch.setattr(clarabel_, "CACHE_SIZE", 0)
+    monkeypatch.setattr(clarabel_, "_SOLVERS", {})
+    for p, first in zip(problems, reused):
+        fresh = solve(p, "clarabel", tol=1e-9)
+        assert first.status == fresh.status == "solved"
+        assert np.linalg.norm(first.x - fresh.x) <= 1e-9 * np.linalg.norm(fresh.x)
+
+
+def test_compiled_gram_solve_equals_the_numpy_path(op):
+    pytest.importorskip("numba")
+    from cardan_forces.solvers._batched_kernels import gram_chain_solve
+
+    A = np.ascontiguousarray(op.A)
+    blocks = nb.chain(A[0])
+    R = np.ascontiguousarray(np.concatenate([op.b[:, :, None], A[:, :, op.unilateral]], 2))
+    m = A.shape[1]
+    K = A @ A.transpose(0, 2, 1)
+    K[:, np.arange(m), np.arange(m)] += nb.GRAM_RTOL / m * np.trace(K, axis1=1, axis2=2)[:, None]
+    compiled = gram_chain_solve(A, R, np.array([b.start for b in blocks]),
+                                *nb._block_columns(A, blocks), nb.GRAM_RTOL)
+    plain = nb.chain_solve(K, R, blocks)
+    # K is singular along the rows' dependency; B' removes that direction
+    At = A.transpose(0, 2, 1)
+    assert np.abs(At @ (compiled - plain)).max() <= 1e-9 * np.abs(At @ plain).max()
+
+
+def test_cvxpy_compiled_once_gives_the_answers_of_a_fresh_problem(op, monkeypatch):
+    """Parameters updated per instant: the same answers as a problem built anew."""
+    if "cvxpy-clarabel" not in available():
+        pytest.skip("cvxpy with Clarabel not installed")
+    from cardan_forces.solvers import cvxpy_
+
+    problems = fbatch.build_problems(op, "min_norm_scaled", range(0, 41, 10))
+    reused = [solve(p, "cvxpy-clarabel", tol=1e-9) for p in problems]
+    monkeypatch.setattr(cvxpy_, "CACHE_SIZE", 0)
+    monkeypatch.setattr(cvxpy_, "_PROBLEMS", {})
+    for p, first in zip(problems, reused):
+        fresh = solve(p, "cvxpy-clarabel", tol=1e-9)
+        assert first.status == fresh.status == "solved"
+        assert np.linalg.norm(first.x - fresh.x) <= 1e-8 * np.linalg.norm(fresh.x)
+
+
+def test_compiled_active_set_equals_the_numpy_one():
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(11)
+    N = rng.standard_normal((200, 8, 7))
+    M = N @ N.transpose(0, 2, 1)
+    q = rng.uniform(0, 5, (200, 8)) - (N @ (10 * rng.standard_normal((200, 7, 1))))[:, :, 0]
+    compiled = nb._active_set(M, q, 30)
+    plain = nb._active_set_numpy(M, q, 30)
+    assert np.array_equal(compiled[1], plain[1]) and np.array_equal(compiled[2], plain[2])
+    assert np.allclose(np.einsum("tij,tj->ti", N.transpose(0, 2, 1), compiled[0]),
+                       np.einsum("tij,tj->ti", N.transpose(0, 2, 1), plain[0]), atol=1e-9)
+
+
+def test_a_batched_record_is_the_per_instant_record_of_the_same_answer(op):
+    """One residual code, one status rule, one optimality code: finalizing instant k of
+    a moreau batch on its own gives the same record as the batch's."""
+    if "moreau" not in available():
+        pytest.skip("moreau not installed")
+    from cardan_forces.solvers.record import Outcome, finalize
+
+    instants = np.arange(0, 41, 10)
+    problems = fbatch.build_problems(op, "socp_face", instants)
+    batch = fbatch.conic_batch(problems, instants)
+    result = solve_batch(batch, "moreau")
+    for k, problem in enumerate(problems):
+        outcome = Outcome(str(result.status[k]), result.z[k], duals=result.y[k])
+        alone = finalize(problem, "moreau", outcome)
+        batched = result.record(k)
+        assert alone.status == batched.status
+        for key, value in alone.residuals.items():
+            assert batched.residuals[key] == pytest.approx(value, rel=1e-9, abs=1e-18)
+        for key, value in alone.optimality.items():
+            assert batched.optimality[key] == pytest.approx(value, rel=1e-9, abs=1e-18)

@@ -1,0 +1,114 @@
+"""Optimality measured from the problem data: dual residual, duality / objective gap,
+distance only where the optimum is unique (qpbenchmark's measures)."""
+
+import numpy as np
+import pytest
+
+from cardan_forces.formulations.problems import LP, QP, Conic, ForceChecks
+from cardan_forces.solvers import available, solve
+from cardan_forces.solvers.optimality import measures, recover, unique_optimum
+from cardan_forces.solvers.record import Outcome, finalize
+
+
+def _checks(A, b, unilateral):
+    A = np.atleast_2d(np.asarray(A, float))
+    return ForceChecks(A=A, b=np.asarray(b, float),
+                       names=tuple(f"x{i}" for i in range(A.shape[1])),
+                       unilateral=np.asarray(unilateral, bool))
+
+
+def _projection() -> QP:
+    """min 1/2||x - c||^2 on x0+x1+x2 = 1, x >= 0, c = (1.2, 0.6, -1): x = (0.8, 0.2, 0);
+    by hand, x - c + y e + (lower-bound rows -I)' y_lb = 0 gives y = 0.4 on the
+    equality (conic sign) and y_lb = (0, 0, 1.4) on the bounds.
+    """
+    ones = np.ones((1, 3))
+    return QP(checks=_checks(ones, [1.0], [True] * 3), formulation="ref", P=np.eye(3),
+              q=-np.array([1.2, 0.6, -1.0]), A=ones, b=np.array([1.0]), lb=np.zeros(3))
+
+
+def _flat_lp() -> LP:
+    """min x0 + x1 on x0 + x1 = 1, x >= 0: every point of the segment is optimal (value 1)."""
+    return LP(checks=_checks([[1.0, 1.0]], [1.0], [True, True]), formulation="ref",
+              c=np.array([1.0, 1.0]), A=np.array([[1.0, 1.0]]), b=np.array([1.0]),
+              lb=np.zeros(2))
+
+
+def test_known_multipliers_give_zero_dual_residual_and_gap():
+    problem = _projection()
+    exact = np.array([0.4, 0.0, 0.0, 1.4])
+    record = finalize(problem, "hand", Outcome("solved", np.array([0.8, 0.2, 0.0]),
+                                               duals=exact))
+    assert record.duals == "solver"
+    assert record.optimality["dual"] <= 1e-15 and record.optimality["gap"] <= 1e-15
+    wrong = finalize(problem, "hand", Outcome("solved", np.array([0.8, 0.2, 0.0]),
+                                              duals=exact + [0.1, 0, 0, 0]))
+    assert wrong.optimality["dual"] > 1e-2  # stationarity fails with the wrong multiplier
+    conic = problem.as_conic()
+    assert np.allclose(recover(conic.P, conic.q, conic.A, conic.b, conic.cones,
+                               np.array([0.8, 0.2, 0.0])), exact, atol=1e-12)
+
+
+def test_a_feasible_point_that_is_not_optimal_has_a_gap():
+    problem = _projection()
+    record = finalize(problem, "hand", Outcome("solved", np.array([0.5, 0.5, 0.0])),
+                      reference=np.array([0.8, 0.2, 0.0]))
+    assert record.status == "solved"  # primal feasible: the residuals alone accept it
+    assert record.optimality["primal"] <= 1e-15
+    assert max(record.optimality["dual"], record.optimality["gap"]) > 1e-2
+    assert record.optimality["distance"] > 0.3  # unique optimum: the distance is reported
+    assert not record.within(1e-6)
+
+
+def test_non_unique_optimum_has_zero_gap_where_the_distance_would_fail():
+    problem = _flat_lp()
+    assert not unique_optimum(problem)
+    for point in ([0.3, 0.7], [1.0, 0.0]):
+        record = finalize(problem, "hand", Outcome("solved", np.array(point)),
+                          reference=np.array([0.5, 0.5]), optimal_value=1.0)
+        assert record.residuals["reference"] > 0.2  # distance to one optimal point fails
+        assert "distance" not in record.optimality  # ... so it is not a measure here
+        assert record.optimality["dual"] <= 1e-15 and record.optimality["gap"] <= 1e-15
+        assert record.within(1e-12)
+
+
+def test_objective_gap_for_a_record_without_duals():
+    record = finalize(_flat_lp(), "hand", Outcome("solved", np.array([0.5, 0.5])),
+                      optimal_value=0.9)
+    assert record.duals == "recovered" and record.gap_kind == "objective"
+    assert record.optimality["gap"] == pytest.approx(0.1 / 0.9)
+
+
+def test_second_order_cone_multiplier_on_the_boundary():
+    # min t s.t. u + v = 2, ||(u, v)|| <= t: u = v = 1, t = sqrt 2; the multipliers are
+    # y_eq = -1/sqrt2 (conic sign) and the cone's y = (1, -1/sqrt2, -1/sqrt2).
+    A = np.vstack([[0.0, 1, 1], -np.eye(3)])
+    b = np.array([2.0, 0, 0, 0])
+    q = np.array([1.0, 0, 0])
+    z = np.array([np.sqrt(2.0), 1, 1])
+    y = recover(None, q, A, b, (("zero", 1), ("soc", 3)), z)
+    exact = np.array([-1 / np.sqrt(2), 1.0, -1 / np.sqrt(2), -1 / np.sqrt(2)])
+    assert np.allclose(y, exact, atol=1e-12)
+    found = measures(None, q[None], A[None], b[None], (("zero", 1), ("soc", 3)), z[None],
+                     exact[None])
+    assert found["dual"][0] <= 1e-15 and found["gap"][0] <= 1e-15
+
+
+def test_min_max_like_problem_solved_by_clarabel_is_optimal_without_a_distance():
+    """The least peak of two loads whose sum is fixed, with a free third component: the
+    optimum is a set, Clarabel lands somewhere in it, and the measures say optimal."""
+    if "clarabel" not in available():
+        pytest.skip("clarabel not installed")
+    # z = (a, b, c, t): a + b = 2, |a| <= t, |b| <= t, c free in [-1, 1] and unused.
+    A = np.vstack([[1.0, 1, 0, 0],
+                   [0, 0, 0, -1], [-1, 0, 0, 0],
+                   [0, 0, 0, -1], [0, -1, 0, 0],
+                   [0, 0, 1, 0], [0, 0, -1, 0]])
+    b = np.array([2.0, 0, 0, 0, 0, 1, 1])
+    checks = _checks([[1.0, 1, 0, 0]], [2.0], [False] * 4)
+    problem = Conic(checks=checks, formulation="ref", q=np.array([0.0, 0, 0, 1]), A=A, b=b,
+                    cones=(("zero", 1), ("soc", 2), ("soc", 2), ("nonneg", 2)))
+    record = solve(problem, "clarabel", tol=1e-9, reference=np.array([1.0, 1, 0.5, 1]))
+    assert record.status == "solved" and record.duals == "solver"
+    assert "distance" not in record.optimality
+    assert record.within(1e-7)
