@@ -294,8 +294,8 @@ class _Runs:
 
     def lines(self) -> list[str]:
         """What was simulated, what for, and its cost."""
-        out = [f"- loading the compiled kernels and the first motion's set-up (once per "
-               f"process): {1e3 * (self.load_s or 0.0):.0f} ms"]
+        out = [f"- the first motion's set-up (once per process; it loads the compiled kernels "
+               f"where numba is installed): {1e3 * (self.load_s or 0.0):.0f} ms"]
         out += [f"- motion of `{name}` ({n} instants, 1-DOF): {1e3 * s:.0f} ms, for {why}"
                 for name, n, s, why in self.motions]
         for name, r in self.penalties.items():
