@@ -7,9 +7,9 @@ into a folder, and returns the CSV's path. The PNG is always redrawn from the CS
 How they are drawn: the rigid-model methods first and on top, and the y axis fitted to
 them with a margin, since their differences of tens of newtons are what the figures
 compare; the penalty simulation as a light raw line (its impact peaks clipped, the
-ranges of raw and average written in the panel where they leave it) under its moving average over :data:`SMOOTH_S` (column
-``..._penalty_avg``). The rigid
-solution set is shaded only where it is bounded on both sides; where it is not, the
+ranges of raw and average written in the panel where they leave it) under its moving
+average over :data:`SMOOTH_S` (column ``..._penalty_avg``). The rigid solution set is
+shaded only where it is bounded on both sides; where it is not, the
 panel says so (and draws a finite bound as a dashed line).
 """
 
