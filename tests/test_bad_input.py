@@ -160,7 +160,8 @@ COMMANDS = [
     ("sets --t -0.5", "--t -0.5: must be a finite number in [0, 1e+06]"),
     ("sets --t 6", "--t 6.0: outside the scene's time span [0.0, 5.0] s"),
     ("sets --t abc", "argument --t: invalid float value: 'abc' (see 'cardan sets --help')"),
-    ("bench --budget-s -1", "--budget-s -1.0: must be a finite number in (0, 100000]"),
+    ("bench --budget-s -1", "argument --budget-s: expected a positive number of seconds, "
+                            "got '-1' (see 'cardan bench --help')"),
     ("hard --tol -1", "--tol -1.0: must be a finite number in (0, 1]"),
     ("sweep --angle 95", "--angle 95: |articulation| must be at most 89 deg"),
     ("sweep --amplitude 1e300", "--amplitude 1e+300: must be at most 1e+09 N m in magnitude"),

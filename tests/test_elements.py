@@ -231,11 +231,13 @@ def test_scene_show_lists_kinds_and_slip_joints(capsys):
 
 @pytest.mark.parametrize("name", ["paper", "propshaft"])
 def test_batched_least_norm_is_exact_on_any_scene(name):
-    from cardan_forces.experiments.batched import solve_batched
+    from cardan_forces.formulations.batch import least_norm_batch
+    from cardan_forces.solvers import solve_batch
 
     op = build_operator(simulate(load_scene(name), np.linspace(0.0, 0.5, 21)))
     for formulation in ("min_norm", "positive"):
-        assert solve_batched(op, formulation).residuals["equilibrium"].max() < 1e-11
+        record = solve_batch(least_norm_batch(op, formulation), "numpy-batched")
+        assert record.residuals["equilibrium"].max() < 1e-11
 
 
 def test_sets_release_prints_the_advice_and_the_released_table(capsys):
