@@ -106,6 +106,7 @@ def test_cli_json_and_reports(tmp_path, capsys):
     assert {c["formulation"] for c in cases} == {"paper", "positive"}
     for c in cases:
         assert set(c) >= {"case", "formulation", "solver", "status", "residuals", "forces"}
+        # --json prints undefined numbers (a failed solve's residuals) as null
         residuals = {k: np.inf if v is None else float(v) for k, v in c["residuals"].items()}
         if c["status"] == "solved":
             assert residuals["equilibrium"] <= 1e-6

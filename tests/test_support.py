@@ -73,3 +73,28 @@ def test_a_locked_line_is_refused(monkeypatch, paper):
     with pytest.raises(SceneError, match="the line is locked: its contacts leave no free "
                                          "motion, so it cannot turn"):
         check_support(paper)
+
+
+def test_new_kinds_of_contact_columns_are_counted_without_change(paper):
+    """The count reads only the operator: a column that restrains nothing new (a copy of
+    a bearing's) leaves the line held; a brake (a moment about the input shaft's own
+    axis, as a new element kind would add) locks it; a bearing released axially (its x
+    column removed, as a floating bearing) keeps it held (the other bearing holds x)."""
+    from cardan_forces.driveline.dynamics import simulate
+    from cardan_forces.driveline.equilibrium import build_operator
+
+    op = build_operator(simulate(paper, [0.3]))
+    A = op.A[0]
+    copy = np.column_stack([A, A[:, op.index("bearing.input.near.z")]])
+    assert free_motions(copy, op.rows).held
+    brake = np.zeros(A.shape[0])
+    brake[3:6] = [1.0, 0.0, 0.0]  # input shaft, moment about its axis (global x)
+    assert free_motions(np.column_stack([A, brake]), op.rows).free == 0
+    floating = np.delete(A, op.index("bearing.input.far.x"), axis=1)
+    assert free_motions(floating, op.rows).held
+    # every bearing floating axially: the whole line (input and output parallel in Z)
+    # slides along x; the closed loop no longer holds it
+    axial = [op.index(f"bearing.{s}.{b}.x") for s in ("input", "output") for b in ("near", "far")]
+    found = free_motions(np.delete(A, axial, axis=1), op.rows)
+    assert found.free == 2
+    assert {"input.force.x", "intermediate.force.x", "output.force.x"} <= set(found.rows)
