@@ -164,9 +164,10 @@ def turns_bound(scene: Scene) -> float:
 def check_motion(scene: Scene) -> None:
     """Raise :class:`SceneError` when :func:`turns_bound` exceeds :data:`MAX_TURNS`."""
     turns = turns_bound(scene)
+    span = scene.time.stop_s - scene.time.start_s
     if turns > MAX_TURNS:
         raise SceneError(
-            f"scene {scene.source}: field 'time.stop_s': over {scene.time.stop_s - scene.time.start_s:g} s "
+            f"scene {scene.source}: field 'time.stop_s': over {span:g} s "
             f"the line may turn {turns:.3g} revolutions (initial speed "
             f"{scene.initial_speed_rad_s:g} rad/s and the torques); at most {MAX_TURNS:g}: "
             "shorten the time span or lower the speed or torques")

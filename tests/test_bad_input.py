@@ -60,8 +60,10 @@ NOT_HELD = ("field 'shafts': the line is not held: its contacts leave {free} fre
             "bearings that hold these bodies")
 
 SCENES = [
-    ("binary", bytes(range(256)) * 4, "not UTF-8 text (byte 0x80 at offset 128); TOML files are UTF-8"),
-    ("utf16", PAPER.encode("utf-16"), "not UTF-8 text (byte 0xff at offset 0); TOML files are UTF-8"),
+    ("binary", bytes(range(256)) * 4,
+     "not UTF-8 text (byte 0x80 at offset 128); TOML files are UTF-8"),
+    ("utf16", PAPER.encode("utf-16"),
+     "not UTF-8 text (byte 0xff at offset 0); TOML files are UTF-8"),
     ("latin1-byte", PAPER.replace("Wang", "W\xe4ng", 1).encode("latin-1"),
      "not UTF-8 text (byte 0xe4 at offset 23); TOML files are UTF-8"),
     ("nested-5000", PAPER + "\nextra = " + "[" * 5000 + "]" * 5000 + "\n",
