@@ -51,9 +51,9 @@ from cardan_forces.driveline.scene import (
 )
 from cardan_forces.experiments import bench, hard, report, secondary, sweep
 from cardan_forces.experiments.analysis import intervals, solve_all
+from cardan_forces.experiments.paper_method import multistart
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
-from cardan_forces.formulations.paper import multistart
 from cardan_forces.solvers import SolverNotFound, available
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.registry import known_backends

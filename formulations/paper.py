@@ -1,4 +1,7 @@
-"""The paper's own method: 34 polar unknowns, 34 nonlinear equations, ``fsolve``.
+"""The paper's own method as a problem: 34 polar unknowns, 34 nonlinear equations.
+
+The root finding (``fsolve``, ``root(lm)``, multistart) goes through the solver
+registry like every other solve: ``cardan_forces.experiments.paper_method``.
 
 Wang & Qi (2017) write every radial contact force as a magnitude and a contact angle
 (bearings eqs. 11-14, trunnions eqs. 37, 44), keep the end-face forces as magnitudes
@@ -36,18 +39,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import fsolve, root
 
-from cardan_forces.driveline.determinacy import RANK_RTOL
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.kinematics import rest_geometry
 from cardan_forces.driveline.scene import Scene
 
 from .convex import NotApplicable, socp_face
 from .problems import NLS, ForceChecks
-
-CONVERGED = 1e-8
-"""``paper_residual`` below which a solve counts as converged."""
 
 TINY = 1e-12
 """Relative magnitude under which a start's contact angle is set to 0."""
@@ -66,6 +64,19 @@ class PaperNLS(NLS):
     radial: np.ndarray = field(default=None, repr=False)
     angles: np.ndarray = field(default=None, repr=False)
     end_faces: np.ndarray = field(default=None, repr=False)
+
+    def canonical(self, z: np.ndarray) -> tuple[np.ndarray, bool]:
+        """The same polar point with nonnegative radial magnitudes (``(-f, a) -> (f, a +
+        pi)``) and angles in (-pi, pi]; and whether any magnitude flipped. A change of
+        variables: without the rim it changes no force, with it the end-face rim points
+        (eqs. 33-36, 42-43) move, since they depend on the angles.
+        """
+        z = np.array(z, float)
+        neg = z[self.radial] < 0
+        z[self.radial[neg]] *= -1.0
+        z[self.angles[neg]] += np.pi
+        z[self.angles] = np.pi - np.mod(np.pi - z[self.angles], 2.0 * np.pi)
+        return z, bool(neg.any())
 
 
 @dataclass(frozen=True)
@@ -313,90 +324,3 @@ def _with_face_moments(lay: _Layout, face, op: Operator):
         return np.concatenate([x, m])
 
     return to_forces
-
-
-def _run(problem: PaperNLS, method: str, z0: np.ndarray, xtol: float | None):
-    """One run of ``fsolve`` (MINPACK hybrid, MATLAB's fsolve counterpart) or ``root(lm)``."""
-    if method == "hybr":
-        z, info, ier, message = fsolve(
-            problem.fun, z0, fprime=problem.jac, full_output=True,
-            **({} if xtol is None else {"xtol": xtol}),
-        )
-        return z, ier == 1, message, int(info["nfev"])
-    if method == "lm":
-        sol = root(problem.fun, z0, jac=problem.jac, method="lm",
-                   **({} if xtol is None else {"options": {"xtol": xtol}}))
-        return sol.x, bool(sol.success), sol.message, int(sol.nfev)
-    raise ValueError(f"unknown method {method!r}: use 'hybr' or 'lm'")
-
-
-def _solve(problem: PaperNLS, method: str, z0: np.ndarray, xtol: float | None):
-    """Solve, then make the radial magnitudes >= 0 (``(-f, a) -> (f, a + pi)``).
-
-    Without the rim that changes no force. With it the end-face points move, so it
-    solves again from the flipped point and keeps that answer when it converges with
-    all magnitudes >= 0; otherwise it returns the first answer as the solver gave it.
-    """
-    z, success, message, nfev = _run(problem, method, z0, xtol)
-    flipped_z, flipped = _canonical(problem, z)
-    if not (flipped and problem.rim):
-        return flipped_z, success, message, nfev
-    again, success2, message2, nfev2 = _run(problem, method, flipped_z, xtol)
-    again, flipped = _canonical(problem, again)
-    if success2 and not flipped and problem.paper_residual(again) < CONVERGED:
-        return again, success2, message2, nfev + nfev2
-    return z, success, message, nfev + nfev2
-
-
-def _canonical(problem: PaperNLS, z: np.ndarray) -> tuple[np.ndarray, bool]:
-    """Nonnegative radial magnitudes, angles in (-pi, pi]; and whether any flipped."""
-    z = np.array(z, float)
-    neg = z[problem.radial] < 0
-    z[problem.radial[neg]] *= -1.0
-    z[problem.angles[neg]] += np.pi
-    z[problem.angles] = np.pi - np.mod(np.pi - z[problem.angles], 2.0 * np.pi)
-    return z, bool(neg.any())
-
-
-def solve_paper(op: Operator, i: int, method: str = "hybr", rim: bool = True,
-                z0: np.ndarray | None = None, xtol: float | None = None,
-                scene: Scene | None = None) -> dict:
-    """Solve the paper's system at instant ``i``; the Jacobian's rank and condition
-    at the answer show the direction the 34 equations leave free (the closed loop's
-    self-stress).
-    """
-    problem = build_paper(op, i, rim=rim, scene=scene)
-    z, success, message, nfev = _solve(problem, method, problem.z0 if z0 is None else z0, xtol)
-    s = np.linalg.svd(problem.jac(z), compute_uv=False)
-    return {
-        "x": problem.to_forces(z),
-        "z": z,
-        "success": success,
-        "message": message,
-        "nfev": nfev,
-        "paper_residual": problem.paper_residual(z),
-        "jac_rank": int(np.sum(s > RANK_RTOL * s[0])),
-        "jac_cond": float(s[0] / s[-1]) if s[-1] > 0 else float("inf"),
-    }
-
-
-def multistart(op: Operator, i: int, n: int = 20, seed: int = 0, rim: bool = True,
-               scene: Scene | None = None) -> np.ndarray:
-    """``fsolve`` from ``n`` seeded random starts around eqs. 63-74's; the converged
-    forces (n_converged, len(checks.names)): the 36 Cartesian forces, then with the rim
-    the end-face moments) sample the rigid model's solution set.
-    """
-    problem = build_paper(op, i, rim=rim, scene=scene)
-    rng = np.random.default_rng(seed)
-    top = np.abs(problem.z0).max()
-    found = []
-    for _ in range(n):
-        z0 = problem.z0.copy()
-        z0[problem.radial] *= np.exp(0.5 * rng.standard_normal(len(problem.radial)))
-        z0[problem.angles] += rng.uniform(-0.5, 0.5, len(problem.angles))
-        z0[problem.end_faces] = rng.uniform(0.0, 0.2 * top, len(problem.end_faces))
-        z, success, _, _ = _solve(problem, "hybr", z0, None)
-        if success and problem.paper_residual(z) < CONVERGED:
-            found.append(problem.to_forces(z))
-    return np.array(found).reshape(-1, len(problem.checks.names))
-

@@ -1,10 +1,14 @@
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.formulations.paper import build_paper, multistart, solve_paper
+from cardan_forces.experiments.paper_method import multistart, solve_paper
+from cardan_forces.formulations.paper import build_paper
 
 TIMES = [0.5, 1.3, 2.77]
 
@@ -146,3 +150,29 @@ def test_records_report_the_singular_jacobian(op):
     record = solve(build_paper(op, 0), "scipy-fsolve")
     assert record.status == "solved"
     assert "jacobian rank 33 of 34" in record.message
+
+
+def test_formulations_solve_nothing():
+    """Formulations build problems; every root finding and optimization goes through
+    the solver registry (``solvers/``), which formulations must not import."""
+    root = Path(__file__).resolve().parents[1] / "formulations"
+    sources = sorted(root.glob("*.py"))
+    assert any(path.name == "paper.py" for path in sources)
+    pattern = re.compile(r"^\s*(?:from|import)\s+(?:scipy\.optimize|scipy\s+import\s+[^\n]*"
+                         r"\boptimize\b|cardan_forces\.solvers|\.\.solvers)", flags=re.M)
+    for path in sources:
+        found = pattern.findall(path.read_text())
+        assert not found, f"{path.name} imports {found}"
+
+
+def test_canonical_flips_magnitudes_without_changing_forces(op):
+    """``(-f, a) -> (f, a + pi)`` is a change of variables: without the rim the forces stay."""
+    problem = build_paper(op, 0, rim=False)
+    z = problem.z0 + np.random.default_rng(3).normal(size=problem.n)
+    z[problem.radial[::2]] = -np.abs(z[problem.radial[::2]]) - 1.0
+    flipped, any_flipped = problem.canonical(z)
+    assert any_flipped and np.all(flipped[problem.radial] >= 0)
+    assert np.all(np.abs(flipped[problem.angles]) <= np.pi)
+    np.testing.assert_allclose(problem.to_forces(flipped), problem.to_forces(z),
+                               atol=1e-9 * np.abs(problem.to_forces(z)).max())
+    assert problem.canonical(flipped)[1] is False
