@@ -179,10 +179,12 @@ def _cmd_sets(args) -> int:
 def _print_sets(name, result, ranges, starts=None, n_starts=0) -> None:
     print(f"scene {name}, t = {result.t:g} s: rank {result.rank}, nullity "
           f"{result.nullity}, least-norm residual {result.residual:.1e}")
-    print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; least-norm values in N "
-          "(one member of the solution set where not determinate); interval over all "
-          "solutions with end faces >= 0 (-inf/+inf: unbounded)")
-    print(f"{'component':24s} {'determinate':>11s} {'least-norm N':>14s} {'min N':>12s} "
+    print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; least-norm values in N, "
+          "N m for a slip joint's bending and torque (one member of the solution set where "
+          "not determinate); interval over all solutions with end faces >= 0 (-inf/+inf: "
+          "unbounded)")
+    width = max(24, *(len(n) for n in result.names))
+    print(f"{'component':{width}s} {'determinate':>11s} {'least-norm N':>14s} {'min N':>12s} "
           f"{'max N':>12s}")
     if starts is not None:
         print(f"paper method (fsolve, end faces on the axis) from {n_starts} random "
@@ -194,7 +196,7 @@ def _print_sets(name, result, ranges, starts=None, n_starts=0) -> None:
         hi = "+inf" if hi is None else f"{hi:.4f}"
         spread = "" if starts is None or not len(starts) else \
             f"  paper: [{starts[:, j].min():.3f}, {starts[:, j].max():.3f}]"
-        print(f"{name:24s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}"
+        print(f"{name:{width}s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}"
               f"{spread}")
 
 
