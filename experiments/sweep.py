@@ -17,9 +17,11 @@ import io
 import json
 import math
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Iterator
+from contextlib import closing
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -328,12 +330,16 @@ def read_rows(path: Path) -> list[dict]:
 
 
 def _write(f, rows: list[dict], header: bool = False) -> None:
-    w = csv.DictWriter(f, COLUMNS, lineterminator="\n")
+    """Append ``rows`` (and the header) to ``f`` in one write, flushed: an interrupt
+    lands before or after a point's rows, never inside a line."""
+    text = io.StringIO()
+    w = csv.DictWriter(text, COLUMNS, lineterminator="\n")
     if header:
         w.writeheader()
     w.writerows({k: " ".join(row[k].split())[:300] if k == "message"
                  else _num(row.get(k, math.nan), FORMATS.get(k, ".10g")) for k in COLUMNS}
                 for row in rows)
+    f.write(text.getvalue())
     f.flush()
 
 
@@ -341,8 +347,15 @@ def _write(f, rows: list[dict], header: bool = False) -> None:
 
 
 def _pool(tasks: list[dict], workers: int) -> Iterator[tuple[dict, list[dict] | Exception]]:
-    """Run ``tasks`` in a local process pool; yield each with its rows or the error."""
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(tasks)))
+    """Run ``tasks`` in a local process pool; yield each with its rows or the error.
+
+    The workers ignore SIGINT (a Ctrl-C reaches the whole process group): the main
+    process alone handles it, and on an interrupt (or the generator closed early) drops
+    the queued points and ends the workers at once, losing only the points in flight.
+    """
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(tasks)),
+                               initializer=signal.signal,
+                               initargs=(signal.SIGINT, signal.SIG_IGN))
     try:
         owner = {pool.submit(run_point, task): task for task in tasks}
         for future in as_completed(owner):
@@ -350,10 +363,21 @@ def _pool(tasks: list[dict], workers: int) -> Iterator[tuple[dict, list[dict] | 
                 yield owner[future], future.result()
             except Exception as exc:  # a worker that died: the point is retried next run
                 yield owner[future], exc
-    except BaseException:  # interrupted: drop the queued points instead of running them
-        pool.shutdown(wait=False, cancel_futures=True)
+    except BaseException:
+        _stop(pool)
         raise
     pool.shutdown()
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel the queued points and terminate the workers instead of letting them finish
+    their points (``shutdown`` alone waits for those at exit)."""
+    workers = list((pool._processes or {}).values())  # no public handle before Python 3.14
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in workers:
+        process.terminate()
+    for process in workers:
+        process.join(timeout=5.0)
 
 
 def connect(address: str, timeout: float):
@@ -427,7 +451,7 @@ def sweep(study: Study, out: Path, workers: int, client=None,
     start, lost, costs = time.perf_counter(), [], []
     if tasks:
         results = _pool(tasks, workers) if client is None else _dask(client, tasks)
-        with open(path, "a", newline="") as f:
+        with closing(results), open(path, "a", newline="") as f:  # closing: stop the pool
             if f.tell() == 0:
                 _write(f, [], header=True)
             for k, (task, rows) in enumerate(results, 1):
