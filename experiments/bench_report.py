@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 from .bench_metrics import PROFILES, SHIFT_S, TAUS, best_runs
-from .environment import json_number, machine, versions
+from .environment import json_number, machine, number_text, versions
 
 THROUGHPUT_COLUMNS = ("formulation", "solver", "mode", "instant", "t_s", "status", "time_s",
                       "build_s", "convert_s", "solve_s", "checks_s", "iterations", "primal",
@@ -22,7 +22,8 @@ PROFILE_COLUMNS = ("formulation", "profile", "level", "solver", "solved", "sgm_r
 
 
 def write_csv(path: Path, rows: list[dict], columns: tuple[str, ...]) -> None:
-    """Long-format CSV with fixed ``columns`` (floats with 4 significant digits)."""
+    """Long-format CSV with fixed ``columns`` (floats with 4 significant digits; an
+    empty cell where a number is missing or undefined)."""
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(columns)
@@ -31,9 +32,8 @@ def write_csv(path: Path, rows: list[dict], columns: tuple[str, ...]) -> None:
 
 
 def _cell(value):
-    if value is None:
-        return ""
-    return f"{value:.4g}" if isinstance(value, float) else value
+    return number_text(value, ".4g", "") if value is None or isinstance(value, float) \
+        else value
 
 
 def profile_rows(profiles: list[dict]) -> list[dict]:
@@ -97,10 +97,8 @@ def plot_profiles(profiles: list[dict], path: Path) -> None:
     plt.close(fig)
 
 
-def _fmt(value: float, digits: int = 2) -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return ""
-    return "inf" if value == math.inf else f"{value:.{digits}e}"
+def _fmt(value: float | None, digits: int = 2) -> str:
+    return number_text(value, f".{digits}e")
 
 
 def _us(seconds: float) -> str:
@@ -168,7 +166,7 @@ def _throughput(summary) -> list[str]:
         s = e["split_s"]
         lines.append(
             f"| {e['formulation']} | {e['solver']} | {e['mode']} | {e['instants']} | "
-            f"{e['instants_per_s']:.1f} | {e['sgm_s'] * 1e3:.3f} | "
+            f"{e['instants_per_s']:.1f} | {number_text(e['sgm_s'] * 1e3, '.3f')} | "
             f"{100 * e['success_rate']:.1f}% | {_us(s['build_s'])} | {_us(s['convert_s'])} | "
             f"{_us(s['solve_s'])} | {_us(s['checks_s'])} | {_us(s['other_s'])} | "
             f"{100 * e['solver_share']:.0f}% |")
@@ -215,7 +213,7 @@ def _targets(rows) -> list[str]:
     lines = ["", "## Targets (measured in this run)", "",
              "| target | measured | wanted | met | detail |", "|---|---:|---:|---|---|"]
     for t in rows:
-        value = "not run" if t["value"] is None else f"{t['value']:.3g}"
+        value = "not run" if t["value"] is None else number_text(t["value"], ".3g")
         met = "" if t["met"] is None else ("met" if t["met"] else "NOT met")
         lines.append(f"| {t['name']} | {value} | {t['wanted']:g} | {met} | {t['detail']} |")
     return lines
@@ -247,7 +245,7 @@ def _profiles(profiles) -> list[str]:
     ten = int(abs(TAUS - 10.0).argmin())
     for p in sorted(profiles, key=lambda p: (p["formulation"], p["profile"], p["sgm_ratio"])):
         lines.append(f"| {p['formulation']} | {p['profile']} | {p['solver']} | "
-                     f"{100 * p['solved']:.0f}% | {p['sgm_ratio']:.2f} | "
+                     f"{100 * p['solved']:.0f}% | {number_text(p['sgm_ratio'], '.2f')} | "
                      f"{100 * p['curve'][ten]:.0f}% |")
     return lines
 

@@ -1,5 +1,5 @@
 """What a report states about where it ran: CPU, platform, package versions; and
-numbers made JSON-safe.
+numbers made safe to print (text, Markdown, CSV) and to write as JSON.
 """
 
 from __future__ import annotations
@@ -44,3 +44,15 @@ def json_number(value: float) -> float | str:
     """A JSON-safe float: ``inf``/``nan`` as strings, read back with ``float()``."""
     value = float(value)
     return value if math.isfinite(value) else str(value)
+
+
+def number_text(value: float | None, spec: str, undefined: str = "-") -> str:
+    """``value`` formatted by ``spec``, or ``undefined`` where it is not a finite number
+    (a failed record's residual, a peak over no solved instant, a missing reference):
+    tables and Markdown show ``-`` (right-aligned in the width ``spec`` asks for), CSV
+    cells pass ``undefined=""`` (an empty cell). Never prints ``inf`` or ``nan``.
+    """
+    if value is not None and math.isfinite(float(value)):
+        return format(value, spec)
+    padded = format(math.inf, spec)  # the width spec asks for, if any
+    return undefined.rjust(len(padded)) if padded.startswith(" ") else undefined

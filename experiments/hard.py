@@ -32,7 +32,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.scene import Scene, load_scene, scene_from_dict
 from cardan_forces.experiments.analysis import solve_all
-from cardan_forces.experiments.environment import json_number
+from cardan_forces.experiments.environment import json_number, number_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers import STATUSES, Record
 
@@ -326,14 +326,16 @@ def _table(rows: list[dict]) -> list[str]:
              f"{'worst res':>9s} {'max jump':>9s} {'NaN-free':>8s}  verdict"]
     for row in rows:
         lines.append(f"{row['case']:22s} {row['formulation']:16s} {row['best']:22s} "
-                     f"{row['solved']:>6s} {row['worst_residual']:9.1e} {row['max_jump']:9.2e} "
+                     f"{row['solved']:>6s} {number_text(row['worst_residual'], '9.1e')} "
+                     f"{number_text(row['max_jump'], '9.2e')} "
                      f"{'yes' if row['nan_free'] else 'NO':>8s}  {_verdict(row)}")
     return lines
 
 
 def write_csv(runs: list[Run], path: Path) -> None:
     """Long format: one row per case x formulation x backend x instant; a failed
-    solve is a row with ``inf`` residuals; ``jump`` is the step from the previous instant.
+    solve is a row with empty residual cells (undefined); ``jump`` is the step from the
+    previous instant, empty next to an instant without forces.
     """
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
@@ -342,7 +344,8 @@ def write_csv(runs: list[Run], path: Path) -> None:
         for run in runs:
             for ti, r, jump in zip(run.t, run.records, run.jumps()):
                 w.writerow([run.case, run.formulation, run.solver, f"{ti:.6g}", r.status,
-                            *(f"{r.residuals[k]:.3e}" for k in RESIDUALS), f"{jump:.3e}",
+                            *(number_text(r.residuals[k], ".3e", "") for k in RESIDUALS),
+                            number_text(jump, ".3e", ""),
                             f"{r.setup_s + r.solve_s:.3e}", r.message])
 
 
@@ -356,7 +359,8 @@ def write_md(rows: list[dict], path: Path, settings: str) -> None:
               "| case | formulation | best backend | solved | worst residual | max jump | "
               "NaN-free | verdict | backends failing somewhere |", "|---" * 9 + "|"]
     lines += [f"| {r['case']} | {r['formulation']} | {r['best']} | {r['solved']} | "
-              f"{r['worst_residual']:.1e} | {r['max_jump']:.2e} | "
+              f"{number_text(r['worst_residual'], '.1e')} | "
+              f"{number_text(r['max_jump'], '.2e')} | "
               f"{'yes' if r['nan_free'] else 'NO'} | {_verdict(r)} | "
               f"{', '.join(r['failing']) or '-'} |" for r in rows]
     lines += ["", "## Known failures", ""]

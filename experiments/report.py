@@ -26,6 +26,7 @@ from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.release import named_modes
 from cardan_forces.driveline.scene import load_scene
 from cardan_forces.experiments.analysis import value_range
+from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers import available, solve
 
@@ -62,6 +63,8 @@ def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
 
 
 def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
+    """Long format, one row per component x instant; an empty cell where the answer
+    is missing (not solved) or an end of the interval is unbounded."""
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s", "component", "contact", "kind", f"{SELECTION}_N", "min_N", "max_N",
@@ -70,7 +73,8 @@ def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
             for j in c.columns:
                 for i, t in enumerate(op.t):
                     w.writerow([f"{t:.6g}", op.names[j], c.name, c.kind,
-                                *(f"{h[k][i, j]:.9g}" for k in ("value", "min", "max")),
+                                *(number_text(h[k][i, j], ".9g", "")
+                                  for k in ("value", "min", "max")),
                                 bool(h["determinate"][i, j])])
 
 
@@ -123,7 +127,7 @@ def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path) -> None:
                       axis=0)
     for j, name in enumerate(op.names):
         lines.append(f"| {name} | {'yes' if h['determinate'][:, j].all() else 'no'} | "
-                     f"{width[j]:.3g} |")
+                     f"{number_text(width[j], '.3g', 'unbounded')} |")
     lines += ["", "## Modes (null-space directions)", ""]
     lines += [f"- **{m.kind}**: {m.description}; release: {m.release}" for m in modes]
     path.write_text("\n".join(lines) + "\n")

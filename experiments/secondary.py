@@ -46,6 +46,7 @@ from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.scene import Scene, load_scene, scene_from_dict
+from cardan_forces.experiments.environment import number_text
 
 STEPS = 72
 """Instants per revolution (5 deg apart)."""
@@ -114,7 +115,7 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
         w.writerow(["case", "bearing_load", "angle_deg", "force_N"])
         for case, loads in results.items():
             for name, values in loads.items():
-                w.writerows([case, name, f"{q:.6g}", f"{v:.9g}"]
+                w.writerows([case, name, f"{q:.6g}", number_text(v, ".9g", "")]
                             for q, v in zip(angle_deg, values))
     fig, axes = plt.subplots(len(results), 1, figsize=(8, 3 * len(results)), squeeze=False)
     for ax, (case, loads) in zip(axes[:, 0], results.items()):
@@ -177,5 +178,6 @@ def _run_cli(args) -> int:
         for key, name, i in (("near_0", near.name, 0), ("far_0", far.name, 0),
                              ("near_90", near.name, step), ("far_90", far.name, step)):
             got = loads[f"input.{name}.normal"][i]
-            print(f"{case:18s} {key:10s} {expect[key]:12.4f} {got:12.4f}")
+            print(f"{case:18s} {key:10s} {number_text(expect[key], '12.4f')} "
+                  f"{number_text(got, '12.4f')}")
     return 0

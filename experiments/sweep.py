@@ -17,9 +17,11 @@ import io
 import json
 import math
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Iterator
+from contextlib import closing
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -30,6 +32,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.kinematics import Geometry, kinematics
 from cardan_forces.driveline.scene import Scene, builtin_names, load_scene, scene_from_dict
+from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import STATUSES, Record, backends_for, solve
@@ -87,8 +90,8 @@ def point_scene(task: dict) -> Scene:
 def run_point(task: dict) -> list[dict]:
     """Simulate one point and solve its ``methods`` (``[formulation, backend]`` pairs):
     one row per method. Never raises: a scene, motion or solver error is a ``failed``
-    row with an ``inf`` residual and the reason. A top-level function of plain data, so
-    that a process pool and Dask can ship it.
+    row with an ``inf`` residual (an empty CSV cell) and the reason. A top-level
+    function of plain data, so that a process pool and Dask can ship it.
     """
     start = time.perf_counter()
     base = {k: task[k] for k in KEY if k in task}
@@ -294,12 +297,18 @@ def _methods(scene: Scene, formulations: list[str] | None, solvers: list[str] | 
 
 
 def _num(value, spec: str = ".10g") -> str:
-    """How the CSV spells a number: 10 significant digits unless ``spec`` says otherwise."""
+    """How the CSV spells a number: 10 significant digits unless ``spec`` says otherwise;
+    an empty cell where it is undefined (``inf``/``nan``)."""
     if isinstance(value, str):
         return value
     if isinstance(value, (int, np.integer)):
         return str(int(value))
-    return format(float(value), spec)
+    return number_text(float(value), spec, "")
+
+
+def _value(cell: str) -> float:
+    """A CSV number cell read back: NaN for an empty (undefined) cell."""
+    return float(cell) if cell else math.nan
 
 
 def read_rows(path: Path) -> list[dict]:
@@ -321,12 +330,16 @@ def read_rows(path: Path) -> list[dict]:
 
 
 def _write(f, rows: list[dict], header: bool = False) -> None:
-    w = csv.DictWriter(f, COLUMNS, lineterminator="\n")
+    """Append ``rows`` (and the header) to ``f`` in one write, flushed: an interrupt
+    lands before or after a point's rows, never inside a line."""
+    text = io.StringIO()
+    w = csv.DictWriter(text, COLUMNS, lineterminator="\n")
     if header:
         w.writeheader()
     w.writerows({k: " ".join(row[k].split())[:300] if k == "message"
                  else _num(row.get(k, math.nan), FORMATS.get(k, ".10g")) for k in COLUMNS}
                 for row in rows)
+    f.write(text.getvalue())
     f.flush()
 
 
@@ -334,8 +347,15 @@ def _write(f, rows: list[dict], header: bool = False) -> None:
 
 
 def _pool(tasks: list[dict], workers: int) -> Iterator[tuple[dict, list[dict] | Exception]]:
-    """Run ``tasks`` in a local process pool; yield each with its rows or the error."""
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(tasks)))
+    """Run ``tasks`` in a local process pool; yield each with its rows or the error.
+
+    The workers ignore SIGINT (a Ctrl-C reaches the whole process group): the main
+    process alone handles it, and on an interrupt (or the generator closed early) drops
+    the queued points and ends the workers at once, losing only the points in flight.
+    """
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(tasks)),
+                               initializer=signal.signal,
+                               initargs=(signal.SIGINT, signal.SIG_IGN))
     try:
         owner = {pool.submit(run_point, task): task for task in tasks}
         for future in as_completed(owner):
@@ -343,10 +363,21 @@ def _pool(tasks: list[dict], workers: int) -> Iterator[tuple[dict, list[dict] | 
                 yield owner[future], future.result()
             except Exception as exc:  # a worker that died: the point is retried next run
                 yield owner[future], exc
-    except BaseException:  # interrupted: drop the queued points instead of running them
-        pool.shutdown(wait=False, cancel_futures=True)
+    except BaseException:
+        _stop(pool)
         raise
     pool.shutdown()
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel the queued points and terminate the workers instead of letting them finish
+    their points (``shutdown`` alone waits for those at exit)."""
+    workers = list((pool._processes or {}).values())  # no public handle before Python 3.14
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in workers:
+        process.terminate()
+    for process in workers:
+        process.join(timeout=5.0)
 
 
 def connect(address: str, timeout: float):
@@ -420,7 +451,7 @@ def sweep(study: Study, out: Path, workers: int, client=None,
     start, lost, costs = time.perf_counter(), [], []
     if tasks:
         results = _pool(tasks, workers) if client is None else _dask(client, tasks)
-        with open(path, "a", newline="") as f:
+        with closing(results), open(path, "a", newline="") as f:  # closing: stop the pool
             if f.tell() == 0:
                 _write(f, [], header=True)
             for k, (task, rows) in enumerate(results, 1):
@@ -462,7 +493,9 @@ SHOWN = ("angle_deg", "amplitude_N_m", "formulation", "solver", "status", "n_sol
 
 
 def _shown(row: dict) -> dict[str, str]:
-    return {k: format(float(row[k]), ".6g") if k in PEAKS else row[k] for k in SHOWN}
+    return {k: number_text(_value(row[k]), ".6g") if k in PEAKS else
+            number_text(_value(row[k]), FORMATS[k]) if k in FORMATS else row[k]
+            for k in SHOWN}
 
 
 def write_md(result: SweepResult, study: Study, path: Path) -> None:
@@ -474,8 +507,9 @@ def write_md(result: SweepResult, study: Study, path: Path) -> None:
         f"Backend: {result.backend}. This run computed {result.computed} points and resumed "
         f"{result.resumed} in {result.wall_s:.1f} s.", "",
         "## Cost per point", "",
-        f"{c['points']} points: mean {c['mean_s']:.3f} s, max {c['max_s']:.3f} s of worker "
-        f"time each (simulation and operator: mean {c['simulate_mean_s']:.3f} s).", "",
+        f"{c['points']} points: mean {number_text(c['mean_s'], '.3f')} s, max "
+        f"{number_text(c['max_s'], '.3f')} s of worker time each (simulation and operator: "
+        f"mean {number_text(c['simulate_mean_s'], '.3f')} s).", "",
         "## Rows", "",
         "Peaks in N over the solved instants; most are not determinate in the rigid model: "
         "each is the formulation's member of the solution set (the out-of-plane bearing "
@@ -499,12 +533,13 @@ def _settings(study: Study) -> str:
 
 
 def _typed(row: dict) -> dict:
-    """A CSV row for JSON: numbers as numbers, ``inf``/``nan`` kept as strings."""
+    """A CSV row for JSON: numbers as numbers, undefined ones (an empty cell, or
+    ``inf``/``nan`` in a CSV of an older run) as ``None``."""
     text = ("scene", "formulation", "solver", "status", "message")
     out = {}
     for k, v in row.items():
-        value = v if k in text else float(v)
-        out[k] = v if k in text or not math.isfinite(value) else \
+        value = v if k in text else _value(v)
+        out[k] = v if k in text else None if not math.isfinite(value) else \
             int(value) if k in ("instants", "n_solved") else value
     return out
 
@@ -572,8 +607,8 @@ def run(args) -> int:
                           "rows": [_typed(r) for r in result.rows]}, indent=2))
     else:
         c = costs(result.rows)
-        print(f"{_settings(study)}\ncost per point: mean {c['mean_s']:.3f} s, max "
-              f"{c['max_s']:.3f} s; {result.backend}")
+        print(f"{_settings(study)}\ncost per point: mean {number_text(c['mean_s'], '.3f')} "
+              f"s, max {number_text(c['max_s'], '.3f')} s; {result.backend}")
         table = [dict(zip(SHOWN, SHOWN)), *map(_shown, result.rows)]
         width = {k: max(len(r[k]) for r in table) for k in SHOWN}
         for r in table:

@@ -1,5 +1,7 @@
 """The penalty-contact simulation (paper eqs. 75-78) against the rigid model."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
@@ -49,16 +51,47 @@ def test_contact_law_eqs_75_78():
     assert contact_law(1e-6, -1.0, k, n, c, d_max) == 0.0
 
 
-def test_contact_parameters(scene):
-    """Joints: Hertz K (eqs. 76-77), c_max = 1 % of K read in mm-N-s units; bearings:
-    linear, c_max = 0.01 s times their stiffness."""
-    contacts = penalty._Model(scene, penalty.DAMPING_LENGTH_UNIT_M).c
-    k = hertz_stiffness(scene, scene.joints[0])
+def test_contact_parameters_match_the_paper_by_hand(scene):
+    """The joints' Hertz stiffness and damping from the paper's printed numbers, worked
+    by hand: E = 2.07e11 Pa, nu = 0.29 (material), rs = 4.75 mm and rb = 5.00 mm (Table
+    2), eqs. 76-77 with the same steel on both sides: s = (1 - 0.29^2) / 2.07e11 =
+    4.4246e-12 1/Pa, K = 4 / (3 * 2s) * sqrt(4.75 * 5.00 / 0.25 * 1e-3 m) = 1.5067e11 *
+    0.30822 = 4.644e10 N/m^1.5. Damping (eq. 78 and the text after it): c_max = 1 % of
+    K read in ADAMS's N, mm, s, i.e. 0.01 * K [N/mm^1.5] N s/mm, at full depth d_max =
+    0.01 mm; the exponent is 1.5 (steel). 2 joints x F1-F8 and 4 bearings x 3 forces.
+    """
+    model = penalty._Model(scene, penalty.DAMPING_LENGTH_UNIT_M)
+    contacts = model.c
     joint, bearing = contacts.exponent == 1.5, contacts.exponent == 1.0
     assert joint.sum() == 16 and bearing.sum() == 12
-    assert np.allclose(contacts.stiffness[joint], k)
-    assert np.allclose(contacts.c_max[joint], 0.01 * k * 1e-3**0.5)
-    assert np.allclose(contacts.c_max[bearing], 0.01 * scene.contact.bearing_stiffness_N_m)
+    assert np.allclose(contacts.stiffness[joint], 4.644e10, rtol=2e-4)
+    k_mm = 4.644e10 * 1e-3**1.5  # N/mm^1.5
+    assert np.allclose(contacts.c_max[joint], 0.01 * k_mm * 1e3, rtol=2e-4)  # N s/mm -> /m
+    assert model.d_max == pytest.approx(1e-5)
+    # at 0.01 mm and at rest a pin in its bore carries K d^1.5 = 1468.6 N
+    assert contact_law(1e-5, 0.0, contacts.stiffness[joint][0], 1.5, contacts.c_max[joint][0],
+                       model.d_max) == pytest.approx(1468.6, rel=2e-4)
+
+
+def test_hertz_stiffness_scales_with_the_effective_modulus_and_radius(scene):
+    """Hertz line contact of a pin in a bore: K grows with E / (1 - nu^2) and with the
+    square root of the effective radius R1 R2 / (R2 - R1), so doubling E doubles K,
+    scaling both radii (and the play) by 4 doubles it, and a tighter play stiffens it."""
+    joint, material = scene.joints[0], scene.material
+    k = hertz_stiffness(scene, joint)
+
+    def with_material(**changes):
+        return dataclasses.replace(scene, material=dataclasses.replace(material, **changes))
+
+    doubled_e = with_material(youngs_modulus_Pa=2 * material.youngs_modulus_Pa)
+    assert hertz_stiffness(doubled_e, joint) == pytest.approx(2 * k, rel=1e-12)
+    rubbery = with_material(poisson_ratio=0.5)
+    assert hertz_stiffness(rubbery, joint) == pytest.approx(
+        k * (1 - 0.29**2) / (1 - 0.5**2), rel=1e-12)
+    bigger = dataclasses.replace(joint, rs_m=4 * joint.rs_m, rb_m=4 * joint.rb_m)
+    assert hertz_stiffness(scene, bigger) == pytest.approx(2 * k, rel=1e-12)
+    tighter = dataclasses.replace(joint, rs_m=joint.rb_m - 0.1e-3)
+    assert hertz_stiffness(scene, tighter) > 1.5 * k
 
 
 def _pressed_state(model, seed):

@@ -2,9 +2,13 @@ import argparse
 import csv
 import json
 import math
+import os
 import shutil
+import signal
 import socket
+import subprocess
 import sys
+import time
 
 import pytest
 
@@ -184,3 +188,37 @@ def test_point_scene_sets_every_joint_and_the_amplitude():
     torque = scene.input_torque
     assert (torque.mean_N_m, torque.amplitude_N_m, torque.frequency_hz) == (10.0, 7.0, 1.0)
     assert study.methods == (("min_norm", "numpy-kkt"),)
+
+
+def test_ctrl_c_stops_the_workers_at_once_and_keeps_the_csv_whole(tmp_path):
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) once the first
+    point's row is in the CSV: the queued points are dropped and the point in flight is
+    not finished (each takes seconds here), one line on stderr, exit 130, and the CSV
+    holds whole rows only, which a rerun resumes."""
+    args = ["sweep", "--angle", "5:20:4", "--instants", "6000", "--formulation", "min_max",
+            "--workers", "2", "--out", str(tmp_path)]
+    proc = subprocess.Popen([sys.executable, "-m", "cardan_forces.cli", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    path = tmp_path / "sweep.csv"
+    deadline = time.monotonic() + 240
+    while (not path.exists() or path.read_text().count("\n") < 2) and proc.poll() is None \
+            and time.monotonic() < deadline:
+        time.sleep(0.05)
+    first_point = time.monotonic()
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    stopped_after = time.monotonic() - first_point
+    assert proc.returncode == 130 and err.splitlines()[-1] == "cardan: interrupted"
+    assert "Traceback" not in err
+    # the other worker's point had as long to run as the first: finishing it (or the
+    # queued ones) would take seconds more
+    assert stopped_after < 0.5 * float(err.split(" s/point")[0].split()[-1]), err
+    text = path.read_text()
+    assert text.endswith("\n")
+    table = rows(tmp_path)
+    assert 1 <= len(table) < 4 and all(None not in r.values() for r in table)
+    assert {r["status"] for r in table} <= {"solved", "inaccurate"}
