@@ -51,6 +51,7 @@ from cardan_forces.driveline.scene import (
 )
 from cardan_forces.experiments import bench, hard, report, secondary, sweep
 from cardan_forces.experiments.analysis import intervals, solve_all
+from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.paper_method import multistart
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
@@ -283,24 +284,20 @@ def _cmd_solve(args) -> int:
     if args.json:
         print(json.dumps([r.to_json() for r in records], indent=2))
         return 0
-    print(f"scene {scene.name}, t = {args.t:g} s; residuals relative to ||b||; "
-          "ref = distance to the formulation's clarabel answer at tol 1e-10")
+    print(f"scene {scene.name}, t = {args.t:g} s; residuals relative to ||b||; dual = "
+          "stationarity with the solver's (or recovered) multipliers; gap = duality or "
+          "objective gap; dist = distance to the formulation's clarabel answer at tol 1e-10, "
+          "only where the optimum is unique; '-' = undefined")
     print(f"{'formulation':16s} {'solver':22s} {'status':10s} {'equil':>8s} {'sign':>8s} "
-          f"{'compl':>8s} {'cone':>8s} {'ref':>8s} {'ms':>8s}")
+          f"{'compl':>8s} {'cone':>8s} {'dual':>8s} {'gap':>8s} {'dist':>8s} {'ms':>8s}")
     for r in records:
         res = [r.residuals.get(k, math.nan) for k in ("equilibrium", "sign", "complementarity",
-                                                     "cone", "reference")]
+                                                     "cone")]
+        res += [r.optimality.get(k, math.nan) for k in ("dual", "gap", "distance")]
         print(f"{r.formulation:16s} {r.solver:22s} {r.status:10s} "
-              + " ".join(_number(v, "8.1e") for v in res)
+              + " ".join(number_text(v, "8.1e") for v in res)
               + f" {1e3 * (r.setup_s + r.solve_s):8.2f}")
     return 0
-
-
-def _number(value: float, spec: str) -> str:
-    """``value`` formatted, or ``-`` in the same width where it is not finite (a failed
-    record's residuals, a missing reference)."""
-    text = format(value, spec)
-    return text if math.isfinite(value) else "-".rjust(len(text))
 
 
 # ---------------------------------------------------------------------------- repro
