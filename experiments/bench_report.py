@@ -151,8 +151,8 @@ def _header(results, settings) -> list[str]:
         "duals), and the distance to the reference only where the optimum is unique; a row "
         "succeeds at a level when all its measures are within it",
         f"- sgm: shifted geometric mean of the time per instant, shift {SHIFT_S:g} s",
-        "- all times are wall-clock on a machine shared with other work: read them as "
-        "ratios within this run",
+        "- all times are wall-clock and move with the machine's load: read them as ratios "
+        "within this run",
     ]
 
 
