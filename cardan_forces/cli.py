@@ -211,7 +211,8 @@ def op_motion(motion, op):
 
 def _released(motion, labels):
     """The operator of ``motion``'s scene with the ``--apply`` releases (SceneError if
-    they leave a mechanism)."""
+    they leave a mechanism).
+    """
     if not labels:
         return build_operator(motion)
     releases = [parse_release(text, motion.scene) for text in labels]
@@ -492,7 +493,8 @@ def _finite(value):
 
 def strict_json(text: str) -> str:
     """A command's JSON output as strict JSON: numbers that are not finite become
-    ``null`` (each record's ``status`` says why)."""
+    ``null`` (each record's ``status`` says why).
+    """
     return json.dumps(_finite(json.loads(text)), indent=2, allow_nan=False) + "\n"
 
 

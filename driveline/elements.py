@@ -31,7 +31,8 @@ from .scene import Scene, SceneError
 @dataclass(frozen=True)
 class Segment:
     """A rigid shaft body: shaft ``shaft`` (scene index) from ``lo_m`` to ``hi_m`` along
-    its axis (offsets from the shaft's centre, downstream positive)."""
+    its axis (offsets from the shaft's centre, downstream positive).
+    """
 
     name: str
     shaft: int
@@ -77,10 +78,9 @@ def check_elements(scene: Scene) -> None:
     for slip in scene.slip_joints:
         k = [s.name for s in scene.shafts].index(slip.shaft)
         shaft = scene.shafts[k]
-        for side, has_joint, on in (("upstream", k > 0, lambda b: b.offset_m < slip.offset_m),
-                                    ("downstream", k < last,
-                                     lambda b: b.offset_m > slip.offset_m)):
-            if not has_joint and not any(on(b) for b in shaft.bearings):
+        for side, has_joint, sign in (("upstream", k > 0, -1.0), ("downstream", k < last, 1.0)):
+            if not has_joint and not any(sign * (b.offset_m - slip.offset_m) > 0
+                                         for b in shaft.bearings):
                 raise SceneError(
                     f"scene {scene.source}: slip joint {slip.name!r} on shaft {shaft.name!r}: "
                     f"its {side} segment has no neighbour (no Cardan joint at its end, no "
@@ -95,7 +95,8 @@ def check_elements(scene: Scene) -> None:
 
 def sliding_bodies(scene: Scene, segments: list[Segment] | None = None) -> list[str]:
     """Names of the shaft bodies that some rigid translation allowed by the bearings,
-    joints and splines moves (empty when the line is held)."""
+    joints and splines moves (empty when the line is held).
+    """
     from .kinematics import rest_geometry  # kinematics imports the scene module
 
     segments = shaft_segments(scene) if segments is None else segments

@@ -168,7 +168,8 @@ class Operator:
 
     def bearing_force(self, contact: Link, x: np.ndarray) -> np.ndarray:
         """A bearing's force on its shaft as a global vector (..., 3), N, from the
-        forces ``x`` (..., n): its x, y, z columns, or its r1, r2 in the shaft's frame."""
+        forces ``x`` (..., n): its x, y, z columns, or its r1, r2 in the shaft's frame.
+        """
         values = np.asarray(x)[..., list(contact.columns)]
         if contact.frame == "global":
             return values
@@ -183,7 +184,8 @@ class Operator:
 @dataclass(frozen=True)
 class _Column:
     """One column while assembling: a force at ``point`` along ``direction`` (or a pure
-    moment about ``direction``) on ``body``, the opposite on ``other``."""
+    moment about ``direction``) on ``body``, the opposite on ``other``.
+    """
 
     name: str
     body: int
@@ -195,7 +197,8 @@ class _Column:
 
 def shaft_frames(motion: Motion) -> np.ndarray:
     """Per shaft the rows ``r1, r2, axis``: ``r1 = n x axis`` in the articulation plane,
-    ``r2 = n`` its normal (the geometry's ``plane_normal``)."""
+    ``r2 = n`` its normal (the geometry's ``plane_normal``).
+    """
     geo = motion.geometry
     n = np.broadcast_to(geo.plane_normal, geo.axes.shape)
     return np.stack([np.cross(n, geo.axes), n, geo.axes], axis=1)

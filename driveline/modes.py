@@ -85,7 +85,8 @@ def _locating_by_body(op: Operator) -> dict:
 
 def name_modes(op: Operator, i: int, det: Determinacy, loop_release: str = "") -> list[Mode]:
     """Every null-space direction at instant ``i``, named; closed loops are the
-    complement of the structural modes in the null space."""
+    complement of the structural modes in the null space.
+    """
     modes = structural_modes(op, i)
     N = det.null_basis
     if modes:
@@ -132,7 +133,8 @@ def _path(op: Operator, v: np.ndarray) -> str:
 
 def _chain(body, index: int) -> tuple[int, int]:
     """Position along the line: shaft k at 2k, the cross-pin of joint j at 2j + 1 (a
-    shaft's segments in body order)."""
+    shaft's segments in body order).
+    """
     return (2 * body.shaft, index) if body.joint is None else (2 * body.joint + 1, index)
 
 

@@ -21,10 +21,9 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from itertools import combinations
 
 import numpy as np
-
-from itertools import combinations
 
 from .determinacy import Determinacy, determinacy
 from .dynamics import Motion
@@ -48,7 +47,8 @@ class Release:
     @property
     def label(self) -> str:
         """The release as typed on the command line: ``float:<shaft>.<bearing>`` or
-        ``slip:<shaft>``."""
+        ``slip:<shaft>``.
+        """
         return f"float:{self.shaft}.{self.bearing}" if self.kind == "floating" \
             else f"slip:{self.shaft}"
 
@@ -77,7 +77,8 @@ def parse_release(text: str, scene: Scene) -> Release:
 
 def candidates(scene: Scene) -> list[Release]:
     """Every single release the scene admits: each locating bearing floating, a slip joint
-    in each shaft that has none (slips first: a slip removes loops)."""
+    in each shaft that has none (slips first: a slip removes loops).
+    """
     slipped = {s.shaft for s in scene.slip_joints}
     out = [Release("slip", s.name) for s in scene.shafts if s.name not in slipped]
     out += [Release("floating", s.name, b.name) for s in scene.shafts for b in s.bearings
@@ -95,7 +96,8 @@ def _slip_offset(shaft) -> float:
 
 def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) -> Scene:
     """``scene`` with ``releases`` applied (element checks re-run: SceneError if a part of
-    the line is left unheld)."""
+    the line is left unheld).
+    """
     shafts, slips = list(scene.shafts), list(scene.slip_joints)
     for r in releases:
         k = [s.name for s in shafts].index(r.shaft)
@@ -122,7 +124,8 @@ def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) 
 
 def released_operator(motion: Motion, releases) -> Operator:
     """The operator of the released scene on the same motion; SceneError when the
-    releases leave a mechanism (more than the motion's one dependent row)."""
+    releases leave a mechanism (more than the motion's one dependent row).
+    """
     scene = released_scene(motion.scene, releases)
     op = build_operator(dataclasses.replace(motion, scene=scene))
     deficient = [op.A.shape[1] - np.linalg.matrix_rank(A, tol=1e-9 * np.linalg.norm(A, 2))
@@ -172,7 +175,8 @@ class Advice:
 
 def named_modes(motion: Motion, i: int, op: Operator | None = None) -> list[Mode]:
     """The modes of ``motion``'s scene at instant ``i``, each closed loop with the single
-    releases that remove one loop (tried on the same motion)."""
+    releases that remove one loop (tried on the same motion).
+    """
     op = build_operator(motion) if op is None else op
     det = determinacy(op, i)
     modes = name_modes(op, i, det)
@@ -191,7 +195,8 @@ def named_modes(motion: Motion, i: int, op: Operator | None = None) -> list[Mode
 
 def _friction_words(op: Operator, mode: Mode) -> str:
     """A loop through a slip joint's friction force is bounded (``|axial| <= mu T / r``);
-    a frictionless spline removes it."""
+    a frictionless spline removes it.
+    """
     slips = [f.slip for f in op.slip_friction if op.names[f.axial] in mode.components]
     return "".join(f"bounded by the friction of slip joint {s}; a frictionless spline "
                    "removes it; or " for s in slips)
@@ -211,7 +216,8 @@ def _preference(scene: Scene, releases) -> tuple[int, int, int]:
     """Smaller is better: shafts with two or more bearings left without a locating one
     (a design keeps one per such shaft; a lone centre bearing may float), slip joints
     added (a floating bearing is the cheaper release), of them those in shafts with
-    bearings (real lines put the spline in a propshaft)."""
+    bearings (real lines put the spline in a propshaft).
+    """
     shafts = {s.name: s for s in scene.shafts}
     slips = [r for r in releases if r.kind == "slip"]
     return (sum(len(s.bearings) > 1 and all(b.kind == "floating" for b in s.bearings)

@@ -756,7 +756,8 @@ def _build(raw: dict, source: str) -> Scene:
 
 def _slip_joints(top: _Table, shafts: tuple[Shaft, ...], names: list[str]) -> tuple:
     """The ``[[slip_joints]]`` array: at most one per shaft, strictly inside it, not at a
-    bearing."""
+    bearing.
+    """
     if "slip_joints" not in top.raw:
         top.used.add("slip_joints")
         return ()
@@ -791,7 +792,8 @@ def _slip_joints(top: _Table, shafts: tuple[Shaft, ...], names: list[str]) -> tu
 
 def _check_elements(scene: Scene) -> None:
     """Slip joints and floating bearings that leave a part of the line unheld (a more
-    specific message than the general support check, for lines that have them)."""
+    specific message than the general support check, for lines that have them).
+    """
     if not scene.slip_joints and all(b.kind == "locating"
                                      for s in scene.shafts for b in s.bearings):
         return

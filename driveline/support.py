@@ -1,5 +1,5 @@
-"""Is a scene's drive line usable: held so that it turns with exactly one degree of
-freedom, and with a motion the integrator can follow?
+"""Support check: a scene's line must be held so that it turns with exactly one degree
+of freedom, with a motion the integrator can follow.
 
 Decided from the structure, not by counting bearings: at one generic configuration
 (the kinematics at the scene's initial angle turned by :data:`GENERIC_TURN_RAD`) the

@@ -31,7 +31,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.scene import load_scene
@@ -46,7 +45,8 @@ from . import bench_run as runs
 
 def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float) -> dict:
     """Throughput and accuracy rows of every planned formulation x backend, formulation
-    by formulation (its problems built once, then dropped)."""
+    by formulation (its problems built once, then dropped).
+    """
     rows, acc_rows, stages, references, setup, conic = [], [], {}, {}, {}, set()
     for name, solvers in backends.items():
         runs.progress(f"bench: building {name} at {len(op.t)} instants ...")
@@ -116,7 +116,8 @@ def run(args) -> int:
 @contextlib.contextmanager
 def _stdout_to_stderr():
     """Send what solvers print (HiGHS's banner comes from its C++ library) to stderr,
-    at the file-descriptor level, so ``--json`` leaves stdout to the JSON object."""
+    at the file-descriptor level, so ``--json`` leaves stdout to the JSON object.
+    """
     sys.stdout.flush()
     saved = os.dup(1)
     os.dup2(2, 1)

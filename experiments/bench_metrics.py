@@ -133,7 +133,8 @@ def success(rows: list[dict], ladder) -> list[dict]:
     """Rows ``{formulation, solver, level, rate, tol}``: per level of the ladder, the
     share of instants within it in the backend's best run (its defaults or any
     tolerance of the ladder; ``tol`` says which): whether the backend reaches that
-    accuracy at all, and how often."""
+    accuracy at all, and how often.
+    """
     out = []
     for (formulation, solver), group in groups(rows, ("formulation", "solver")).items():
         runs = groups(group, ("tol",))

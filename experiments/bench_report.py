@@ -23,7 +23,8 @@ PROFILE_COLUMNS = ("formulation", "profile", "level", "solver", "solved", "sgm_r
 
 def write_csv(path: Path, rows: list[dict], columns: tuple[str, ...]) -> None:
     """Long-format CSV with fixed ``columns`` (floats with 4 significant digits; an
-    empty cell where a number is missing or undefined)."""
+    empty cell where a number is missing or undefined).
+    """
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(columns)
@@ -58,7 +59,8 @@ def _figure(panels: int, cols: int = 3):
 
 def plot_pareto(points: list[dict], path: Path) -> None:
     """Log-log time per instant vs worst optimality measure, one panel per formulation,
-    one marker per backend, the front as a step line; 0 is drawn at 1e-17."""
+    one marker per backend, the front as a step line; 0 is drawn at 1e-17.
+    """
     names = list(dict.fromkeys(p["formulation"] for p in points))
     plt, fig, axes = _figure(len(names))
     markers = "os^vD<>phX*P8"
@@ -175,7 +177,8 @@ def _throughput(summary) -> list[str]:
 
 def best_table(summary) -> list[dict]:
     """Per formulation: its best run (solving every instant) and its ratio to the
-    paper method's fastest run of the same benchmark."""
+    paper method's fastest run of the same benchmark.
+    """
     best = best_runs(summary)
     paper = max((e for e in summary if e["formulation"] == "paper"),
                 key=lambda e: e["instants_per_s"], default=None)

@@ -17,7 +17,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
@@ -55,7 +54,8 @@ def progress(message: str) -> None:
 @dataclass
 class Prepared:
     """One formulation built once per operator: its problems at every instant, the
-    build time, and its batches (built on demand, with their build time)."""
+    build time, and its batches (built on demand, with their build time).
+    """
 
     name: str
     op: object
@@ -205,7 +205,8 @@ def _is_batched(solver: str) -> bool:
 
 def throughput(prepared: Prepared, solvers: list[str], budget_s: float):
     """Rows of every backend x mode on all instants, and the batched stage times.
-    Per-instant runs stop after ``budget_s``, except the paper's (the baseline)."""
+    Per-instant runs stop after ``budget_s``, except the paper's (the baseline).
+    """
     rows, stages = [], {}
     limit = math.inf if prepared.name == "paper" else budget_s
     for solver in solvers:
@@ -263,7 +264,8 @@ def tolerances(solver: str, ladder) -> list[float | None]:
 
 def accuracy(prepared: Prepared, solvers: list[str], samples, ladder, budget_s: float):
     """Rows of every backend x tolerance at ``samples`` (less those without a
-    reference answer), and the reference used ``(name, samples where not solved)``."""
+    reference answer), and the reference used ``(name, samples where not solved)``.
+    """
     refs, name, unsolved = references(prepared, samples)
     usable = samples if refs is None else np.array([i for i in samples if int(i) in refs])
     rows = []

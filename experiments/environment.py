@@ -29,7 +29,8 @@ def machine() -> str:
 
 def versions() -> str:
     """Installed versions of NumPy, SciPy, the distributions every available backend
-    declares it runs on, and Matplotlib."""
+    declares it runs on, and Matplotlib.
+    """
     found = []
     declared = [d for backend in available().values() for d in backend.distributions]
     for dist in dict.fromkeys(("numpy", "scipy", *declared, "matplotlib")):

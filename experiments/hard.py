@@ -26,7 +26,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
 from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
@@ -58,7 +57,8 @@ QUICK_SOLVERS = ("clarabel", "numpy-kkt", "qpsolvers-daqp", "lcp-lemke", "scipy-
 
 def base_tables(base: str) -> dict:
     """The ``shafts``, ``joints`` and ``effects`` of scene ``base`` as TOML-like tables
-    (``extends`` resolved), so that a case can override them entry by entry."""
+    (``extends`` resolved), so that a case can override them entry by entry.
+    """
     scene = load_scene(base)
 
     def plain(value):
@@ -90,7 +90,8 @@ def _tables(key: str, **fields) -> Callable[[dict], dict]:
 
 def _mass_ratio(ratio: float) -> Callable[[dict], dict]:
     """The middle shafts' (all but the first and the last; the intermediate shaft in
-    ``paper``) mass and all their principal moments times ``ratio``."""
+    ``paper``) mass and all their principal moments times ``ratio``.
+    """
     def build(base: dict) -> dict:
         shafts = copy.deepcopy(base["shafts"])
         for middle in shafts[1:-1]:

@@ -13,7 +13,6 @@ solved again from the flipped point (see :func:`_solve`).
 from __future__ import annotations
 
 import numpy as np
-
 from cardan_forces.driveline.determinacy import RANK_RTOL
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.scene import Scene
@@ -62,7 +61,8 @@ def _solve(problem: PaperNLS, method: str, z0: np.ndarray,
 
 def _jacobian(problem: PaperNLS, z: np.ndarray) -> tuple[int, float]:
     """Numerical rank and condition of the 34 x 34 Jacobian at ``z`` (0, NaN off a
-    finite point)."""
+    finite point).
+    """
     if not np.all(np.isfinite(z)):
         return 0, float("nan")
     s = np.linalg.svd(problem.jac(z), compute_uv=False)

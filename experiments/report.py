@@ -19,7 +19,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
@@ -40,7 +39,8 @@ BACKENDS = ("qpsolvers-daqp", "clarabel")
 
 def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
     """``value``, ``min``, ``max`` (T, n; NaN where unbounded or not solved) and
-    ``determinate`` (T, n) over the operator's instants."""
+    ``determinate`` (T, n) over the operator's instants.
+    """
     backend = next(b for b in BACKENDS if b in available())
     T, n = len(op.t), len(op.names)
     out = {k: np.full((T, n), np.nan) for k in ("value", "min", "max")}
@@ -64,7 +64,8 @@ def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
 
 def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
     """Long format, one row per component x instant; an empty cell where the answer
-    is missing (not solved) or an end of the interval is unbounded."""
+    is missing (not solved) or an end of the interval is unbounded.
+    """
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s", "component", "contact", "kind", f"{SELECTION}_N", "min_N", "max_N",
@@ -80,7 +81,8 @@ def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
 
 def write_png(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
     """One panel per contact; the band runs to the panel's edge on an unbounded side
-    (the panel's title says so)."""
+    (the panel's title says so).
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -41,7 +41,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
@@ -55,7 +54,8 @@ STEPS = 72
 def revolution_scene(base: str, arrangement: str, angles_deg: tuple[float, float],
                      torque_N_m: float, steps: int = STEPS) -> Scene:
     """``base`` quasi-static over one input revolution (1 rad/s, so ``t`` = angle), no
-    gravity, constant input torque, the given arrangement and joint angles."""
+    gravity, constant input torque, the given arrangement and joint angles.
+    """
     parent = load_scene(base)
     joints = [{**dataclasses.asdict(j), "articulation_deg": a}
               for j, a in zip(parent.joints, angles_deg)]
@@ -71,7 +71,8 @@ def revolution_scene(base: str, arrangement: str, angles_deg: tuple[float, float
 def bearing_loads(op: Operator) -> dict[str, np.ndarray]:
     """Per bearing and instant: ``<shaft>.<bearing>.in_plane`` (along ``r1``) and
     ``.normal`` (along ``r2``, the plane's normal), N, least-norm; NaN where the rigid
-    model does not determine it."""
+    model does not determine it.
+    """
     out = {}
     dets = [determinacy(op, i) for i in range(len(op.t))]
     x = np.array([d.min_norm for d in dets])
@@ -90,7 +91,8 @@ def bearing_loads(op: Operator) -> dict[str, np.ndarray]:
 def handbook(torque: float, b1_deg: float, b2_deg: float, arrangement: str, a: float,
              c: float, length: float) -> dict[str, float]:
     """The closed forms of the module docstring (N): input bearings ``normal`` loads at
-    0 and 90 deg, and the intermediate shaft's shear ``S`` at 0 deg."""
+    0 and 90 deg, and the intermediate shaft's shear ``S`` at 0 deg.
+    """
     b1, b2 = math.radians(b1_deg), math.radians(b2_deg)
     sign = -1.0 if arrangement == "Z" else 1.0
     shear = torque * math.cos(b1) * (math.tan(b1) + sign * math.tan(b2)) / length
@@ -160,7 +162,8 @@ def add_parser(subparsers) -> None:
 
 def _run_cli(args) -> int:
     """Loads over one revolution to CSV + PNG; the closed forms at 0 and 90 deg beside
-    the package's numbers on stdout."""
+    the package's numbers on stdout.
+    """
     results = run(args.scene, args.torque, Path(args.out))
     scene = load_scene(args.scene)
     shaft = scene.shafts[0]

@@ -21,13 +21,12 @@ import signal
 import sys
 import time
 from collections.abc import Callable, Iterator
-from contextlib import closing
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import closing
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.kinematics import Geometry, kinematics
@@ -298,7 +297,8 @@ def _methods(scene: Scene, formulations: list[str] | None, solvers: list[str] | 
 
 def _num(value, spec: str = ".10g") -> str:
     """How the CSV spells a number: 10 significant digits unless ``spec`` says otherwise;
-    an empty cell where it is undefined (``inf``/``nan``)."""
+    an empty cell where it is undefined (``inf``/``nan``).
+    """
     if isinstance(value, str):
         return value
     if isinstance(value, (int, np.integer)):
@@ -331,7 +331,8 @@ def read_rows(path: Path) -> list[dict]:
 
 def _write(f, rows: list[dict], header: bool = False) -> None:
     """Append ``rows`` (and the header) to ``f`` in one write, flushed: an interrupt
-    lands before or after a point's rows, never inside a line."""
+    lands before or after a point's rows, never inside a line.
+    """
     text = io.StringIO()
     w = csv.DictWriter(text, COLUMNS, lineterminator="\n")
     if header:
@@ -371,7 +372,8 @@ def _pool(tasks: list[dict], workers: int) -> Iterator[tuple[dict, list[dict] | 
 
 def _stop(pool: ProcessPoolExecutor) -> None:
     """Cancel the queued points and terminate the workers instead of letting them finish
-    their points (``shutdown`` alone waits for those at exit)."""
+    their points (``shutdown`` alone waits for those at exit).
+    """
     workers = list((pool._processes or {}).values())  # no public handle before Python 3.14
     pool.shutdown(wait=False, cancel_futures=True)
     for process in workers:
@@ -534,7 +536,8 @@ def _settings(study: Study) -> str:
 
 def _typed(row: dict) -> dict:
     """A CSV row for JSON: numbers as numbers, undefined ones (an empty cell, or
-    ``inf``/``nan`` in a CSV of an older run) as ``None``."""
+    ``inf``/``nan`` in a CSV of an older run) as ``None``.
+    """
     text = ("scene", "formulation", "solver", "status", "message")
     out = {}
     for k, v in row.items():

@@ -33,7 +33,8 @@ where it is a QP with a diagonal ``P``: linear law, no gaps)."""
 @dataclass(frozen=True)
 class CheckBatch:
     """The ``ForceChecks`` of T instants: ``A`` (T, m, n), ``b`` (T, m) stacked; the
-    signs, pairs and cones (the same at every instant, else ``per_instant`` holds them)."""
+    signs, pairs and cones (the same at every instant, else ``per_instant`` holds them).
+    """
 
     A: np.ndarray
     b: np.ndarray
@@ -150,7 +151,8 @@ def as_conic(problem):
 
 def conic_batch(problems: list, instants) -> ConicBatch:
     """Stack per-instant problems of one formulation into a :class:`ConicBatch`
-    (``ValueError`` when they are not conic-convertible or change structure)."""
+    (``ValueError`` when they are not conic-convertible or change structure).
+    """
     conics = [as_conic(p) for p in problems]
     if any(c is None for c in conics):
         raise ValueError("the problems have no conic form")

@@ -26,7 +26,6 @@ contact forces, N) or map back to them with ``to_forces``.
 from __future__ import annotations
 
 import numpy as np
-
 from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.determinacy import RANK_RTOL, determinacy
 from cardan_forces.driveline.equilibrium import Operator
@@ -52,7 +51,8 @@ def slip_cones(op: Operator, i: int) -> tuple[SecondOrderCone, ...]:
     """The slip joints' friction bounds ``|axial| <= (mu / r) s0 torque`` as cones, ``s0``
     the sign of the spline torque in the least-norm answer (the torque through a spline
     is determinate: no self-stress of the line twists a shaft, so every solution has
-    the same sign)."""
+    the same sign).
+    """
     if not op.slip_friction:
         return ()
     least = determinacy(op, i).min_norm
@@ -63,7 +63,8 @@ def slip_cones(op: Operator, i: int) -> tuple[SecondOrderCone, ...]:
 
 def slip_rows(op: Operator, i: int, n: int | None = None) -> np.ndarray:
     """The friction bounds as linear rows ``G x <= 0`` (two per slip joint with friction),
-    padded to ``n`` unknowns."""
+    padded to ``n`` unknowns.
+    """
     cones = slip_cones(op, i)
     G = np.zeros((2 * len(cones), len(op.names) if n is None else n))
     for r, c in enumerate(cones):

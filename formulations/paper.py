@@ -39,7 +39,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.kinematics import rest_geometry
 from cardan_forces.driveline.scene import Scene

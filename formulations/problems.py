@@ -107,7 +107,8 @@ RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
 @functools.lru_cache(maxsize=64)
 def _cone_arrays(cones: tuple, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Cones as arrays: apex rows (k, n), member indices padded to the longest (k, w)
-    and their mask (k, w), so all cones are checked in one vectorized step."""
+    and their mask (k, w), so all cones are checked in one vectorized step.
+    """
     width = max(len(c.members) for c in cones)
     members = np.zeros((len(cones), width), int)
     mask = np.zeros((len(cones), width))

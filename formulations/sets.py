@@ -12,7 +12,6 @@ model) is a choice inside it.
 from __future__ import annotations
 
 import numpy as np
-
 from cardan_forces.driveline.equilibrium import Operator
 
 from .convex import checks, equalities, slip_rows

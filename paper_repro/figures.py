@@ -22,9 +22,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from scipy.ndimage import uniform_filter1d  # noqa: E402
-
 from cardan_forces.driveline.dynamics import Motion  # noqa: E402
+from scipy.ndimage import uniform_filter1d  # noqa: E402
 
 SMOOTH_S = 0.1
 """Moving-average window (s) for the penalty simulation: the released line rattles in

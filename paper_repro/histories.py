@@ -14,7 +14,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.penalty import PenaltyResult, simulate_penalty
 from cardan_forces.driveline.scene import Scene, SceneError

@@ -18,8 +18,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import binomtest
-
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import Motion, simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
@@ -28,6 +26,7 @@ from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene, load_scene
 from cardan_forces.experiments.analysis import value_range
 from cardan_forces.experiments.environment import machine, versions
+from scipy.stats import binomtest
 
 from . import figures
 from .figures import SMOOTH_S, moving_average

@@ -53,7 +53,8 @@ def _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol, Kd, Ko):
     """The nonzero blocks of ``K = B B' + delta I`` at instant ``t``, ``delta = rtol *
     trace(K) / rows``: diagonal ``Kd[k]`` (symmetric) from the columns touching block
     ``k``, off-diagonal ``Ko[k] = K[k, k+1]`` from the columns touching both (a contact
-    loads at most two bodies)."""
+    loads at most two bodies).
+    """
     nb = len(starts)
     trace = 0.0
     for k in range(nb):
@@ -86,7 +87,8 @@ def _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol, Kd, Ko):
 def gram_chain_solve(Bt, R, starts, own, n_own, shared, n_shared, rtol):
     """``(B B' + delta I)^{-1} R`` per instant without forming ``B B'``: its blocks from
     the columns each body touches, then the block elimination of :func:`chain_solve`;
-    ``delta = rtol * trace(B B') / rows``."""
+    ``delta = rtol * trace(B B') / rows``.
+    """
     T, r, nb = Bt.shape[0], R.shape[2], len(starts)
     out = np.empty_like(R)
     Kd = np.empty((nb, B, B))
@@ -138,7 +140,8 @@ def gram_chain_solve(Bt, R, starts, own, n_own, shared, n_shared, rtol):
 @njit(cache=True)
 def _solve_pinned(M, q, pinned, lam, delta):
     """``lam_P = -(M_PP + delta I)^-1 q_P``, zero elsewhere (Gaussian elimination with
-    partial pivoting on the pinned block)."""
+    partial pivoting on the pinned block).
+    """
     idx = np.flatnonzero(pinned)
     p = len(idx)
     S = np.empty((p, p + 1))
@@ -167,7 +170,8 @@ def _solve_pinned(M, q, pinned, lam, delta):
 @njit(cache=True)
 def active_set(M, q, max_iter, rtol, delta):
     """The primal-dual active-set method of ``numpy_batched_._active_set`` compiled, one
-    instant after the other: ``(lam, iterations, settled)``."""
+    instant after the other: ``(lam, iterations, settled)``.
+    """
     T, k = q.shape
     lam = np.zeros((T, k))
     iterations = np.zeros(T, np.int64)

@@ -13,7 +13,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 
 from .optimality import combine, measures, recover, unique_optimum
@@ -102,7 +101,8 @@ def _forces(batch, outcome: BatchOutcome, answered: np.ndarray) -> np.ndarray:
 
 def _least_norm_measures(batch: LeastNormBatch, x: np.ndarray, y: np.ndarray):
     """Optimality of ``min 1/2 x'Wx, A x = b, x_signed >= 0`` with conic multipliers ``y``
-    (rows ``A``, then ``-e_j`` per signed column)."""
+    (rows ``A``, then ``-e_j`` per signed column).
+    """
     m = batch.A.shape[1]
     signed = np.flatnonzero(batch.signed)
     Wx = x if batch.weights is None else batch.weights * x

@@ -14,7 +14,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from cardan_forces.formulations.problems import Conic
 
 from . import settings
@@ -72,7 +71,8 @@ def _solver(clarabel, problem: Conic, P: np.ndarray, A: np.ndarray, opts, key: t
     """A Clarabel solver holding this problem's data: the cached one of the same
     structure updated with the new numbers (Clarabel's ``update``: no new symbolic
     factorization) when its sparsity covers this problem's, else a new one on the union
-    of both sparsities (an explicit zero keeps a place that another instant fills)."""
+    of both sparsities (an explicit zero keeps a place that another instant fills).
+    """
     mask_P, mask_A = np.triu(P) != 0, A != 0
     cached = _SOLVERS.get(key)
     if cached is not None:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-
 from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 

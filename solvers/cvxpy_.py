@@ -16,7 +16,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 from . import settings
@@ -176,7 +175,7 @@ def _compiled(cp, problem, cvx_name: str):
 
 
 def conic_duals(problem, constraints) -> np.ndarray | None:
-    """cvxpy's multipliers in the rows of the problem's conic form (``None`` if cvxpy
+    """Cvxpy's multipliers in the rows of the problem's conic form (``None`` if cvxpy
     gave none). cvxpy's duals of ``A z == b``, ``G z <= h``, ``z >= lb``, ``s >= 0`` and
     of the cones on ``s = b - A z`` are the conic ones; that of ``s == 0`` changes sign.
     """

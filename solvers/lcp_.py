@@ -19,7 +19,6 @@ import time
 from typing import NamedTuple
 
 import numpy as np
-
 from cardan_forces.formulations.problems import LCP
 
 from . import settings

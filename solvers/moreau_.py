@@ -25,7 +25,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from cardan_forces.formulations.batch import ConicBatch
 
 from .batch import BatchOutcome
@@ -50,7 +49,8 @@ STATUS = {
 
 def grouped_rows(cones) -> tuple[np.ndarray, object]:
     """The row permutation that groups the cone blocks in :data:`ORDER` (stable within a
-    kind) and the matching ``moreau.Cones``."""
+    kind) and the matching ``moreau.Cones``.
+    """
     import moreau
 
     rows = {kind: [] for kind in ORDER}
@@ -92,7 +92,8 @@ _COMPILED: dict[tuple, object] = {}
 
 def _compiled(n, m, patterns, cones, T, tol, options):
     """The compiled solver of this structure: built once, then reused (only the numbers
-    change between calls: ``setup`` and ``solve``)."""
+    change between calls: ``setup`` and ``solve``).
+    """
     import moreau
 
     (p_off, p_col), (a_off, a_col) = patterns
@@ -112,7 +113,8 @@ def _compiled(n, m, patterns, cones, T, tol, options):
 
 def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     """Every instant of the batch with one compiled structure (compiled on the first
-    call for a structure, reused after)."""
+    call for a structure, reused after).
+    """
     start = time.perf_counter()
     T, m, n = batch.A.shape
     order, cones = grouped_rows(batch.cones)

@@ -34,7 +34,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from cardan_forces.formulations.batch import LeastNormBatch
 
 from .batch import BatchOutcome
@@ -179,7 +178,8 @@ def _gram_solve(B: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray
 
 def _block_columns(B: np.ndarray, blocks: list[slice]):
     """Per block in chain order the columns that touch it, and per neighbouring pair
-    the columns that touch both, padded (index arrays and counts)."""
+    the columns that touch both, padded (index arrays and counts).
+    """
     touch = np.any(B.reshape(len(B), -1, 6, B.shape[2]) != 0, axis=(0, 2))
     order = [b.start // 6 for b in blocks]
     own = [np.flatnonzero(touch[k]) for k in order]

@@ -13,7 +13,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from cardan_forces.formulations.problems import LS
 
 from .record import Outcome

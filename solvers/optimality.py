@@ -61,7 +61,8 @@ def _inf(v: np.ndarray) -> np.ndarray:
 @functools.lru_cache(maxsize=64)
 def _layout(cones: tuple) -> tuple:
     """Row indices of the cone kinds: nonneg rows, second-order blocks padded to the
-    longest (apex, members, mask), power blocks (k, 3) and their alphas."""
+    longest (apex, members, mask), power blocks (k, 3) and their alphas.
+    """
     nonneg, socs, pows, alphas = [], [], [], []
     for kind, size, rows in blocks(cones):
         idx = list(range(rows.start, rows.stop))
@@ -133,7 +134,8 @@ def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
 
 def _normal(kind: str, alpha: float, s: np.ndarray) -> np.ndarray | None:
     """The outward normal of a cone block's boundary at ``s`` (a direction in K*
-    orthogonal to ``s``), or ``None`` at the apex."""
+    orthogonal to ``s``), or ``None`` at the apex.
+    """
     if kind == "soc":
         return None if not np.any(s) else np.concatenate([[s[0]], -s[1:]])
     x, v, w = s
@@ -214,9 +216,11 @@ def unique_optimum(problem) -> bool:
 
 def objective_value(problem, z) -> float | None:
     """The objective ``1/2 z'Pz + q'z`` of an LS, QP, LP or conic problem at ``z`` (in
-    its conic form; the same value along every conversion), ``None`` for the others."""
-    from .conversions import convert
+    its conic form; the same value along every conversion), ``None`` for the others.
+    """
     from cardan_forces.formulations.problems import Conic
+
+    from .conversions import convert
 
     conic = convert(problem, (Conic,))
     if conic is None or z is None:

@@ -11,7 +11,6 @@ import dataclasses
 import time
 
 import numpy as np
-
 from cardan_forces.formulations.problems import QP
 
 from . import settings
@@ -104,7 +103,7 @@ def bounds_as_rows(problem: QP) -> QP:
 
 
 def conic_duals(problem: QP, sol) -> np.ndarray | None:
-    """qpsolvers' multipliers (``P z + q + A'y + G'z + z_box = 0``) in the rows of
+    """Qpsolvers' multipliers (``P z + q + A'y + G'z + z_box = 0``) in the rows of
     ``problem.as_conic()``: equalities, ``G``, finite lower bounds, finite upper bounds
     (a lower bound's multiplier is ``-z_box``, an upper bound's ``z_box``). ``None`` when
     the solver reported some of them not.

@@ -14,7 +14,6 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-
 from cardan_forces.formulations.problems import Conic
 
 from .conversions import convert
@@ -150,7 +149,8 @@ def failed_record(
 def judge(status, worst):
     """The package's status rule, elementwise: a reported ``"solved"`` whose worst
     residual exceeds :data:`ACCEPT` becomes ``"inaccurate"`` (every path, per instant or
-    batched, decides by this one rule)."""
+    batched, decides by this one rule).
+    """
     status, worst = np.asarray(status, object), np.asarray(worst, float)
     return np.where((status == "solved") & ~(worst <= ACCEPT), "inaccurate", status)
 

@@ -10,8 +10,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from cardan_forces.formulations.problems import LCP, LP, LS, NLS, QP, Conic, ForceChecks, SecondOrderCone
+from cardan_forces.formulations.problems import (
+    LCP,
+    LP,
+    LS,
+    NLS,
+    QP,
+    Conic,
+    ForceChecks,
+    SecondOrderCone,
+)
 
 
 @dataclass(frozen=True)

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import settings
-from .conversions import convert, reachable
 from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
+from .conversions import convert, reachable
 from .record import Outcome, Record, failed_record, finalize
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "lcp_",

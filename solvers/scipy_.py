@@ -19,7 +19,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-
 from cardan_forces.formulations.problems import LP, LS, NLS, QP
 
 from . import settings
@@ -116,8 +115,9 @@ def solve_fsolve(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
 
     z0 = problem.z0 if initvals is None else initvals
     start = time.perf_counter()
+    options = settings.options_for(TOLERANCES["fsolve"], tol) | options
     z, info, ier, mesg = fsolve(problem.fun, np.asarray(z0, float), fprime=problem.jac,
-                                full_output=True, **(settings.options_for(TOLERANCES["fsolve"], tol) | options))
+                                full_output=True, **options)
     status = "solved" if ier == 1 and np.all(np.isfinite(info["fvec"])) else "failed"
     solve_s = time.perf_counter() - start
     return Outcome(status, z, message=f"{mesg.strip()} (nfev {info['nfev']}, ier {ier})"

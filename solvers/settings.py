@@ -16,7 +16,8 @@ TIKHONOV_DEFAULT = 1e-10
 def options_for(parameters: tuple[str, ...], tol: float | None,
                 smallest: float = 0.0) -> dict[str, float]:
     """``{parameter: tol}`` for each of ``parameters`` (empty when ``tol`` is None);
-    ``smallest``: the least value the solver accepts (HiGHS rejects smaller ones)."""
+    ``smallest``: the least value the solver accepts (HiGHS rejects smaller ones).
+    """
     if tol is None:
         return {}
     return dict.fromkeys(parameters, max(float(tol), smallest))

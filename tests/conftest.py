@@ -1,9 +1,8 @@
 import copy
 
 import pytest
-from hypothesis import settings
-
 from cardan_forces.driveline.scene import builtin_text, load_scene, scene_from_dict
+from hypothesis import settings
 
 try:
     import tomllib

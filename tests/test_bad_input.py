@@ -10,9 +10,9 @@ from __future__ import annotations
 import re
 
 import pytest
+from cardan_forces.driveline.scene import builtin_names, builtin_text
 
 from cardan_forces.cli import main
-from cardan_forces.driveline.scene import builtin_names, builtin_text
 
 PAPER = builtin_text("paper")
 

@@ -7,14 +7,12 @@ import math
 
 import numpy as np
 import pytest
-
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.scene import load_scene
 from cardan_forces.experiments import bench, bench_metrics, bench_report, bench_run
 from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.solvers import SolverNotFound, failed_record, solve
-from cardan_forces.solvers import registry
+from cardan_forces.solvers import SolverNotFound, failed_record, registry, solve
 
 
 def _args(*argv):

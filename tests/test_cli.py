@@ -2,9 +2,9 @@ import json
 
 import numpy as np
 import pytest
+from cardan_forces.paper_repro.figures import read_csv
 
 from cardan_forces.cli import main
-from cardan_forces.paper_repro.figures import read_csv
 
 
 def test_sets_json_reports_every_component(capsys):

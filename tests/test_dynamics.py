@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
-from scipy.integrate import simpson
-
-from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline import dynamics
 from cardan_forces.driveline.compiled import HAVE_NUMBA
+from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import reduced_inertia, simulate
 from cardan_forces.driveline.equilibrium import build_operator
+from scipy.integrate import simpson
+
 from tests.conftest import variant
 
 

@@ -8,8 +8,6 @@ except ModuleNotFoundError:  # Python 3.10
 
 import numpy as np
 import pytest
-
-from cardan_forces.cli import main
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
@@ -20,6 +18,8 @@ from cardan_forces.experiments import secondary
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import solve
+
+from cardan_forces.cli import main
 
 
 def _op(name, t=0.5):

@@ -3,13 +3,13 @@
 import dataclasses
 
 import numpy as np
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.scene import EFFECTS
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
 from tests.conftest import variant
 
 LINEAR_EFFECTS = ("gravity", "inertia", "crosspin_inertia")

@@ -4,7 +4,6 @@ import dataclasses
 
 import numpy as np
 import pytest
-
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
@@ -12,6 +11,7 @@ from cardan_forces.experiments.analysis import intervals, solve_all
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import contacts
 from cardan_forces.solvers import backends_for, solve
+
 from tests.conftest import variant
 
 # how closely a solved record must reproduce the determinate components (relative to
@@ -148,7 +148,8 @@ def test_paper_rim_solution_is_a_member_of_the_face_cone_set(paper_records):
 
 
 def _friction_op(mu):
-    scene = variant(effects=["gravity", "inertia", "friction"], contact={"friction_coefficient": mu})
+    scene = variant(effects=["gravity", "inertia", "friction"],
+                    contact={"friction_coefficient": mu})
     return build_operator(simulate(scene, [0.5]))
 
 

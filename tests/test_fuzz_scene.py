@@ -14,10 +14,9 @@ import dataclasses
 import json
 import math
 
+from cardan_forces.driveline.scene import MAX_INSTANTS, Scene, SceneError, builtin_text, load_scene
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from cardan_forces.driveline.scene import MAX_INSTANTS, Scene, SceneError, builtin_text, load_scene
 
 try:
     import tomllib

@@ -7,10 +7,10 @@ import math
 
 import numpy as np
 import pytest
-
 from cardan_forces.experiments import hard
-from cardan_forces.cli import main
 from cardan_forces.solvers import STATUSES
+
+from cardan_forces.cli import main
 
 INSTANTS = 3
 

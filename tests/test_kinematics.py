@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from cardan_forces.driveline.kinematics import kinematics, rest_geometry
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cardan_forces.driveline.kinematics import kinematics, rest_geometry
 from tests.conftest import variant
 
 

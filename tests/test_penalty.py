@@ -4,8 +4,6 @@ import dataclasses
 
 import numpy as np
 import pytest
-from scipy.integrate import cumulative_trapezoid
-
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.determinacy import determinacy
@@ -13,6 +11,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.penalty import contact_law, simulate_penalty
 from cardan_forces.driveline.scene import load_scene
+from scipy.integrate import cumulative_trapezoid
 
 STOP_S = 0.2
 LATE_S = 0.1  # after the play has closed (~0.07 s from rest) and the first impacts

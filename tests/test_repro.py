@@ -2,7 +2,6 @@
 
 import matplotlib.pyplot as plt
 import numpy as np
-
 from cardan_forces.paper_repro import figures, repro
 
 

@@ -7,7 +7,6 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-
 from cardan_forces.formulations.problems import NLS, QP
 from cardan_forces.solvers import (
     Backend,

@@ -2,7 +2,6 @@
 
 import numpy as np
 import pytest
-
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.formulations import FORMULATIONS

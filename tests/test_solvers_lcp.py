@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from cardan_forces.solvers.lcp_ import fb_newton, fischer_burmeister, lemke, natural_residual, pgs
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-from cardan_forces.solvers.lcp_ import fb_newton, fischer_burmeister, lemke, natural_residual, pgs
 
 
 def _spd_lcp(seed: int, n: int = 8) -> tuple[np.ndarray, np.ndarray]:

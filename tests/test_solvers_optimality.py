@@ -3,7 +3,6 @@ distance only where the optimum is unique (qpbenchmark's measures)."""
 
 import numpy as np
 import pytest
-
 from cardan_forces.formulations.problems import LP, QP, Conic, ForceChecks
 from cardan_forces.solvers import available, solve
 from cardan_forces.solvers.optimality import measures, recover, unique_optimum

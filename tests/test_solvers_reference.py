@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from cardan_forces.solvers import ACCEPT, backends_for, solve
 from cardan_forces.solvers.reference_problems import references
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from cardan_forces.driveline.scene import SceneError, builtin_names, load_scene, scene_from_dict
 from cardan_forces.driveline.support import Support, check_support, free_motions, support
 

@@ -11,8 +11,8 @@ import sys
 import time
 
 import pytest
-
 from cardan_forces.experiments import sweep
+
 from cardan_forces.cli import main
 
 ARGS = ["sweep", "--angle", "0", "--angle", "30", "--amplitude", "-5", "--formulation",

@@ -12,10 +12,10 @@ import math
 import re
 
 import numpy as np
-
-from cardan_forces.cli import main
 from cardan_forces.experiments import hard, sweep
 from cardan_forces.experiments.environment import number_text
+
+from cardan_forces.cli import main
 
 TOKEN = re.compile(r"(?<!\w)(nan|inf)(?![\w-])", re.IGNORECASE)
 """``inf``, ``-inf``, ``nan`` as printed numbers (not words such as ``NaN-free``)."""
