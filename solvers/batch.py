@@ -16,7 +16,7 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 
 from .optimality import combine, measures, recover, unique_optimum
-from .record import Record, judge
+from .record import Record, confirm, judge
 
 _WITH_ANSWER = ("solved", "inaccurate")
 
@@ -166,6 +166,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
         residuals["reference"][~answered] = np.inf
         if _unique(batch):
             optimality["distance"] = residuals["reference"]
+    status = confirm(status, optimality, source)
     return BatchRecord(
         formulation=batch.formulation, solver=solver, instants=batch.instants,
         names=batch.checks.names, status=status.astype(str), x=x, residuals=residuals,

@@ -155,6 +155,21 @@ def judge(status, worst):
     return np.where((status == "solved") & ~(worst <= ACCEPT), "inaccurate", status)
 
 
+def confirm(status, optimality: dict, duals: str):
+    """The second half of the status rule, elementwise: a solver's ``"inaccurate"``
+    (Clarabel's ``AlmostSolved``, a stalled iteration) becomes ``"solved"`` where the
+    package's own measures (primal, dual residual with the solver's or recovered
+    multipliers, and gap) are all within :data:`ACCEPT`. Without multipliers nothing is
+    confirmed: the status stays as the solver and :func:`judge` left it.
+    """
+    status = np.asarray(status, object)
+    if duals == "none" or not {"primal", "dual", "gap"} <= set(optimality):
+        return status
+    within = np.all([np.asarray(optimality[k], float) <= ACCEPT
+                     for k in ("primal", "dual", "gap")], axis=0)
+    return np.where((status == "inaccurate") & within, "solved", status)
+
+
 def finalize(
     problem,
     solver: str,
@@ -198,6 +213,10 @@ def finalize(
                                               residuals[worst], optimal_value)
     if reference is not None and unique_optimum(problem):
         optimality["distance"] = residuals["reference"]
+    confirmed = str(confirm(status, optimality, duals))
+    if confirmed != status:
+        notes.append("confirmed by the package's primal, dual and gap measures")
+    status = confirmed
     objective = outcome.objective if answered else None
     return Record(
         formulation=problem.formulation,

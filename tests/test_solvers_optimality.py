@@ -111,3 +111,31 @@ def test_min_max_like_problem_solved_by_clarabel_is_optimal_without_a_distance()
     assert record.status == "solved" and record.duals == "solver"
     assert "distance" not in record.optimality
     assert record.within(1e-7)
+
+
+def test_confirm_upgrades_inaccurate_only_with_all_measures_within_accept():
+    from cardan_forces.solvers.record import ACCEPT, confirm
+
+    good = {"primal": 1e-12, "dual": 1e-10, "gap": 1e-9}
+    assert list(confirm(["inaccurate", "failed", "solved"], good, "solver")) == \
+        ["solved", "failed", "solved"]
+    assert confirm("inaccurate", good, "none") == "inaccurate"  # no multipliers: no proof
+    for key in good:
+        assert confirm("inaccurate", good | {key: 10 * ACCEPT}, "solver") == "inaccurate"
+    batch = {k: np.array([v, 10 * ACCEPT]) for k, v in good.items()}
+    assert list(confirm(np.array(["inaccurate"] * 2, object), batch, "solver")) == \
+        ["solved", "inaccurate"]
+
+
+def test_clarabel_almost_solved_is_judged_by_the_measures():
+    """min_max on the propshaft with straight joints: Clarabel stops at AlmostSolved at
+    the first instant; the package's own primal, dual and gap measures decide."""
+    import cardan_forces as cf
+    from cardan_forces.experiments.hard import CASES
+
+    case = next(c for c in CASES if c.name == "articulation-0")
+    op = cf.build_operator(cf.simulate(case.scene("propshaft"), [0.0]))
+    record = cf.solve(cf.build_formulation("min_max", op, 0), "clarabel", tol=1e-8)
+    assert "AlmostSolved" in record.message
+    assert all(v <= 1e-6 for v in record.optimality.values())
+    assert record.status == "solved" and "confirmed" in record.message
