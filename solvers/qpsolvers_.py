@@ -43,6 +43,10 @@ TOLERANCES: dict[str, tuple[str, ...]] = {
 }
 """Each solver's own parameters a requested tolerance sets (quadprog: a direct method)."""
 
+TIME_LIMITS = {"highs": "time_limit"}
+"""Solvers given :data:`~.settings.TIME_LIMIT_S` as their own time limit (their iteration
+limits do not bound the time)."""
+
 SMALLEST_TOL = {"highs": 1e-10}
 """Smallest tolerance a solver accepts (HiGHS rejects smaller ones)."""
 
@@ -146,6 +150,8 @@ def _solve_with(solver: str):
                                vec(problem.b), vec(problem.lb), vec(problem.ub))
         kwargs = settings.options_for(TOLERANCES.get(solver, ()), tol,
                                       SMALLEST_TOL.get(solver, 0.0))
+        if solver in TIME_LIMITS:
+            kwargs[TIME_LIMITS[solver]] = settings.TIME_LIMIT_S
         if solver == "osqp":
             kwargs["raise_error"] = False  # today's behaviour, without osqp's FutureWarning
         setup_done = time.perf_counter()
@@ -155,6 +161,8 @@ def _solve_with(solver: str):
         solve_s = wall - build if sol.solve_time is None else sol.solve_time
         extras = sol.extras or {}
         status, text = ("solved", "") if sol.found else _unfound_status(solver, extras)
+        if not sol.found and solver in TIME_LIMITS and wall >= settings.TIME_LIMIT_S:
+            text = f"{text}; time limit of {settings.TIME_LIMIT_S:g} s reached"
         z = sol.x
         objective = None if z is None else 0.5 * z @ P @ z + q @ z
         return Outcome(status, z, iterations=_iterations(extras), message=text,

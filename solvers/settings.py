@@ -9,6 +9,12 @@ ignored for them.
 
 from __future__ import annotations
 
+TIME_LIMIT_S = 20.0
+"""Wall-time limit of one solve for solvers whose own iteration limit does not bound the
+time (HiGHS's QP ran for minutes on one near-90-degree instant): the adapter passes it
+as the solver's own time limit, so a stalled solve ends as a failed record, never a
+hang. Options given to a solve override it."""
+
 TIKHONOV_DEFAULT = 1e-10
 """Relative Tikhonov weight of ``scipy-lsq_linear`` when no ``tol`` is given."""
 

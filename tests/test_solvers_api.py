@@ -206,3 +206,16 @@ def test_qpsolvers_status_map(solver, extras, expected):
     from cardan_forces.solvers.qpsolvers_ import _unfound_status
 
     assert _unfound_status(solver, extras)[0] == expected
+
+
+def test_a_solver_past_its_time_limit_is_a_failed_record(monkeypatch):
+    """HiGHS's QP iterations are not bounded in time: the adapter passes the package's
+    limit, and a solve that reaches it is a record, never a hang."""
+    pytest.importorskip("highspy")
+    from cardan_forces.solvers import settings
+
+    monkeypatch.setattr(settings, "TIME_LIMIT_S", 0.0)
+    problem = next(r.problem for r in REFS.values() if isinstance(r.problem, QP))
+    record = solve(problem, "qpsolvers-highs")
+    assert record.status in ("failed", "inaccurate")
+    assert "time limit" in record.message
