@@ -130,8 +130,9 @@ def test_confirm_upgrades_inaccurate_only_with_all_measures_within_accept():
 def test_clarabel_almost_solved_is_judged_by_the_measures():
     """min_max on the propshaft with straight joints: Clarabel stops at AlmostSolved at
     the first instant; the package's own primal, dual and gap measures decide."""
-    import cardan_forces as cf
     from cardan_forces.experiments.hard import CASES
+
+    import cardan_forces as cf
 
     case = next(c for c in CASES if c.name == "articulation-0")
     op = cf.build_operator(cf.simulate(case.scene("propshaft"), [0.0]))
