@@ -80,8 +80,9 @@ def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
 
 
 def write_png(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
-    """One panel per contact; the band runs to the panel's edge on an unbounded side
-    (the panel's title says so).
+    """One panel per contact: the solution set shaded where both its ends are finite, a
+    finite end dashed where the other is not; an unbounded side is said in the title
+    rather than shaded to the panel's edge.
     """
     import matplotlib
 
@@ -96,15 +97,21 @@ def write_png(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
         lines = [ax.plot(op.t, h["value"][:, j], lw=1.2,
                          label=op.names[j][len(c.name) + 1:] or "force")[0] for j in c.columns]
         bottom, top = ax.get_ylim()
-        unbounded = False
+        sides = set()
         for line, j in zip(lines, c.columns):
             lo, hi = h["min"][:, j], h["max"][:, j]
-            unbounded |= not (np.isfinite(lo).all() and np.isfinite(hi).all())
-            ax.fill_between(op.t, np.where(np.isfinite(lo), lo, bottom),
-                            np.where(np.isfinite(hi), hi, top), color=line.get_color(),
-                            alpha=0.12, lw=0)
+            finite_lo, finite_hi = np.isfinite(lo), np.isfinite(hi)
+            sides |= {"below"} if not finite_lo.all() else set()
+            sides |= {"above"} if not finite_hi.all() else set()
+            both = finite_lo & finite_hi
+            ax.fill_between(op.t, np.where(both, lo, np.nan), np.where(both, hi, np.nan),
+                            color=line.get_color(), alpha=0.15, lw=0)
+            for bound, finite in ((lo, finite_lo), (hi, finite_hi)):
+                ax.plot(op.t, np.where(finite & ~both, bound, np.nan), ls="--", lw=0.8,
+                        color=line.get_color())
         ax.set_ylim(bottom, top)
-        ax.set_title(f"{c.name} ({c.kind})" + (", set unbounded" if unbounded else ""),
+        words = " and ".join(sorted(sides, reverse=True))
+        ax.set_title(f"{c.name} ({c.kind})" + (f", set unbounded {words}" if sides else ""),
                      fontsize=8)
         ax.tick_params(labelsize=7)
         ax.legend(fontsize=6)
