@@ -87,9 +87,10 @@ def plot_profiles(profiles: list[dict], path: Path) -> None:
     panels = list(dict.fromkeys((p["formulation"], p["profile"]) for p in profiles))
     plt, fig, axes = _figure(len(panels), cols=4)
     for ax, (formulation, name) in zip(axes.flat, panels):
-        for p in profiles:
-            if (p["formulation"], p["profile"]) == (formulation, name):
-                ax.step(TAUS, p["curve"], where="post", lw=1.0, label=p["solver"])
+        curves = [p for p in profiles if (p["formulation"], p["profile"]) == (formulation, name)]
+        for k, p in enumerate(curves):  # past the 10 colours of the cycle, a new line style
+            ax.step(TAUS, p["curve"], where="post", lw=1.0, ls=("-", "--", ":")[k // 10 % 3],
+                    label=p["solver"])
         level = next(p["level"] for p in profiles if p["profile"] == name)
         ax.set(xscale="log", ylim=(-0.02, 1.02), title=f"{formulation}, {name} ({level:g})",
                xlabel="tau (time / fastest)", ylabel="share of instants")
