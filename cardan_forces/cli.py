@@ -69,7 +69,6 @@ ARGUMENTS = (
     ("t", "--t", 0.0, LIMITS["time_s"][1], True),
     ("tol", "--tol", 0.0, 1.0, False),
     ("multistart", "--multistart", 0, 1000, True),
-    ("budget_s", "--budget-s", 0.0, 1e5, False),
     ("instants", "--instants", 1, MAX_INSTANTS, True),
     ("stop", "--stop", 0.0, LIMITS["time_s"][1], False),
     ("workers", "--workers", 1, 1024, True),
