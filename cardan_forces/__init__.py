@@ -25,8 +25,9 @@ from __future__ import annotations
 from .driveline.determinacy import Determinacy, determinacy
 from .driveline.dynamics import Motion, simulate
 from .driveline.equilibrium import Operator, build_operator
+from .driveline.loading import load_scene
 from .driveline.release import advise, named_modes
-from .driveline.scene import Scene, SceneError, load_scene
+from .driveline.scene import Scene, SceneError
 from .formulations import FORMULATIONS
 from .solvers import Record, SolverNotFound, available, solve
 

@@ -34,6 +34,7 @@ import numpy as np
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import DynamicsError, simulate
 from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import builtin_names, builtin_text, load_scene
 from cardan_forces.driveline.release import (
     advise,
     named_modes,
@@ -45,9 +46,6 @@ from cardan_forces.driveline.scene import (
     MAX_ARTICULATION_DEG,
     MAX_INSTANTS,
     SceneError,
-    builtin_names,
-    builtin_text,
-    load_scene,
 )
 from cardan_forces.experiments import bench, hard, report, secondary, sweep
 from cardan_forces.experiments.analysis import intervals, solve_all

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .kinematics import rest_geometry
 from .scene import Scene, SceneError
 
 
@@ -97,8 +98,6 @@ def sliding_bodies(scene: Scene, segments: list[Segment] | None = None) -> list[
     """Names of the shaft bodies that some rigid translation allowed by the bearings,
     joints and splines moves (empty when the line is held).
     """
-    from .kinematics import rest_geometry  # kinematics imports the scene module
-
     segments = shaft_segments(scene) if segments is None else segments
     axes = rest_geometry(scene).axes
     n = 3 * len(segments)

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.driveline.scene import load_scene
+from cardan_forces.driveline.loading import load_scene
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.problems import Conic
 from cardan_forces.solvers import get as get_backend

@@ -29,7 +29,8 @@ import numpy as np
 from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.driveline.scene import Scene, load_scene, scene_from_dict
+from cardan_forces.driveline.loading import load_scene, scene_from_dict
+from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.analysis import solve_all
 from cardan_forces.experiments.environment import json_number, number_text
 from cardan_forces.formulations import FORMULATIONS

@@ -22,8 +22,8 @@ import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.release import named_modes
-from cardan_forces.driveline.scene import load_scene
 from cardan_forces.experiments.analysis import value_range
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS

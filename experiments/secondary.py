@@ -44,7 +44,8 @@ import numpy as np
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
-from cardan_forces.driveline.scene import Scene, load_scene, scene_from_dict
+from cardan_forces.driveline.loading import load_scene, scene_from_dict
+from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.environment import number_text
 
 STEPS = 72

@@ -30,7 +30,8 @@ import numpy as np
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.kinematics import Geometry, kinematics
-from cardan_forces.driveline.scene import Scene, builtin_names, load_scene, scene_from_dict
+from cardan_forces.driveline.loading import builtin_names, load_scene, scene_from_dict
+from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable

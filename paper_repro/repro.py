@@ -22,8 +22,9 @@ from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import Motion, simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.kinematics import kinematics
+from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import PenaltyResult
-from cardan_forces.driveline.scene import Scene, load_scene
+from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.analysis import value_range
 from cardan_forces.experiments.environment import machine, versions
 from scipy.stats import binomtest

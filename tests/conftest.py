@@ -1,7 +1,7 @@
 import copy
 
 import pytest
-from cardan_forces.driveline.scene import builtin_text, load_scene, scene_from_dict
+from cardan_forces.driveline.loading import builtin_text, load_scene, scene_from_dict
 from hypothesis import settings
 
 try:

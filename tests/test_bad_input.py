@@ -10,7 +10,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from cardan_forces.driveline.scene import builtin_names, builtin_text
+from cardan_forces.driveline.loading import builtin_names, builtin_text
 
 from cardan_forces.cli import main
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.driveline.scene import load_scene
+from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import bench, bench_metrics, bench_report, bench_run
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers import SolverNotFound, failed_record, registry, solve

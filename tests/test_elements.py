@@ -11,9 +11,10 @@ import pytest
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import builtin_text, load_scene, scene_from_dict
 from cardan_forces.driveline.modes import counts
 from cardan_forces.driveline.release import advise, named_modes, released_operator
-from cardan_forces.driveline.scene import SceneError, builtin_text, load_scene, scene_from_dict
+from cardan_forces.driveline.scene import SceneError
 from cardan_forces.experiments import secondary
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable

@@ -14,7 +14,8 @@ import dataclasses
 import json
 import math
 
-from cardan_forces.driveline.scene import MAX_INSTANTS, Scene, SceneError, builtin_text, load_scene
+from cardan_forces.driveline.loading import builtin_text, load_scene
+from cardan_forces.driveline.scene import MAX_INSTANTS, Scene, SceneError
 from hypothesis import given, settings
 from hypothesis import strategies as st
 

@@ -9,8 +9,8 @@ from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import contact_law, simulate_penalty
-from cardan_forces.driveline.scene import load_scene
 from scipy.integrate import cumulative_trapezoid
 
 STOP_S = 0.2

@@ -4,13 +4,8 @@ import sys
 import numpy as np
 import pytest
 from cardan_forces.driveline.kinematics import rest_geometry
-from cardan_forces.driveline.scene import (
-    SceneError,
-    builtin_names,
-    builtin_text,
-    load_scene,
-    scene_from_dict,
-)
+from cardan_forces.driveline.loading import builtin_names, builtin_text, load_scene, scene_from_dict
+from cardan_forces.driveline.scene import SceneError
 
 from cardan_forces.cli import main
 from tests.conftest import variant

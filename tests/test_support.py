@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from cardan_forces.driveline.scene import SceneError, builtin_names, load_scene, scene_from_dict
+from cardan_forces.driveline.loading import builtin_names, load_scene, scene_from_dict
+from cardan_forces.driveline.scene import SceneError
 from cardan_forces.driveline.support import Support, check_support, free_motions, support
 
 ROWS = tuple(f"{body}.{kind}.{axis}" for body in ("a", "b") for kind in ("force", "moment")
