@@ -5,11 +5,13 @@ numbers made safe to print (text, Markdown, CSV) and to write as JSON.
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import math
 import os
 import platform
 from pathlib import Path
 
+import numpy as np
 from cardan_forces.solvers import available
 
 
@@ -41,19 +43,54 @@ def versions() -> str:
     return ", ".join(found)
 
 
-def json_number(value: float) -> float | str:
-    """A JSON-safe float: ``inf``/``nan`` as strings, read back with ``float()``."""
+def json_number(value: float) -> float | None:
+    """A JSON-safe float: ``None`` (JSON ``null``) where ``value`` is not finite (the
+    record's status or the row's message says why).
+    """
     value = float(value)
-    return value if math.isfinite(value) else str(value)
+    return value if math.isfinite(value) else None
+
+
+def json_safe(value):
+    """``value`` (dicts, lists, tuples, NumPy arrays and scalars) as plain JSON types,
+    every number that is not finite as ``None``.
+    """
+    if isinstance(value, dict):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return json_number(value)
+    return value
+
+
+def json_text(value) -> str:
+    """The package's one JSON encoder: strict JSON (no ``NaN``/``Infinity``), indented,
+    non-finite numbers as ``null``; what every ``--json`` output prints.
+    """
+    return json.dumps(json_safe(value), indent=2, allow_nan=False)
 
 
 def number_text(value: float | None, spec: str, undefined: str = "-") -> str:
     """``value`` formatted by ``spec``, or ``undefined`` where it is not a finite number
     (a failed record's residual, a peak over no solved instant, a missing reference):
     tables and Markdown show ``-`` (right-aligned in the width ``spec`` asks for), CSV
-    cells pass ``undefined=""`` (an empty cell). Never prints ``inf`` or ``nan``.
+    cells pass ``undefined=""`` (an empty cell). Never prints ``inf`` or ``nan``, nor a
+    negative zero (``-0.0000`` for ``-1e-7`` at four decimals is ``0.0000``).
     """
     if value is not None and math.isfinite(float(value)):
-        return format(value, spec)
+        text = format(value, spec)
+        return format(0.0, spec) if text.lstrip().startswith("-") and _zero(text) else text
     padded = format(math.inf, spec)  # the width spec asks for, if any
     return undefined.rjust(len(padded)) if padded.startswith(" ") else undefined
+
+
+def _zero(text: str) -> bool:
+    try:
+        return float(text) == 0.0
+    except ValueError:
+        return False

@@ -132,7 +132,7 @@ def test_ctrl_c_ends_a_run_with_one_line_and_code_130(monkeypatch, capsys):
     def interrupted(args):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("cardan_forces.cli._cmd_solvers", interrupted)
+    monkeypatch.setattr("cardan_forces.commands.solvers.run", interrupted)
     assert main(["solvers"]) == 130
     assert capsys.readouterr().err == "cardan: interrupted\n"
 
@@ -156,6 +156,6 @@ def test_a_long_run_says_it_is_still_running(monkeypatch, capsys):
         time.sleep(0.3)
         return 0
 
-    monkeypatch.setattr("cardan_forces.cli._cmd_solvers", slow)
+    monkeypatch.setattr("cardan_forces.commands.solvers.run", slow)
     assert main(["solvers"]) == 0
     assert "cardan solvers: still running after" in capsys.readouterr().err

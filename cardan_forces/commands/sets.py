@@ -1,0 +1,144 @@
+"""``cardan sets``: rank, null space, determinacy and the interval of every contact
+force at one instant; with ``--apply`` on a released line, with ``--release`` the
+advisor's smallest release set (started from the ``--apply``-released line).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.release import (
+    advise,
+    named_modes,
+    parse_release,
+    released_operator,
+)
+from cardan_forces.experiments.paper_method import multistart
+from cardan_forces.experiments.study import intervals
+
+from . import check_time, print_json
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cardan sets``."""
+    st = subparsers.add_parser("sets", help="rank, null space and determinacy at one instant")
+    st.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
+    st.add_argument("--t", type=float, default=0.5, help="instant in s (default 0.5)")
+    st.add_argument("--json", action="store_true", help="print JSON")
+    st.add_argument("--multistart", type=int, default=0, metavar="N",
+                    help="also run the paper's method from N seeded random starts")
+    st.add_argument("--release", action="store_true",
+                    help="propose the smallest set of releases (floating bearings, slip "
+                         "joints) that leaves only end-face pair modes, starting from the "
+                         "line as --apply leaves it; show the released line's table")
+    st.add_argument("--apply", action="append", metavar="RELEASE",
+                    help="apply a release first: float:<shaft>.<bearing> or slip:<shaft> "
+                         "(repeatable)")
+    st.set_defaults(func=run)
+
+
+def run(args) -> int:
+    scene = load_scene(args.scene)
+    check_time(scene, args.t)
+    applied = [parse_release(text, scene) for text in args.apply or ()]  # before any work
+    motion = simulate(scene, [args.t])
+    if applied:  # SceneError when the releases leave a mechanism
+        op = released_operator(motion, applied)
+        motion = dataclasses.replace(motion, scene=op.scene)
+    else:
+        op = build_operator(motion)
+    if args.release:
+        return _advise(args, motion, applied)
+    result = determinacy(op, 0)
+    ranges = intervals(op, 0)
+    modes = named_modes(motion, 0, op)
+    starts = multistart(op, 0, n=args.multistart, rim=False)[:, : len(op.names)] \
+        if args.multistart else None
+    if args.json:
+        report = _with_intervals(result.to_json(), ranges)
+        if starts is not None:
+            for j, entry in enumerate(report["components"].values()):
+                entry["paper_multistart"] = starts[:, j]
+        report["modes"] = [m.to_json() for m in modes]
+        print_json(report)
+        return 0
+    print_table(op.scene.name, result, ranges, starts, args.multistart)
+    print_modes(modes)
+    return 0
+
+
+def _with_intervals(report: dict, ranges: dict) -> dict:
+    """A determinacy report's components with their ``min``/``max`` (None: unbounded)."""
+    for name, entry in report["components"].items():
+        entry.update(min=ranges[name]["min"], max=ranges[name]["max"])
+    return report
+
+
+def print_table(name, result, ranges, starts=None, n_starts=0) -> None:
+    """One line per component: determinate, least-norm value, interval (and the spread
+    of the paper method's multistart answers).
+    """
+    print(f"scene {name}, t = {result.t:g} s: rank {result.rank}, nullity "
+          f"{result.nullity}, least-norm residual {result.residual:.1e}")
+    print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; least-norm values in N, "
+          "N m for a slip joint's bending and torque (one member of the solution set where "
+          "not determinate); interval over all solutions with end faces >= 0 (-inf/+inf: "
+          "unbounded)")
+    width = max(24, *(len(n) for n in result.names))
+    print(f"{'component':{width}s} {'determinate':>11s} {'least-norm N':>14s} {'min N':>12s} "
+          f"{'max N':>12s}")
+    if starts is not None:
+        print(f"paper method (fsolve, end faces on the axis) from {n_starts} random "
+              f"starts: {len(starts)} converged; their spread per component at the right")
+    for j, (name, det, value) in enumerate(zip(result.names, result.determinate,
+                                               result.min_norm)):
+        lo, hi = ranges[name]["min"], ranges[name]["max"]
+        lo = "-inf" if lo is None else f"{lo + 0.0:.4f}"
+        hi = "+inf" if hi is None else f"{hi + 0.0:.4f}"
+        spread = "" if starts is None or not len(starts) else \
+            f"  paper: [{starts[:, j].min():.3f}, {starts[:, j].max():.3f}]"
+        print(f"{name:{width}s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}"
+              f"{spread}")
+
+
+def print_modes(modes) -> None:
+    """The null-space directions in words, with the release each would need."""
+    print(f"modes (null-space directions): {len(modes)}")
+    for k, m in enumerate(modes, 1):
+        print(f"  {k}. {m.kind}: {m.description}")
+        shown = ", ".join(m.components[:6]) + (" ..." if len(m.components) > 6 else "")
+        print(f"     moves {shown}; release: {m.release}")
+
+
+def _advise(args, motion, applied) -> int:
+    """``--release``: the advisor's release set on the (already released) line, and the
+    table of the line with both the applied and the advised releases.
+    """
+    advice = advise(motion, 0)
+    ranges = intervals(advice.operator, 0)
+    if args.json:
+        report = advice.to_json()
+        report["applied"] = [r.to_json() for r in applied]
+        report["modes"] = [m.to_json() for m in advice.modes]
+        report["released"] = _with_intervals(advice.released.to_json(), ranges)
+        report["released"]["modes"] = [m.to_json() for m in advice.released_modes]
+        print_json(report)
+        return 0
+    if applied:
+        print(f"applied first: {'; '.join(r.words for r in applied)}")
+    print_modes(advice.modes)
+    words = "; ".join(r.words for r in advice.releases) or "none: only end-face pair modes"
+    print(f"release advisor: {len(advice.releases)} release(s): {words}")
+    print(f"  ({len(advice.alternatives)} other set(s) of the same size also work; "
+          f"{advice.tried} set(s) built and checked by determinacy)")
+    every = (*applied, *advice.releases)
+    if every:
+        print(f"  as --apply: {' '.join('--apply ' + r.label for r in every)}")
+    print()
+    print_table(advice.scene.name, advice.released, ranges)
+    print_modes(advice.released_modes)
+    return 0

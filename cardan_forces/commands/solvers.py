@@ -1,0 +1,34 @@
+"""``cardan solvers``: the backends present, their problem classes, and how to install
+the absent ones.
+"""
+
+from __future__ import annotations
+
+from cardan_forces.solvers import available
+from cardan_forces.solvers.registry import known_backends
+
+from . import print_json
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cardan solvers``."""
+    sv = subparsers.add_parser("solvers",
+                               help="solver backends present, with their problem classes")
+    sv.add_argument("--json", action="store_true", help="print JSON")
+    sv.set_defaults(func=run)
+
+
+def run(args) -> int:
+    backends = available()
+    if args.json:
+        print_json([{"name": b.name, "family": b.family, "version": b.version,
+                     "classes": [c.__name__ for c in b.accepts], "extra": b.extra}
+                    for b in backends.values()])
+        return 0
+    for b in backends.values():
+        print(f"{b.name:22s} {'/'.join(c.__name__ for c in b.accepts):18s} {b.version}")
+    for name in sorted(set(known_backends()) - set(backends)):
+        extra = known_backends()[name]
+        target = "cardan-forces" if extra is None else f"cardan-forces[{extra}]"
+        print(f"{name:22s} absent: pip install \"{target}\"")
+    return 0
