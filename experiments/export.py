@@ -1,0 +1,201 @@
+"""``cardan export``: the package's problems as files any solver or benchmark can read.
+
+Chosen scenes x formulations x instants are written into one folder:
+
+- the QPs (``positive``, ``compliance``, and least norms such as ``min_norm`` as the QP
+  ``min 1/2 x'Wx s.t. Ax = b``) as a **qpbenchmark test set**: ``<name>.py``, a
+  module with one ``TestSet`` class that ``qpbenchmark <name>.py run`` loads, and
+  ``<name>.npz``, its data (per problem ``<problem>/P``, ``q``, ``A``, ``b``, ``G``,
+  ``h``, ``lb``, ``ub``, absent parts left out; ``names`` lists the problems). The
+  module needs only numpy and qpbenchmark.
+- the conic problems (``socp_face``, ``min_max``, ``friction``, ``compliance_hertz``) in
+  one standard form, ``<name>_conic.npz``: ``min 1/2 z'Pz + q'z s.t. A z + s = b, s in
+  K`` with, per problem, ``<problem>/P`` (n, n; zeros for a linear objective), ``q``
+  (n,), ``A`` (m, n), ``b`` (m,), ``cone_kinds`` (k,) strings and ``cone_sizes`` (k,):
+  the blocks of ``K`` in row order, ``zero`` (size rows, ``s = 0``), ``nonneg`` (``s >=
+  0``), ``soc`` (``s_0 >= ||s_1:||``, size rows, apex first) and ``pow`` (3 rows, the
+  size is ``alpha``: ``s_0^alpha s_1^(1-alpha) >= |s_2|``) — Clarabel's, SCS's and
+  moreau's convention. ``names`` lists the problems.
+
+Problems are named ``<scene>_<formulation>_<instant:04d>`` (the instant's index on the
+scene's time grid); forces in N, moments in N·m, the unknowns in the order of the
+formulation's named forces.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.formulations.problems import LS, QP, Conic
+from cardan_forces.solvers.conversions import convert
+
+QP_FORMULATIONS = ("min_norm", "positive", "compliance")
+"""Formulations exported by default (the ones qpbenchmark takes as QPs)."""
+INSTANTS = 50
+"""Evenly spaced instants per scene by default."""
+QP_KEYS = ("P", "q", "A", "b", "G", "h", "lb", "ub")
+
+TEST_SET_MODULE = '''"""cardan-forces problems as a qpbenchmark test set (``cardan export``).
+
+Run with ``qpbenchmark {module}.py run``; the problems are in ``{module}.npz`` beside
+this file (per problem ``<name>/P``, ``q``, ``A``, ``b``, ``G``, ``h``, ``lb``, ``ub``).
+"""
+
+from pathlib import Path
+
+import numpy as np
+from qpbenchmark import Problem, TestSet
+
+DATA = Path(__file__).with_suffix(".npz")
+KEYS = ("P", "q", "G", "h", "A", "b", "lb", "ub")
+
+
+class {cls}(TestSet):
+    """{title}."""
+
+    @property
+    def description(self) -> str:
+        return "{description}"
+
+    @property
+    def title(self) -> str:
+        return "{title}"
+
+    @property
+    def sparse_only(self) -> bool:
+        return False
+
+    def __iter__(self):
+        with np.load(DATA) as data:
+            for name in data["names"]:
+                parts = {{k: data[f"{{name}}/{{k}}"].copy() if f"{{name}}/{{k}}" in data
+                         else None for k in KEYS}}
+                yield Problem(**parts, name=str(name))
+'''
+
+
+def class_name(module: str) -> str:
+    """The class name qpbenchmark looks for in module ``module`` (its ``load_test_set``
+    rule: title case, underscores removed).
+    """
+    return module.title().replace("_", "")
+
+
+def collect(scenes, formulations, instants: int) -> dict[str, object]:
+    """``{name: problem}`` of every scene x formulation at ``instants`` evenly spaced
+    instants of the scene's time grid (a formulation a scene does not call for is left
+    out for that scene).
+    """
+    out = {}
+    for scene_name in scenes:
+        scene = load_scene(scene_name)
+        times = scene.time.instants()
+        chosen = np.unique(np.linspace(0, len(times) - 1, instants).round().astype(int))
+        op = build_operator(simulate(scene, times[:chosen[-1] + 1]))
+        for formulation in formulations:
+            try:
+                problems = fbatch.build_problems(op, formulation, chosen)
+            except NotApplicable:
+                continue
+            out |= {f"{scene.name}_{formulation}_{i:04d}": p for i, p in zip(chosen, problems)}
+    return out
+
+
+def as_qp(problem) -> QP | None:
+    """The problem as a package ``QP`` (a least norm through ``LS.as_qp``), else ``None``."""
+    if isinstance(problem, LS):
+        return problem.as_qp()
+    return problem if isinstance(problem, QP) else None
+
+
+def write_qpbenchmark(folder: Path, module: str, qps: dict[str, QP], title: str) -> Path:
+    """Write ``<module>.py`` and ``<module>.npz`` (a qpbenchmark test set); the module's path."""
+    data = {"names": np.array(list(qps))}
+    for name, qp in qps.items():
+        for key in QP_KEYS:
+            value = getattr(qp, key)
+            if value is not None:
+                data[f"{name}/{key}"] = np.asarray(value, float)
+    np.savez(folder / f"{module}.npz", **data)
+    path = folder / f"{module}.py"
+    path.write_text(TEST_SET_MODULE.format(
+        module=module, cls=class_name(module), title=title,
+        description=f"{len(qps)} QPs of drive-shaft reaction forces (cardan-forces)"))
+    return path
+
+
+def write_conic(path: Path, conics: dict[str, Conic]) -> None:
+    """Write the conic problems in the standard form of the module docstring."""
+    data = {"names": np.array(list(conics))}
+    for name, c in conics.items():
+        data |= {f"{name}/P": np.zeros((c.n, c.n)) if c.P is None else np.asarray(c.P, float),
+                 f"{name}/q": np.asarray(c.q, float), f"{name}/A": np.asarray(c.A, float),
+                 f"{name}/b": np.asarray(c.b, float),
+                 f"{name}/cone_kinds": np.array([k for k, _ in c.cones]),
+                 f"{name}/cone_sizes": np.array([float(s) for _, s in c.cones])}
+    np.savez(path, **data)
+
+
+def export(folder: Path, problems: dict[str, object], module: str) -> dict[str, Path]:
+    """Split ``problems`` into QPs and conic problems and write both; the paths written."""
+    folder.mkdir(parents=True, exist_ok=True)
+    qps = {name: qp for name, p in problems.items() if (qp := as_qp(p)) is not None}
+    conics = {name: convert(p, (Conic,)) for name, p in problems.items() if name not in qps}
+    conics = {name: c for name, c in conics.items() if c is not None}
+    written = {}
+    if qps:
+        written["qpbenchmark"] = write_qpbenchmark(folder, module, qps,
+                                                   "cardan-forces drive-shaft QPs")
+    if conics:
+        written["conic"] = folder / f"{module}_conic.npz"
+        write_conic(written["conic"], conics)
+    return written
+
+
+def run(args) -> int:
+    """``cardan export``: write the chosen problems into ``args.out``."""
+    problems = collect(args.scene or ["paper"], args.formulation or QP_FORMULATIONS,
+                       args.instants)
+    written = export(Path(args.out), problems, args.module)
+    for kind, path in written.items():
+        print(f"{kind}: {path}")
+    print(f"cardan export: {len(problems)} problems", file=sys.stderr)
+    return 0
+
+
+def _count(text: str) -> int:
+    """A positive whole number (argparse type)."""
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive whole number, got {text!r}")
+    return int(text)
+
+
+def _module(text: str) -> str:
+    """A Python module name (argparse type): qpbenchmark imports the test set by it."""
+    if not text.isidentifier():
+        raise argparse.ArgumentTypeError(f"expected a Python identifier, got {text!r}")
+    return text
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cardan export`` on the command line's subparsers."""
+    p = subparsers.add_parser("export", help="write problems as a qpbenchmark test set and "
+                                             "conic NPZ")
+    p.add_argument("scene", nargs="*", help="built-in names or TOML paths (default paper)")
+    p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
+                   help=f"one formulation (repeatable); default {', '.join(QP_FORMULATIONS)}")
+    p.add_argument("--instants", type=_count, default=INSTANTS,
+                   help=f"evenly spaced instants per scene (default {INSTANTS})")
+    p.add_argument("--out", default="results/export", help="output folder")
+    p.add_argument("--name", dest="module", type=_module, default="cardan_qp",
+                   help="name of the test-set module (default cardan_qp)")
+    p.set_defaults(func=run)

@@ -1,0 +1,207 @@
+"""Both accuracy views on the same solves, and qpbenchmark itself beside them.
+
+``cardan bench --harness qpbenchmark`` runs each QP backend on exported problems at
+qpbenchmark's four settings (:mod:`cardan_forces.solvers.settings_profiles`) and scores
+every solve twice:
+
+- **solver optimality** (:mod:`cardan_forces.solvers.qp_measures`): qpbenchmark's
+  absolute primal residual, dual residual and duality gap of the QP the solver
+  received, with the solver's own ``found`` and multipliers; success as qpbenchmark's
+  (found, and all three strictly below the setting's tolerance);
+- **force accuracy** (the package's physics, ``ForceChecks.residuals``): equilibrium
+  ``||Ax - b|| / ||b||``, pulling unilateral forces, end-face complementarity and cones,
+  each relative to ``||b||``, against :data:`FORCE_LEVEL`.
+
+A QP solve here is qpbenchmark's own call (``qpsolvers.solve_problem`` on the problem
+with the setting's options, timed around that call alone, sparse conversion outside
+the timer), so its ``runtime_s`` is what qpbenchmark records; the force view is then the
+package's :func:`~cardan_forces.solvers.record.finalize` of that same answer.
+:func:`run_qpbenchmark` runs qpbenchmark itself (its ``run`` and ``Results``) on the
+exported test set, for its success and runtime tables.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+from cardan_forces.formulations.problems import RESIDUALS
+from cardan_forces.solvers import qp_measures as qm
+from cardan_forces.solvers import settings_profiles
+from cardan_forces.solvers.qpsolvers_ import conic_duals
+from cardan_forces.solvers.record import Outcome, finalize
+
+from .export import as_qp, class_name
+
+FORCE_LEVEL = 1e-6
+"""Largest relative force residual of a force-accurate answer (the package's ``ACCEPT``)."""
+
+
+def qpsolvers_problem(qp, solver: str):
+    """The qpsolvers problem of a package ``QP``, sparse for a sparse-only solver (as
+    qpbenchmark's ``time_solve_problem`` converts it, outside the timer).
+    """
+    import qpsolvers
+
+    problem = qpsolvers.Problem(*(None if (v := getattr(qp, k)) is None else np.asarray(v, float)
+                                  for k in ("P", "q", "G", "h", "A", "b", "lb", "ub")))
+    if solver in qpsolvers.sparse_solvers and solver not in qpsolvers.dense_solvers:
+        import scipy.sparse as spa
+
+        problem = qpsolvers.Problem(*(spa.csc_matrix(v) if k in "PGA" and v is not None else v
+                                      for k, v in zip("PqGhAbLU", problem.unpack())))
+    return problem
+
+
+def solve_both(problem, backend: str, setting: str) -> dict:
+    """One solve of ``problem`` (LS or QP) by qpsolvers backend ``backend`` at
+    qpbenchmark setting ``setting``, scored in both views: one row.
+    """
+    import qpsolvers
+
+    began = time.perf_counter()
+    qp = as_qp(problem)
+    solver = settings_profiles.BACKEND_SOLVER[backend]
+    data = qpsolvers_problem(qp, solver)
+    options = settings_profiles.options(backend, setting)
+    start = time.perf_counter()
+    try:
+        sol = qpsolvers.solve_problem(data, solver=solver, **options)
+    except Exception as exc:  # as qpbenchmark: an exception is a solution not found
+        sol, message = qpsolvers.Solution(data), f"{type(exc).__name__}: {exc}"
+    else:
+        message = ""
+    runtime = time.perf_counter() - start
+    found = bool(sol.found)
+    measured = qm.qp_residuals(qp, found, sol.x, sol.y, sol.z, sol.z_box)
+    duals = conic_duals(qp, sol) if sol.x is not None else None
+    status = "solved" if found else ("inaccurate" if sol.x is not None else "failed")
+    # the multipliers are the 8th field (named ``y`` or ``duals`` as the record evolves)
+    record = finalize(problem, backend, Outcome(status, sol.x, None, message, None, 0.0,
+                                                runtime, duals))
+    force = {k: float(record.residuals[k]) for k in RESIDUALS}
+    chosen = qm.SETTINGS[setting]
+    return {
+        "formulation": problem.formulation, "solver": backend, "setting": setting,
+        "found": found, **measured, "solver_ok": bool(qm.succeeds(found, *measured.values(),
+                                                                  chosen)),
+        "solver_rule": qm.failed_rule(found, measured, chosen), **force,
+        "force_ok": record.status in ("solved", "inaccurate")
+                    and all(v <= FORCE_LEVEL for v in force.values()),
+        "force_rule": force_rule(record.status, force),
+        "runtime_s": runtime,
+        "solver_s": runtime if sol.solve_time is None else float(sol.solve_time),
+        "end_to_end_s": time.perf_counter() - began,
+    }
+
+
+def force_rule(status: str, force: dict[str, float]) -> str:
+    """Which force check an answer fails at :data:`FORCE_LEVEL` (``""``: none): ``"no
+    answer"`` or the residuals above the level, joined by ``+``.
+    """
+    if status not in ("solved", "inaccurate"):
+        return "no answer"
+    return "+".join(k for k, v in force.items() if not v <= FORCE_LEVEL)
+
+
+def backends_with_profiles(available) -> list[str]:
+    """The qpsolvers backends among ``available`` that declare qpbenchmark's settings."""
+    return [b for b in available if b.startswith("qpsolvers-")
+            and settings_profiles.has_profile(b)]
+
+
+def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTINGS)):
+    """Rows of :func:`solve_both` for every QP problem x backend x setting (with the
+    problem's name in ``problem``).
+    """
+    rows = []
+    for name, problem in problems.items():
+        if as_qp(problem) is None:
+            continue
+        for backend in backends:
+            for setting in settings:
+                rows.append({"problem": name} | solve_both(problem, backend, setting))
+    return rows
+
+
+def package_tables(rows: list[dict]) -> list[dict]:
+    """Per solver x setting: solver-optimality success % (qpbenchmark's rule), the
+    failing rules counted, force-accuracy success % and its causes, and the shifted
+    geometric mean runtime with qpbenchmark's shift and time-limit rule.
+    """
+    out = []
+    keys = dict.fromkeys((r["solver"], r["setting"]) for r in rows)
+    for solver, setting in keys:
+        mine = [r for r in rows if (r["solver"], r["setting"]) == (solver, setting)]
+        chosen = qm.SETTINGS[setting]
+        times = qm.runtime_for_mean([r["found"] for r in mine], [r["runtime_s"] for r in mine],
+                                    chosen)
+        out.append({
+            "solver": solver, "setting": setting, "problems": len(mine),
+            "solver_success": 100.0 * np.mean([r["solver_ok"] for r in mine]),
+            "solver_failures": _count(r["solver_rule"] for r in mine),
+            "force_success": 100.0 * np.mean([r["force_ok"] for r in mine]),
+            "force_failures": _count(r["force_rule"] for r in mine),
+            "runtime_sgm_s": qm.shifted_geometric_mean(times),
+        })
+    return out
+
+
+def _count(rules) -> str:
+    """``"rule: count, ..."`` of the non-empty rules, most frequent first."""
+    counts: dict[str, int] = {}
+    for rule in rules:
+        if rule:
+            counts[rule] = counts.get(rule, 0) + 1
+    return ", ".join(f"{k}: {v}" for k, v in sorted(counts.items(), key=lambda kv: -kv[1]))
+
+
+def load_test_set(path: Path):
+    """The test set of an exported module (loaded from its file, not from ``sys.path``)."""
+    spec = importlib.util.spec_from_file_location(f"_exported_{path.stem}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return getattr(module, class_name(path.stem))()
+
+
+def run_qpbenchmark(path: Path, solvers, results: Path) -> list[dict]:
+    """Run qpbenchmark itself on the test set at ``path`` for ``solvers`` (qpsolvers names):
+    per solver x setting its success % and its runtime shifted-geometric-mean ratio to
+    the best solver (its ``Results.build_success_rate_df`` and ``build_shgeom_df``).
+    """
+    import qpbenchmark
+
+    test_set = load_test_set(path)
+    found = qpbenchmark.Results(results, test_set)
+    for solver in solvers:
+        if solver in test_set.solvers:
+            qpbenchmark.run(test_set, found, only_solver=solver)
+    tol = test_set.tolerances
+    success = found.build_success_rate_df({k: t.primal for k, t in tol.items()},
+                                          {k: t.dual for k, t in tol.items()},
+                                          {k: t.gap for k, t in tol.items()})
+    runtime = found.build_shgeom_df("runtime", qm.SHIFT_S,
+                                    {k: t.runtime for k, t in tol.items()})
+    return [{"solver": f"qpsolvers-{solver}", "setting": setting,
+             "success": float(success.at[solver, setting]),
+             "runtime_ratio": float(runtime.at[solver, setting])}
+            for solver in success.index for setting in success.columns]
+
+
+def side_by_side(package: list[dict], qpbench: list[dict]) -> list[dict]:
+    """Package tables joined with qpbenchmark's on solver x setting, with the package's
+    runtime ratio to the best solver of the setting (as qpbenchmark's).
+    """
+    theirs = {(r["solver"], r["setting"]): r for r in qpbench}
+    best = {}
+    for r in package:
+        best[r["setting"]] = min(best.get(r["setting"], math.inf), r["runtime_sgm_s"])
+    return [r | {"runtime_ratio": r["runtime_sgm_s"] / best[r["setting"]],
+                 "qpbenchmark_success": theirs.get((r["solver"], r["setting"]), {}).get(
+                     "success", math.nan),
+                 "qpbenchmark_runtime_ratio": theirs.get((r["solver"], r["setting"]), {}).get(
+                     "runtime_ratio", math.nan)}
+            for r in package]

@@ -1,0 +1,266 @@
+"""Solver optimality: qpbenchmark's measures on the problem as the solver received it.
+
+This is the *solver-optimality* view of an answer (the *force-accuracy* view, the
+package's physics on the named forces, is ``ForceChecks.residuals`` and
+:mod:`.optimality`). It asks only whether the solver solved the problem it was given,
+in that problem's own units, with the solver's own multipliers, exactly as
+`qpbenchmark <https://github.com/qpsolvers/qpbenchmark>`_ 2.7 scores a solve through
+qpsolvers' ``Solution`` methods. For a QP ``min 1/2 x'Px + q'x s.t. Ax = b, Gx <= h,
+lb <= x <= ub`` with multipliers ``y, z, z_box`` (``Px + q + A'y + G'z + z_box = 0``):
+
+- primal residual ``r_p = max(0, ||Ax - b||_inf, max(Gx - h), max(lb - x), max(x - ub))``;
+- dual residual ``r_d = ||Px + q + A'y + G'z + z_box||_inf``;
+- duality gap ``r_g = |x'Px + q'x + b'y + h'z + lb'z_box^- + ub'z_box^+|``
+  (``v^- = min(v, 0)``, ``v^+ = max(v, 0)``, infinite bounds left out).
+
+All three are absolute (in the units of the data: N, N², ...), as qpbenchmark's are.
+A solve succeeds at a setting when the solver reports it found a solution and all
+three are strictly below the setting's tolerance (:data:`SETTINGS`).
+
+The same QP written in Clarabel's standard form (:meth:`QP.as_conic`: ``A_c z + s =
+b_c``, ``s`` in zero x nonnegative cones, multipliers ``y_c`` with ``y_c = (y, z,
+-z_box^- on finite lb, z_box^+ on finite ub)``) gives the very same numbers:
+``A_c'y_c = A'y + G'z + z_box`` and ``b_c'y_c = b'y + h'z + lb'z_box^- +
+ub'z_box^+``. So one function, :func:`conic_residuals`, measures both: for a QP it is
+qpbenchmark's three measures; for a conic problem it is their analogue, the absolute KKT
+residuals of the standard form, with the cone's violation in the primal residual
+(``dist(b - Az, K)``, per block) and the dual cone's in the dual residual (a QP's
+multipliers are not sign-checked, as qpbenchmark does not check them).
+
+Arrays are batched: ``q`` (T, n), ``A`` (T, m, n) or (m, n), ``b`` (T, m), ``z`` (T, n),
+``y`` (T, m); ``P`` (n, n), (T, n, n) or ``None``. Cost: a few dense products per
+instant.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from .optimality import blocks, dual_cone_violation
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One of qpbenchmark's solver settings: the absolute tolerance it asks of the
+    solver (``None``: the solver's defaults), the tolerance it judges primal, dual and
+    gap by (strictly below), and the time limit (s) given to solvers that take one and
+    counted for a run the solver reports as not found.
+    """
+
+    name: str
+    eps_abs: float | None
+    tolerance: float
+    time_limit_s: float
+
+
+TIME_LIMIT_S = 10.0
+"""qpbenchmark's time limit per solve (``TestSet.define_tolerances(runtime=10.0)``)."""
+SHIFT_S = 10.0
+"""qpbenchmark's shift of the shifted geometric mean of runtimes (``sh = 10``)."""
+
+SETTINGS = {s.name: s for s in (
+    Setting("default", None, 1.0, TIME_LIMIT_S),
+    Setting("low_accuracy", 1e-3, 1e-3, TIME_LIMIT_S),
+    Setting("mid_accuracy", 1e-6, 1e-6, TIME_LIMIT_S),
+    Setting("high_accuracy", 1e-9, 1e-9, TIME_LIMIT_S),
+)}
+"""qpbenchmark 2.7's four settings (``TestSet.define_solver_settings`` and
+``define_tolerances``); ``default`` judges at 1, its other settings at their ``eps_abs``."""
+
+MEASURES = ("primal", "dual", "gap")
+
+
+def _Pz(P, z: np.ndarray) -> np.ndarray:
+    if P is None:
+        return np.zeros_like(z)
+    P = np.asarray(P, float)
+    return z @ P.T if P.ndim == 2 else np.einsum("tij,tj->ti", P, z)
+
+
+@functools.lru_cache(maxsize=64)
+def _primal_layout(cones: tuple) -> tuple:
+    """Row indices per cone kind: zero rows, nonneg rows, second-order blocks (apex,
+    members padded, mask) and power blocks (k, 3) with their alphas.
+    """
+    zero, nonneg, socs, pows, alphas = [], [], [], [], []
+    for kind, size, rows in blocks(cones):
+        idx = list(range(rows.start, rows.stop))
+        {"zero": zero, "nonneg": nonneg}.get(kind, []).extend(idx)
+        if kind == "soc":
+            socs.append(idx)
+        elif kind == "pow":
+            pows.append(idx)
+            alphas.append(float(size))
+    width = max((len(r) - 1 for r in socs), default=0)
+    members = np.zeros((len(socs), width), int)
+    mask = np.zeros((len(socs), width))
+    for k, r in enumerate(socs):
+        members[k, :len(r) - 1] = r[1:]
+        mask[k, :len(r) - 1] = 1.0
+    return (np.array(zero, int), np.array(nonneg, int), np.array([r[0] for r in socs], int),
+            members, mask, np.array(pows, int).reshape(-1, 3), np.array(alphas))
+
+
+def cone_violation(cones, s: np.ndarray) -> np.ndarray:
+    """``s in K`` violated by how much, per instant ((T,), absolute, >= 0): ``|s_i|`` on
+    zero rows, ``-s_i`` on nonnegative rows, ``||s_1:|| - s_0`` on a second-order block,
+    ``|w| - u^a v^(1-a)`` (or a negative ``u, v``) on a power block.
+    """
+    zero, nonneg, apex, members, mask, pows, alphas = _primal_layout(tuple(cones))
+    worst = np.abs(s[:, zero]).max(axis=1, initial=0.0)
+    worst = np.maximum(worst, (-s[:, nonneg]).max(axis=1, initial=0.0))
+    if len(apex):
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", s[:, members] * mask, s[:, members] * mask))
+        worst = np.maximum(worst, (spread - s[:, apex]).max(axis=1))
+    if len(pows):
+        u, v, w = s[:, pows[:, 0]], s[:, pows[:, 1]], s[:, pows[:, 2]]
+        mean = np.maximum(u, 0.0) ** alphas * np.maximum(v, 0.0) ** (1.0 - alphas)
+        worst = np.maximum(worst, np.maximum(np.abs(w) - mean, -np.minimum(u, v)).max(axis=1))
+    return np.maximum(worst, 0.0)
+
+
+def conic_residuals(P, q, A, b, cones, z, y, *, check_dual_cone: bool) -> dict:
+    """Absolute primal, dual and gap of answers to a conic problem, per instant.
+
+    Answers ``z`` with multipliers ``y`` (Clarabel's convention ``Pz + q + A'y = 0``) to
+    ``min 1/2 z'Pz + q'z s.t. Az + s = b, s in K``; ``(T,)`` arrays:
+
+    - ``primal = dist-like violation of b - Az in K`` (:func:`cone_violation`);
+    - ``dual = ||Pz + q + A'y||_inf``, and the dual cone's violation of ``y`` when
+      ``check_dual_cone`` (conic problems; not for a QP, as qpbenchmark);
+    - ``gap = |z'Pz + q'z + b'y|``.
+
+    ``inf`` where the answer or the multipliers are missing or not finite.
+    """
+    z, y = np.asarray(z, float), np.asarray(y, float)
+    A, b, q = np.asarray(A, float), np.asarray(b, float), np.asarray(q, float)
+    bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
+    z, y = np.where(bad[:, None], 0.0, z), np.where(bad[:, None], 0.0, y)
+    Az = z @ A.T if A.ndim == 2 else np.einsum("tmn,tn->tm", A, z)
+    Aty = y @ A if A.ndim == 2 else np.einsum("tmn,tm->tn", A, y)
+    Pz = _Pz(P, z)
+    dual = np.abs(Pz + q + Aty).max(axis=1, initial=0.0)
+    if check_dual_cone:
+        dual = np.maximum(dual, dual_cone_violation(cones, y))
+    out = {"primal": cone_violation(cones, b - Az), "dual": dual,
+           "gap": np.abs(np.einsum("ti,ti->t", z, Pz) + np.einsum("ti,ti->t", q, z)
+                         + np.einsum("tm,tm->t", b, y))}
+    for value in out.values():
+        value[bad] = np.inf
+    return out
+
+
+def qp_residuals(qp, found: bool, x, y, z, z_box) -> dict[str, float]:
+    """The three measures of qpbenchmark for one qpsolvers answer ``x``.
+
+    With qpsolvers' multipliers ``y, z, z_box`` (each ``None`` where qpsolvers gave
+    none) to ``qp`` (a package ``QP``), by the formulas of the module docstring, term for term as
+    ``qpsolvers.Solution.primal_residual``, ``dual_residual`` and ``duality_gap``:
+    ``inf`` when the solver did not report ``found``, without ``x``, or without a
+    multiplier that the problem's constraints need.
+    """
+    if not found or x is None:
+        return dict.fromkeys(MEASURES, np.inf)
+    x, P, q = np.asarray(x, float), np.asarray(qp.P, float), np.asarray(qp.q, float)
+    parts = {"A": (qp.A, qp.b, y), "G": (qp.G, qp.h, z)}
+    primal = [0.0] + [float(np.max(bound - x)) for bound in (qp.lb,) if bound is not None]
+    primal += [float(np.max(x - bound)) for bound in (qp.ub,) if bound is not None]
+    stationarity, gap, missing = P @ x + q, x @ P @ x + q @ x, False
+    for key, (M, v, mult) in parts.items():
+        if M is None:
+            continue
+        r = np.asarray(M, float) @ x - np.asarray(v, float)
+        primal.append(float(np.max(np.abs(r) if key == "A" else r)))
+        if mult is None:
+            missing = True
+            continue
+        stationarity = stationarity + np.asarray(M, float).T @ np.asarray(mult, float)
+        gap += float(np.asarray(v, float) @ np.asarray(mult, float))
+    if qp.lb is not None or qp.ub is not None:
+        if z_box is None:
+            missing = True
+        else:
+            zb = np.asarray(z_box, float)
+            stationarity = stationarity + zb
+            for bound, part in ((qp.lb, np.minimum(zb, 0.0)), (qp.ub, np.maximum(zb, 0.0))):
+                if bound is not None:
+                    keep = np.isfinite(bound)
+                    gap += float(np.asarray(bound, float)[keep] @ part[keep])
+    dual = np.inf if missing else float(np.abs(stationarity).max(initial=0.0))
+    return {"primal": max(primal), "dual": dual, "gap": np.inf if missing else abs(gap)}
+
+
+def qp_duals(qp, y, z, z_box) -> np.ndarray:
+    """Multipliers ``y, z, z_box`` (qpsolvers') of ``qp`` (a package ``QP``) as the
+    multipliers of ``qp.as_conic()``'s rows (see the module docstring).
+    """
+    parts = [np.asarray(v, float) for v, rows in ((y, qp.A), (z, qp.G)) if rows is not None]
+    for bound, part in ((qp.lb, np.minimum), (qp.ub, np.maximum)):
+        if bound is not None:
+            keep = np.isfinite(bound)
+            sign = -1.0 if part is np.minimum else 1.0
+            parts.append(sign * part(np.asarray(z_box, float), 0.0)[keep])
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
+def solver_optimality(received, z, y) -> dict[str, float]:
+    """The three measures of one answer ``z`` (``y``: multipliers in the rows of the
+    received problem's conic form, ``None``: none given) to the problem a backend
+    received (an ``LS``, ``QP`` or ``Conic``): qpbenchmark's for a QP or least norm, the
+    conic KKT analogue for a conic problem. ``inf`` without an answer or multipliers
+    (qpbenchmark's value for a missing dual).
+    """
+    from cardan_forces.formulations.problems import Conic
+
+    from .conversions import convert
+
+    conic = convert(received, (Conic,))
+    if z is None or y is None or conic is None:
+        return dict.fromkeys(MEASURES, np.inf)
+    found = conic_residuals(conic.P, np.asarray(conic.q, float)[None], conic.A,
+                            np.asarray(conic.b, float)[None], conic.cones,
+                            np.asarray(z, float)[None], np.asarray(y, float)[None],
+                            check_dual_cone=not _is_qp(received))
+    return {k: float(v[0]) for k, v in found.items()}
+
+
+def _is_qp(problem) -> bool:
+    from cardan_forces.formulations.problems import LS, QP
+
+    return isinstance(problem, (LS, QP))
+
+
+def succeeds(found, primal, dual, gap, setting: Setting):
+    """The success rule of qpbenchmark, elementwise: the solver reported a solution and the
+    primal residual, dual residual and duality gap are each strictly below the
+    setting's tolerance (a NaN measure fails).
+    """
+    tol = setting.tolerance
+    return (np.asarray(found, bool) & (np.asarray(primal) < tol) & (np.asarray(dual) < tol)
+            & (np.asarray(gap) < tol))
+
+
+def failed_rule(found: bool, measures: dict[str, float], setting: Setting) -> str:
+    """Which part of :func:`succeeds` a run fails (``""``: none): ``"not found"`` or the
+    measures at or above the tolerance, joined by ``+``.
+    """
+    if not found:
+        return "not found"
+    return "+".join(k for k in MEASURES if not measures[k] < setting.tolerance)
+
+
+def runtime_for_mean(found, runtime_s, setting: Setting):
+    """The time-limit rule of qpbenchmark, elementwise: a run the solver reports as not found
+    counts as the setting's time limit in the shifted geometric mean (a found run counts
+    its time, whatever its accuracy).
+    """
+    return np.where(np.asarray(found, bool), np.asarray(runtime_s, float), setting.time_limit_s)
+
+
+def shifted_geometric_mean(values, shift: float = SHIFT_S) -> float:
+    """The ``shgeom`` of qpbenchmark: ``exp(mean(log(v + shift))) - shift`` (``nan`` for none)."""
+    v = np.asarray(values, float)
+    return float(np.exp(np.mean(np.log(v + shift))) - shift) if v.size else float("nan")
