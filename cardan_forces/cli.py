@@ -39,12 +39,12 @@ from cardan_forces.commands import solve as solve_command
 from cardan_forces.commands import solvers as solvers_command
 from cardan_forces.driveline.dynamics import DynamicsError
 from cardan_forces.driveline.scene import LIMITS, MAX_ARTICULATION_DEG, MAX_INSTANTS, SceneError
-from cardan_forces.experiments import bench, hard, report, secondary, sweep
+from cardan_forces.experiments import bench, export, hard, report, secondary, sweep
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import SolverNotFound
 
 COMMANDS = (scene_command, sets_command, solvers_command, solve_command, repro_command,
-            bench, hard, sweep, report, secondary)
+            bench, export, hard, sweep, report, secondary)
 """The command modules, in the order ``cardan --help`` lists them."""
 
 HEARTBEAT_S = 30.0
