@@ -1,4 +1,5 @@
-"""Which contact forces the rigid model determines, and the least-norm answer.
+"""Which contact forces the rigid model determines, the least-norm answer, and the one
+rank test that says whether contacts hold a line (held, mechanism or locked).
 
 At one instant, the solution set of ``A x = b`` is ``x_min_norm + N y`` with ``N`` an
 orthonormal null-space basis. A component is *determinate* when its row of ``N``
@@ -12,13 +13,16 @@ set, not "the" force of an indeterminate component.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .equilibrium import Operator
+if TYPE_CHECKING:
+    from .equilibrium import Operator
 
 RANK_RTOL = 1e-9
-"""Singular values below ``RANK_RTOL * sigma_max`` count as zero."""
+"""Singular values below ``RANK_RTOL * sigma_max`` count as zero (every rank in the
+package: determinacy, the support check, releases, the elements' translations)."""
 
 DETERMINATE_TOL = 1e-8
 """A component is determinate when its null-space row norm is below this (the basis
@@ -63,11 +67,61 @@ class Determinacy:
         }
 
 
+def numerical_rank(s: np.ndarray) -> int:
+    """Singular values ``s`` (descending) above :data:`RANK_RTOL` times the largest."""
+    return int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
+
+
+def equilibrated(A: np.ndarray) -> np.ndarray:
+    """``A`` with columns, then rows, scaled to unit norm (zero ones kept zero), so that
+    a rank does not depend on units (moments in N m over lengths from 1e-6 m to 1e3 m).
+    """
+    col = np.linalg.norm(A, axis=0)
+    A = A / np.where(col > 0, col, 1.0)
+    row = np.linalg.norm(A, axis=1)
+    return A / np.where(row > 0, row, 1.0)[:, None]
+
+
+def left_null_space(A: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (rows x free) of the left null space of the equilibrated
+    ``A``: for an equilibrium operator (6 rows per body), the body motions along which
+    no contact does work.
+    """
+    u, s, _ = np.linalg.svd(equilibrated(A))
+    return u[:, numerical_rank(s):]
+
+
+@dataclass(frozen=True)
+class Hold:
+    """How contacts hold a line meant to turn with one degree of freedom: ``free``
+    motions (rows minus the rank of the equilibrated operator), ``null`` their basis
+    (rows x free, :func:`left_null_space`).
+    """
+
+    free: int
+    null: np.ndarray
+
+    @property
+    def state(self) -> str:
+        """``held`` (the rotation is the only free motion), ``mechanism`` (more) or
+        ``locked`` (none: the line cannot turn).
+        """
+        return "held" if self.free == 1 else "locked" if self.free == 0 else "mechanism"
+
+
+def holding(A: np.ndarray) -> Hold:
+    """The free motions that the equilibrium operator ``A`` (rows x contact columns, six
+    rows per body) leaves.
+    """
+    null = left_null_space(A)
+    return Hold(free=null.shape[1], null=null)
+
+
 def determinacy(op: Operator, i: int) -> Determinacy:
     """Rank, null-space basis, determinate flags and least-norm forces at instant ``i``."""
     A, b = op.A[i], op.b[i]
     u, s, vt = np.linalg.svd(A)
-    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    rank = numerical_rank(s)
     null = vt[rank:].T
     x = vt[:rank].T @ ((u[:, :rank].T @ b) / s[:rank])
     return Determinacy(

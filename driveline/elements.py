@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .determinacy import left_null_space
 from .kinematics import rest_geometry
 from .scene import Scene, SceneError
 
@@ -125,10 +126,8 @@ def sliding_bodies(scene: Scene, segments: list[Segment] | None = None) -> list[
         b = min(g for g, s in enumerate(segments) if s.shaft == j + 1)
         rows.append(block(a, np.eye(3), b))
     matrix = np.vstack(rows) if rows else np.zeros((1, n))
-    _, s, vt = np.linalg.svd(matrix)
-    rank = int(np.sum(s > 1e-9 * max(s[0], 1e-300)))
-    null = vt[rank:]
-    if not len(null):
+    null = left_null_space(matrix.T)  # the translations allowed, n x free
+    if not null.shape[1]:
         return []
-    moved = np.linalg.norm(null.reshape(len(null), len(segments), 3), axis=(0, 2)) > 1e-9
+    moved = np.linalg.norm(null.reshape(len(segments), 3, -1), axis=(1, 2)) > 1e-9
     return [seg.name for seg, m in zip(segments, moved) if m]

@@ -23,9 +23,7 @@ import dataclasses
 from dataclasses import dataclass
 from itertools import combinations
 
-import numpy as np
-
-from .determinacy import Determinacy, determinacy
+from .determinacy import Determinacy, determinacy, holding
 from .dynamics import Motion
 from .elements import check_elements
 from .equilibrium import Operator, build_operator
@@ -128,11 +126,10 @@ def released_operator(motion: Motion, releases) -> Operator:
     """
     scene = released_scene(motion.scene, releases)
     op = build_operator(dataclasses.replace(motion, scene=scene))
-    deficient = [op.A.shape[1] - np.linalg.matrix_rank(A, tol=1e-9 * np.linalg.norm(A, 2))
-                 for A in op.A]
-    if max(deficient) > 1:
+    free = max(holding(A).free for A in op.A)
+    if free > 1:
         labels = ", ".join(r.label for r in releases)
-        raise SceneError(f"releases {labels} leave a mechanism: {max(deficient) - 1} "
+        raise SceneError(f"releases {labels} leave a mechanism: {free - 1} "
                          "direction(s) in which the released line moves without deforming "
                          "(besides its rotation)")
     return op

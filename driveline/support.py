@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .determinacy import holding
 from .dynamics import reduced_inertia, simulate
 from .equilibrium import build_operator
 from .kinematics import kinematics, rest_geometry
@@ -37,10 +38,6 @@ from .scene import MAX_TURNS, Scene, SceneError
 GENERIC_TURN_RAD = 0.7
 """Input angle added to the scene's initial angle: a configuration where no yoke lies in
 the articulation plane (those are where the paper's eq. 2 has its extremes)."""
-
-RANK_RTOL = 1e-9
-"""Singular values of the row- and column-equilibrated ``A`` below ``RANK_RTOL`` times
-the largest count as zero."""
 
 FREE_TOL = 1e-6
 """A row of the extra free motions with a weight above this is reported as free."""
@@ -61,17 +58,6 @@ class Support:
         return self.free == 1
 
 
-def _equilibrated(A: np.ndarray) -> np.ndarray:
-    """``A`` with rows and columns scaled to unit norm (zero rows and columns kept zero),
-    so that the rank does not depend on units (moments in N m over lengths from 1e-6 m
-    to 1e3 m).
-    """
-    col = np.linalg.norm(A, axis=0)
-    A = A / np.where(col > 0, col, 1.0)
-    row = np.linalg.norm(A, axis=1)
-    return A / np.where(row > 0, row, 1.0)[:, None]
-
-
 def free_motions(A: np.ndarray, labels: tuple[str, ...]) -> Support:
     """Count the motions ``A`` (rows x columns, 6 rows per body: force x, y, z, then
     moment x, y, z) leaves free, and name the rows that move in the free motions besides
@@ -80,10 +66,8 @@ def free_motions(A: np.ndarray, labels: tuple[str, ...]) -> Support:
     any (a body not held in place), else rotations; rows under a tenth of the largest
     weight are left out.
     """
-    u, s, _ = np.linalg.svd(_equilibrated(A))
-    top = s[0] if s.size and s[0] > 0 else 1.0
-    null = u[:, int(np.sum(s > RANK_RTOL * top)):]  # left null space, rows x free
-    free = null.shape[1]
+    hold = holding(A)
+    null, free = hold.null, hold.free
     if free <= 1:
         return Support(free=free, rows=())
     force_rows = (np.arange(A.shape[0]) % 6) < 3
