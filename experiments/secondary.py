@@ -44,29 +44,51 @@ import numpy as np
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
-from cardan_forces.driveline.loading import load_scene, scene_from_dict
-from cardan_forces.driveline.scene import Scene
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.scene import LIMITS, Scene, SceneError, TimeGrid, TorqueLaw
 from cardan_forces.experiments.environment import number_text
 
 STEPS = 72
 """Instants per revolution (5 deg apart)."""
 
 
+def requirements(scene: Scene) -> list[str]:
+    """What ``scene`` lacks for the handbook comparison, found by structure (the chain's
+    order, not names): three shafts joined by two Cardan joints, two bearings at
+    different places on the first shaft, a slip joint in the middle shaft (without it the
+    middle shaft's axial force, and with it the bearing loads, are not determinate).
+    """
+    missing = []
+    if len(scene.shafts) != 3:
+        missing.append(f"three shafts joined by two Cardan joints (it has "
+                       f"{len(scene.shafts)} shafts)")
+        return missing
+    first, middle = scene.shafts[0], scene.shafts[1]
+    if len(first.bearings) != 2 or first.bearings[0].offset_m == first.bearings[1].offset_m:
+        missing.append(f"two bearings at different places on the first shaft "
+                       f"{first.name!r} (it has {len(first.bearings)})")
+    if not any(slip.shaft == middle.name for slip in scene.slip_joints):
+        missing.append(f"a slip joint in the middle shaft {middle.name!r}")
+    return missing
+
+
 def revolution_scene(base: str, arrangement: str, angles_deg: tuple[float, float],
                      torque_N_m: float, steps: int = STEPS) -> Scene:
     """``base`` quasi-static over one input revolution (1 rad/s, so ``t`` = angle), no
-    gravity, constant input torque, the given arrangement and joint angles.
+    gravity, constant input torque ``torque_N_m`` (N m), the given arrangement and joint
+    angles (deg, one per joint).
     """
     parent = load_scene(base)
-    joints = [{**dataclasses.asdict(j), "articulation_deg": a}
-              for j, a in zip(parent.joints, angles_deg)]
-    return scene_from_dict({
-        "extends": base, "name": f"{base}-{arrangement}-{angles_deg[0]:g}-{angles_deg[1]:g}",
-        "effects": [], "arrangement": arrangement, "joints": joints,
-        "torque": {"input": torque_N_m, "load": 0.0},
-        "initial": {"angle_rad": 0.0, "speed_rad_s": 1.0},
-        "time": {"start_s": 0.0, "stop_s": 2 * math.pi, "step_s": 2 * math.pi / steps}},
-        source=f"<revolution of {base}>")
+    if len(angles_deg) != len(parent.joints):
+        raise SceneError(f"scene {parent.source}: {len(angles_deg)} joint angles given for "
+                         f"{len(parent.joints)} joints")
+    joints = tuple(dataclasses.replace(j, articulation_deg=float(a))
+                   for j, a in zip(parent.joints, angles_deg))
+    return parent.with_changes(
+        name=f"{parent.name}-revolution", effects=frozenset(), arrangement=arrangement,
+        joints=joints, input_torque=TorqueLaw(float(torque_N_m)), load_torque=TorqueLaw(0.0),
+        initial_angle_rad=0.0, initial_speed_rad_s=1.0,
+        time=TimeGrid(0.0, 2 * math.pi, 2 * math.pi / steps))
 
 
 def bearing_loads(op: Operator) -> dict[str, np.ndarray]:
@@ -134,18 +156,27 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
     return [out / "secondary.csv", out / "secondary.png"]
 
 
-def run(base: str = "paper-slip", torque: float = 100.0, out: Path | None = None,
-        cases=(("Z", (30.0, 30.0)), ("W", (30.0, 30.0)), ("Z", (10.0, 40.0)),
-               ("W", (15.0, 25.0)))) -> dict[str, dict[str, np.ndarray]]:
-    """Bearing loads over one revolution for each (arrangement, angles) case."""
+CASES = (("Z", (30.0, 30.0)), ("W", (30.0, 30.0)), ("Z", (10.0, 40.0)), ("W", (15.0, 25.0)))
+"""(arrangement, joint angles in deg) of ``cardan secondary``: equal and unequal angles."""
+
+
+def revolutions(base: str = "paper-slip", torque: float = 100.0, out: Path | None = None,
+                cases=CASES) -> dict[str, dict[str, np.ndarray]]:
+    """Bearing loads over one revolution for each (arrangement, angles) case, by case
+    name (``"Z 30/30 deg"``); with ``out``, also ``secondary.csv`` and ``.png`` there.
+    """
     results = {}
     for arrangement, angles in cases:
         scene = revolution_scene(base, arrangement, angles, torque)
         op = build_operator(simulate(scene))
-        results[f"{arrangement} {angles[0]:g}/{angles[1]:g} deg"] = bearing_loads(op)
+        results[_case_name(arrangement, angles)] = bearing_loads(op)
     if out is not None:
         write(results, np.degrees(scene.time.instants()), Path(out))
     return results
+
+
+def _case_name(arrangement: str, angles) -> str:
+    return f"{arrangement} {angles[0]:g}/{angles[1]:g} deg"
 
 
 def add_parser(subparsers) -> None:
@@ -154,34 +185,45 @@ def add_parser(subparsers) -> None:
                               "revolution (Z and W, equal and unequal angles) against the "
                               "handbook closed forms")
     p.add_argument("scene", nargs="?", default="paper-slip",
-                   help="a 3-shaft scene with a slip joint in the middle shaft "
-                        "(default paper-slip)")
-    p.add_argument("--torque", type=float, default=100.0, help="input torque, N m")
+                   help="three shafts, two bearings on the first, a slip joint in the "
+                        "middle one (default paper-slip)")
+    p.add_argument("--torque", type=float, default=100.0,
+                   help="constant input torque, N m (default 100)")
     p.add_argument("--out", default="results/secondary", help="output folder")
-    p.set_defaults(func=_run_cli)
+    p.set_defaults(func=run)
 
 
-def _run_cli(args) -> int:
-    """Loads over one revolution to CSV + PNG; the closed forms at 0 and 90 deg beside
-    the package's numbers on stdout.
+def run(args) -> int:
+    """``cardan secondary``: loads over one revolution to CSV + PNG; the closed forms at 0
+    and 90 deg beside the package's numbers on stdout. A scene without the handbook's
+    layout is refused before any work (SceneError).
     """
-    results = run(args.scene, args.torque, Path(args.out))
     scene = load_scene(args.scene)
-    shaft = scene.shafts[0]
-    if len(shaft.bearings) != 2 or len(scene.shafts) != 3:
-        print("closed forms need 3 shafts and 2 bearings on the input shaft; not compared")
-        return 0
-    near, far = sorted(shaft.bearings, key=lambda b: b.offset_m)[::-1]
-    a, c = near.offset_m - far.offset_m, shaft.length_m / 2 - near.offset_m
-    print(f"{'case':18s} {'quantity':10s} {'handbook N':>12s} {'package N':>12s}")
-    for case, loads in results.items():
-        arrangement, angles = case.split()[0], case.split()[1].split("/")
-        expect = handbook(args.torque, float(angles[0]), float(angles[1]), arrangement, a, c,
-                          scene.shafts[1].length_m)
-        step = len(loads[f"input.{near.name}.normal"]) // 4  # 90 deg
-        for key, name, i in (("near_0", near.name, 0), ("far_0", far.name, 0),
-                             ("near_90", near.name, step), ("far_90", far.name, step)):
-            got = loads[f"input.{name}.normal"][i]
-            print(f"{case:18s} {key:10s} {number_text(expect[key], '12.4f')} "
+    missing = requirements(scene)
+    if missing:
+        raise SceneError(f"scene {scene.source}: cardan secondary compares bearing loads with "
+                         f"the handbook's closed forms and needs {'; '.join(missing)}")
+    limit = LIMITS["torque_N_m"][1]
+    if not (math.isfinite(args.torque) and abs(args.torque) <= limit):
+        raise SceneError(f"--torque {args.torque}: must be a finite number of at most "
+                         f"{limit:g} N m in magnitude")
+    results = revolutions(args.scene, args.torque, Path(args.out))
+    first = scene.shafts[0]
+    near, far = sorted(first.bearings, key=lambda b: b.offset_m, reverse=True)
+    a, c = near.offset_m - far.offset_m, first.length_m / 2 - near.offset_m
+    print(f"constant input torque {number_text(args.torque, 'g')} N m, quasi-static, no "
+          f"gravity; each row: the force of a bearing of the first shaft {first.name!r} on it "
+          "along r2 (the normal to the articulation plane), N, at input angle 0 and 90 deg; "
+          f"{near.name!r} is the bearing nearer to joint {scene.joints[0].name!r}; "
+          "'-': not determinate")
+    print(f"{'case':16s} {'bearing':12s} {'angle deg':>9s} {'handbook N':>12s} "
+          f"{'package N':>12s}")
+    for (arrangement, angles), loads in zip(CASES, results.values()):
+        expect = handbook(args.torque, *angles, arrangement, a, c, scene.shafts[1].length_m)
+        for key, bearing, i in (("near_0", near, 0), ("far_0", far, 0),
+                                ("near_90", near, STEPS // 4), ("far_90", far, STEPS // 4)):
+            got = loads[f"{first.name}.{bearing.name}.normal"][i]
+            print(f"{_case_name(arrangement, angles):16s} {bearing.name:12s} "
+                  f"{360 * i // STEPS:9d} {number_text(expect[key], '12.4f')} "
                   f"{number_text(got, '12.4f')}")
     return 0

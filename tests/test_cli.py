@@ -159,3 +159,63 @@ def test_a_long_run_says_it_is_still_running(monkeypatch, capsys):
     monkeypatch.setattr("cardan_forces.commands.solvers.run", slow)
     assert main(["solvers"]) == 0
     assert "cardan solvers: still running after" in capsys.readouterr().err
+
+
+def _renamed_slip_line(tmp_path):
+    """paper-slip with its shafts named Input, INPUT, input (in chain order)."""
+    from cardan_forces.driveline.loading import builtin_text
+
+    text = builtin_text("paper")
+    for old, new in (("input", "Input"), ("intermediate", "INPUT"), ("output", "input")):
+        text = text.replace(f'name = "{old}"', f'name = "{new}"')
+    text += ('\n[[slip_joints]]\nname = "spline"\nshaft = "INPUT"\noffset_m = 0.0\n'
+             'pitch_radius_m = 0.02\nfriction_coefficient = 0.0\n')
+    path = tmp_path / "renamed.toml"
+    path.write_text(text)
+    return path
+
+
+def test_secondary_finds_its_shafts_by_structure(tmp_path, capsys):
+    """Shafts named Input/INPUT/input: the first shaft's bearings are compared, and the
+    package's determinate loads meet the handbook's closed forms (an independent
+    derivation) in every row."""
+    path = _renamed_slip_line(tmp_path)
+    assert main(["secondary", str(path), "--torque", "250", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "250 N m" in out and "first shaft 'Input'" in out and "-0.0000" not in out
+    rows = [line.split() for line in out.splitlines() if line.endswith(tuple("0123456789"))]
+    assert len(rows) == 16
+    for row in rows:
+        handbook, package = float(row[-2]), float(row[-1])
+        assert package == pytest.approx(handbook, abs=1e-3), row
+
+
+def test_secondary_refuses_a_scene_without_its_layout(capsys):
+    assert main(["secondary", "paper"]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.count("\n") == 1 and "cardan secondary" in err and "slip joint" in err
+    assert "revolution" not in err  # the command's needs, not its derived scene
+
+
+def test_release_starts_from_the_applied_line(capsys):
+    """--apply then --release: the advisor's set added to the applied one leaves only
+    end-face pairs, and the released table is that of both (its nullity is the pairs')."""
+    assert main(["sets", "paper", "--apply", "slip:intermediate", "--release", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert [r["release"] for r in report["applied"]] == ["slip:intermediate"]
+    assert all(r["release"] != "slip:intermediate" for r in report["releases"])
+    pairs = [m for m in report["released"]["modes"] if m["kind"] == "end-face pair"]
+    assert report["released"]["nullity"] == len(pairs) == len(report["released"]["modes"])
+    applied_only = ["sets", "paper", "--apply", "slip:intermediate", "--json"]
+    assert main(applied_only) == 0
+    assert json.loads(capsys.readouterr().out)["nullity"] > report["released"]["nullity"] \
+        or not report["releases"]
+
+
+@pytest.mark.parametrize("extra", [[], ["--release"], ["--release", "--json"]])
+def test_a_bad_apply_is_one_line_exit_2(capsys, extra):
+    assert main(["sets", "paper", "--apply", "nonsense:foo", *extra]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.startswith("cardan: error: release 'nonsense:foo'")
+    assert err.count("\n") == 1

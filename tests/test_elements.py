@@ -175,7 +175,7 @@ def test_secondary_couple_matches_the_handbook(arrangement, angles):
 
 
 def test_secondary_writes_csv_and_png(tmp_path):
-    secondary.run(out=tmp_path, cases=(("Z", (30.0, 30.0)),))
+    secondary.revolutions(out=tmp_path, cases=(("Z", (30.0, 30.0)),))
     assert (tmp_path / "secondary.png").stat().st_size > 0
     text = (tmp_path / "secondary.csv").read_text().splitlines()
     assert text[0] == "case,bearing_load,angle_deg,force_N" and len(text) > 100
