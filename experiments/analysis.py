@@ -1,4 +1,7 @@
-"""Solving formulations at one instant: solution sets and formulation x solver sweeps."""
+"""Solving formulations at one instant: every formulation x solver (``cardan solve``).
+
+Solution-set intervals live in the study layer (:mod:`cardan_forces.experiments.study`).
+"""
 
 from __future__ import annotations
 
@@ -8,33 +11,7 @@ import numpy as np
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
-from cardan_forces.formulations.sets import range_problems
 from cardan_forces.solvers import Record, backends_for, solve
-
-INTERVAL_SOLVER = "scipy-highs"
-
-
-def intervals(op: Operator, i: int, solver: str = INTERVAL_SOLVER) -> dict[str, dict]:
-    """``{name: {"min": float | None, "max": float | None, "status": str}}``.
-
-    ``None`` marks an unbounded side; a side whose LP fails is ``None`` with the status
-    saying so (never a number that was not checked).
-    """
-    eye = np.eye(len(op.names))
-    return {name: value_range(op, i, eye[j], solver)
-            for j, name in enumerate(op.names)}
-
-
-def value_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLVER) -> dict:
-    """``{"min", "max", "status"}`` of ``c'x`` over the rigid set at instant ``i``."""
-    ends, statuses = [], []
-    for problem in range_problems(op, i, c):
-        record = solve(problem, solver)
-        statuses.append(record.status)
-        ends.append(float(c @ record.x) if record.status == "solved" else None)
-    status = "solved" if all(s in ("solved", "unbounded") for s in statuses) else "/".join(
-        statuses)
-    return {"min": ends[0], "max": ends[1], "status": status}
 
 
 def solve_all(

@@ -17,11 +17,12 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from cardan_forces.experiments.study import solve_over_time
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP
-from cardan_forces.solvers import available, backends_for, solve
+from cardan_forces.solvers import Residuals, available, backends_for, solve
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.optimality import objective_value
 from cardan_forces.solvers.registry import batch_backends, solve_batch
@@ -41,7 +42,6 @@ BATCH_BUDGET_S = 0.5
 QUICK_SOLVERS = ("scipy-fsolve", "numpy-kkt", "qpsolvers-osqp", "clarabel", "lcp-lemke",
                  "lcp-pgs", "numpy-batched", "moreau")
 
-RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
 MEASURES = ("primal", "dual", "gap", "distance")
 SPLIT = ("build_s", "convert_s", "solve_s", "checks_s")
 """Time per instant: taking the problem, conversion and setup, the solver, the checks."""
@@ -125,7 +125,7 @@ def _row(formulation, solver, mode, instant, t, status, time_s, split, residuals
          optimality, iterations=None, message="") -> dict:
     return {"formulation": formulation, "solver": solver, "mode": mode,
             "instant": int(instant), "t_s": float(t), "status": status, "time_s": time_s,
-            **split, **{k: float(residuals.get(k, math.inf)) for k in RESIDUALS},
+            **split, **{k: float(residuals.get(k, math.inf)) for k in Residuals.KEYS},
             **{k: float(optimality[k]) if k in optimality else math.nan for k in MEASURES},
             "iterations": iterations, "message": message}
 
@@ -137,34 +137,17 @@ def run_instants(prepared: Prepared, solver: str, instants, *, mode="cold", tol=
     ``mode="warm"``: the previous instant's answer is the start. ``references`` maps an
     instant to ``(forces, optimal value)`` of a high-precision solve.
     """
-    rows, start, previous = [], time.perf_counter(), None
-    t = prepared.op.t
-    for i in instants:
-        if rows and time.perf_counter() - start > budget_s:
-            break
-        ref, best = (None, None) if references is None else references.get(int(i), (None, None))
-        began = time.perf_counter()
-        problem = prepared.problems[int(i)]
-        built = time.perf_counter()
-        try:
-            record = solve(problem, solver, tol=tol,
-                           initvals=previous if mode == "warm" else None, reference=ref,
-                           optimal_value=best)
-        except Exception as exc:  # a run that raises is a failed row, never a crash
-            rows.append(_row(prepared.name, solver, mode, i, t[i], "failed",
-                             time.perf_counter() - began, dict.fromkeys(SPLIT, 0.0), {},
-                             dict.fromkeys(MEASURES[:3], math.inf),
-                             message=f"{type(exc).__name__}: {exc}"))
-            previous = None
-            continue
-        wall = time.perf_counter() - began
-        split = {"build_s": built - began, "convert_s": record.setup_s,
+    history = solve_over_time(prepared.op, prepared.name, solver, instants=instants, tol=tol,
+                              problem=prepared.problems.__getitem__, warm=mode == "warm",
+                              budget_s=budget_s, references=references)
+    rows = []
+    for i, t, wall, record in zip(history.instants, history.t, history.wall_s,
+                                  history.records):
+        split = {"build_s": 0.0, "convert_s": record.setup_s,  # built once, in prepare
                  "solve_s": record.solve_s, "checks_s": record.checks_s}
-        rows.append(_row(prepared.name, solver, mode, i, t[i], record.status, wall, split,
+        rows.append(_row(prepared.name, solver, mode, i, t, record.status, wall, split,
                          record.residuals, record.optimality, record.iterations,
                          record.message))
-        answered = record.status in ("solved", "inaccurate") and record.z is not None
-        previous = np.asarray(record.z, float) if answered else None
     return rows
 
 
@@ -251,8 +234,8 @@ def references(prepared: Prepared, samples) -> tuple[dict | None, str, int]:
     refs, unsolved = {}, 0
     for i in samples:
         record = solve(prepared.problems[int(i)], solver, tol=tol)
-        unsolved += record.status != "solved"
-        if record.status in ("solved", "inaccurate"):
+        unsolved += not record.solved
+        if record.status.has_answer:
             refs[int(i)] = (record.x, objective_value(prepared.problems[int(i)], record.z))
     return refs, solver if tol is None else f"{solver} tol {tol:g}", unsolved
 

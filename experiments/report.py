@@ -24,42 +24,26 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.release import named_modes
-from cardan_forces.experiments.analysis import value_range
 from cardan_forces.experiments.environment import number_text
-from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.solvers import available, solve
+from cardan_forces.experiments.study import interval_history, solve_over_time
 
 INSTANTS = 41
 """Instants of the report by default (each costs two LPs per component)."""
 
 SELECTION = "positive"
-BACKENDS = ("qpsolvers-daqp", "clarabel")
-"""``positive`` is solved by the first of these present."""
+"""The formulation drawn as lines, by the study layer's default backend."""
 
 
 def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
     """``value``, ``min``, ``max`` (T, n; NaN where unbounded or not solved) and
-    ``determinate`` (T, n) over the operator's instants.
+    ``determinate`` (T, n) over the operator's instants (a determinate component's
+    interval is its one value).
     """
-    backend = next(b for b in BACKENDS if b in available())
-    T, n = len(op.t), len(op.names)
-    out = {k: np.full((T, n), np.nan) for k in ("value", "min", "max")}
-    out["determinate"] = np.zeros((T, n), bool)
-    for i in range(T):
-        if progress:
-            progress(f"report: instant {i + 1}/{T}")
-        record = solve(FORMULATIONS[SELECTION](op, i), backend)
-        if record.status == "solved":
-            out["value"][i] = record.x[:n]
-        det = determinacy(op, i)
-        out["determinate"][i] = det.determinate
-        eye = np.eye(n)
-        for j in range(n):  # a determinate component's interval is its one value
-            ends = {"min": det.min_norm[j], "max": det.min_norm[j]} if det.determinate[j] \
-                else value_range(op, i, eye[j])
-            for side in ("min", "max"):
-                out[side][i, j] = math.nan if ends[side] is None else ends[side]
-    return out
+    chosen = solve_over_time(op, SELECTION)
+    say = None if progress is None else (lambda m: progress(f"report: {m}"))
+    sets = interval_history(op, progress=say)
+    return {"value": chosen.forces, "min": sets.min, "max": sets.max,
+            "determinate": sets.determinate}
 
 
 def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:

@@ -36,3 +36,25 @@ def interval_problems(op: Operator, i: int) -> dict[str, tuple[LP, LP]]:
     """``{name: (lp_min, lp_max)}`` for every named component."""
     eye = np.eye(len(op.names))
     return {name: range_problems(op, i, eye[j]) for j, name in enumerate(op.names)}
+
+
+def feasibility_problem(op: Operator, i: int) -> LP:
+    """The LP ``min 0`` over the rigid set: ``solved`` when the set is not empty."""
+    return range_problems(op, i, np.zeros(len(op.names)))[0]
+
+
+INTERVAL_RTOL = 1e-6
+"""Relative tolerance of an interval's ends (the package's acceptance level, ``ACCEPT``):
+LP ends of ``c'x`` that cross by less than this times :func:`interval_slack`'s scale are
+one value."""
+
+
+def interval_slack(op: Operator, i: int, c: np.ndarray) -> float:
+    """How far two LP ends of ``c'x`` may cross and still be one value: the tolerance
+    scaled to the problem, ``INTERVAL_RTOL * ||c||_1 * max(|b|_inf, |x_ln|_inf)`` with
+    ``x_ln`` the least-norm forces (N, N m), so it follows the loads' own size.
+    """
+    A, b = equalities(op, i)
+    x = np.linalg.lstsq(A, b, rcond=None)[0]
+    scale = max(float(np.abs(b).max(initial=0.0)), float(np.abs(x).max(initial=0.0)), 1e-300)
+    return INTERVAL_RTOL * float(np.abs(c).sum()) * scale

@@ -11,63 +11,29 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.penalty import PenaltyResult, simulate_penalty
 from cardan_forces.driveline.scene import Scene, SceneError
-from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.solvers import solve
+from cardan_forces.experiments.study import History, solve_over_time
+from cardan_forces.solvers import Status
 
-METHODS = {
-    "paper": "scipy-fsolve",
-    "positive": "qpsolvers-daqp",
-    "min_max": "clarabel",
-    "compliance": "qpsolvers-daqp",
-}
-"""Method (formulation) -> the backend that draws it in the figures. ``min_norm`` is
-left out: its end faces pull, so it is no contact force."""
-
-
-@dataclass(frozen=True)
-class History:
-    """Forces (T, 36) in the operator's names, NaN where an instant was not solved."""
-
-    method: str
-    solver: str
-    forces: np.ndarray
-    statuses: tuple[str, ...]
-    seconds: float
-
-    @property
-    def solved(self) -> int:
-        return sum(s == "solved" for s in self.statuses)
+METHODS = ("paper", "positive", "min_max", "compliance")
+"""Methods (formulations) drawn in the figures, each by the study layer's default
+backend (:func:`cardan_forces.experiments.study.default_backend`). ``min_norm`` is left
+out: its end faces pull, so it is no contact force."""
 
 
 def history(op: Operator, method: str, solver: str | None = None,
             progress: Callable[[str], None] | None = None) -> History:
-    """Solve ``method`` at every instant of ``op`` with ``solver`` (default: METHODS)."""
-    solver = solver or METHODS[method]
-    n = len(op.names)
-    forces = np.full((len(op.t), n), np.nan)
-    statuses, seconds, warm = [], 0.0, None
-    for i in range(len(op.t)):
-        problem = FORMULATIONS[method](op, i)
-        record = solve(problem, solver, initvals=warm)
-        seconds += record.setup_s + record.solve_s
-        if record.status != "solved" and warm is not None:
-            # a warm start can fall off a branch of the paper's nonsmooth system (the Sgn
-            # of eqs. 35-36): start again from its own initial-value procedure
-            record = solve(problem, solver)
-            seconds += record.setup_s + record.solve_s
-        statuses.append(record.status)
-        if record.status == "solved":
-            forces[i] = record.x[:n]
-            warm = record.z if method == "paper" else None
-        if progress and (i + 1) % 200 == 0:
-            progress(f"repro: {method} ({solver}) {i + 1}/{len(op.t)} instants")
-    return History(method, solver, forces, tuple(statuses), seconds)
+    """Solve ``method`` at every instant of ``op`` with ``solver`` (default: the study
+    layer's). The paper's method starts each instant from the previous answer and again
+    from its own initial-value procedure (eqs. 63-74) where that fails.
+    """
+    say = None if progress is None else (lambda m: progress(f"repro: {m}"))
+    return solve_over_time(op, method, solver, warm=method == "paper", restart=True,
+                           progress=say)
 
 
 RELEASED = frozenset({"clearance", "crosspin_inertia", "penalty_dynamics"})
@@ -103,5 +69,7 @@ def penalty_history(result: PenaltyResult, names: tuple[str, ...]) -> History:
     a failed integration).
     """
     forces = np.column_stack([result.forces[n] for n in names])
-    statuses = tuple("solved" if np.all(np.isfinite(row)) else "failed" for row in forces)
-    return History("penalty", f"scipy-{result.method}", forces, statuses, result.wall_s)
+    statuses = tuple(Status.SOLVED if np.all(np.isfinite(row)) else Status.FAILED
+                     for row in forces)
+    return History("penalty", f"scipy-{result.method}", np.asarray(result.t), forces, statuses,
+                   result.wall_s)

@@ -197,7 +197,7 @@ def test_report_on_the_propshaft(tmp_path):
             lo, hi, v = float(row["min_N"]), float(row["max_N"]), float(row["positive_N"])
             assert lo == hi and abs(v - lo) <= 1e-6 * max(1.0, abs(v))
     # ... and the LPs over the whole rigid set agree (one component, independently)
-    from cardan_forces.experiments.analysis import value_range
+    from cardan_forces.experiments.study import value_range
 
     op = build_operator(simulate(load_scene("propshaft"), [0.2]))
     j = op.index("bearing.front_prop.centre.r1")

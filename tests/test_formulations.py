@@ -7,10 +7,13 @@ import pytest
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.experiments.analysis import intervals, solve_all
+from cardan_forces.experiments import study
+from cardan_forces.experiments.analysis import solve_all
+from cardan_forces.experiments.study import intervals
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import contacts
-from cardan_forces.solvers import backends_for, solve
+from cardan_forces.formulations.sets import interval_slack
+from cardan_forces.solvers import Status, backends_for, solve
 
 from tests.conftest import variant
 
@@ -96,6 +99,64 @@ def test_every_answer_lies_in_the_solution_set(paper_op, paper_records):
                 assert hi is None or r.x[j] <= hi + slack
     # the axial split between two bearings of a shaft is free in both directions
     assert sets["bearing.input.near.x"] == {"min": None, "max": None, "status": "solved"}
+
+
+def _crossing_ends(monkeypatch, j: int, value: float, delta: float):
+    """Every interval LP answers as if component ``j``'s ends were ``value + delta``
+    (min) and ``value - delta`` (max): ends that cross by ``2 delta``.
+    """
+    def fake(problem, solver, **kwargs):
+        record = solve(problem, solver, **kwargs)
+        sign = 1.0 if problem.formulation == "interval.min" else -1.0
+        x = np.zeros_like(record.x)
+        x[j] = value + sign * delta
+        return dataclasses.replace(record, status=Status.SOLVED, x=x)
+    monkeypatch.setattr(study, "solve", fake)
+
+
+def test_interval_ends_never_cross(paper_op, monkeypatch):
+    """Ends within the problem's tolerance of each other are one value (their mean);
+    ends that cross by more are not reported: min <= max always."""
+    j = paper_op.index("bearing.input.near.x")
+    c = np.eye(len(paper_op.names))[j]
+    slack = interval_slack(paper_op, 0, c)
+    _crossing_ends(monkeypatch, j, 250.0, 0.1 * slack)
+    near = study.value_range(paper_op, 0, c)
+    assert near["min"] == near["max"] == pytest.approx(250.0, abs=slack)
+    _crossing_ends(monkeypatch, j, 250.0, 10 * slack)
+    far = study.value_range(paper_op, 0, c)
+    assert far["min"] is None and far["max"] is None and far["status"] == "inconsistent"
+
+
+def test_interval_tolerance_follows_the_loads(paper_op):
+    """The same line under loads 1e6 times larger: the crossing tolerance grows alike."""
+    big = dataclasses.replace(paper_op, b=1e6 * paper_op.b)
+    c = np.eye(len(paper_op.names))[paper_op.index("bearing.input.near.x")]
+    assert interval_slack(big, 0, c) == pytest.approx(1e6 * interval_slack(paper_op, 0, c))
+
+
+def test_a_determinate_component_is_its_value_whatever_its_lps_say(paper_op, monkeypatch):
+    """A determinate component takes no LP: an LP failing on it (a badly scaled line)
+    cannot make it unbounded. Every LP of a bound is made to fail here; the
+    determinate components keep min = max = their value, the others say the failure."""
+    real = study.solve
+
+    def failing(problem, solver, **kwargs):
+        record = real(problem, solver, **kwargs)
+        if problem.formulation.startswith("interval.") and problem.c.any():
+            return dataclasses.replace(record, status=Status.FAILED)
+        return record
+    monkeypatch.setattr(study, "solve", failing)
+    sets = study.intervals(paper_op, 0)
+    d = determinacy(paper_op, 0)
+    assert d.determinate.any() and not d.determinate.all()
+    for j, name in enumerate(paper_op.names):
+        entry = sets[name]
+        if d.determinate[j]:
+            assert entry["min"] == entry["max"] == pytest.approx(d.min_norm[j])
+        else:
+            assert entry["min"] is None and entry["max"] is None
+            assert entry["status"] != "solved"
 
 
 def test_lever_rule_on_a_straight_line():

@@ -1,0 +1,274 @@
+"""The study layer: solution-set intervals, solve-over-time and the default backend.
+
+Every experiment (``bench``, ``hard``, ``sweep``, ``report``) and the paper's figures
+(``paper_repro``) answer questions over the instants of an operator. They do it through
+this module, so that each piece of that knowledge has one home:
+
+- :func:`default_backend`: which backend solves a formulation when none is asked for
+  (:data:`DEFAULT_BACKENDS`, then :data:`FALLBACK`, then any backend that takes it), so
+  a missing optional package changes the backend, never the outcome;
+- :func:`solve_over_time`: one formulation with one backend at every instant, as one
+  :class:`History` (a package-judged record per instant);
+- :func:`intervals`, :func:`value_range`, :func:`interval_history`: the rigid solution
+  set's interval ``[min, max]`` of each force component (DESIGN §2, "Solution sets"),
+  consistent by construction: a determinate component's interval is its one value, and
+  ``min <= max`` always.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.equilibrium import Operator
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
+from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
+
+# ---------------------------------------------------------------------------- backends
+
+DEFAULT_BACKENDS: dict[str, tuple[str, ...]] = {
+    "paper": ("scipy-fsolve", "scipy-root-lm"),
+    "min_norm": ("numpy-kkt",),
+    "min_norm_scaled": ("numpy-kkt",),
+    "positive": ("qpsolvers-daqp", "clarabel"),
+    "compliance": ("qpsolvers-daqp", "clarabel"),
+    "compliance_hertz": ("clarabel",),
+    "min_max": ("clarabel",),
+    "socp_face": ("clarabel",),
+    "lcp": ("lcp-lemke",),
+}
+"""Formulation -> the backends that draw it by default, best first (the only such table)."""
+
+FALLBACK = "clarabel"
+"""Tried after a formulation's own list (a core dependency that takes every convex class)."""
+
+
+class NoBackend(ValueError):
+    """No installed backend takes a formulation's problem."""
+
+
+def default_backend(formulation: str, problem, wanted: Sequence[str] | None = None) -> str:
+    """The backend that solves ``problem`` (of ``formulation``): the first of ``wanted``
+    (default :data:`DEFAULT_BACKENDS`, then :data:`FALLBACK`, then any) that is installed
+    and takes it; :class:`NoBackend` if none does.
+    """
+    usable = backends_for(problem)
+    order = list(wanted) if wanted else [*DEFAULT_BACKENDS.get(formulation, ()), FALLBACK,
+                                         *usable]
+    chosen = next((s for s in order if s in usable), None)
+    if chosen is None:
+        raise NoBackend(f"formulation {formulation}: no backend of {', '.join(order)} takes "
+                        f"it; backends that do: {', '.join(usable) or 'none installed'}")
+    return chosen
+
+
+# ---------------------------------------------------------------------------- histories
+
+@dataclass(frozen=True)
+class History:
+    """One formulation solved by one backend over instants: forces ``(T, n)`` in the
+    operator's names (N, N m), NaN where an instant was not ``solved``; the statuses;
+    the solver's seconds (setup + solve, summed); each instant's wall time of the
+    package's ``solve`` (s); and the records (empty for a history that has none, the
+    penalty simulation's).
+    """
+
+    formulation: str
+    solver: str
+    t: np.ndarray
+    forces: np.ndarray
+    statuses: tuple[Status, ...]
+    seconds: float
+    instants: tuple[int, ...] = ()
+    wall_s: tuple[float, ...] = ()
+    records: tuple[Record, ...] = field(default=(), repr=False)
+
+    @property
+    def solved(self) -> int:
+        """Instants whose forces are trusted."""
+        return sum(s is Status.SOLVED for s in self.statuses)
+
+    @property
+    def status(self) -> Status:
+        """The worst status over the instants (``failed`` for an empty history)."""
+        return max(self.statuses, default=Status.FAILED)
+
+    def answers(self) -> np.ndarray:
+        """Forces ``(T, n)`` of every record with an answer (``inaccurate`` too)."""
+        n = self.forces.shape[1]
+        return np.array([r.x[:n] if r.status.has_answer else np.full(n, np.nan)
+                         for r in self.records]).reshape(-1, n)
+
+    def worst(self, keys: Sequence[str]) -> dict[str, float]:
+        """The largest of each residual over the instants (``inf`` where one failed)."""
+        return {k: max((r.residuals.get(k, math.inf) for r in self.records), default=math.inf)
+                for k in keys}
+
+    def jumps(self) -> np.ndarray:
+        """Per instant ``max_j |x_j(t_i) - x_j(t_{i-1})| / max_{i,j} |x_{i,j}|`` over the
+        answered forces: 0 at the first instant, ``inf`` next to an instant without
+        forces. The largest is the history's "max jump" (continuity in time).
+        """
+        x = self.answers()
+        finite = np.all(np.isfinite(x), axis=1)
+        scale = np.abs(x[finite]).max() if finite.any() else np.inf
+        with np.errstate(invalid="ignore"):
+            step = np.abs(np.diff(x, axis=0)).max(axis=1, initial=0.0) / max(scale, 1e-300)
+        return np.concatenate([[0.0], np.where(finite[1:] & finite[:-1], step, np.inf)])[
+            : len(x)]
+
+
+def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *,
+                    instants: Sequence[int] | None = None, tol: float | None = None,
+                    problem: Callable[[int], object] | None = None, warm: bool = False,
+                    restart: bool = False, budget_s: float = math.inf,
+                    references: dict | None = None,
+                    progress: Callable[[str], None] | None = None) -> History:
+    """``formulation`` solved with ``solver`` (default :func:`default_backend`) at
+    ``instants`` of ``op`` (default all), in order.
+
+    ``problem(i)`` gives instant ``i``'s problem (default: built by the formulation);
+    ``warm``: each instant starts from the previous answer, and with ``restart`` a
+    failed warm start is solved again cold (the paper's nonsmooth system can fall off a
+    branch, its Sgn of eqs. 35-36); ``budget_s``: stop after this long (at least one
+    instant); ``references``: ``{i: (forces, optimal value)}`` for the records'
+    distance and objective gap. An exception becomes a ``failed`` record, never a crash.
+    """
+    picks = list(range(len(op.t)) if instants is None else instants)
+    make = problem or (lambda i: FORMULATIONS[formulation](op, i))
+    solver = solver or default_backend(formulation, make(picks[0]))
+    records, walls, start, previous = [], [], time.perf_counter(), None
+    for k, i in enumerate(picks):
+        if records and time.perf_counter() - start > budget_s:
+            break
+        began = time.perf_counter()
+        record = _solve_one(op, make, int(i), solver, tol, previous if warm else None,
+                            references)
+        if restart and previous is not None and not record.solved:
+            record = _solve_one(op, make, int(i), solver, tol, None, references)
+        walls.append(time.perf_counter() - began)
+        records.append(record)
+        answered = record.status.has_answer and record.z is not None
+        previous = np.asarray(record.z, float) if answered else None
+        if progress and (k + 1) % 200 == 0:
+            progress(f"{formulation} ({solver}) {k + 1}/{len(picks)} instants")
+    return history_of(op, formulation, solver, picks[: len(records)], records, walls)
+
+
+def _solve_one(op: Operator, make, i: int, solver: str, tol, initvals, references) -> Record:
+    ref, best = (None, None) if references is None else references.get(i, (None, None))
+    try:
+        problem = make(i)
+    except Exception as exc:  # a problem that cannot be built at this instant
+        return _failed(op, solver, exc)
+    try:
+        return solve(problem, solver, tol=tol, initvals=initvals, reference=ref,
+                     optimal_value=best)
+    except Exception as exc:  # a backend that rejects this instant's problem
+        return failed_record(problem, solver, f"{type(exc).__name__}: {exc}")
+
+
+def _failed(op: Operator, solver: str, exc: Exception) -> Record:
+    """A ``failed`` record for an instant whose problem could not be built."""
+    return Record(formulation="", solver=solver, status=Status.FAILED,
+                  x=np.full(len(op.names), np.nan), names=op.names, iterations=None,
+                  setup_s=0.0, solve_s=0.0, residuals=Residuals(*[math.inf] * 4),
+                  message=f"{type(exc).__name__}: {exc}")
+
+
+def history_of(op: Operator, formulation: str, solver: str, instants: Sequence[int],
+               records: Sequence[Record], walls: Sequence[float] = ()) -> History:
+    """The :class:`History` of ``records`` solved at ``instants`` of ``op``."""
+    n = len(op.names)
+    forces = np.full((len(records), n), np.nan)
+    for k, r in enumerate(records):
+        if r.solved:
+            forces[k] = r.x[:n]
+    return History(formulation, solver, np.asarray(op.t)[list(instants)], forces,
+                   tuple(r.status for r in records),
+                   float(sum(r.setup_s + r.solve_s for r in records)),
+                   tuple(int(i) for i in instants), tuple(walls), tuple(records))
+
+
+# ---------------------------------------------------------------------------- intervals
+
+INTERVAL_SOLVER = "scipy-highs"
+"""The LP backend of the intervals (HiGHS: it tells unbounded from infeasible)."""
+
+
+def value_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLVER) -> dict:
+    """``{"min", "max", "status"}`` of ``c'x`` over the rigid set at instant ``i``.
+
+    ``None`` marks an unbounded side, or a side whose LP failed (``status`` then says
+    which). Ends that cross by less than :func:`interval_slack` (the LP tolerance scaled
+    to the problem) are one value, their mean; ends that cross by more are not
+    reported (status ``inconsistent``): ``min <= max`` always.
+    """
+    ends, statuses = [], []
+    for lp in range_problems(op, i, c):
+        record = solve(lp, solver)
+        statuses.append(record.status)
+        ends.append(float(c @ record.x) if record.solved else None)
+    fine = all(s in (Status.SOLVED, Status.UNBOUNDED) for s in statuses)
+    status = Status.SOLVED.value if fine else "/".join(s.value for s in statuses)
+    lo, hi = ends
+    if lo is not None and hi is not None and lo > hi:
+        if lo - hi > interval_slack(op, i, c):
+            return {"min": None, "max": None, "status": "inconsistent"}
+        lo = hi = 0.5 * (lo + hi)
+    return {"min": lo, "max": hi, "status": status}
+
+
+def intervals(op: Operator, i: int, solver: str = INTERVAL_SOLVER) -> dict[str, dict]:
+    """``{name: {"min", "max", "status"}}`` for every named component at instant ``i``.
+
+    A determinate component (its null-space row vanishes) takes no LP: its interval is
+    its one value, ``min = max`` = the least-norm value, when the rigid set is not
+    empty; otherwise every component is ``None`` with the feasibility LP's status.
+    """
+    det = determinacy(op, i)
+    feasible = solve(feasibility_problem(op, i), solver).status
+    eye = np.eye(len(op.names))
+    out = {}
+    for j, name in enumerate(op.names):
+        if feasible is not Status.SOLVED:
+            out[name] = {"min": None, "max": None, "status": feasible.value}
+        elif det.determinate[j]:
+            value = float(det.min_norm[j])
+            out[name] = {"min": value, "max": value, "status": "solved"}
+        else:
+            out[name] = value_range(op, i, eye[j], solver)
+    return out
+
+
+@dataclass(frozen=True)
+class IntervalHistory:
+    """Intervals over instants: ``min``, ``max`` ``(T, n)`` (N, N m; NaN where a side is
+    unbounded or not computed), ``determinate`` ``(T, n)``, ``t`` (s).
+    """
+
+    t: np.ndarray
+    min: np.ndarray
+    max: np.ndarray
+    determinate: np.ndarray
+
+
+def interval_history(op: Operator, instants: Sequence[int] | None = None,
+                     progress: Callable[[str], None] | None = None) -> IntervalHistory:
+    """:func:`intervals` at ``instants`` of ``op`` (default all)."""
+    picks = list(range(len(op.t)) if instants is None else instants)
+    shape = (len(picks), len(op.names))
+    lo, hi, det = np.full(shape, np.nan), np.full(shape, np.nan), np.zeros(shape, bool)
+    for k, i in enumerate(picks):
+        if progress:
+            progress(f"intervals: instant {k + 1}/{len(picks)}")
+        det[k] = determinacy(op, i).determinate
+        for j, entry in enumerate(intervals(op, i).values()):
+            lo[k, j] = math.nan if entry["min"] is None else entry["min"]
+            hi[k, j] = math.nan if entry["max"] is None else entry["max"]
+    return IntervalHistory(np.asarray(op.t)[picks], lo, hi, det)
