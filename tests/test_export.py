@@ -1,0 +1,83 @@
+"""``cardan export``: the files say what the package solves, and qpbenchmark runs them."""
+
+import csv
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from cardan_forces.experiments import export, qpbench_harness
+from cardan_forces.formulations.problems import Conic
+from cardan_forces.solvers import qp_measures, solve
+from cardan_forces.solvers.conversions import convert
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("export")
+    problems = export.collect(["paper"], ["positive", "min_norm", "min_max"], 2)
+    return folder, problems, export.export(folder, problems, "cardan_small")
+
+
+def test_names_say_scene_formulation_and_instant(exported):
+    _, problems, written = exported
+    assert set(written) == {"qpbenchmark", "conic"}
+    assert sorted(problems) == sorted(f"paper_{f}_{i:04d}" for f in ("positive", "min_norm",
+                                                                    "min_max")
+                                      for i in (0, 1000))
+
+
+def test_conic_file_in_its_documented_form_holds_the_optimum(exported):
+    """The package's optimum of each conic problem, put into the exported arrays with
+    the documented convention (``A z + s = b``, ``s`` in the listed cones), leaves ``s``
+    in the cones and reproduces the optimal objective ``1/2 z'Pz + q'z``."""
+    folder, problems, written = exported
+    with np.load(written["conic"]) as data:
+        names = [str(n) for n in data["names"]]
+        assert names == [n for n in problems if "min_max" in n]
+        for name in names:
+            P, q, A, b = (data[f"{name}/{k}"] for k in ("P", "q", "A", "b"))
+            cones = tuple(zip(data[f"{name}/cone_kinds"].tolist(),
+                              data[f"{name}/cone_sizes"].tolist()))
+            record = solve(problems[name], "clarabel", tol=1e-10)
+            z = np.asarray(record.z, float)
+            slack = (b - A @ z)[None]
+            assert qp_measures.cone_violation(cones, slack)[0] <= 1e-8 * max(1, np.abs(b).max())
+            original = convert(problems[name], (Conic,))
+            assert 0.5 * z @ P @ z + q @ z == pytest.approx(
+                0.5 * z @ np.asarray(original.P if original.P is not None else P) @ z
+                + original.q @ z, rel=1e-12)
+
+
+def test_test_set_yields_the_packages_qps(exported):
+    pytest.importorskip("qpbenchmark")
+    folder, problems, written = exported
+    test_set = qpbench_harness.load_test_set(written["qpbenchmark"])
+    loaded = {p.name: p for p in test_set}
+    assert sorted(loaded) == sorted(n for n in problems if "min_max" not in n)
+    for name, p in loaded.items():
+        qp = export.as_qp(problems[name])
+        for key in export.QP_KEYS:
+            ours = getattr(qp, key)
+            assert (ours is None) == (getattr(p, key) is None), (name, key)
+            if ours is not None:
+                np.testing.assert_array_equal(getattr(p, key), ours)
+
+
+def test_qpbenchmark_runs_the_export_unchanged(exported, tmp_path):
+    """``qpbenchmark FILE run`` on the exported module: one result per problem."""
+    pytest.importorskip("qpbenchmark")
+    command = shutil.which("qpbenchmark")
+    if command is None:
+        pytest.skip("qpbenchmark's command is not on PATH")
+    _, problems, written = exported
+    results = tmp_path / "results.csv"
+    done = subprocess.run([command, str(written["qpbenchmark"]), "--results-path",
+                           str(results), "run", "--solver", "quadprog", "--author", "test"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    with results.open() as handle:
+        rows = list(csv.DictReader(handle))
+    qps = [n for n in problems if "min_max" not in n]
+    assert sorted(r["problem"] for r in rows) == sorted(qps * len(qp_measures.SETTINGS))
+    assert {r["solver"] for r in rows} == {"quadprog"}
