@@ -22,11 +22,7 @@ strict-JSON object.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import json
 import math
-import os
-import sys
 import time
 from pathlib import Path
 
@@ -34,6 +30,7 @@ import numpy as np
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
+from cardan_forces.experiments.environment import json_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.problems import Conic
 from cardan_forces.solvers import get as get_backend
@@ -95,8 +92,7 @@ def run(args) -> int:
     samples = np.unique(np.linspace(0, len(times) - 1, runs.QUICK_SAMPLES if args.quick
                                     else runs.SAMPLES).round().astype(int))
     backends = runs.plan(op, args.formulation, args.solver, args.quick)
-    with _stdout_to_stderr() if args.json else contextlib.nullcontext():
-        measured = measure(op, backends, samples, ladder, args.budget_s)
+    measured = measure(op, backends, samples, ladder, args.budget_s)
     results = evaluate(measured, ladder, time.perf_counter() - started)
     _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
@@ -105,28 +101,12 @@ def run(args) -> int:
         "wall_s": time.perf_counter() - started})
     runs.progress(f"bench: wrote {folder} in {time.perf_counter() - started:.0f} s")
     if args.json:
-        print(json.dumps(out.json_object(results), indent=2, allow_nan=False))
+        print(json_text(out.json_object(results)))
     else:
         for e in results["summary"]:
             print(f"{e['formulation']:16s} {e['solver']:20s} {e['mode']:7s} "
                   f"{e['instants_per_s']:10.1f}/s  solved {100 * e['success_rate']:5.1f}%")
     return 0
-
-
-@contextlib.contextmanager
-def _stdout_to_stderr():
-    """Send what solvers print (HiGHS's banner comes from its C++ library) to stderr,
-    at the file-descriptor level, so ``--json`` leaves stdout to the JSON object.
-    """
-    sys.stdout.flush()
-    saved = os.dup(1)
-    os.dup2(2, 1)
-    try:
-        yield
-    finally:
-        sys.stdout.flush()
-        os.dup2(saved, 1)
-        os.close(saved)
 
 
 def _write(folder: Path, results: dict, settings: dict) -> None:
