@@ -24,13 +24,12 @@ up to millions of revolutions is refused at load rather than integrated for hour
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from .determinacy import holding
-from .dynamics import reduced_inertia, simulate
+from .dynamics import Motion, reduced_inertia
 from .equilibrium import build_operator
 from .kinematics import kinematics, rest_geometry
 from .scene import MAX_TURNS, Scene, SceneError
@@ -99,12 +98,41 @@ def _describe(rows: tuple[str, ...]) -> str:
 
 def support(scene: Scene) -> Support:
     """The free motions of ``scene``'s line at a generic configuration (contact geometry
-    only: the loads ``b`` play no part).
+    only: the loads ``b`` play no part, so neither do torques, time grid or effects).
+    Remembered by the line's structure: variants that change only loads or the grid
+    (sweep points, hard cases) reuse the answer.
     """
-    motion = simulate(scene, [scene.time.start_s])
-    q = motion.q + GENERIC_TURN_RAD
-    op = build_operator(dataclasses.replace(motion, q=q, kin=kinematics(motion.geometry, q)))
-    return free_motions(op.A[0], op.rows)
+    key = (scene.shafts, scene.joints, scene.slip_joints, scene.frame, scene.arrangement,
+           scene.initial_angle_rad)
+    if key not in _KNOWN:
+        if len(_KNOWN) >= MAX_KNOWN:
+            _KNOWN.pop(next(iter(_KNOWN)))
+        op = build_operator(at_rest(scene, scene.initial_angle_rad + GENERIC_TURN_RAD))
+        _KNOWN[key] = free_motions(op.A[0], op.rows)
+    return _KNOWN[key]
+
+
+_KNOWN: dict[tuple, Support] = {}
+""":func:`support`'s answers by structure, oldest first."""
+
+MAX_KNOWN = 256
+"""Structures remembered (a few kB each)."""
+
+
+def at_rest(scene: Scene, q: float) -> Motion:
+    """The line held still at input angle ``q`` (rad), at the scene's start: the contact
+    geometry of any motion through ``q``, without integrating the motion there.
+    """
+    geometry = rest_geometry(scene)
+    angle, zero = np.array([q]), np.zeros(1)
+    kin = kinematics(geometry, angle)
+    t = np.array([scene.time.start_s])
+    return Motion(scene=scene, geometry=geometry, t=t, q=angle, qd=zero, qdd=zero, kin=kin,
+                  omega=kin.ratio * 0.0, alpha=kin.ratio * 0.0, pin_omega=kin.pin_rate * 0.0,
+                  pin_alpha=kin.pin_rate * 0.0,
+                  com_acceleration=np.zeros((len(scene.shafts) + len(scene.joints), 1, 3)),
+                  input_torque=scene.input_torque(t) * 1.0,
+                  load_torque=scene.load_torque(t) * 1.0)
 
 
 def check_support(scene: Scene) -> None:
