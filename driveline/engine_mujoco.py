@@ -122,6 +122,11 @@ def _mujoco():
     return mujoco
 
 
+def mujoco_version() -> str:
+    """The installed MuJoCo's version (:class:`EngineUnsupported` when it is absent)."""
+    return _mujoco().__version__
+
+
 def check_expressible(scene: Scene) -> None:
     """Raise :class:`EngineUnsupported` naming every element the engine cannot express."""
     problems = [f"slip joint {s.name!r} has friction (coefficient {s.friction_coefficient:g}): "

@@ -1,0 +1,362 @@
+"""``cardan engine SCENE``: what MuJoCo says about the drive line's loads, set against
+the rigid analysis (:mod:`cardan_forces.driveline.engine_mujoco` builds and runs it).
+
+At sampled instants, for the engine's forces ``x_e`` under each softness setting:
+
+- the residual of the package's equilibrium, ``||A x_e - b|| / ||b||``;
+- the determinate components: ``|x_e - x|`` against the rigid value (a point);
+- every indeterminate component inside or outside its rigid interval (two LPs each,
+  :func:`~cardan_forces.formulations.sets.interval_problems`), within a tolerance of
+  1e-6 of the largest load plus the equilibrium residual's size;
+- the formulation whose forces lie closest, ``||x_e - x_f|| / ||x_f||``;
+- the spread of each component over the softness settings: the determinate ones stay
+  put (to the softness error), the indeterminate ones move with settings that have
+  nothing to do with the machine.
+
+The softness settings (:data:`SETTINGS`) vary MuJoCo's ``solref`` time constant over
+0.5-8 ms, its damping ratio 0.3-1, ``solimp``'s impedance (0.9, 0.95) to (0.99, 0.999)
+and width 1 mm to 1 um, all bearings alike; and the relative softness of the input
+and output shafts' bearings (one shaft's time constant 4 times the other's). Instants
+within the engine's settling (the first 10 time constants of the softest constraint:
+the line starts unloaded and sags into its constraints) are left out of the
+statistics and said to be.
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from cardan_forces.driveline import engine_mujoco
+from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
+from cardan_forces.experiments.environment import number_text
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.formulations.sets import interval_problems
+
+import cardan_forces as cf
+
+SETTINGS = (
+    Softness(label="default"),
+    Softness(timeconst_s=0.0005, label="timeconst 0.5 ms"),
+    Softness(timeconst_s=0.008, label="timeconst 8 ms"),
+    Softness(dampratio=0.3, label="dampratio 0.3"),
+    Softness(dmin=0.99, dmax=0.999, label="solimp 0.99/0.999"),
+    Softness(width_m=1e-6, label="solimp width 1 um"),
+    Softness(scaled=(("output", 4.0),), label="output bearings 4x softer"),
+    Softness(scaled=(("input", 4.0),), label="input bearings 4x softer"),
+)
+"""The softness settings compared (module doc); the first is the reference. A
+``scaled`` shaft the scene lacks leaves that setting uniform."""
+
+FIGURE_SETTINGS = ("default", "output bearings 4x softer", "input bearings 4x softer")
+
+BACKENDS = {
+    "min_norm": ("numpy-kkt",),
+    "min_norm_scaled": ("numpy-kkt",),
+    "positive": ("qpsolvers-daqp", "qpsolvers-clarabel", "cvxpy-clarabel"),
+    "compliance": ("qpsolvers-daqp", "qpsolvers-clarabel", "cvxpy-clarabel"),
+    "min_max": ("clarabel", "cvxpy-clarabel"),
+    "socp_face": ("clarabel", "cvxpy-clarabel"),
+    "compliance_hertz": ("clarabel", "cvxpy-clarabel"),
+}
+"""Formulations the engine is set against, each with its backends in order of
+preference (the first present that solves). The paper's NLS is left out: its answer
+is wherever its root finder lands."""
+
+INSIDE_RTOL = 1e-6
+
+
+@dataclass(frozen=True)
+class InstantComparison:
+    """One setting at one instant (module doc). ``outside``: indeterminate components
+    outside their interval; ``closest``: (formulation, relative distance).
+    """
+
+    setting: str
+    t: float
+    residual: float
+    determinate_error_N: float
+    outside: tuple[str, ...]
+    closest: tuple[str, float]
+
+
+@dataclass(frozen=True)
+class EngineStudy:
+    """The runs, the operator they were read on, and the comparisons."""
+
+    op: cf.Operator
+    runs: dict[str, EngineRun]
+    sampled: np.ndarray
+    settled: np.ndarray
+    intervals: dict[int, np.ndarray]
+    determinate: np.ndarray
+    rigid: dict[int, np.ndarray]
+    comparisons: tuple[InstantComparison, ...]
+    formulations: dict[int, dict[str, np.ndarray]]
+
+
+def _formulation_forces(op, i: int) -> dict[str, np.ndarray]:
+    """Each formulation's forces at instant ``i`` (those some backend solves)."""
+    out = {}
+    for name, backends in BACKENDS.items():
+        for backend in backends:
+            try:
+                record = cf.solve(cf.build_formulation(name, op, i), backend)
+            except (cf.SolverNotFound, NotApplicable):
+                continue
+            if record.solved:
+                out[name] = np.asarray(record.x[:len(op.names)], float)
+                break
+    return out
+
+
+def _intervals(op, i: int) -> np.ndarray:
+    """(n, 2): each component's rigid interval at instant ``i``, +-inf where unbounded."""
+    out = np.empty((len(op.names), 2))
+    for j, (lo, hi) in enumerate(interval_problems(op, i).values()):
+        for side, (problem, sign) in enumerate(((lo, 1.0), (hi, -1.0))):
+            record = cf.solve(problem, "scipy-highs")
+            out[j, side] = record.x[j] if record.solved else sign * -np.inf
+    return out
+
+
+def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray) -> EngineStudy:
+    """Set every run against the rigid analysis at the ``sampled`` instants."""
+    settle = 10 * max(r.softness.timeconst_s * max([1.0] + [f for _, f in r.softness.scaled])
+                      for r in runs.values())
+    settled = op.t[sampled] - op.t[0] >= settle
+    det0 = cf.determinacy(op, int(sampled[0]))
+    intervals, rigid, forms, comparisons = {}, {}, {}, []
+    for i in sampled:
+        det = cf.determinacy(op, int(i))
+        intervals[i], rigid[i] = _intervals(op, int(i)), det.min_norm
+        forms[i] = _formulation_forces(op, int(i))
+        for label, r in runs.items():
+            comparisons.append(_compare_one(op, int(i), label, r.forces[i], det,
+                                            intervals[i], forms[i]))
+    return EngineStudy(op, runs, sampled, settled, intervals, det0.determinate, rigid,
+                       tuple(comparisons), forms)
+
+
+def _compare_one(op, i, label, x, det, interval, forms) -> InstantComparison:
+    b = op.b[i]
+    residual = float(np.linalg.norm(op.A[i] @ x - b) / np.linalg.norm(b))
+    d = det.determinate
+    error = float(np.max(np.abs(x[d] - det.min_norm[d]), initial=0.0))
+    slack = INSIDE_RTOL * max(np.abs(b).max(), np.abs(x).max()) + residual * np.linalg.norm(b)
+    out = [n for n, v, (lo, hi), fixed in zip(op.names, x, interval, d)
+           if not fixed and not lo - slack <= v <= hi + slack]
+    distances = {f: float(np.linalg.norm(x - xf) / np.linalg.norm(xf)) for f, xf in forms.items()}
+    closest = min(distances.items(), key=lambda kv: kv[1]) if distances else ("-", np.nan)
+    return InstantComparison(label, float(op.t[i]), residual, error, tuple(out), closest)
+
+
+def study(spec: str, stop_s: float | None = None, instants: int = 6,
+          settings=SETTINGS) -> EngineStudy:
+    """Run the engine on scene ``spec`` up to ``stop_s`` (default its stop) under
+    every softness setting and compare at ``instants`` evenly spaced instants.
+    """
+    scene = cf.load_scene(spec)
+    try:
+        engine_mujoco.check_expressible(scene)
+    except EngineUnsupported as err:
+        raise NotApplicable(str(err)) from None
+    t = scene.time.instants()
+    if stop_s is not None:
+        t = t[t <= stop_s + 1e-12]
+    op = cf.build_operator(cf.simulate(scene, t))
+    shafts = {s.name for s in scene.shafts}
+    runs = {}
+    try:
+        for s in settings:
+            if all(name in shafts for name, _ in s.scaled):
+                runs[s.label] = engine_mujoco.run(op, s)
+    except EngineUnsupported as err:
+        raise NotApplicable(str(err)) from None
+    sampled = np.unique(np.linspace(0, len(t) - 1, instants).round().astype(int))
+    return compare(op, runs, sampled)
+
+
+def _load_rows(op) -> dict[str, np.ndarray]:
+    """The first shaft's loads the figure draws, as rows ``c`` over the forces (``c'x``):
+    each bearing's in-plane radial component (``r1``, N) and the shaft's axial load
+    (sum over its bearings, N).
+    """
+    frame = op.shaft_frames[0]
+    rows, axial = {}, np.zeros(len(op.names))
+    for link in op.of_kind("bearing-locating", "bearing-floating"):
+        if link.shaft != 0:
+            continue
+        basis = np.eye(3) if link.frame == "global" else frame[:2]
+        c = np.zeros(len(op.names))
+        c[list(link.columns)] = basis @ frame[0]
+        rows[f"{link.element} in-plane"] = c
+        axial[list(link.columns)] += basis @ frame[2]
+    rows[f"{op.scene.shafts[0].name} axial (sum)"] = axial
+    return rows
+
+
+def _band(op, c: np.ndarray, sampled: np.ndarray) -> np.ndarray:
+    """(k, 2): the rigid interval of ``c'x`` at the sampled instants (+-inf: unbounded)."""
+    from cardan_forces.formulations.sets import range_problems
+
+    out = np.empty((len(sampled), 2))
+    for k, i in enumerate(sampled):
+        for side, (problem, sign) in enumerate(zip(range_problems(op, int(i), c), (1, -1))):
+            record = cf.solve(problem, "scipy-highs")
+            out[k, side] = c @ record.x if record.solved else -sign * np.inf
+    return out
+
+
+def draw(result: EngineStudy, path: Path) -> None:
+    """The engine's first-shaft bearing loads over time for :data:`FIGURE_SETTINGS`,
+    over the rigid band (shaded where both ends are finite; the title says otherwise).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    op, rows = result.op, _load_rows(result.op)
+    fig, axes = plt.subplots(len(rows), 1, figsize=(8, 2.6 * len(rows)), sharex=True)
+    for ax, (label, c) in zip(np.atleast_1d(axes), rows.items()):
+        band = _band(op, c, result.sampled)
+        finite = np.all(np.isfinite(band), axis=1)
+        ts = op.t[result.sampled]
+        if finite.any():
+            ax.fill_between(ts[finite], band[finite, 0], band[finite, 1], color="0.85",
+                            label="rigid set")
+            ax.plot(ts[finite], band[finite], "k.-", lw=0.6, ms=3)
+        for style, name in zip(("-", "--", ":"), FIGURE_SETTINGS):
+            if name in result.runs:
+                ax.plot(op.t, result.runs[name].forces @ c, style, label=f"MuJoCo: {name}")
+        open_share = 1 - finite.mean()
+        ax.set_title(label + (f" (rigid set unbounded at {open_share:.0%} of the sampled "
+                              "instants)" if open_share else ""), fontsize=9)
+        ax.set_ylabel("N")
+    np.atleast_1d(axes)[0].legend(fontsize=7)
+    np.atleast_1d(axes)[-1].set_xlabel("t (s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _spread(result: EngineStudy) -> np.ndarray:
+    """Per component, the largest spread (max - min) over the settings at a settled
+    sampled instant (N, N m); ``nan`` where no sampled instant is settled.
+    """
+    settled = result.sampled[result.settled]
+    if not len(settled):
+        return np.full(len(result.op.names), np.nan)
+    stack = np.stack([r.forces[settled] for r in result.runs.values()])
+    return np.max(np.ptp(stack, axis=0), axis=0)
+
+
+def report_lines(result: EngineStudy, mujoco_version: str) -> list[str]:
+    """``engine.md``: cost, agreement per setting and the sensitivity table."""
+    op, settled = result.op, set(result.sampled[result.settled].tolist())
+    lines = [f"# MuJoCo {mujoco_version} beside the rigid analysis: {op.scene.name}", "",
+             "Forward simulation from the scene's start (module doc of "
+             "`driveline/engine_mujoco.py`: inverse dynamics on the package's exact "
+             "motion gives no constraint force in a soft-constraint engine); every bearing "
+             "a `connect` equality, the joints hinges; forces read at the scene's instants. "
+             f"Compared at {len(result.sampled)} instants, {len(settled)} of them after "
+             "the engine's settling (10 time constants), which the statistics use.", "",
+             "## Cost (one run)", "",
+             "| setting | step (s) | steps | wall (s) | s per simulated s |",
+             "|---|---|---|---|---|"]
+    span = op.t[-1] - op.t[0]
+    for label, r in result.runs.items():
+        lines.append(f"| {label} | {r.timestep_s:.3g} | {r.steps} | {r.wall_s:.2f} | "
+                     f"{number_text(r.wall_s / span if span > 0 else np.nan)} |")
+    return lines + [""] + agreement_lines(result) + [""] + _sensitivity_lines(result)
+
+
+def agreement_lines(result: EngineStudy) -> list[str]:
+    """Per setting, over the settled instants: residual, determinate error, components
+    outside their interval, the closest formulation (at its farthest instant).
+    """
+    op, settled = result.op, set(result.sampled[result.settled].tolist())
+    lines = ["## Agreement with the rigid model (settled instants)", "",
+              "| setting | max residual of A x = b | max determinate error (N) | "
+              "outside their interval | closest formulation (rel. distance) |",
+              "|---|---|---|---|---|"]
+    for label in result.runs:
+        rows = [c for c in result.comparisons if c.setting == label
+                and np.argmin(np.abs(op.t - c.t)) in settled]
+        if not rows:
+            continue
+        outside = sorted({n for c in rows for n in c.outside})
+        worst = max(rows, key=lambda c: c.closest[1])
+        lines.append(f"| {label} | {number_text(max(c.residual for c in rows))} | "
+                     f"{number_text(max(c.determinate_error_N for c in rows))} | "
+                     f"{', '.join(outside) or 'none'} | {worst.closest[0]} "
+                     f"({number_text(worst.closest[1])}) |")
+    return lines
+
+
+def _sensitivity_lines(result: EngineStudy) -> list[str]:
+    op, spread = result.op, _spread(result)
+    i = int(result.sampled[-1])
+    lines = ["## Sensitivity to the softness (spread over the settings)", "",
+             f"Interval and values at t = {op.t[i]:.3f} s; spread: the largest over "
+             "settled instants.", "",
+             "| component | determinate | rigid interval | "
+             + " | ".join(result.runs) + " | spread |",
+             "|---|---|---|" + "---|" * len(result.runs) + "---|"]
+    for j, name in enumerate(op.names):
+        lo, hi = result.intervals[i][j]
+        values = " | ".join(f"{r.forces[i, j]:.2f}" for r in result.runs.values())
+        lines.append(f"| {name} | {'yes' if result.determinate[j] else 'no'} | "
+                     f"[{number_text(lo)}, {number_text(hi)}] | {values} | "
+                     f"{number_text(spread[j])} |")
+    det = result.determinate
+    lines += ["", f"Largest spread: determinate components "
+              f"{number_text(np.nanmax(spread[det], initial=0.0))}, indeterminate "
+              f"{number_text(np.nanmax(spread[~det], initial=0.0))} (N, N m)."]
+    return lines
+
+
+def write(result: EngineStudy, out: Path, mujoco_version: str) -> None:
+    """``engine.csv`` (every instant: each setting's forces), ``engine.md``, ``engine.png``."""
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "engine.csv", "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["setting", "t", *result.op.names])
+        for label, r in result.runs.items():
+            for t, x in zip(r.t, r.forces):
+                writer.writerow([label, f"{t:.6g}", *(f"{v:.9g}" for v in x)])
+    (out / "engine.md").write_text("\n".join(report_lines(result, mujoco_version)) + "\n")
+    draw(result, out / "engine.png")
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cardan engine``."""
+    p = subparsers.add_parser("engine", help="MuJoCo's constraint forces for the same line, "
+                              "against the rigid solution set (CSV, PNG, Markdown)")
+    p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
+    p.add_argument("--out", default="results/engine", help="output folder")
+    p.add_argument("--stop", type=float, default=None,
+                   help="simulate up to this time (s; default the scene's stop)")
+    p.add_argument("--instants", type=int, default=6,
+                   help="instants compared with the rigid set (default 6)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """``cardan engine``: the study, its files, and a one-line summary per setting."""
+    try:
+        version = engine_mujoco.mujoco_version()
+    except EngineUnsupported as err:
+        raise NotApplicable(str(err)) from None
+    start = time.perf_counter()
+    result = study(args.scene, args.stop, max(2, args.instants))
+    write(result, Path(args.out), version)
+    print("\n".join(agreement_lines(result)))
+    print(f"wrote {args.out}/engine.md, engine.csv, engine.png "
+          f"({time.perf_counter() - start:.1f} s)")
+    return 0
+
