@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from cardan_forces.solvers import Status
 
 from .bench_run import MEASURES, SPLIT
 
@@ -50,14 +51,14 @@ def shifted_geometric_mean(values, shift: float = SHIFT_S) -> float:
 
 def within(row: dict, level: float) -> bool:
     """An answer whose every measure (NaN: the row has none of it) is <= ``level``."""
-    if row["status"] not in ("solved", "inaccurate"):
+    if not Status(row["status"]).has_answer:
         return False
     return all(not (row[k] > level) for k in MEASURES)  # NaN compares False: absent
 
 
 def worst_measure(row: dict) -> float:
     """The largest optimality measure a row has (``inf`` without an answer)."""
-    if row["status"] not in ("solved", "inaccurate"):
+    if not Status(row["status"]).has_answer:
         return math.inf
     return max((row[k] for k in MEASURES if not math.isnan(row[k])), default=math.inf)
 

@@ -5,12 +5,13 @@
 >>> record.status, record.forces(), record.residuals   # doctest: +SKIP
 
 Every call returns a :class:`Record` whose status the package decides from its own
-residuals, with its optimality measured from the problem data; solver failures are
+residuals, with its optimality measured from the problem data (typed: :class:`Status`,
+:class:`Residuals`, :class:`Optimality`); solver failures are
 records, never exceptions. :func:`solve_batch` solves all instants of a formulation's
 batch (``cardan_forces.formulations.batch``) with a batched backend.
 """
 
-from .record import ACCEPT, STATUSES, Record, failed_record
+from .record import ACCEPT, STATUSES, Optimality, Record, Residuals, Status, failed_record
 from .registry import (
     Backend,
     SolverNotFound,
@@ -28,8 +29,11 @@ __all__ = [
     "ACCEPT",
     "STATUSES",
     "Backend",
+    "Optimality",
     "Record",
+    "Residuals",
     "SolverNotFound",
+    "Status",
     "UnsupportedProblem",
     "available",
     "backends_for",

@@ -16,9 +16,7 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 
 from .optimality import combine, measures, recover, unique_optimum
-from .record import Record, confirm, judge
-
-_WITH_ANSWER = ("solved", "inaccurate")
+from .record import Optimality, Record, Residuals, Status, confirm, judge
 
 
 @dataclass(frozen=True)
@@ -26,7 +24,7 @@ class BatchOutcome:
     """What a batched backend hands back, per instant (T rows).
 
     ``z`` is the solver's variable (the forces in N for a :class:`LeastNormBatch`);
-    ``duals`` the multipliers in the batch's conic rows (Clarabel's sign convention; for
+    ``y`` the multipliers in the batch's conic rows (Clarabel's sign convention; for
     a :class:`LeastNormBatch` the rows ``A x = b`` then ``-x_j <= 0`` for the signed
     columns), ``None`` if the solver gives none; ``stages`` seconds per stage of the
     whole batch; ``messages`` one per instant (or empty).
@@ -34,7 +32,7 @@ class BatchOutcome:
 
     status: np.ndarray
     z: np.ndarray
-    duals: np.ndarray | None
+    y: np.ndarray | None
     iterations: np.ndarray
     setup_s: float
     solve_s: float
@@ -48,7 +46,8 @@ class BatchRecord:
 
     ``setup_s``, ``solve_s`` and ``checks_s`` are for the whole batch; ``stages`` the
     backend's own split of them; ``z`` the solver's variable (T, nz), ``y`` the
-    multipliers the optimality was measured with (solver's or recovered).
+    multipliers the optimality was measured with (solver's or recovered);
+    ``residuals`` and ``optimality`` hold one array per measure.
     """
 
     formulation: str
@@ -57,8 +56,8 @@ class BatchRecord:
     names: tuple[str, ...]
     status: np.ndarray
     x: np.ndarray
-    residuals: dict[str, np.ndarray]
-    optimality: dict[str, np.ndarray]
+    residuals: Residuals
+    optimality: Optimality
     iterations: np.ndarray
     duals: str
     setup_s: float
@@ -71,10 +70,7 @@ class BatchRecord:
 
     def within(self, level: float) -> np.ndarray:
         """Per instant: an answer with every optimality measure <= ``level``."""
-        ok = np.isin(self.status, _WITH_ANSWER)
-        for value in self.optimality.values():
-            ok &= value <= level
-        return ok
+        return np.isin(self.status, Status.answered()) & self.optimality.within(level)
 
     def record(self, k: int) -> Record:
         """Instant ``k`` as a per-instant record (times are the batch's per instant)."""
@@ -83,11 +79,12 @@ class BatchRecord:
             formulation=self.formulation, solver=self.solver, status=str(self.status[k]),
             x=self.x[k], names=self.names, iterations=int(self.iterations[k]),
             setup_s=self.setup_s / T, solve_s=self.solve_s / T,
-            residuals={key: float(v[k]) for key, v in self.residuals.items()},
+            residuals=self.residuals.at(k),
             message=self.messages[k] if self.messages else "",
-            optimality={key: float(v[k]) for key, v in self.optimality.items()},
+            optimality=self.optimality.at(k),
             duals=self.duals, gap_kind="duality", checks_s=self.checks_s / T,
-            z=None if self.z is None or not self.z.size else self.z[k])
+            z=None if self.z is None or not self.z.size else self.z[k],
+            y=None if self.y is None else self.y[k])
 
 
 def _forces(batch, outcome: BatchOutcome, answered: np.ndarray) -> np.ndarray:
@@ -116,23 +113,23 @@ def _least_norm_measures(batch: LeastNormBatch, x: np.ndarray, y: np.ndarray):
 def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
     if not answered.any():
         inf = np.full(len(answered), np.inf)
-        return {"primal": primal, "dual": inf, "gap": inf.copy()}, "none", None
+        return Optimality(primal=primal, dual=inf, gap=inf.copy()), "none", None
     z = np.where(answered[:, None], outcome.z, 0.0)
     if isinstance(batch, LeastNormBatch):
         found = _least_norm_measures(batch, np.where(answered[:, None], x, 0.0),
-                                     outcome.duals)
+                                     outcome.y)
         source = "solver"
     else:
-        source = "solver" if outcome.duals is not None else "recovered"
-        y = outcome.duals if outcome.duals is not None else np.array(
+        source = "solver" if outcome.y is not None else "recovered"
+        y = outcome.y if outcome.y is not None else np.array(
             [recover(batch.P if np.ndim(batch.P) != 3 else batch.P[k], batch.q[k],
                      batch.A[k], batch.b[k], batch.cones, z[k]) if answered[k] else
              np.zeros(batch.A.shape[1]) for k in range(len(z))])
         found = measures(batch.P, batch.q, batch.A, batch.b, batch.cones, z, y)
-    out = {"primal": primal, "dual": found["dual"], "gap": found["gap"]}
-    for value in out.values():
+    for value in (primal, found["dual"], found["gap"]):
         value[~answered] = np.inf
-    return out, source, outcome.duals if isinstance(batch, LeastNormBatch) else y
+    return (Optimality(primal=primal, dual=found["dual"], gap=found["gap"]), source,
+            outcome.y if isinstance(batch, LeastNormBatch) else y)
 
 
 def _unique(batch) -> bool:
@@ -150,22 +147,23 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
     """
     began = time.perf_counter()
     status = np.asarray(outcome.status, object).copy()
-    answered = np.isin(status, _WITH_ANSWER)
+    answered = np.isin(status.astype(str), Status.answered())
     x = _forces(batch, outcome, answered)
     bad = answered & ~np.all(np.isfinite(x), axis=1)
-    status[bad], answered[bad] = "failed", False
+    status[bad], answered[bad] = Status.FAILED, False
     x[bad] = np.nan
-    residuals = batch.checks.residuals(x)
-    primal = np.max(np.array(list(residuals.values())), axis=0)
+    residuals = Residuals(**batch.checks.residuals(x))
+    primal = residuals.largest()
     status = judge(status, primal)
     optimality, source, y = _optimality(batch, outcome, x, answered, primal.copy())
     if reference is not None:
         ref = np.asarray(reference, float)
-        residuals["reference"] = (np.linalg.norm(x - ref, axis=1)
-                                  / np.maximum(np.linalg.norm(ref, axis=1), 1e-12))
-        residuals["reference"][~answered] = np.inf
+        distance = (np.linalg.norm(x - ref, axis=1)
+                    / np.maximum(np.linalg.norm(ref, axis=1), 1e-12))
+        distance[~answered] = np.inf
+        residuals = Residuals(**residuals, reference=distance)
         if _unique(batch):
-            optimality["distance"] = residuals["reference"]
+            optimality = Optimality(**optimality, distance=distance)
     status = confirm(status, optimality, source)
     return BatchRecord(
         formulation=batch.formulation, solver=solver, instants=batch.instants,

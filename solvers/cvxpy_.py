@@ -213,7 +213,7 @@ def _solve_with(name: str):
                        message="" if prob.status == "optimal" else f"cvxpy status {prob.status}",
                        objective=prob.value, setup_s=built - start + compile_s,
                        solve_s=wall - compile_s,
-                       duals=conic_duals(problem, prob.constraints) if z.value is not None
+                       y=conic_duals(problem, prob.constraints) if z.value is not None
                        else None)
 
     return solve_cvxpy
@@ -236,6 +236,7 @@ def backends() -> list[Backend]:
             continue
         accepts = (LS, QP) if key == "osqp" else (LS, QP, LP, Conic)
         limits = {"supports": _no_power_cone} if key == "ecos" else {}
-        found.append(Backend(name, accepts, _solve_with(name), ("cvxpy", key), extra, "cvxpy",
+        found.append(Backend(name=name, family="cvxpy", distributions=("cvxpy", key),
+                             extra=extra, accepts=accepts, solve=_solve_with(name),
                              tolerances=TOLERANCES[key], **limits))
     return found

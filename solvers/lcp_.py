@@ -174,8 +174,9 @@ def backends() -> list[Backend]:
     """The three LCP methods (NumPy only, always present)."""
     dist = ("cardan-forces", "numpy")
     return [
-        Backend(name, (LCP,), _adapter(method, name, warm), dist, None, "lcp",
-                tolerances=TOLERANCES[name], warm_start=warm)
+        Backend(name=name, family="lcp", distributions=dist, accepts=(LCP,),
+                solve=_adapter(method, name, warm), tolerances=TOLERANCES[name],
+                warm_start=warm)
         for name, method, warm in (("lcp-lemke", lemke, False), ("lcp-pgs", pgs, True),
                                    ("lcp-fb-newton", fb_newton, True))
     ]

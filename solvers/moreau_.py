@@ -28,6 +28,7 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
 from .batch import BatchOutcome
+from .record import Status
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"moreau": "moreau"}
@@ -138,9 +139,9 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     iterations = np.broadcast_to(np.asarray(solver.info.iterations), (T,)).astype(int)
     messages = tuple("" if s == "Solved" else f"moreau status {s}" for s in names)
     # the package's share is the row layout; compiling, setup and solve are moreau's
-    return BatchOutcome(np.array([STATUS.get(s, "failed") for s in names], object),
-                        np.asarray(sol.x), duals, iterations, converted - start,
-                        time.perf_counter() - converted,
+    return BatchOutcome(status=np.array([STATUS.get(s, Status.FAILED) for s in names], object),
+                        z=np.asarray(sol.x), y=duals, iterations=iterations,
+                        setup_s=converted - start, solve_s=time.perf_counter() - converted,
                         stages={"layout": converted - start, "compile": compiled - converted,
                                 "setup": setup_done - compiled, "solve": solve_s},
                         messages=messages)
@@ -152,5 +153,5 @@ def backends() -> list[Backend]:
         import moreau  # noqa: F401
     except ImportError:
         return []
-    return [Backend("moreau", (), None, ("moreau",), "moreau", "moreau",
+    return [Backend(name="moreau", family="moreau", distributions=("moreau",), extra="moreau",
                     tolerances=TOLERANCES, batch=solve_batch, batch_accepts=(ConicBatch,))]

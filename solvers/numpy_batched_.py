@@ -38,6 +38,7 @@ from cardan_forces.formulations.batch import LeastNormBatch
 
 from .batch import BatchOutcome
 from .lcp_ import lemke
+from .record import Status
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"numpy-batched": None}
@@ -68,8 +69,9 @@ def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> Ba
     T = len(x)
     messages = tuple(np.where(fallback, "Lemke fallback", "")) if fallback.any() else ()
     solve_s = sum(stages.values())
-    return BatchOutcome(np.full(T, "solved", object), x, duals, iterations, 0.0, solve_s,
-                        stages=stages, messages=messages)
+    return BatchOutcome(status=np.full(T, Status.SOLVED, object), z=x, y=duals,
+                        iterations=iterations, setup_s=0.0, solve_s=solve_s, stages=stages,
+                        messages=messages)
 
 
 def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
@@ -91,12 +93,16 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     # one step of iterative refinement on B B' Z = R removes the bias of delta whatever
     # the scene's scales (1e-7 relative on the propshaft, 1e-15 on paper). The bias is
     # K's (delta / sigma_min^2), the same for every column: the first column's residual
-    # says whether the step is needed.
+    # says whether an instant needs the step. Decided per instant, so that an instant's
+    # answer does not depend on the others in its batch.
     mu0 = Z[:, :, 0]
     r0 = b - np.einsum("tmn,tn->tm", B, np.einsum("tmn,tm->tn", B, mu0))
     scale = np.maximum(np.linalg.norm(b, axis=1), np.finfo(float).tiny)
-    if np.max(np.linalg.norm(r0, axis=1) / scale) > REFINE_RTOL:
-        Z += _gram_solve(B, R - B @ (B.transpose(0, 2, 1) @ Z), blocks)
+    refine = np.flatnonzero(np.linalg.norm(r0, axis=1) / scale > REFINE_RTOL)
+    if refine.size:
+        Bk = B[refine]
+        Z[refine] += _gram_solve(Bk, R[refine] - Bk @ (Bk.transpose(0, 2, 1) @ Z[refine]),
+                                 blocks)
     clock = _lap(stages, "gram+factor+solve", clock)
     mu = Z[:, :, 0]
     iterations, fallback = np.zeros(T, int), np.zeros(T, bool)
@@ -261,5 +267,6 @@ def _chain_shaped(batch) -> bool:
 
 def backends() -> list[Backend]:
     """The batched least-norm backend (NumPy only, always present)."""
-    return [Backend("numpy-batched", (), None, ("cardan-forces", "numpy"), None, "numpy",
-                    supports=_chain_shaped, batch=solve_batch, batch_accepts=(LeastNormBatch,))]
+    return [Backend(name="numpy-batched", family="numpy",
+                    distributions=("cardan-forces", "numpy"), supports=_chain_shaped,
+                    batch=solve_batch, batch_accepts=(LeastNormBatch,))]

@@ -39,7 +39,7 @@ def solve_ls(problem: LS, tol: float | None = None, initvals=None,
     # W z = A' mu with mu = U S^-1 V' y; in the conic form (P z + A'y = 0) the dual is -mu
     mu = U[:, :rank] @ ((Vt[:rank] @ y) / sigma[:rank])
     return Outcome(
-        "solved", z, duals=-mu,
+        "solved", z, y=-mu,
         message=f"rank {rank} of {min(A.shape)}",
         objective=0.5 * float(z @ (w * z)),
         setup_s=setup_done - start,
@@ -49,4 +49,5 @@ def solve_ls(problem: LS, tol: float | None = None, initvals=None,
 
 def backends() -> list[Backend]:
     """The SVD backend (NumPy is a core dependency, always present)."""
-    return [Backend("numpy-kkt", (LS,), solve_ls, ("numpy",), None, "numpy")]
+    return [Backend(name="numpy-kkt", family="numpy", distributions=("numpy",), accepts=(LS,),
+                    solve=solve_ls)]

@@ -167,7 +167,7 @@ def _solve_with(solver: str):
         objective = None if z is None else 0.5 * z @ P @ z + q @ z
         return Outcome(status, z, iterations=_iterations(extras), message=text,
                        objective=objective, setup_s=setup_done - start + build, solve_s=solve_s,
-                       duals=conic_duals(problem, sol))
+                       y=conic_duals(problem, sol))
 
     return solve_qp
 
@@ -179,9 +179,9 @@ def backends() -> list[Backend]:
     except ImportError:
         return []
     return [
-        Backend(f"qpsolvers-{name}", (QP,), _solve_with(name),
-                ("qpsolvers", DISTRIBUTIONS.get(name, name)),
-                EXTRAS.get(f"qpsolvers-{name}"), "qpsolvers",
+        Backend(name=f"qpsolvers-{name}", family="qpsolvers",
+                distributions=("qpsolvers", DISTRIBUTIONS.get(name, name)),
+                extra=EXTRAS.get(f"qpsolvers-{name}"), accepts=(QP,), solve=_solve_with(name),
                 tolerances=TOLERANCES.get(name, ()), smallest_tol=SMALLEST_TOL.get(name, 0.0),
                 warm_start=name in WARM_STARTS)
         for name in qpsolvers.available_solvers

@@ -27,7 +27,7 @@ import numpy as np
 from . import settings
 from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
 from .conversions import convert, reachable
-from .record import Outcome, Record, failed_record, finalize
+from .record import Outcome, Record, Status, failed_record, finalize
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "lcp_",
             "numpy_batched_", "moreau_")
@@ -46,7 +46,7 @@ def _always(problem) -> bool:
     return True
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Backend:
     """One named way to solve problems, and what it declares about itself.
 
@@ -62,11 +62,11 @@ class Backend:
     """
 
     name: str
-    accepts: tuple[type, ...]
-    solve: Callable[..., Outcome] | None
-    distributions: tuple[str, ...]
-    extra: str | None
     family: str
+    distributions: tuple[str, ...]
+    extra: str | None = None
+    accepts: tuple[type, ...] = ()
+    solve: Callable[..., Outcome] | None = None
     supports: Callable[[object], bool] = _always
     tolerances: tuple[str, ...] = ()
     smallest_tol: float = 0.0
@@ -229,7 +229,8 @@ def solve_batch(batch, solver: str, tol: float | None = None,
     except (KeyboardInterrupt, SystemExit):
         raise
     except BaseException as exc:  # noqa: BLE001 - a failing solver is a failed batch
-        outcome = BatchOutcome(np.full(T, "failed", object), np.zeros((T, 0)), None,
-                               np.zeros(T, int), 0.0, time.perf_counter() - start,
+        outcome = BatchOutcome(status=np.full(T, Status.FAILED, object), z=np.zeros((T, 0)),
+                               y=None, iterations=np.zeros(T, int), setup_s=0.0,
+                               solve_s=time.perf_counter() - start,
                                messages=(f"{type(exc).__name__}: {exc}",) * T)
     return finalize_batch(batch, solver, outcome, reference=reference)

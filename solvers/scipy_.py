@@ -147,14 +147,14 @@ def backends() -> list[Backend]:
         import scipy.optimize  # noqa: F401
     except ImportError:
         return []
-    dist = ("scipy",)
+    common = {"family": "scipy", "distributions": ("scipy",)}
     return [
-        Backend("scipy-lsq_linear", (LS, QP), solve_lsq_linear, dist, None, "scipy",
+        Backend(name="scipy-lsq_linear", accepts=(LS, QP), solve=solve_lsq_linear, **common,
                 supports=_no_inequalities, tolerances=TOLERANCES["lsq_linear"]),
-        Backend("scipy-highs", (LP,), solve_highs, dist, None, "scipy",
+        Backend(name="scipy-highs", accepts=(LP,), solve=solve_highs, **common,
                 tolerances=TOLERANCES["highs"], smallest_tol=HIGHS_SMALLEST),
-        Backend("scipy-fsolve", (NLS,), solve_fsolve, dist, None, "scipy",
+        Backend(name="scipy-fsolve", accepts=(NLS,), solve=solve_fsolve, **common,
                 tolerances=TOLERANCES["fsolve"], warm_start=True),
-        Backend("scipy-root-lm", (NLS,), solve_root_lm, dist, None, "scipy",
+        Backend(name="scipy-root-lm", accepts=(NLS,), solve=solve_root_lm, **common,
                 tolerances=TOLERANCES["root-lm"], warm_start=True),
     ]

@@ -42,8 +42,8 @@ def fake_backend(monkeypatch):
 
     def register(solve_fn):
         available()  # load the real ones first
-        backend = Backend("fake", (REFS["ls_min_norm"].problem.__class__,), solve_fn,
-                          ("numpy",), None, "test")
+        backend = Backend(name="fake", family="test", distributions=("numpy",),
+                          accepts=(REFS["ls_min_norm"].problem.__class__,), solve=solve_fn)
         monkeypatch.setitem(registry._CACHE, "fake", backend)
 
     return register

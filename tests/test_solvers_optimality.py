@@ -1,12 +1,14 @@
 """Optimality measured from the problem data: dual residual, duality / objective gap,
-distance only where the optimum is unique (qpbenchmark's measures)."""
+distance only where the optimum is unique (qpbenchmark's measures); and the status rule
+that uses them, on constructed outcomes whose measures are known by hand."""
 
 import numpy as np
 import pytest
 from cardan_forces.formulations.problems import LP, QP, Conic, ForceChecks
-from cardan_forces.solvers import available, solve
+from cardan_forces.solvers import ACCEPT, Backend, Optimality, available, registry, solve
 from cardan_forces.solvers.optimality import measures, recover, unique_optimum
-from cardan_forces.solvers.record import Outcome, finalize
+from cardan_forces.solvers.record import Outcome, confirm, finalize
+from cardan_forces.solvers.reference_problems import references
 
 
 def _checks(A, b, unilateral):
@@ -37,11 +39,11 @@ def test_known_multipliers_give_zero_dual_residual_and_gap():
     problem = _projection()
     exact = np.array([0.4, 0.0, 0.0, 1.4])
     record = finalize(problem, "hand", Outcome("solved", np.array([0.8, 0.2, 0.0]),
-                                               duals=exact))
+                                               y=exact))
     assert record.duals == "solver"
     assert record.optimality["dual"] <= 1e-15 and record.optimality["gap"] <= 1e-15
     wrong = finalize(problem, "hand", Outcome("solved", np.array([0.8, 0.2, 0.0]),
-                                              duals=exact + [0.1, 0, 0, 0]))
+                                              y=exact + [0.1, 0, 0, 0]))
     assert wrong.optimality["dual"] > 1e-2  # stationarity fails with the wrong multiplier
     conic = problem.as_conic()
     assert np.allclose(recover(conic.P, conic.q, conic.A, conic.b, conic.cones,
@@ -114,29 +116,96 @@ def test_min_max_like_problem_solved_by_clarabel_is_optimal_without_a_distance()
 
 
 def test_confirm_upgrades_inaccurate_only_with_all_measures_within_accept():
-    from cardan_forces.solvers.record import ACCEPT, confirm
-
-    good = {"primal": 1e-12, "dual": 1e-10, "gap": 1e-9}
+    good = Optimality(primal=1e-12, dual=1e-10, gap=1e-9)
     assert list(confirm(["inaccurate", "failed", "solved"], good, "solver")) == \
         ["solved", "failed", "solved"]
     assert confirm("inaccurate", good, "none") == "inaccurate"  # no multipliers: no proof
-    for key in good:
-        assert confirm("inaccurate", good | {key: 10 * ACCEPT}, "solver") == "inaccurate"
-    batch = {k: np.array([v, 10 * ACCEPT]) for k, v in good.items()}
+    for key in ("primal", "dual", "gap"):
+        for factor, expected in ((0.5, "solved"), (2.0, "inaccurate")):
+            measured = Optimality(**{**good, key: factor * ACCEPT})
+            assert confirm("inaccurate", measured, "solver") == expected
+        assert confirm("inaccurate", Optimality(**{k: v for k, v in good.items() if k != key}),
+                       "solver") == "inaccurate"  # a measure it has not: no proof
+    batch = Optimality(**{k: np.array([v, 10 * ACCEPT]) for k, v in good.items()})
     assert list(confirm(np.array(["inaccurate"] * 2, object), batch, "solver")) == \
         ["solved", "inaccurate"]
 
 
-def test_clarabel_almost_solved_is_judged_by_the_measures():
-    """min_max on the propshaft with straight joints: Clarabel stops at AlmostSolved at
-    the first instant; the package's own primal, dual and gap measures decide."""
-    from cardan_forces.experiments.hard import CASES
+EXACT_Y = np.array([0.4, 0.0, 0.0, 1.4])
+"""The multipliers of :func:`_projection` (equality row, then the bounds' rows)."""
 
-    import cardan_forces as cf
+EXACT_Z = np.array([0.8, 0.2, 0.0])
 
-    case = next(c for c in CASES if c.name == "articulation-0")
-    op = cf.build_operator(cf.simulate(case.scene("propshaft"), [0.0]))
-    record = cf.solve(cf.build_formulation("min_max", op, 0), "clarabel", tol=1e-8)
-    assert "AlmostSolved" in record.message
-    assert all(v <= 1e-6 for v in record.optimality.values())
-    assert record.status == "solved" and "confirmed" in record.message
+
+def _shifted(eps: float) -> np.ndarray:
+    """The exact multipliers with the equality's moved by ``eps``: by hand, the
+    stationarity residual is ``eps`` in every component against the largest term
+    ``||q||_inf = 1.2`` (dual ``eps / 1.2``), and the dual objective drops by ``eps``
+    from the primal ``-0.74`` (gap ``eps / (0.74 + eps)``, relative to the larger).
+    """
+    return EXACT_Y + np.array([eps, 0.0, 0.0, 0.0])
+
+
+@pytest.fixture
+def stub(monkeypatch):
+    """Register a backend ``stub`` for QPs that returns the outcome the test gives."""
+    def register(outcome: Outcome):
+        available()  # load the real ones first
+        backend = Backend(name="stub", family="test", distributions=("numpy",),
+                          accepts=(QP,), solve=lambda problem, tol=None, initvals=None: outcome)
+        monkeypatch.setitem(registry._CACHE, "stub", backend)
+    return register
+
+
+@pytest.mark.parametrize(("eps", "expected"), [(0.0, "solved"), (0.5 * ACCEPT, "solved"),
+                                               (2.0 * ACCEPT, "inaccurate")])
+def test_a_solvers_inaccurate_is_solved_where_the_measures_say_so(stub, eps, expected):
+    """Both sides of the rule through the registry, on measures known by hand."""
+    stub(Outcome("inaccurate", EXACT_Z, message="stalled", y=_shifted(eps)))
+    record = solve(_projection(), "stub")
+    assert record.optimality["dual"] == pytest.approx(eps / 1.2, rel=1e-6, abs=1e-15)
+    assert record.optimality["gap"] == pytest.approx(eps / (0.74 + eps), rel=1e-6, abs=1e-15)
+    assert record.status == expected
+    assert ("confirmed" in record.message) == (expected == "solved")
+
+
+def test_an_infeasible_answer_is_not_confirmed(stub):
+    """A primal residual above ACCEPT keeps the solver's inaccurate (and turns a
+    reported solved into inaccurate), whatever the multipliers."""
+    z = EXACT_Z + [2 * ACCEPT, 0.0, 0.0]  # equilibrium residual 2 ACCEPT (||b|| = 1)
+    for reported in ("inaccurate", "solved"):
+        stub(Outcome(reported, z, y=EXACT_Y))
+        record = solve(_projection(), "stub")
+        assert record.optimality["primal"] == pytest.approx(2 * ACCEPT)
+        assert record.status == "inaccurate"
+
+
+def test_recovered_multipliers_confirm_and_no_multipliers_do_not(stub):
+    stub(Outcome("inaccurate", EXACT_Z))  # no duals: the package recovers them
+    record = solve(_projection(), "stub")
+    assert record.duals == "recovered" and record.status == "solved"
+    ref = next(r for r in references() if r.name == "nls_polynomial")
+    root = finalize(ref.problem, "hand", Outcome("inaccurate", ref.x))
+    assert root.duals == "none" and root.optimality["primal"] <= 1e-15
+    assert root.status == "inaccurate"  # a root finder's doubt has no dual to settle it
+
+
+def test_the_batched_path_follows_the_same_rule():
+    """Three instants of a constructed batch: confirmed, not confirmed, reported solved;
+    each batched record equals the per-instant record of the same outcome."""
+    from cardan_forces.formulations.batch import conic_batch
+    from cardan_forces.solvers.batch import BatchOutcome, finalize_batch
+
+    conic = _projection().as_conic()
+    batch = conic_batch([conic] * 3, [0, 1, 2])
+    status = np.array(["inaccurate", "inaccurate", "solved"], object)
+    y = np.array([_shifted(0.5 * ACCEPT), _shifted(2 * ACCEPT), EXACT_Y])
+    result = finalize_batch(batch, "stub", BatchOutcome(
+        status=status, z=np.array([EXACT_Z] * 3), y=y, iterations=np.zeros(3, int),
+        setup_s=0.0, solve_s=0.0))
+    assert list(result.status) == ["solved", "inaccurate", "solved"]
+    for k in range(3):
+        alone = finalize(conic, "stub", Outcome(status[k], EXACT_Z, y=y[k]))
+        assert result.record(k).status == alone.status
+        for key, value in alone.optimality.items():
+            assert result.optimality[key][k] == pytest.approx(value, rel=1e-9, abs=1e-18)
