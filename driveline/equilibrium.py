@@ -83,8 +83,10 @@ class Link:
     ``kind`` is one of :data:`CONTACT_KINDS`; ``element`` the scene element it belongs to
     (``<shaft>.<bearing>``, a joint's or a slip joint's name); ``frame`` the frame of its
     components: ``global``, ``shaft`` (``r1, r2``, axis) or ``pin`` (``e1, e2, e3``);
-    ``components`` their directions in it. Trunnion contacts also carry the joint, the
-    trunnion axis (``e1`` driving, ``e2`` driven) and the side (+1 at ``+hs``/``+ht``).
+    ``components`` their directions in it, ``units`` theirs (``N`` or ``N m``).
+    ``label``: its name within its element (a bearing's name; ``F1`` ... ``F8`` of a
+    joint; empty for a slip joint). Trunnion contacts also carry the joint, the trunnion
+    axis (``e1`` driving, ``e2`` driven) and the side (+1 at ``+hs``/``+ht``).
     """
 
     name: str
@@ -99,6 +101,33 @@ class Link:
     joint: int | None = None
     trunnion: str = ""
     side: float = 0.0
+    label: str = ""
+    units: tuple[str, ...] = ()
+
+    def column(self, component: str) -> int:
+        """Column of ``A`` of one of its components (e.g. ``e2``, ``r1``, ``torque``)."""
+        return self.columns[self.components.index(component)]
+
+
+@dataclass(frozen=True)
+class BearingLoad:
+    """One bearing's load on its shaft in the shaft's own frame (N), over instants:
+    ``in_plane`` along ``r1`` (normal to the axis, in the articulation plane),
+    ``normal`` along ``r2`` (the plane's normal), ``axial`` along the shaft's axis
+    (downstream positive; zero for a floating bearing), ``radial`` the length of the
+    part normal to the axis.
+    """
+
+    element: str
+    shaft: int
+    label: str
+    in_plane: np.ndarray
+    normal: np.ndarray
+    axial: np.ndarray
+
+    @property
+    def radial(self) -> np.ndarray:
+        return np.hypot(self.in_plane, self.normal)
 
 
 @dataclass(frozen=True)
@@ -133,6 +162,8 @@ class Operator:
     ``contacts`` are the structure (what each row block and column is);
     ``pin_frames[j, t]`` the rows ``e1, e2, e3`` of cross-pin ``j``; ``shaft_frames[k]``
     the rows ``r1, r2, axis`` of shaft ``k``; ``slip_friction`` the bounded axial forces.
+    ``points[t, c]`` is where column ``c`` acts (m, global; NaN for a pure moment) and
+    ``directions[t, c]`` its direction (the moment's axis for a pure moment).
     """
 
     t: np.ndarray
@@ -149,6 +180,8 @@ class Operator:
     pin_frames: np.ndarray | None = None
     shaft_frames: np.ndarray | None = None
     slip_friction: tuple[SlipFriction, ...] = ()
+    points: np.ndarray | None = None
+    directions: np.ndarray | None = None
 
     def index(self, name: str) -> int:
         """Column of a named force component."""
@@ -165,6 +198,47 @@ class Operator:
     def of_kind(self, *kinds: str) -> list[Link]:
         """The contacts of the given kinds, in column order."""
         return [c for c in self.contacts if c.kind in kinds]
+
+    def joint_contacts(self, joint: int) -> dict[str, Link]:
+        """The contacts of joint ``joint`` (scene index) by label, ``F1`` ... ``F8``."""
+        return {c.label: c for c in self.contacts
+                if c.joint == joint and c.kind in ("trunnion-radial", "end-face")}
+
+    def bearings(self, shaft: int | None = None) -> list[Link]:
+        """The bearings (of shaft ``shaft``, scene index; all without), in column order."""
+        return [c for c in self.of_kind("bearing-locating", "bearing-floating")
+                if shaft is None or c.shaft == shaft]
+
+    def bearing_matrix(self, contact: Link) -> np.ndarray:
+        """(3, n): the rows that map the forces ``x`` to the bearing's load on its shaft
+        in the shaft's frame ``(r1, r2, axis)`` (N): ``bearing_matrix(c) @ x``.
+        """
+        out = np.zeros((3, len(self.names)))
+        frame = self.shaft_frames[contact.shaft]
+        basis = np.eye(3) if contact.frame == "global" else frame[:2]
+        out[:, list(contact.columns)] = frame @ basis.T
+        return out
+
+    def bearing_loads(self, x: np.ndarray, shaft: int | None = None) -> dict[str, BearingLoad]:
+        """Every bearing's load (of shaft ``shaft`` only, if given) from forces ``x``
+        (..., n), in its shaft's frame, by element (``<shaft>.<bearing>``), N.
+        """
+        out = {}
+        for c in self.bearings(shaft):
+            r1, r2, axial = np.moveaxis(np.asarray(x) @ self.bearing_matrix(c).T, -1, 0)
+            out[c.element] = BearingLoad(c.element, c.shaft, c.label, r1, r2, axial)
+        return out
+
+    def contact_magnitudes(self, x: np.ndarray, kinds: tuple[str, ...] = CONTACT_KINDS
+                           ) -> dict[str, np.ndarray]:
+        """Per contact of ``kinds`` whose components share one unit (every kind but a
+        slip joint's, which mixes N and N m), the length of its force, in that unit
+        (:attr:`Link.units`): a bearing's total force, a trunnion's radial force, an end
+        face's push (N), from the forces ``x`` (..., n).
+        """
+        x = np.asarray(x)
+        return {c.name: np.linalg.norm(x[..., list(c.columns)], axis=-1)
+                for c in self.of_kind(*kinds) if len(set(c.units)) == 1}
 
     def bearing_force(self, contact: Link, x: np.ndarray) -> np.ndarray:
         """A bearing's force on its shaft as a global vector (..., 3), N, from the
@@ -228,8 +302,9 @@ def _layout(motion: Motion):
             comps = tuple(AXES) if locating else ("r1", "r2")
             dirs = np.eye(3) if locating else frames[k, :2]
             add(dict(name=name, kind=f"bearing-{bearing.kind}", body=g, other=None,
-                     element=f"{shaft.name}.{bearing.name}",
-                     frame="global" if locating else "shaft", components=comps, shaft=k),
+                     element=f"{shaft.name}.{bearing.name}", label=bearing.name,
+                     frame="global" if locating else "shaft", components=comps, shaft=k,
+                     units=("N",) * len(comps)),
                 [_Column(f"{name}.{c}", g, None, point, d) for c, d in zip(comps, dirs)])
     for slip in scene.slip_joints:
         _slip_columns(slip, scene, segments, geo, frames, add)
@@ -253,8 +328,9 @@ def _slip_columns(slip, scene, segments, geo, frames, add) -> None:
     if slip.friction_coefficient > 0:
         columns.append(_Column(f"{slip.name}.axial", down, up, point, axis))
         comps.append("axial")
+    units = tuple("N m" if c.point is None else "N" for c in columns)
     add(dict(name=slip.name, kind="slip", body=down, other=up, element=slip.name,
-             frame="shaft", components=tuple(comps), shaft=k), columns)
+             frame="shaft", components=tuple(comps), shaft=k, units=units), columns)
 
 
 def _joint_columns(j, joint, pin, segments, geo, kin, add) -> None:
@@ -271,13 +347,13 @@ def _joint_columns(j, joint, pin, segments, geo, kin, add) -> None:
         for label, sign in ((fa, 1.0), (fb, -1.0)):
             name = f"{joint.name}.{label}"
             add(dict(name=name, kind="trunnion-radial", components=radial, side=sign,
-                     **common),
+                     label=label, units=("N", "N"), **common),
                 [_Column(f"{name}.{c}", pin, yoke, centre + sign * joint.hs_m * axis, e[c])
                  for c in radial])
         for label, sign in ((fc, 1.0), (fd, -1.0)):
             add(dict(name=f"{joint.name}.{label}", kind="end-face",
                      components=(f"{'-' if sign > 0 else '+'}{trunnion}",), side=sign,
-                     **common),
+                     label=label, units=("N",), **common),
                 [_Column(f"{joint.name}.{label}", pin, yoke,
                          centre + sign * joint.ht_m * axis, -sign * axis, True)])
 
@@ -290,8 +366,13 @@ def build_operator(motion: Motion) -> Operator:
                             for s in segments], geo.joint_centres]).reshape(-1, 3)
     T = len(motion.t)
     A = np.zeros((T, 6 * len(bodies), len(cols)))
+    points = np.full((T, len(cols), 3), np.nan)
+    directions = np.empty((T, len(cols), 3))
     for c, col in enumerate(cols):
         direction = np.broadcast_to(col.direction, (T, 3))
+        directions[:, c] = direction
+        if col.point is not None:
+            points[:, c] = col.point
         for target, sign in ((col.body, 1.0), (col.other, -1.0)):
             if target is None:
                 continue
@@ -315,6 +396,7 @@ def build_operator(motion: Motion) -> Operator:
         bodies=tuple(bodies), contacts=tuple(links),
         pin_frames=np.stack([motion.kin.e1, motion.kin.e2, motion.kin.e3], axis=2),
         shaft_frames=shaft_frames(motion), slip_friction=_slip_friction(scene, links),
+        points=points, directions=directions,
     )
 
 

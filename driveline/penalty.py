@@ -96,7 +96,8 @@ from . import penalty_kernels as kernels
 from .compiled import harmonic_law
 from .contact import hertz_stiffness
 from .dynamics import simulate
-from .kinematics import rest_geometry
+from .elements import shaft_segments
+from .equilibrium import build_operator
 from .scene import Scene, SceneError
 
 DAMPING_LENGTH_UNIT_M = 1e-3
@@ -238,65 +239,110 @@ class _Contacts:
     c_max: np.ndarray
 
 
+SPLINE_STIFFNESS_FACTOR = 1.0
+"""A slip joint's spline is as stiff as a bearing (``bearing_stiffness_N_m``) per
+contact: the scenes give no spline stiffness, and any stiffness far above the shafts'
+loads over the play leaves the rigid model's loads."""
+
+
+def _contact_rows(model: _Model, damping_length_unit_m: float):
+    """The penalty contacts (rows of :class:`_Contacts`) of every link of the operator.
+
+    Built at the start; returned with, per link, the indices of its contacts. Geometry
+    comes from the
+    operator's columns (where each acts, along what); only the contact law is this
+    model's:
+
+    - a bearing: radially with the bearing clearance; a locating one also axially both
+      ways (two faces); linear, ``bearing_stiffness_N_m``;
+    - a trunnion's radial contact: the trunnion point at ``±hs`` in its bore (the yoke's
+      axis through the joint centre), radial clearance ``rb - rs``; an end face: the
+      trunnion end beyond the housing bottom at ``hb``; Hertz (eqs. 76-77);
+    - a slip joint (frictionless): two radial contacts without clearance at one pitch
+      radius either side of the joint along the axis (shear and bending) and two teeth
+      at the pitch radius, each a face both ways along the tangent (torque); no axial
+      contact, the spline slides; linear, as stiff as a bearing.
+    """
+    scene, op, nb = model.scene, model.operator, model.n_bodies
+    ct = scene.contact
+
+    def law(stiffness: float, exponent: float) -> tuple[float, float, float]:
+        c = ct.damping_fraction_of_stiffness * stiffness
+        return stiffness, exponent, c * damping_length_unit_m ** (exponent - 1.0)
+
+    rows, parts = [], []
+
+    def add(a, b, point_a, axis_a, point_b, axis_b, offset, radial, contact_law):
+        rows.append((a, b, model.local(a, point_a), model.local(a, vector=axis_a),
+                     model.local(b, point_b), model.local(b, vector=axis_b), offset, radial,
+                     *contact_law))
+        parts[-1].append(len(rows) - 1)
+
+    linear = law(ct.bearing_stiffness_N_m, 1.0)
+    spline = law(SPLINE_STIFFNESS_FACTOR * ct.bearing_stiffness_N_m, 1.0)
+    for link in op.contacts:
+        parts.append([])
+        point = op.points[0, link.columns[0]]
+        a, b = link.body, nb if link.other is None else link.other
+        if link.kind.startswith("bearing"):
+            axis, gap = op.shaft_frames[link.shaft, 2], ct.bearing_clearance_m
+            add(a, b, point, axis, point, axis, gap, True, linear)
+            if link.kind == "bearing-locating":
+                for sign in (1.0, -1.0):
+                    add(a, b, point, sign * axis, point, sign * axis, gap, False, linear)
+        elif link.kind == "slip":
+            r1, _, axis = op.shaft_frames[link.shaft]
+            reach = next(s for s in scene.slip_joints if s.name == link.element).pitch_radius_m
+            for sign in (1.0, -1.0):
+                ring = point + sign * reach * axis
+                add(a, b, ring, axis, ring, axis, 0.0, True, spline)
+                tooth, tangent = point + sign * reach * r1, sign * np.cross(axis, r1)
+                for face in (1.0, -1.0):
+                    add(a, b, tooth, face * tangent, tooth, face * tangent, 0.0, False, spline)
+        else:  # a trunnion's contact: in its bore (radial) or on its end face
+            joint = scene.joints[link.joint]
+            hertz = law(hertz_stiffness(scene, joint), ct.exponent)
+            centre = model.rest_centre[a]
+            if link.kind == "trunnion-radial":
+                axis = op.pin_frames[link.joint, 0, "e1 e2".split().index(link.trunnion)]
+                add(a, b, point, axis, centre, axis, joint.radial_clearance_m, True, hertz)
+            else:
+                axis = -op.directions[0, link.columns[0]]
+                add(a, b, point, axis, centre, axis, joint.hb_m, False, hertz)
+    return rows, parts
+
+
 class _Model:
-    """Bodies (shafts, then cross-pins), contacts and the right-hand side."""
+    """Bodies (the operator's: shaft bodies, then cross-pins), contacts and the
+    right-hand side.
+
+    The contacts are built from the equilibrium operator's links at the start
+    (:func:`_contact_rows`), so every element the operator takes, this model takes; the
+    forces it reports are the operator's columns (:meth:`link_values`).
+    """
 
     def __init__(self, scene: Scene, damping_length_unit_m: float):
-        geo = rest_geometry(scene)
-        ns, nj = len(scene.shafts), len(scene.joints)
-        nb = ns + nj
-        self.scene, self.geometry, self.n_shafts, self.n_bodies = scene, geo, ns, nb
+        motion = simulate(scene, [scene.time.start_s])
+        op = build_operator(motion)
+        segments = shaft_segments(scene)
+        ns, nb = len(segments), len(op.bodies)
+        self.scene, self.motion, self.operator = scene, motion, op
+        self.n_shafts, self.n_bodies, self.segments = ns, nb, segments
         self.n_state, self.n_calls = 13 * nb, 0
-        cp, ct = scene.crosspin, scene.contact
-        self.mass = np.array([s.mass_kg for s in scene.shafts] + [cp.mass_kg] * nj)
-        self.inertia = np.array([s.inertia_kg_m2 for s in scene.shafts]
-                                + [cp.inertia_kg_m2] * nj)
-        self.rest_centre = np.concatenate([geo.centres, geo.joint_centres])
+        cp = scene.crosspin
+        self.mass = np.array([g.fraction * scene.shafts[g.shaft].mass_kg for g in segments]
+                             + [cp.mass_kg] * (nb - ns))
+        self.inertia = np.array([g.fraction * np.array(scene.shafts[g.shaft].inertia_kg_m2)
+                                 for g in segments] + [cp.inertia_kg_m2] * (nb - ns))
+        geo = motion.geometry
+        self.rest_centre = np.concatenate([
+            [geo.centres[g.shaft] + g.middle_m * geo.axes[g.shaft] for g in segments],
+            geo.joint_centres]).reshape(nb, 3)
         self.gravity = np.array(scene.gravity_m_s2) if scene.has("gravity") else np.zeros(3)
-        # shaft body frames at rest: columns (n1, axis, n3), J2 about the axis
-        self.rest_frame = [np.column_stack([np.cross(a, geo.plane_normal), a,
-                                            geo.plane_normal]) for a in geo.axes]
-        axis = np.array([0.0, 1.0, 0.0])  # a shaft's axis in its body coordinates
-        rows = []
-
-        def add(*row) -> int:
-            rows.append(row)
-            return len(rows) - 1
-
-        def law(stiffness: float, exponent: float) -> tuple[float, float, float]:
-            c = ct.damping_fraction_of_stiffness * stiffness
-            return stiffness, exponent, c * damping_length_unit_m ** (exponent - 1.0)
-
-        self.bearing_contacts = []  # (radial, [face, face]) per bearing, scene order
-        bearing = law(ct.bearing_stiffness_N_m, 1.0)
-        gap = ct.bearing_clearance_m
-        for k in range(ns):
-            for point in geo.bearing_points[k]:
-                s = self.rest_frame[k].T @ (point - geo.centres[k])
-                self.bearing_contacts.append((
-                    add(k, nb, s, axis, point, geo.axes[k], gap, True, *bearing),
-                    [add(k, nb, s, sign * axis, point, sign * geo.axes[k], gap, False,
-                         *bearing) for sign in (1.0, -1.0)],
-                ))
-        self.joint_contacts = []  # {"F1": contact, ...} per joint
-        for j, joint in enumerate(scene.joints):
-            hertz, index = law(hertz_stiffness(scene, joint), ct.exponent), {}
-            sides = ((j, geo.yoke_in[j], np.eye(3)[0], "F1 F2 F3 F4"),
-                     (j + 1, geo.yoke_out[j], np.eye(3)[1], "F5 F6 F7 F8"))
-            for shaft, yoke, e, labels in sides:
-                frame = self.rest_frame[shaft]
-                centre = frame.T @ (geo.joint_centres[j] - geo.centres[shaft])
-                u = frame.T @ yoke
-                for label, sign in zip(labels.split(), (1.0, -1.0, 1.0, -1.0)):
-                    if label in ("F1", "F2", "F5", "F6"):
-                        index[label] = add(ns + j, shaft, sign * joint.hs_m * e, e, centre, u,
-                                           joint.radial_clearance_m, True, *hertz)
-                    else:
-                        index[label] = add(ns + j, shaft, sign * joint.ht_m * e, sign * e,
-                                           centre, sign * u, joint.hb_m, False, *hertz)
-            self.joint_contacts.append(index)
+        self.start_frames = self._start_frames()
+        rows, self.parts = _contact_rows(self, damping_length_unit_m)
         c = self.c = _Contacts(*(np.array(column) for column in zip(*rows)))
-        self.d_max = ct.damping_full_depth_m
+        self.d_max = scene.contact.damping_full_depth_m
         self.contact_map, self.contact_bias = self._contact_map()
         # the contact force acts +F on a, -F on b; the ground's row is dropped
         m = len(c.a)
@@ -307,6 +353,31 @@ class _Model:
         self.links[c.a[inner], c.b[inner]] = self.links[c.b[inner], c.a[inner]] = True
         self.jacobian_columns = self._colour()
         self.kernel_args = self._packed(scene)
+
+    def _start_frames(self) -> np.ndarray:
+        """(bodies, 3, 3): each body's frame at the start (body to global). Shaft bodies:
+        columns (n1, axis, n3) turned by the shaft's angle, so a shaft's axis is its
+        second body axis; cross-pins: (e1, e2, e3).
+        """
+        geo, kin = self.motion.geometry, self.motion.kin
+        frames = []
+        for g in self.segments:
+            a = geo.axes[g.shaft]
+            rest = np.column_stack([np.cross(a, geo.plane_normal), a, geo.plane_normal])
+            frames.append(Rotation.from_rotvec(kin.phi[g.shaft, 0] * a).as_matrix() @ rest)
+        frames += [np.column_stack([kin.e1[j, 0], kin.e2[j, 0], kin.e3[j, 0]])
+                   for j in range(len(self.scene.joints))]
+        return np.array(frames)
+
+    def local(self, body: int, point: np.ndarray | None = None,
+              vector: np.ndarray | None = None) -> np.ndarray:
+        """A global point or vector at the start in ``body``'s coordinates (the ground,
+        index ``n_bodies``: global).
+        """
+        if body == self.n_bodies:
+            return point if vector is None else vector
+        frame = self.start_frames[body]
+        return frame.T @ (point - self.rest_centre[body] if vector is None else vector)
 
     def _packed(self, scene: Scene) -> tuple:
         """The model as the compiled kernels take it (:mod:`penalty_kernels`)."""
@@ -366,24 +437,18 @@ class _Model:
 
     # ------------------------------------------------------------------ state layout
 
-    def initial_state(self, t0: float) -> np.ndarray:
+    def initial_state(self) -> np.ndarray:
         """Rest positions (cross-pins centred in their clearances), orientations and
-        speeds of the rigid model at ``t0``, centres at rest.
+        speeds of the rigid model at the start, centres at rest.
         """
-        m = simulate(self.scene, [t0])
-        geo, kin = self.geometry, m.kin
-        frames = [Rotation.from_rotvec(kin.phi[k, 0] * geo.axes[k]).as_matrix()
-                  @ self.rest_frame[k] for k in range(self.n_shafts)]
-        frames += [np.column_stack([kin.e1[j, 0], kin.e2[j, 0], kin.e3[j, 0]])
-                   for j in range(len(self.scene.joints))]
-        rates = [m.omega[k, 0] * geo.axes[k] for k in range(self.n_shafts)]
+        m, nb = self.motion, self.n_bodies
+        rates = [m.omega[g.shaft, 0] * m.geometry.axes[g.shaft] for g in self.segments]
         rates += list(m.pin_omega[:, 0])
-        nb = self.n_bodies
         return np.concatenate([
             np.zeros(3 * nb),
-            Rotation.from_matrix(np.array(frames)).as_quat()[:, [3, 0, 1, 2]].ravel(),
+            Rotation.from_matrix(self.start_frames).as_quat()[:, [3, 0, 1, 2]].ravel(),
             np.zeros(3 * nb),
-            np.concatenate([f.T @ w for f, w in zip(frames, rates)]),
+            np.concatenate([f.T @ w for f, w in zip(self.start_frames, rates)]),
         ])
 
     # ------------------------------------------------------------------ contacts
@@ -423,6 +488,32 @@ class _Model:
                         c.exponent[:, None], c.c_max[:, None], self.d_max)
         force = -f * np.where(radial, normal, e)
         return d, f, force, np.concatenate([arm, offset + arm_j], axis=1)
+
+    def link_values(self, force: np.ndarray, arms: np.ndarray, rot: np.ndarray) -> np.ndarray:
+        """The operator's columns (n, k) from the contacts' forces on body ``a`` (3, m, k),
+        their arms from ``a``'s centre (3, 2m, k) and the bodies' rotations: per link, the
+        net force of its contacts on the link's body and their net moment about the
+        link's point, along each column's direction (turning with the cross-pin for a
+        link in the pin's frame, fixed otherwise, as the operator's columns).
+        """
+        op, k = self.operator, force.shape[-1]
+        out = np.empty((len(op.names), k))
+        for link, rows in zip(op.contacts, self.parts):
+            body = link.body
+            net = force[:, rows].sum(axis=1)
+            point = self.local(body, op.points[0, link.columns[0]])
+            lever = np.einsum("ijk,j->ik", rot[body], point)
+            moment = _cross(arms[:, rows] - lever[:, None], force[:, rows]).sum(axis=1)
+            for c in link.columns:
+                direction = op.directions[0, c]
+                if link.frame == "pin":
+                    direction = np.einsum("ijk,j->ik", rot[body],
+                                          self.local(body, vector=direction))
+                else:
+                    direction = np.broadcast_to(direction[:, None], (3, k))
+                pure = np.isnan(op.points[0, c, 0])
+                out[c] = ((moment if pure else net) * direction).sum(axis=0)
+        return out
 
     # ------------------------------------------------------------------ dynamics
 
@@ -537,11 +628,10 @@ def simulate_penalty(
             f"{', '.join(sorted(scene.effects)) or 'none'}); add it to the scene's effects "
             "to run the penalty-contact simulation"
         )
-    if scene.slip_joints or any(b.kind != "locating" for s in scene.shafts for b in s.bearings):
+    if any(s.friction_coefficient > 0 for s in scene.slip_joints):
         raise SceneError(
-            f"scene {scene.name!r}: the penalty-contact simulation does not apply to scenes "
-            "with slip joints or floating bearings (it models every bearing as locating and "
-            "every joint as a cross-pin)")
+            f"scene {scene.name!r}: the penalty-contact simulation models a slip joint's "
+            "spline as frictionless; set its friction_coefficient to 0")
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
     if kernel == "auto":
@@ -556,7 +646,7 @@ def simulate_penalty(
     start, cpu = _time.perf_counter(), _time.process_time()
     clock = {"rhs": 0.0, "jacobian": 0.0}
     model = _Model(scene, damping_length_unit_m)
-    y0 = model.initial_state(t0)
+    y0 = model.initial_state()
     atol, step = model.tolerances(atol_m)
     states = np.full((len(t), model.n_state), np.nan)
     states[t == t0] = y0
@@ -685,29 +775,15 @@ def _timed(model: _Model, kernel: str, step: np.ndarray, clock: dict):
 
 
 def _sample(model: _Model, states: np.ndarray):
-    """Named forces (in the equilibrium operator's order), shaft speeds about their own
-    axes and the deepest penetration at sampled states (T, n).
+    """Named forces (the equilibrium operator's columns, :meth:`_Model.link_values`),
+    shaft speeds about their own axes and the deepest penetration at sampled states
+    (T, n).
     """
     bodies = model.bodies(states.T)
-    depth, push, force, _ = model.contacts(bodies)
+    depth, _, force, arms = model.contacts(bodies)
     rot, omega = bodies[4:]
-    scene, ns = model.scene, model.n_shafts
-    speeds = (omega[:ns] * rot[:ns, :, 1]).sum(axis=1)
-    bearings = iter(model.bearing_contacts)
-    forces = {}
-    for shaft in scene.shafts:
-        for bearing in shaft.bearings:
-            radial, faces = next(bearings)
-            total = force[:, radial] + force[:, faces].sum(axis=1)
-            for i, axis in enumerate("xyz"):
-                forces[f"bearing.{shaft.name}.{bearing.name}.{axis}"] = total[i]
-    for j, joint in enumerate(scene.joints):
-        frame, index = rot[ns + j], model.joint_contacts[j]
-        for radial, comps, faces in (("F1 F2", (1, 2), "F3 F4"), ("F5 F6", (2, 0), "F7 F8")):
-            for label in radial.split():
-                for c in comps:
-                    forces[f"{joint.name}.{label}.e{c + 1}"] = (
-                        force[:, index[label]] * frame[:, c]).sum(axis=0)
-            for label in faces.split():
-                forces[f"{joint.name}.{label}"] = push[index[label]]
-    return forces, speeds, depth.max(axis=0)
+    first = [next(g for g, s in enumerate(model.segments) if s.shaft == k)
+             for k in range(len(model.scene.shafts))]
+    speeds = (omega[first] * rot[first, :, 1]).sum(axis=1)
+    values = model.link_values(force, arms, rot)
+    return dict(zip(model.operator.names, values)), speeds, depth.max(axis=0)

@@ -99,15 +99,11 @@ def bearing_loads(op: Operator) -> dict[str, np.ndarray]:
     out = {}
     dets = [determinacy(op, i) for i in range(len(op.t))]
     x = np.array([d.min_norm for d in dets])
-    for c in op.of_kind("bearing-locating", "bearing-floating"):
-        frame = op.shaft_frames[c.shaft]
-        cols = list(c.columns)
-        basis = np.eye(3) if c.frame == "global" else frame[:2]
-        for label, axis in (("in_plane", frame[0]), ("normal", frame[1])):
-            coeff = basis @ axis  # the component as a combination of the columns
-            free = np.array([np.linalg.norm(coeff @ d.null_basis[cols]) for d in dets])
-            out[f"{c.element}.{label}"] = np.where(free < DETERMINATE_TOL, x[:, cols] @ coeff,
-                                                   np.nan)
+    for c in op.bearings():
+        rows = op.bearing_matrix(c)  # the load in the shaft's frame from the columns
+        for label, row in (("in_plane", rows[0]), ("normal", rows[1])):
+            free = np.array([np.linalg.norm(row @ d.null_basis) for d in dets])
+            out[f"{c.element}.{label}"] = np.where(free < DETERMINATE_TOL, x @ row, np.nan)
     return out
 
 

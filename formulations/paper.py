@@ -120,7 +120,8 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
         w = np.cross(s, u)
         axial = np.zeros(len(names))
         for bearing in shaft.bearings:
-            cols = [op.index(f"bearing.{shaft.name}.{bearing.name}.{c}") for c in "xyz"]
+            link = next(c for c in op.bearings(k) if c.label == bearing.name)
+            cols = [link.column(c) for c in "xyz"]
             p, q = np.zeros(len(names)), np.zeros(len(names))
             p[cols], q[cols], axial[cols] = u, w, s / len(shaft.bearings)
             P_cols.append(p)
@@ -134,16 +135,17 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
     yokes = {(c.joint, c.trunnion): (c.body, c.other) for c in op.of_kind("end-face")}
     for j, joint in enumerate(scene.joints):
         e1, e2, e3 = op.pin_frames[j, i]
+        contact = op.joint_contacts(j)  # by the paper's labels F1 ... F8
         theta = {t: add(f"{joint.name}.theta{t}") for t in (1, 2, 5, 6)}
         f = {n: add(f"{joint.name}.f{n}") for n in range(1, 9)}
         for n, (cos_c, sin_c) in {1: ("e2", "e3"), 2: ("e2", "e3"),
                                   5: ("e3", "e1"), 6: ("e3", "e1")}.items():
-            P_cols.append(-unit(op.index(f"{joint.name}.F{n}.{cos_c}")))
-            Q_cols.append(-unit(op.index(f"{joint.name}.F{n}.{sin_c}")))
+            P_cols.append(-unit(contact[f"F{n}"].column(cos_c)))
+            Q_cols.append(-unit(contact[f"F{n}"].column(sin_c)))
             mag.append(f[n])
             ang.append(theta[n])
         for n in (3, 4, 7, 8):
-            lin.append((f[n], unit(op.index(f"{joint.name}.F{n}"))))
+            lin.append((f[n], unit(contact[f"F{n}"].columns[0])))
         for trunnion, (ta, tb), (fa, fb_), (cos_dir, sin_dir) in (
             ("e1", (1, 2), (3, 4), (e2, e3)),
             ("e2", (5, 6), (7, 8), (e3, e1)),
