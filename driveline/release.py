@@ -22,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 from itertools import combinations
+from math import comb
 
 from .determinacy import Determinacy, determinacy, holding
 from .dynamics import Motion
@@ -138,6 +139,22 @@ def released_operator(motion: Motion, releases) -> Operator:
 MAX_RELEASES = 4
 """The advisor tries every set of up to this many releases."""
 
+MAX_RELEASE_SETS = 400
+"""Most release sets the advisor may have to try (every set of up to
+:data:`MAX_RELEASES` of the scene's candidates), known before any is built: each costs
+an operator and SVDs (tenths of a second at eight shafts). The built-in scenes need at
+most 99; a line with every bearing of eight shafts locating would need thousands."""
+
+
+class ReleaseSearchTooLarge(SceneError):
+    """The release search a scene would need exceeds :data:`MAX_RELEASE_SETS`."""
+
+
+def search_size(scene: Scene) -> int:
+    """Release sets of up to :data:`MAX_RELEASES` of ``scene``'s :func:`candidates`."""
+    n = len(candidates(scene))
+    return sum(comb(n, k) for k in range(MAX_RELEASES + 1))
+
 
 @dataclass(frozen=True)
 class Advice:
@@ -227,8 +244,15 @@ def advise(motion: Motion, i: int) -> Advice:
     only end-face pair modes; among those of the smallest size prefer by
     :func:`_preference`, then the first in :func:`candidates` order. Each set is
     verified by re-running determinacy on the released scene. SceneError when no set
-    of up to :data:`MAX_RELEASES` works.
+    of up to :data:`MAX_RELEASES` works; :class:`ReleaseSearchTooLarge` (a SceneError),
+    before any work, when the search could need more than :data:`MAX_RELEASE_SETS` sets.
     """
+    size = search_size(motion.scene)
+    if size > MAX_RELEASE_SETS:
+        raise ReleaseSearchTooLarge(
+            f"scene {motion.scene.name!r}: the release search would try {size} release sets "
+            f"(every set of up to {MAX_RELEASES} of {len(candidates(motion.scene))} "
+            f"candidates); at most {MAX_RELEASE_SETS}: name the releases to apply instead")
     op = build_operator(motion)
     det = determinacy(op, i)
     modes = named_modes(motion, i, op)

@@ -11,7 +11,7 @@ import pytest
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.driveline.loading import builtin_text, load_scene, scene_from_dict
+from cardan_forces.driveline.loading import builtin_names, builtin_text, load_scene, scene_from_dict
 from cardan_forces.driveline.modes import counts
 from cardan_forces.driveline.release import advise, named_modes, released_operator
 from cardan_forces.driveline.scene import SceneError
@@ -215,12 +215,15 @@ def test_hard_case_of_another_scene():
     assert covered(runs)
 
 
-def test_penalty_simulation_refuses_the_new_elements():
+def test_penalty_simulation_refuses_a_slip_joint_with_friction():
     from cardan_forces.driveline.penalty import simulate_penalty
 
+    slip = {"name": "slip", "shaft": "intermediate", "offset_m": 0.0, "pitch_radius_m": 0.02,
+            "friction_coefficient": 0.1}
     scene = scene_from_dict({"extends": "paper-slip", "name": "slip-penalty",
-                             "effects": ["gravity", "inertia", "penalty_dynamics"]})
-    with pytest.raises(SceneError, match="does not apply"):
+                             "effects": ["gravity", "inertia", "penalty_dynamics"],
+                             "slip_joints": [slip]})
+    with pytest.raises(SceneError, match="frictionless"):
         simulate_penalty(scene, [0.0])
 
 
@@ -268,3 +271,38 @@ def test_advisor_recovers_the_propshaft_design_from_an_all_locating_line():
     assert len(labels) == 4 and "slip:rear_prop" in labels
     assert "float:front_prop.centre" in labels
     assert advice.released.nullity == 6
+
+
+def _line(n: int):
+    """An ``n``-shaft line from the paper's: its end shafts, middle shafts of 0.5 m with
+    one centre bearing each, every bearing locating, joints at 10 deg."""
+    import tomllib
+
+    raw = tomllib.loads(builtin_text("paper"))
+    first, mid, last = raw["shafts"]
+    mids = [{**mid, "name": f"mid{k}", "length_m": 0.5,
+             "bearings": [{"name": "centre", "offset_m": 0.0}]} for k in range(1, n - 1)]
+    joints = [{**raw["joints"][0], "name": f"uj{k}", "articulation_deg": 10.0}
+              for k in range(1, n)]
+    return scene_from_dict({"extends": "paper", "name": f"line{n}",
+                            "shafts": [first, *mids, last], "joints": joints})
+
+
+def test_the_release_search_is_refused_before_any_work_when_too_large(monkeypatch, capsys,
+                                                                      tmp_path):
+    """Eight shafts, every bearing locating: 18 candidates, thousands of sets; refused
+    before a single operator is built (the advisor would otherwise run for minutes)."""
+    from cardan_forces.driveline import release
+
+    scene = _line(8)
+    assert release.search_size(scene) > release.MAX_RELEASE_SETS
+    motion = simulate(scene, [0.3])
+
+    def no_work(*_):
+        raise AssertionError("an operator was built")
+
+    monkeypatch.setattr(release, "build_operator", no_work)
+    with pytest.raises(release.ReleaseSearchTooLarge, match="at most"):
+        release.advise(motion, 0)
+    assert all(release.search_size(load_scene(n)) <= release.MAX_RELEASE_SETS
+               for n in builtin_names())
