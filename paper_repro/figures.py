@@ -23,6 +23,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from cardan_forces.driveline.dynamics import Motion  # noqa: E402
+from cardan_forces.driveline.equilibrium import Operator  # noqa: E402
 from scipy.ndimage import uniform_filter1d  # noqa: E402
 
 SMOOTH_S = 0.1
@@ -92,40 +93,36 @@ def fig12(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None) ->
     return csv
 
 
-def joint_magnitudes(names: tuple[str, ...], forces: np.ndarray, joint: str = "uj1") -> dict:
-    """|F1| ... |F8| of one joint (N) from named Cartesian forces (T, n): radial forces
-    as the length of their 2-vector, end faces as they are.
+def joint_magnitudes(op: Operator, forces: np.ndarray, joint: int = 0) -> dict:
+    """|F1| ... |F8| of joint ``joint`` (scene index) in N, from forces (T, n) in the
+    operator's columns: a radial force as the length of its 2-vector, an end face's push
+    as it is (:meth:`Operator.contact_magnitudes`).
     """
-    idx = {n: i for i, n in enumerate(names)}
-    out = {}
-    for k in range(1, 9):
-        label = f"F{k}"
-        parts = [idx[n] for n in names if n.startswith(f"{joint}.{label}.")]
-        parts = parts or [idx[f"{joint}.{label}"]]
-        out[label] = np.linalg.norm(forces[:, parts], axis=1)
+    links = op.joint_contacts(joint)
+    magnitudes = op.contact_magnitudes(forces, ("trunnion-radial", "end-face"))
+    return {label: magnitudes[links[label].name] for label in sorted(links)}
+
+
+def bearing_loads(op: Operator, forces: np.ndarray, shaft: int = 0) -> dict:
+    """The paper's Fig. 14 quantities (N) of shaft ``shaft``: per bearing
+    ``<bearing>_radial``, the length of its load normal to the shaft's axis, and
+    ``axial``, the sum of its bearings' loads along the axis (the paper merges them);
+    in the shaft's own frame (:meth:`Operator.bearing_loads`).
+    """
+    loads = op.bearing_loads(forces, shaft).values()
+    out = {f"{load.label}_radial": load.radial for load in loads}
+    out["axial"] = sum(load.axial for load in loads)
     return out
 
 
-def bearing_loads(names: tuple[str, ...], forces: np.ndarray, shaft: str = "input") -> dict:
-    """The paper's Fig. 14 quantities (N): far (left) and near (right) bearing radial
-    loads (length of the components normal to the shaft, x being its axis in the paper
-    frame) and the axial load (sum of the two bearings' x, which the paper merges).
+def fig13(op: Operator, histories: dict[str, np.ndarray], out: Path) -> Path:
+    """Fig. 13: the eight contact forces F1-F8 of joint 1 (N), one column per method
+    (forces in the operator's columns at its instants).
     """
-    idx = {n: i for i, n in enumerate(names)}
-    col = lambda b, a: forces[:, idx[f"bearing.{shaft}.{b}.{a}"]]  # noqa: E731
-    return {
-        "far_radial": np.hypot(col("far", "y"), col("far", "z")),
-        "near_radial": np.hypot(col("near", "y"), col("near", "z")),
-        "axial": col("far", "x") + col("near", "x"),
-    }
-
-
-def fig13(t: np.ndarray, names: tuple[str, ...], histories: dict[str, np.ndarray], out: Path,
-          scene_name: str) -> Path:
-    """Fig. 13: the eight contact forces F1-F8 of joint 1 (N), one column per method."""
+    t, scene_name = op.t, op.scene.name
     columns = {"t": t}
     for method, forces in histories.items():
-        for label, values in joint_magnitudes(names, forces).items():
+        for label, values in joint_magnitudes(op, forces).items():
             columns[f"{label}_{method}"] = values
     csv = write_csv(Path(out) / "fig13.csv", _with_average(columns, t))
     titles = {1: "radial", 2: "radial", 3: "axial", 4: "axial", 5: "radial", 6: "radial",
@@ -138,16 +135,17 @@ def fig13(t: np.ndarray, names: tuple[str, ...], histories: dict[str, np.ndarray
     return csv
 
 
-def fig14(t: np.ndarray, names: tuple[str, ...], histories: dict[str, np.ndarray],
-          bounds: dict[str, tuple[np.ndarray, np.ndarray]], out: Path, scene_name: str,
+def fig14(op: Operator, histories: dict[str, np.ndarray],
+          bounds: dict[str, tuple[np.ndarray, np.ndarray]], out: Path,
           number: int = 14) -> Path:
     """Fig. 14 (15 with horizontal gravity): the input shaft's bearing loads per method,
     with the rigid solution set's interval (``bounds``: quantity -> (low, high), NaN where
     not computed, inf where unbounded).
     """
+    t, scene_name = op.t, op.scene.name
     columns = {"t": t}
     for method, forces in histories.items():
-        for q, values in bearing_loads(names, forces).items():
+        for q, values in bearing_loads(op, forces).items():
             columns[f"{q}_{method}"] = values
     for q, (low, high) in bounds.items():
         columns[f"{q}_set_min"], columns[f"{q}_set_max"] = low, high

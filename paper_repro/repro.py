@@ -25,8 +25,8 @@ from cardan_forces.driveline.kinematics import kinematics
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene
-from cardan_forces.experiments.analysis import value_range
 from cardan_forces.experiments.environment import machine, versions
+from cardan_forces.experiments.study import value_range
 from scipy.stats import binomtest
 
 from . import figures
@@ -49,16 +49,17 @@ COMPLIANCE_VS_PENALTY = {"compliance": "clarabel", "compliance_hertz": "clarabel
 same effects, so the compliance formulations see the same clearances as gaps)."""
 
 
-def bearing_bounds(op: Operator, shaft: str = "input") -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Intervals of Fig. 14's loads over the rigid set at ``BOUND_INSTANTS`` instants (NaN
-    elsewhere). Axial: the exact range of the sum of both bearings' x. Radial: the range
-    of the radial length allowed by the y and z component intervals (their box hull).
+def bearing_bounds(op: Operator, shaft: int = 0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Intervals of Fig. 14's loads (:func:`figures.bearing_loads`) over the rigid set at
+    ``BOUND_INSTANTS`` instants (NaN elsewhere), in the shaft's frame. Axial: the exact
+    range of the sum of the bearings' axial loads. Radial: the range of the radial
+    length allowed by the in-plane and normal component intervals (their box hull).
     """
     T = len(op.t)
     picks = np.unique(np.linspace(0, T - 1, min(BOUND_INSTANTS, T)).round().astype(int))
+    rows = {c.label: op.bearing_matrix(c) for c in op.bearings(shaft)}
     out = {q: (np.full(T, np.nan), np.full(T, np.nan))
-           for q in ("far_radial", "near_radial", "axial")}
-    eye = np.eye(len(op.names))
+           for q in [f"{label}_radial" for label in rows] + ["axial"]}
 
     def span(i, c):  # None: unbounded on that side; a failed LP is not computed (NaN)
         r = value_range(op, i, c)
@@ -68,14 +69,13 @@ def bearing_bounds(op: Operator, shaft: str = "input") -> dict[str, tuple[np.nda
                 np.inf if r["max"] is None else r["max"])
 
     for i in picks:
-        axial = eye[op.index(f"bearing.{shaft}.far.x")] + eye[op.index(f"bearing.{shaft}.near.x")]
-        out["axial"][0][i], out["axial"][1][i] = span(i, axial)
-        for side in ("far", "near"):
-            ranges = [span(i, eye[op.index(f"bearing.{shaft}.{side}.{a}")]) for a in "yz"]
+        out["axial"][0][i], out["axial"][1][i] = span(i, sum(m[2] for m in rows.values()))
+        for label, matrix in rows.items():
+            ranges = [span(i, matrix[a]) for a in (0, 1)]
             closest = [0.0 if lo <= 0.0 <= hi else min(abs(lo), abs(hi)) for lo, hi in ranges]
             farthest = [max(abs(lo), abs(hi)) for lo, hi in ranges]
-            out[f"{side}_radial"][0][i] = np.hypot(*closest)
-            out[f"{side}_radial"][1][i] = np.hypot(*farthest)
+            out[f"{label}_radial"][0][i] = np.hypot(*closest)
+            out[f"{label}_radial"][1][i] = np.hypot(*farthest)
     return out
 
 
@@ -138,15 +138,15 @@ def _sign_test(differences: list[np.ndarray], scale: list[np.ndarray], block: in
 
 
 def _fig13_notes(op: Operator, hist: dict[str, History]) -> list[str]:
-    mags = {m: figures.joint_magnitudes(op.names, h.forces) for m, h in hist.items()}
+    mags = {m: figures.joint_magnitudes(op, h.forces) for m, h in hist.items()}
     det = determinacy(op, len(op.t) // 2).determinate
-    unique = [n for n, d in zip(op.names, det) if d and n.startswith("uj1.")]
+    joint1 = sorted(c for link in op.joint_contacts(0).values() for c in link.columns)
+    unique = [op.names[c] for c in joint1 if det[c]]
     lines = [f"- components of joint 1 that the rigid model determines (at t = "
              f"{op.t[len(op.t) // 2]:.3f} s): {', '.join(unique) or 'none'}; all others "
              "depend on the selection rule."]
     rigid = [m for m in mags if m != "penalty"]
-    for k in range(1, 9):
-        label = f"F{k}"
+    for label in mags["positive"]:
         spread = np.nanmax([np.nanmax(np.abs(mags[m][label] - mags["positive"][label]))
                             for m in rigid])
         peak = np.nanmax([np.nanmax(mags[m][label]) for m in rigid])
@@ -160,8 +160,8 @@ def _fig13_notes(op: Operator, hist: dict[str, History]) -> list[str]:
 def _frequency_note(op: Operator, mags) -> list[str]:
     """The paper: the ADAMS forces vary at a higher frequency than its method's."""
     def rough(ok):
-        r = {m: np.nanmedian([np.nanmean(np.abs(np.diff(mags[m][f"F{k}"][ok], 2)))
-                              for k in range(1, 9)]) for m in ("paper", "penalty")}
+        r = {m: np.nanmedian([np.nanmean(np.abs(np.diff(values[ok], 2)))
+                              for values in mags[m].values()]) for m in ("paper", "penalty")}
         return r["penalty"] / r["paper"]
 
     verdict, values = _verdict(rough, _settled(op.t), lambda r: r >= 2.0, lambda r: r <= 0.5)
@@ -177,8 +177,8 @@ def _larger_note(op: Operator, mags) -> list[str]:
     """The paper: apart from peaks, its method's forces are slightly larger than ADAMS's."""
     ok = _settled(op.t)
     block = max(1, int(round(SMOOTH_S / np.median(np.diff(op.t))))) if len(op.t) > 1 else 1
-    smooth = {k: moving_average(mags["penalty"][f"F{k}"], op.t)[ok] for k in range(1, 9)}
-    share, n, p, rel = _sign_test([mags["paper"][f"F{k}"][ok] - smooth[k] for k in range(1, 9)],
+    smooth = {k: moving_average(v, op.t)[ok] for k, v in mags["penalty"].items()}
+    share, n, p, rel = _sign_test([mags["paper"][k][ok] - smooth[k] for k in smooth],
                                   list(smooth.values()), block)
     if n and p < SIGNIFICANCE and share > 0.5:
         verdict = "agrees" if rel <= 0.25 else "disagrees (larger, but not slightly)"
@@ -198,7 +198,7 @@ def _larger_note(op: Operator, mags) -> list[str]:
 
 def _bearing_notes(op: Operator, hist: dict[str, History], bounds, number: int) -> list[str]:
     lines = []
-    loads = {m: figures.bearing_loads(op.names, h.forces) for m, h in hist.items()}
+    loads = {m: figures.bearing_loads(op, h.forces) for m, h in hist.items()}
     for q in ("far_radial", "near_radial", "axial"):
         lo, hi = bounds[q]
         ok = ~np.isnan(lo)
@@ -354,10 +354,12 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     if 12 in figs:
         csv = figures.fig12(motion, out, None if pen is None else pen.omega)
         ratio = motion.omega[1][1:] / motion.omega[0][1:]
+        g1 = scene.joints[0].articulation_deg
         sections.append(("Fig. 12: intermediate shaft angular velocity", csv, [
             f"- omega_intermediate / omega_input oscillates in [{ratio.min():.4f}, "
             f"{ratio.max():.4f}] (eq. 3: [cos g1, 1/cos g1] = "
-            f"[{np.cos(np.radians(30)):.4f}, {1 / np.cos(np.radians(30)):.4f}] for 30 deg)",
+            f"[{np.cos(np.radians(g1)):.4f}, {1 / np.cos(np.radians(g1)):.4f}] for "
+            f"g1 = {g1:g} deg)",
             *_speed_notes(motion, pen, (1,))]))
     if any(f in figs for f in (13, 14)):
         sections += _contact_figures(op, figs, out, progress,
@@ -414,13 +416,13 @@ def _contact_figures(op: Operator, figs, out: Path, progress, penalty) -> list:
     forces = {m: h.forces for m, h in hist.items()}
     sections = []
     if 13 in figs:
-        csv = figures.fig13(op.t, op.names, forces, out, op.scene.name)
+        csv = figures.fig13(op, forces, out)
         sections.append(("Fig. 13: contact forces of joint 1", csv,
                          _fig13_notes(op, hist) + _status_lines(hist)))
     if 14 in figs:
         progress("repro: fig 14 solution-set intervals ...")
         bounds = bearing_bounds(op)
-        csv = figures.fig14(op.t, op.names, forces, bounds, out, op.scene.name)
+        csv = figures.fig14(op, forces, bounds, out)
         sections.append(("Fig. 14: input shaft bearing loads", csv,
                          _bearing_notes(op, hist, bounds, 14)))
     return sections
@@ -432,8 +434,7 @@ def _fig15(runs: _Runs, scene: Scene, out: Path, progress):
     pen = runs.penalty_result(scene, "Fig. 15")
     hist = _histories(op, progress, None if pen is None else penalty_history(pen, op.names))
     bounds = bearing_bounds(op)
-    csv = figures.fig14(op.t, op.names, {m: h.forces for m, h in hist.items()}, bounds, out,
-                        scene.name, number=15)
+    csv = figures.fig14(op, {m: h.forces for m, h in hist.items()}, bounds, out, number=15)
     return [(f"Fig. 15: input shaft bearing loads, gravity {scene.gravity_m_s2} m/s^2", csv,
              _bearing_notes(op, hist, bounds, 15))]
 
@@ -445,9 +446,9 @@ def _compliance_vs_penalty(runs: _Runs, scene: Scene, result, out: Path, progres
     """
     progress("repro: compliance vs penalty ...")
     op = build_operator(runs.motion(released(scene), "the compliance comparison"))
-    names = np.array(op.names)
-    groups = {"bearings": np.char.startswith(names, "bearing."),
-              "joints": ~np.char.startswith(names, "bearing.")}
+    bearings = np.zeros(len(op.names), bool)
+    bearings[[c for link in op.bearings() for c in link.columns]] = True
+    groups = {"bearings": bearings, "joints": ~bearings}
     pen = np.column_stack([result.forces[n] for n in op.names])
     ok = _settled(op.t) & np.all(np.isfinite(pen), axis=1)
     rows = []
@@ -511,8 +512,8 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15_scene: st
         f"- scene: `{scene.name}` ({scene.description}); Fig. 15: `{fig15_scene}`",
         f"- instants: {len(motion.t)} from {motion.t[0]:g} to {motion.t[-1]:g} s"
         + (" (quick run)" if quick else ""),
-        "- methods (formulation: backend): "
-        + ", ".join(f"`{m}`: {s}" for m, s in METHODS.items())
+        "- methods (formulations; each figure's notes name the backend that drew it): "
+        + ", ".join(f"`{m}`" for m in METHODS)
         + (", `penalty`: the released scene's penalty-contact simulation"
            if runs.penalties else ""),
         f"- **timings** (measured by this run): total wall {seconds:.1f} s (target <= 120 s "
