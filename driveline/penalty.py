@@ -20,9 +20,17 @@ pushes (``f >= 0``). The contacts:
   the bore axis beyond the housing bottom at ``hb``; the force acts along the trunnion
   axis at the end point; the same ``K``, ``n``;
 - **bearing** (per bearing point of a shaft, against its fixed ground position): radially
-  as a trunnion with clearance ``bearing_clearance_m``, and axially both ways with the
-  same clearance (each bearing locates the shaft axially, as in the rigid model where
-  each bearing carries an axial force); linear, ``K = bearing_stiffness_N_m``, ``n = 1``.
+  as a trunnion with clearance ``bearing_clearance_m``; a locating bearing also axially
+  both ways with the same clearance, a floating one not (as in the rigid model); linear,
+  ``K = bearing_stiffness_N_m``, ``n = 1``;
+- **slip joint** (frictionless spline between the two segments of its shaft): shear and
+  bending by two radial contacts without clearance a pitch radius either side of the
+  joint, torque by two teeth at the pitch radius; no axial contact; linear, as stiff as
+  a bearing (:func:`_contact_rows`).
+
+Every contact is built from the equilibrium operator's links (where each column acts,
+along what), so the bodies are the operator's (a shaft cut by a slip joint is two
+segments, each with its share of the shaft's mass and inertias).
 
 So each reported force is exactly one of the equilibrium operator's columns
 (:mod:`cardan_forces.driveline.equilibrium`) at the current configuration: radial forces normal to
