@@ -28,11 +28,10 @@ import time
 from pathlib import Path
 
 import numpy as np
-from cardan_forces.formulations.problems import RESIDUALS
 from cardan_forces.solvers import qp_measures as qm
 from cardan_forces.solvers import settings_profiles
 from cardan_forces.solvers.qpsolvers_ import conic_duals
-from cardan_forces.solvers.record import Outcome, finalize
+from cardan_forces.solvers.record import Outcome, Residuals, Status, finalize
 
 from .export import as_qp, class_name
 
@@ -82,14 +81,14 @@ def solve_both(problem, backend: str, setting: str) -> dict:
     # the multipliers are the 8th field (named ``y`` or ``duals`` as the record evolves)
     record = finalize(problem, backend, Outcome(status, sol.x, None, message, None, 0.0,
                                                 runtime, duals))
-    force = {k: float(record.residuals[k]) for k in RESIDUALS}
+    force = {k: float(record.residuals[k]) for k in Residuals.KEYS}
     chosen = qm.SETTINGS[setting]
     return {
         "formulation": problem.formulation, "solver": backend, "setting": setting,
         "found": found, **measured, "solver_ok": bool(qm.succeeds(found, *measured.values(),
                                                                   chosen)),
         "solver_rule": qm.failed_rule(found, measured, chosen), **force,
-        "force_ok": record.status in ("solved", "inaccurate")
+        "force_ok": record.status.has_answer
                     and all(v <= FORCE_LEVEL for v in force.values()),
         "force_rule": force_rule(record.status, force),
         "runtime_s": runtime,
@@ -102,7 +101,7 @@ def force_rule(status: str, force: dict[str, float]) -> str:
     """Which force check an answer fails at :data:`FORCE_LEVEL` (``""``: none): ``"no
     answer"`` or the residuals above the level, joined by ``+``.
     """
-    if status not in ("solved", "inaccurate"):
+    if not Status(status).has_answer:
         return "no answer"
     return "+".join(k for k, v in force.items() if not v <= FORCE_LEVEL)
 

@@ -193,8 +193,8 @@ def test_a_new_backend_is_one_registration(tmp_path, monkeypatch, capsys):
 
     registry.available()
     monkeypatch.setitem(registry._CACHE, "fake-ls", Backend(
-        "fake-ls", (LS,), fake, ("numpy",), None, "test", tolerances=("eps",),
-        warm_start=True))
+        name="fake-ls", family="test", distributions=("numpy",), accepts=(LS,), solve=fake,
+        tolerances=("eps",), warm_start=True))
     args = _args("--quick", "--json", "--formulation", "min_norm", "--solver", "fake-ls",
                  "--out", str(tmp_path))
     assert args.func(args) == 0
