@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
 import numpy as np
 import pytest
-from cardan_forces.experiments import hard
+from cardan_forces.driveline.loading import builtin_text
+from cardan_forces.experiments import hard, study
 from cardan_forces.solvers import Residuals, Status
 
 from cardan_forces.cli import main
@@ -118,3 +120,69 @@ def test_cli_json_and_reports(tmp_path, capsys):
 def test_cli_rejects_unknown_case(capsys):
     assert main(["hard", "--case", "no-such-case"]) == 2
     assert capsys.readouterr().err.startswith("cardan: error: argument --case: invalid choice")
+
+
+def _with_equilibrium(run, value: float):
+    """``run`` with every record solved at an equilibrium residual of ``value``."""
+    records = [dataclasses.replace(r, residuals=dataclasses.replace(r.residuals,
+                                                                    equilibrium=value))
+               for r in run.records]
+    return dataclasses.replace(run, history=dataclasses.replace(run.history,
+                                                                records=tuple(records)))
+
+
+def test_the_bar_follows_the_tolerance_asked_for(suite):
+    """A record at 4e-8 after a 1e-8 ask passes (the solver's last digits are not the
+    bar); after a 1e-12 ask it does not."""
+    (run,) = [r for r in suite if (r.case, r.formulation, r.solver)
+              == ("articulation-0", "positive", "qpsolvers-daqp")]
+    assert all(r.solved for r in run.records)
+    runs = [_with_equilibrium(run, 4e-8)]
+    assert hard.covered(runs, tol=1e-8)
+    assert not hard.covered(runs, tol=1e-12)
+    assert hard.bar(None) == hard.bar(1.0) == hard.ACCEPT
+
+
+def _fail_positive_at_the_second_instant(monkeypatch):
+    real = hard.solve_over_time
+
+    def patched(op, formulation, solver=None, **kwargs):
+        h = real(op, formulation, solver, **kwargs)
+        if formulation != "positive":
+            return h
+        records = list(h.records)
+        records[1] = dataclasses.replace(records[1], status=Status.FAILED,
+                                         x=np.full_like(records[1].x, np.nan))
+        return study.history_of(op, formulation, h.solver, h.instants, records, h.wall_s)
+    monkeypatch.setattr(hard, "solve_over_time", patched)
+
+
+def test_a_failing_run_says_which_rows_failed_and_why(monkeypatch, capsys):
+    _fail_positive_at_the_second_instant(monkeypatch)
+    code = main(["hard", "--quick", "--case", "articulation-0", "--formulation", "positive",
+                 "--formulation", "min_norm"])
+    out = capsys.readouterr().out
+    assert code == 1
+    (line,) = [x for x in out.splitlines() if x.startswith("FAIL ")]
+    assert "articulation-0 / positive" in line and "failed" in line and "t=" in line
+
+
+def test_a_variant_beyond_the_scene_limits_does_not_apply(tmp_path, capsys):
+    """A middle shaft of 1e4 kg made 1e6 times heavier exceeds the mass limit: the case
+    is reported as not applying, the suite still exits 0."""
+    text = builtin_text("paper").replace("mass_kg = 33.764", "mass_kg = 1e4")
+    path = tmp_path / "heavy.toml"
+    path.write_text(text)
+    case = next(c for c in hard.CASES if c.name == "mass-1e6")
+    assert "mass" in hard.applies(case, str(path)).reason
+    assert hard.applies(case, "paper") is None
+    code = main(["hard", str(path), "--quick", "--case", "mass-1e6", "--case", "base",
+                 "--formulation", "positive"])
+    out = capsys.readouterr().out
+    assert code == 0 and "does not apply mass-1e6" in out
+
+
+def test_case_words_follow_the_joint_count():
+    case = next(c for c in hard.CASES if c.name == "articulation-89")
+    assert case.describe(2).startswith("both joints")
+    assert case.describe(3).startswith("all 3 joints")

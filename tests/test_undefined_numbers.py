@@ -14,6 +14,8 @@ import re
 import numpy as np
 from cardan_forces.experiments import hard, sweep
 from cardan_forces.experiments.environment import number_text
+from cardan_forces.experiments.study import history_of
+from cardan_forces.solvers import Status
 
 from cardan_forces.cli import main
 
@@ -45,21 +47,25 @@ def test_number_text_keeps_the_width_and_says_undefined():
     assert number_text(None, ".3g", "unbounded") == "unbounded"
 
 
-def _fail_positive_at_second_instant(solve_all):
-    """``solve_all`` with every ``positive`` record of instant 1 turned into a failure
-    without forces, as a solver that gives up reports it."""
-    def patched(op, i, *args, **kwargs):
-        records = solve_all(op, i, *args, **kwargs)
-        if i != 1:
-            return records
-        return [dataclasses.replace(r, status="failed", x=np.full_like(r.x, np.nan),
-                                    residuals=dict.fromkeys(r.residuals, math.inf))
-                if r.formulation == "positive" else r for r in records]
+def _fail_positive_at_second_instant(solve_over_time):
+    """``solve_over_time`` with the ``positive`` record of instant 1 turned into a
+    failure without forces, as a solver that gives up reports it."""
+    def patched(op, formulation, solver=None, **kwargs):
+        h = solve_over_time(op, formulation, solver, **kwargs)
+        if formulation != "positive":
+            return h
+        records = list(h.records)
+        r = records[1]
+        records[1] = dataclasses.replace(r, status=Status.FAILED, x=np.full_like(r.x, np.nan),
+                                         residuals=dataclasses.replace(
+                                             r.residuals, **dict.fromkeys(r.residuals, math.inf)))
+        return history_of(op, formulation, h.solver, h.instants, records, h.wall_s)
     return patched
 
 
 def test_hard_prints_and_writes_no_inf_or_nan(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(hard, "solve_all", _fail_positive_at_second_instant(hard.solve_all))
+    monkeypatch.setattr(hard, "solve_over_time",
+                        _fail_positive_at_second_instant(hard.solve_over_time))
     argv = ["hard", "--quick", "--case", "articulation-0", "--formulation", "positive",
             "--formulation", "min_norm", "--out", str(tmp_path)]
     assert main(argv) == 1  # positive fails at an instant: an unexpected failure
