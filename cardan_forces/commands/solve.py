@@ -12,11 +12,11 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments.analysis import solve_all
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.solvers import Residuals
 from cardan_forces.solvers import get as get_backend
 
 from . import check_time, print_json, progress
 
-RESIDUALS = ("equilibrium", "sign", "complementarity", "cone")
 OPTIMALITY = ("dual", "gap", "distance")
 
 
@@ -52,7 +52,7 @@ def run(args) -> int:
     print(f"{'formulation':16s} {'solver':22s} {'status':10s} {'equil':>8s} {'sign':>8s} "
           f"{'compl':>8s} {'cone':>8s} {'dual':>8s} {'gap':>8s} {'dist':>8s} {'ms':>8s}")
     for r in records:
-        res = [r.residuals.get(k, math.nan) for k in RESIDUALS]
+        res = [r.residuals.get(k, math.nan) for k in Residuals.KEYS]
         res += [r.optimality.get(k, math.nan) for k in OPTIMALITY]
         print(f"{r.formulation:16s} {r.solver:22s} {str(r.status):10s} "
               + " ".join(number_text(v, "8.1e") for v in res)
