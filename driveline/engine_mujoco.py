@@ -391,19 +391,26 @@ def run(op: Operator, softness: Softness = Softness()) -> EngineRun:
         data.xfrc_applied[1, 3:] = scene.input_torque(now) * axes[0]
         data.xfrc_applied[last, 3:] -= scene.load_torque(now) * axes[-1]
 
+    def angle() -> float:  # the first shaft's angle about its axis, in (-pi, pi]
+        turned = data.xmat[1].reshape(3, 3) @ frame[0]
+        return float(np.arctan2(turned @ frame[1], turned @ frame[0]))
+
+    prev = angle()
+    turns = round((scene.initial_angle_rad - prev) / (2 * np.pi))
     for i, target in enumerate(targets):
         while step < target:
             data.xfrc_applied[:] = 0.0
             torques(0.5)
             mj.mj_step(model, data)
             step += 1
+            now = angle()  # counted every step: a turn is many steps
+            turns += round((prev - now) / (2 * np.pi))
+            prev = now
         data.xfrc_applied[:] = 0.0
         torques(0.0)
         mj.mj_forward(model, data)
         forces[i], misfit[i] = _read(mj, model, data, op, i, chain, groups, refs)
-        turned = data.xmat[1].reshape(3, 3) @ frame[0]
-        q[i] = np.arctan2(turned @ frame[1], turned @ frame[0])
+        q[i] = prev + 2 * np.pi * turns
         qd[i] = (data.xmat[1].reshape(3, 3) @ data.qvel[3:6]) @ axes[0]
-    q = scene.initial_angle_rad + np.unwrap(q - q[0]) + (q[0] - scene.initial_angle_rad)
     return EngineRun(op.t, forces, op.names, q, qd, misfit, softness, dt, step,
                      _time.perf_counter() - start)
