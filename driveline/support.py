@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .determinacy import holding
+from .determinacy import equilibrated, holding, numerical_rank
 from .dynamics import Motion, reduced_inertia
 from .equilibrium import build_operator
 from .kinematics import kinematics, rest_geometry
@@ -185,7 +185,46 @@ def check_motion(scene: Scene) -> None:
             "shorten the time span or lower the speed or torques")
 
 
+def still(scene: Scene) -> bool:
+    """Whether the line stays at rest at its initial angle over the whole grid: no
+    initial speed and both torque laws zero (then every instant is one configuration
+    with one load, gravity, and every spline carries zero torque).
+    """
+    laws = (scene.input_torque, scene.load_torque)
+    return scene.initial_speed_rad_s == 0 and all(
+        law.mean_N_m == 0 and law.amplitude_N_m == 0 for law in laws)
+
+
+def check_loads(scene: Scene) -> None:
+    """Raise :class:`SceneError` for a line that cannot carry its loads at any instant:
+    one :func:`still` whose slip joints with friction must carry an axial force. Their
+    friction is at most ``mu T / r`` with the spline torque ``T`` zero, so the axial
+    force is zero; the line carries its loads iff ``b`` lies in the range of ``A``
+    without those columns (end faces come in pairs, so their signs never bind). Exact
+    for the whole grid, since every instant is the same; other lines are not judged
+    here (their spline torques vary with time).
+    """
+    if not still(scene) or not any(s.friction_coefficient > 0 for s in scene.slip_joints):
+        return
+    op = build_operator(at_rest(scene, scene.initial_angle_rad))
+    axial = {f.axial for f in op.slip_friction}
+    A = op.A[0][:, [c for c in range(len(op.names)) if c not in axial]]
+    b = op.b[0][:, None]
+    if numerical_rank(np.linalg.svd(equilibrated(np.hstack([A, b])), compute_uv=False)) \
+            <= numerical_rank(np.linalg.svd(equilibrated(A), compute_uv=False)):
+        return
+    slips = ", ".join(f.slip for f in op.slip_friction)
+    raise SceneError(
+        f"scene {scene.source}: field 'slip_joints': the line cannot carry its loads at any "
+        f"instant: it stays at rest with no torque, so the friction of slip joint(s) {slips} "
+        "(at most mu T / r) is zero, and nothing else holds the part beyond the spline "
+        "against its axial load: give the line a torque or that part a locating bearing")
+
+
 def check_scene(scene: Scene) -> None:
-    """Every structural check of a scene built from its file: motion, then support."""
+    """Every structural check of a scene built from its file: motion, support, then the
+    loads a line at rest can carry.
+    """
     check_motion(scene)
     check_support(scene)
+    check_loads(scene)

@@ -3,6 +3,8 @@ contacts hold it, decided from the rank of the equilibrium operator."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from cardan_forces.driveline.loading import builtin_names, load_scene, scene_from_dict
@@ -98,3 +100,42 @@ def test_new_kinds_of_contact_columns_are_counted_without_change(paper):
     found = free_motions(np.delete(A, axial, axis=1), op.rows)
     assert found.free == 2
     assert {"input.force.x", "intermediate.force.x", "output.force.x"} <= set(found.rows)
+
+
+def _friction_held(paper_raw, gravity, torque):
+    """The paper line with a spline (friction 0.1) in the output shaft, whose far bearing
+    floats: only the spline's friction holds the output's far part along its axis (x)."""
+    first, middle, output = paper_raw["shafts"]
+    output = {**output, "bearings": [{"name": "near", "offset_m": -0.4},
+                                     {"name": "far", "offset_m": 0.4, "kind": "floating"}]}
+    return {"extends": "paper", "name": "friction-held", "gravity_m_s2": gravity,
+            "torque": {"input": torque, "load": 0.0}, "shafts": [first, middle, output],
+            "slip_joints": [{"name": "spline", "shaft": "output", "offset_m": 0.0,
+                             "pitch_radius_m": 0.02, "friction_coefficient": 0.1}]}
+
+
+def test_a_line_whose_spline_friction_must_carry_a_load_without_torque_is_refused(paper_raw):
+    """At rest with zero torque the spline's friction bound is zero: gravity along the
+    output's axis (x) cannot be carried; without an axial component, or with a torque,
+    the line loads."""
+    with pytest.raises(SceneError, match="'slip_joints': the line cannot carry its loads"):
+        scene_from_dict(_friction_held(paper_raw, [-2.0, 0.0, -9.8], 0.0), "line.toml")
+    scene_from_dict(_friction_held(paper_raw, [0.0, 0.0, -9.8], 0.0))
+    scene_from_dict(_friction_held(paper_raw, [-2.0, 0.0, -9.8], 10.0))
+
+
+def test_the_refusal_agrees_with_the_rigid_set_being_empty(paper_raw):
+    """Independent check: the interval LPs over the rigid set (friction bounds included)
+    find no point for the refused line (every instant alike), and one for the accepted."""
+    from cardan_forces.driveline.dynamics import simulate
+    from cardan_forces.driveline.equilibrium import build_operator
+    from cardan_forces.formulations.sets import range_problems
+    from cardan_forces.solvers import solve
+
+    accepted = scene_from_dict(_friction_held(paper_raw, [0.0, 0.0, -9.8], 0.0))
+    refused = dataclasses.replace(accepted, gravity_m_s2=(-2.0, 0.0, -9.8))
+    for scene, feasible in ((accepted, True), (refused, False)):
+        op = build_operator(simulate(scene, [0.0, 2.5]))
+        for i in range(2):
+            record = solve(range_problems(op, i, np.zeros(len(op.names)))[0], "clarabel")
+            assert (record.status == "solved") == feasible
