@@ -1,3 +1,4 @@
+import dataclasses
 import subprocess
 import sys
 
@@ -173,3 +174,51 @@ def test_articulation_up_to_89_degrees_loads(paper_raw, gamma):
     joints[1]["articulation_deg"] = gamma
     assert scene_from_dict({"extends": "paper", "joints": joints}).joints[1].articulation_deg \
         == gamma
+
+
+def _scene_file(path, extends):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(f'extends = "{extends}"\nname = "{path.stem}"\n')
+    return path
+
+
+@pytest.mark.parametrize("files,start", [
+    ({"self.toml": "sub/../self.toml"}, "self.toml"),            # itself, by another path
+    ({"a.toml": "sub/b.toml", "sub/b.toml": "../a.toml"}, "a.toml"),  # through a sub-folder
+    ({"a.toml": "sub/b.toml", "sub/b.toml": "deeper/c.toml",
+      "sub/deeper/c.toml": "../../sub/b.toml"}, "a.toml"),        # a loop not through a
+])
+def test_extends_loops_are_one_scene_error(tmp_path, files, start):
+    (tmp_path / "sub").mkdir()
+    for name, parent in files.items():
+        _scene_file(tmp_path / name, parent)
+    with pytest.raises(SceneError, match="'extends' loops back"):
+        load_scene(tmp_path / start)
+
+
+def test_a_long_extends_chain_is_one_scene_error_and_a_short_one_loads(tmp_path):
+    from cardan_forces.driveline.loading import MAX_EXTENDS_DEPTH
+
+    def chain(folder, length):
+        _scene_file(folder / f"s{length - 1}.toml", "paper")
+        for k in range(length - 1):
+            _scene_file(folder / f"s{k}.toml", f"s{k + 1}.toml")
+        return folder / "s0.toml"
+
+    assert load_scene(chain(tmp_path / "short", 5)).name == "s0"
+    assert load_scene(chain(tmp_path / "edge", MAX_EXTENDS_DEPTH - 1)).name == "s0"
+    with pytest.raises(SceneError, match=f"at most {MAX_EXTENDS_DEPTH}"):
+        load_scene(chain(tmp_path / "long", 5 * MAX_EXTENDS_DEPTH))
+
+
+def test_with_changes_validates_the_variant(paper):
+    """A variant is checked like a file: a field out of range and a rule between fields
+    are refused; a valid change keeps every other field."""
+    joint = dataclasses.replace(paper.joints[0], articulation_deg=95.0)
+    with pytest.raises(SceneError, match="at most 89 deg"):
+        paper.with_changes(joints=(joint, *paper.joints[1:]))
+    with pytest.raises(SceneError, match="'penalty_dynamics' needs 'inertia'"):
+        paper.with_changes(effects=frozenset({"gravity", "penalty_dynamics"}))
+    quiet = paper.with_changes(name="quiet", gravity_m_s2=(0.0, 0.0, 0.0))
+    assert quiet.gravity_m_s2 == (0.0, 0.0, 0.0) and quiet.name == "quiet"
+    assert dataclasses.replace(quiet, name=paper.name, gravity_m_s2=paper.gravity_m_s2) == paper
