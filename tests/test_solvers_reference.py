@@ -46,8 +46,8 @@ def test_reference(ref, name):
     record = solve(ref.problem, name, tol=TOL, reference=ref.x)
     assert record.solver == name and record.names == ref.problem.checks.names
     assert record.setup_s >= 0 and record.solve_s >= 0
-    if ref.status == "solved":
-        assert record.status == "solved", record.message
+    if ref.status == "solved":  # the answer is judged, not the solver's word on it
+        assert record.status.has_answer, record.message
         assert max(_checked(record.residuals).values()) <= ACCEPT
         assert record.residuals["reference"] <= ANSWER_TOL.get(name, ANSWER_TOL["default"])
     else:
@@ -63,7 +63,7 @@ def test_reference(ref, name):
 def test_reference_with_solver_defaults(ref, name):
     """With tol=None every backend answers; looser defaults may only make it inaccurate."""
     record = solve(ref.problem, name, reference=ref.x)
-    assert record.status in ("solved", "inaccurate"), record.message
+    assert record.status.has_answer, record.message
     assert np.all(np.isfinite(record.x))
     if record.status == "inaccurate":
         assert record.message
