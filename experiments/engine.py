@@ -244,6 +244,15 @@ def draw(result: EngineStudy, path: Path) -> None:
     plt.close(fig)
 
 
+def _g(value: float) -> str:
+    return number_text(value, ".3g")
+
+
+def _end(value: float) -> str:
+    """An interval's end, ``unbounded`` where the LP is."""
+    return number_text(value, ".2f", "unbounded")
+
+
 def _spread(result: EngineStudy) -> np.ndarray:
     """Per component, the largest spread (max - min) over the settings at a settled
     sampled instant (N, N m); ``nan`` where no sampled instant is settled.
@@ -271,7 +280,7 @@ def report_lines(result: EngineStudy, mujoco_version: str) -> list[str]:
     span = op.t[-1] - op.t[0]
     for label, r in result.runs.items():
         lines.append(f"| {label} | {r.timestep_s:.3g} | {r.steps} | {r.wall_s:.2f} | "
-                     f"{number_text(r.wall_s / span if span > 0 else np.nan)} |")
+                     f"{_g(r.wall_s / span if span > 0 else np.nan)} |")
     return lines + [""] + agreement_lines(result) + [""] + _sensitivity_lines(result)
 
 
@@ -291,10 +300,10 @@ def agreement_lines(result: EngineStudy) -> list[str]:
             continue
         outside = sorted({n for c in rows for n in c.outside})
         worst = max(rows, key=lambda c: c.closest[1])
-        lines.append(f"| {label} | {number_text(max(c.residual for c in rows))} | "
-                     f"{number_text(max(c.determinate_error_N for c in rows))} | "
+        lines.append(f"| {label} | {_g(max(c.residual for c in rows))} | "
+                     f"{_g(max(c.determinate_error_N for c in rows))} | "
                      f"{', '.join(outside) or 'none'} | {worst.closest[0]} "
-                     f"({number_text(worst.closest[1])}) |")
+                     f"({_g(worst.closest[1])}) |")
     return lines
 
 
@@ -311,12 +320,11 @@ def _sensitivity_lines(result: EngineStudy) -> list[str]:
         lo, hi = result.intervals[i][j]
         values = " | ".join(f"{r.forces[i, j]:.2f}" for r in result.runs.values())
         lines.append(f"| {name} | {'yes' if result.determinate[j] else 'no'} | "
-                     f"[{number_text(lo)}, {number_text(hi)}] | {values} | "
-                     f"{number_text(spread[j])} |")
+                     f"[{_end(lo)}, {_end(hi)}] | {values} | {_g(spread[j])} |")
     det = result.determinate
     lines += ["", f"Largest spread: determinate components "
-              f"{number_text(np.nanmax(spread[det], initial=0.0))}, indeterminate "
-              f"{number_text(np.nanmax(spread[~det], initial=0.0))} (N, N m)."]
+              f"{_g(np.nanmax(spread[det], initial=0.0))}, indeterminate "
+              f"{_g(np.nanmax(spread[~det], initial=0.0))} (N, N m)."]
     return lines
 
 
