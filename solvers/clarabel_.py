@@ -8,8 +8,9 @@ Every solve builds a new solver from this problem's own data. Clarabel's ``updat
 (new numbers in a solver built for another instant) would skip the symbolic setup, but
 it scales the new numbers by the equilibration computed from the first instant's, so
 the answer, the iterations and even the status (``AlmostSolved`` or ``Solved``) would
-depend on which instant was solved before; a new solver costs a few percent of the
-solve here.
+depend on which instant was solved before. A new solver per instant costs its
+symbolic setup: 1.1-1.4 times the solver time of an update and solve on the propshaft's
+conic formulations (one run).
 """
 
 from __future__ import annotations
