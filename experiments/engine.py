@@ -167,6 +167,10 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
     t = scene.time.instants()
     if stop_s is not None:
         t = t[t <= stop_s + 1e-12]
+        if len(t) < 2:
+            raise NotApplicable(f"--stop {stop_s}: the scene's grid starts at "
+                                f"{scene.time.start_s} s with step {scene.time.step_s} s; "
+                                "give at least two of its instants")
     op = cf.build_operator(cf.simulate(scene, t))
     shafts = {s.name for s in scene.shafts}
     runs = {}
@@ -347,11 +351,29 @@ def add_parser(subparsers) -> None:
                               "against the rigid solution set (CSV, PNG, Markdown)")
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     p.add_argument("--out", default="results/engine", help="output folder")
-    p.add_argument("--stop", type=float, default=None,
+    p.add_argument("--stop", type=_stop, default=None,
                    help="simulate up to this time (s; default the scene's stop)")
-    p.add_argument("--instants", type=int, default=6,
+    p.add_argument("--instants", type=_instants, default=6,
                    help="instants compared with the rigid set (default 6)")
     p.set_defaults(func=run)
+
+
+def _stop(text: str) -> float:
+    import argparse
+
+    value = float(text)
+    if not 0.0 < value <= 1e6:
+        raise argparse.ArgumentTypeError(f"a time in (0, 1e6] s, got {text}")
+    return value
+
+
+def _instants(text: str) -> int:
+    import argparse
+
+    value = int(text)
+    if not 2 <= value <= 1001:
+        raise argparse.ArgumentTypeError(f"2 ... 1001, got {text}")
+    return value
 
 
 def run(args) -> int:
@@ -361,7 +383,7 @@ def run(args) -> int:
     except EngineUnsupported as err:
         raise NotApplicable(str(err)) from None
     start = time.perf_counter()
-    result = study(args.scene, args.stop, max(2, args.instants))
+    result = study(args.scene, args.stop, args.instants)
     write(result, Path(args.out), version)
     print("\n".join(agreement_lines(result)))
     print(f"wrote {args.out}/engine.md, engine.csv, engine.png "
