@@ -295,7 +295,8 @@ def _limitations(results, settings) -> list[str]:
         f"ran on the first instants only (count in brackets): {', '.join(cut) or 'none'}.",
         "- cvxpy compiles one parametrized problem per structure (DPP) and reuses it; that "
         "first compilation (up to seconds for a conic form) falls in the run's first "
-        "instant. Clarabel keeps one solver per structure and updates its data; moreau "
+        "instant. Clarabel builds a new solver per instant (its data update would keep "
+        "the first instant's scaling, so answers would depend on the order); moreau "
         "one compiled structure per batch shape.",
         "- The time split of a batched row spreads the batch's time evenly over its "
         "instants; its `conversion` is the layout and setup of the batch.",

@@ -35,7 +35,7 @@ from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
-from cardan_forces.solvers import STATUSES, Record, backends_for, solve
+from cardan_forces.solvers import Record, backends_for, solve
 from cardan_forces.solvers import get as get_backend
 
 KEY = ("scene", "stop_s", "instants", "angle_deg", "amplitude_N_m", "formulation", "solver")
@@ -129,7 +129,7 @@ def _failed(key: dict, exc: Exception, simulate_s: float) -> dict:
 
 def summarize(records: list[Record]) -> dict:
     """Worst status, solved count, worst equilibrium residual, the first complaint."""
-    worst = max(records, key=lambda r: STATUSES.index(r.status))
+    worst = max(records, key=lambda r: r.status)
     return {"status": worst.status, "n_solved": sum(r.solved for r in records),
             "max_equilibrium": max(r.residuals["equilibrium"] for r in records),
             "message": worst.message}
