@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -11,6 +13,7 @@ from cardan_forces.formulations.problems import NLS, QP
 from cardan_forces.solvers import (
     Backend,
     SolverNotFound,
+    Status,
     UnsupportedProblem,
     available,
     backends_for,
@@ -239,3 +242,37 @@ def test_a_solver_past_its_time_limit_is_a_failed_record(monkeypatch):
     record = solve(problem, "qpsolvers-highs")
     assert record.status in ("failed", "inaccurate")
     assert "time limit" in record.message
+
+
+def test_status_is_ordered_and_reads_as_its_string():
+    """Worst of several is ``max``; a status compares, hashes, prints and goes to JSON
+    and CSV as the plain string that callers and files already hold."""
+    import csv
+    import io
+
+    assert max(Status.SOLVED, Status.FAILED, Status.INACCURATE) is Status.FAILED
+    assert sorted(["failed", Status.INACCURATE, Status.SOLVED], key=Status) == [
+        "solved", "inaccurate", "failed"]
+    assert [s.has_answer for s in Status] == [True, True, False, False, False]
+    assert Status.SOLVED == "solved" and "solved" in {Status.SOLVED}
+    assert f"{Status.INFEASIBLE:>11}" == " infeasible" and str(Status.FAILED) == "failed"
+    assert json.dumps({"status": Status.UNBOUNDED}) == '{"status": "unbounded"}'
+    buffer = io.StringIO()
+    csv.writer(buffer).writerow([Status.SOLVED])
+    assert buffer.getvalue().strip() == "solved"
+
+
+def test_typed_measures_read_like_the_dicts_they_replace():
+    record = solve(REFS["ls_min_norm"].problem, "numpy-kkt", reference=REFS["ls_min_norm"].x)
+    assert set(record.residuals) == {"equilibrium", "sign", "complementarity", "cone",
+                                     "reference"}
+    assert record.residuals.get("cone") == record.residuals["cone"] == record.residuals.cone
+    assert "distance" in record.optimality and record.optimality.get("nothing") is None
+    bad = failed_record(REFS["ls_min_norm"].problem, "numpy-kkt", "why")
+    assert "reference" not in bad.residuals and len(bad.residuals) == 4
+    with pytest.raises(KeyError):
+        bad.residuals["reference"]
+    # a record rebuilt with plain values gets the types back
+    rebuilt = dataclasses.replace(record, status="failed",
+                                  residuals=dict.fromkeys(record.residuals, math.inf))
+    assert rebuilt.status is Status.FAILED and rebuilt.residuals.worst()[1] == math.inf
