@@ -11,7 +11,7 @@ records, never exceptions. :func:`solve_batch` solves all instants of a formulat
 batch (``cardan_forces.formulations.batch``) with a batched backend.
 """
 
-from .record import ACCEPT, STATUSES, Optimality, Record, Residuals, Status, failed_record
+from .record import ACCEPT, Optimality, Record, Residuals, Status, failed_record
 from .registry import (
     Backend,
     SolverNotFound,
@@ -27,7 +27,6 @@ from .registry import (
 
 __all__ = [
     "ACCEPT",
-    "STATUSES",
     "Backend",
     "Optimality",
     "Record",

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
 import numpy as np
-from cardan_forces.formulations.problems import Conic
+from cardan_forces.formulations.problems import RESIDUALS, Conic
 
 from .conversions import convert
 from .optimality import measures, recover, unique_optimum
@@ -71,10 +71,6 @@ class Status(str, enum.Enum):
         return format(self.value, spec)
 
 
-STATUSES = tuple(Status)
-"""The statuses from best to worst, for callers written before :class:`Status`
-(``STATUSES.index(record.status)`` still orders them; ``max`` over statuses does the same)."""
-
 ACCEPT = 1e-6
 """Largest relative residual (equilibrium, sign, complementarity, cone) of a solved record."""
 
@@ -122,8 +118,9 @@ class Residuals(_Measures):
     cone: float | np.ndarray
     reference: float | np.ndarray | None = None
 
-    KEYS: ClassVar[tuple[str, ...]] = ("equilibrium", "sign", "complementarity", "cone")
-    """The checked residuals, in the order tables show them."""
+    KEYS: ClassVar[tuple[str, ...]] = RESIDUALS
+    """The checked residuals, in the order tables show them: the keys
+    ``ForceChecks.residuals`` computes, one field each."""
 
     def worst(self) -> tuple[str, float]:
         """The largest checked residual of one record and its name."""
