@@ -173,9 +173,9 @@ def test_unphysical_angle_is_refused_and_a_failed_row(tmp_path, capsys):
     sweep.add_parser(parser.add_subparsers())
     study = sweep.plan(parser.parse_args(["sweep", "--angle", "10", "--formulation",
                                           "min_norm", "--quick"]))
-    (row,) = sweep.run_point(study.task(95.0, 0.0, study.methods))
-    assert row["status"] == "failed" and row["max_equilibrium"] == math.inf
-    assert "must be at most 89 deg" in row["message"]
+    (row,) = sweep.run_point(study.point(95.0, 0.0))
+    assert row.status == "failed" and row.max_equilibrium == math.inf
+    assert "must be at most 89 deg" in row.message
 
 
 def test_point_scene_sets_every_joint_and_the_amplitude():
@@ -183,7 +183,7 @@ def test_point_scene_sets_every_joint_and_the_amplitude():
     sweep.add_parser(parser.add_subparsers())
     study = sweep.plan(parser.parse_args(["sweep", "--angle", "12", "--amplitude", "7",
                                           "--formulation", "min_norm"]))
-    scene = sweep.point_scene(study.task(12.0, 7.0, study.methods))
+    scene = sweep.point_scene(study.point(12.0, 7.0))
     assert [j.articulation_deg for j in scene.joints] == [12.0, 12.0]
     torque = scene.input_torque
     assert (torque.mean_N_m, torque.amplitude_N_m, torque.frequency_hz) == (10.0, 7.0, 1.0)
@@ -222,3 +222,57 @@ def test_ctrl_c_stops_the_workers_at_once_and_keeps_the_csv_whole(tmp_path):
     table = rows(tmp_path)
     assert 1 <= len(table) < 4 and all(None not in r.values() for r in table)
     assert {r["status"] for r in table} <= {"solved", "inaccurate"}
+
+
+@pytest.mark.parametrize("extra,message", [
+    (["--angles", "0:45:30000"], "30000 values; at most 1000"),
+    (["--stop", "100000"], "periods; at most"),
+    (["--angle", "10", "--amplitude", "0:1:900", "--instants", "300"], "solves: at most"),
+    (["--amplitude", "2e9"], "must be at most 1e+09 N m"),
+])
+def test_requests_beyond_the_scene_limits_are_one_line_before_any_work(extra, message,
+                                                                        tmp_path, capsys):
+    assert main(["sweep", "--out", str(tmp_path), *extra]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("cardan: error: ") and err.count("\n") == 1 and message in err
+    assert not (tmp_path / "sweep.csv").exists()
+
+
+@pytest.mark.parametrize("content", [b"\xff\xfe\x00 not text", b"a,b\n1,2\n",
+                                     None])
+def test_a_stored_file_that_is_no_sweep_csv_is_one_line(content, base, tmp_path, capsys):
+    """Not UTF-8, other columns, a cell that does not read as its field's type: exit 2
+    with the file named, and the file left as it was."""
+    path = tmp_path / "sweep.csv"
+    if content is None:  # a whole sweep CSV with one number cell spoiled
+        text = (base / "sweep.csv").read_text()
+        header, first, *rest = text.splitlines(keepends=True)
+        cells = first.split(",")
+        cells[2] = "six"  # instants
+        content = (header + ",".join(cells) + "".join(rest)).encode()
+    path.write_bytes(content)
+    assert main([*ARGS, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("cardan: error: ") and str(path) in err and err.count("\n") == 1
+    assert path.read_bytes() == content
+
+
+def test_rows_read_back_with_their_fields_types(base):
+    from cardan_forces.experiments import sweep_store
+
+    table = sweep_store.read_rows(base / "sweep.csv")
+    assert len(table) == 4
+    for row in table:
+        assert isinstance(row.instants, int) and isinstance(row.angle_deg, float)
+        assert row.status == "solved" and row.n_solved == 6
+        assert sweep_store.parse(sweep_store.cells(row)) == row
+
+
+@pytest.mark.parametrize("extra", [["--angle", "95"], ["--amplitude=-2e9"],
+                                   ["--instants", "30000"], ["--stop", "100000"]])
+def test_the_plan_itself_holds_the_scene_limits(extra):
+    """The sweep's own checks, without the command line's (a caller of ``plan``)."""
+    parser = argparse.ArgumentParser()
+    sweep.add_parser(parser.add_subparsers())
+    with pytest.raises(sweep.SweepError):
+        sweep.plan(parser.parse_args(["sweep", "--formulation", "min_norm", *extra]))

@@ -12,7 +12,7 @@ import math
 import re
 
 import numpy as np
-from cardan_forces.experiments import hard, sweep
+from cardan_forces.experiments import hard, sweep, sweep_store
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.study import history_of
 from cardan_forces.solvers import Status
@@ -95,10 +95,10 @@ def test_sweep_prints_and_writes_no_inf_or_nan(tmp_path, capsys):
     args = ["--angle", "0", "--angle", "30", "--formulation", "min_norm", "--quick",
             "--workers", "1", "--out", str(tmp_path)]
     study = _study(args)
-    (failed,) = sweep.run_point(study.task(95.0, study.amplitudes[0], study.methods))
-    assert failed["status"] == "failed" and failed["max_equilibrium"] == math.inf
+    (failed,) = sweep.run_point(study.point(95.0, study.amplitudes[0]))
+    assert failed.status == "failed" and failed.max_equilibrium == math.inf
     with open(tmp_path / "sweep.csv", "w", newline="") as f:
-        sweep._write(f, [{**failed, "angle_deg": 30.0}], header=True)
+        sweep_store.append(f, [dataclasses.replace(failed, angle_deg=30.0)], header=True)
     assert main(["sweep", *args]) == 0
     out = capsys.readouterr().out
     _clean(out, "stdout")
