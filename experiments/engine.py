@@ -15,8 +15,9 @@ At sampled instants, for the engine's forces ``x_e`` under each softness setting
 
 The softness settings (:data:`SETTINGS`) vary MuJoCo's ``solref`` time constant over
 0.5-8 ms, its damping ratio 0.3-1, ``solimp``'s impedance (0.9, 0.95) to (0.99, 0.999)
-and width 1 mm to 1 um, all bearings alike; and the relative softness of the input
-and output shafts' bearings (one shaft's time constant 4 times the other's). Instants
+and width 1 mm to 1 um, all bearings alike; the relative softness of the input
+and output shafts' bearings (one shaft's time constant 4 times the other's); and the
+integration step (MuJoCo's coarsest, half the time constant, against 1/8). Instants
 within the engine's settling (the first 10 time constants of the softest constraint:
 the line starts unloaded and sags into its constraints) are left out of the
 statistics and said to be.
@@ -47,6 +48,7 @@ SETTINGS = (
     Softness(width_m=1e-6, label="solimp width 1 um"),
     Softness(scaled=(("output", 4.0),), label="output bearings 4x softer"),
     Softness(scaled=(("input", 4.0),), label="input bearings 4x softer"),
+    Softness(steps_per_timeconst=2, label="step timeconst/2"),
 )
 """The softness settings compared (module doc); the first is the reference. A
 ``scaled`` shaft the scene lacks leaves that setting uniform."""
