@@ -10,9 +10,16 @@ package's ``solve`` — conversion, the solver, the checks — split in every ro
   at once: NumPy for the least-norm family, moreau for the conic forms). A per-instant
   run stops after ``--budget-s`` seconds (the paper's method, the baseline, never does).
 - **Accuracy vs time** on evenly spaced instants over the tolerance ladder and each
-  backend's defaults, accuracy measured as optimality from the problem data
+  backend's defaults, accuracy measured by the package's relative optimality measures
   (:mod:`.bench_metrics`): success per level, Pareto fronts, Dolan-Moré performance
-  profiles with shifted geometric mean ratios.
+  profiles with shifted geometric mean ratios, on the solver's own time and end to end.
+- **Two accuracy views on the same solves** (:mod:`.qpbench_harness`): the QPs of those
+  instants (least norms as QPs) through every qpsolvers backend at qpbenchmark's four
+  settings, each solve scored by *solver optimality* (qpbenchmark's absolute measures
+  and success rule, :mod:`cardan_forces.solvers.qp_measures`) and by *force accuracy*
+  (the package's physics), with the failing rule named. ``--harness qpbenchmark`` also
+  exports them as a test set and runs qpbenchmark itself, its success and runtime
+  tables beside the package's.
 
 Running: :mod:`.bench_run`; metrics: :mod:`.bench_metrics`; output: :mod:`.bench_report`.
 Results go to ``--out``: long-format CSVs, PNGs and ``report.md``; ``--json`` prints one
@@ -22,6 +29,7 @@ strict-JSON object.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
 import time
 from pathlib import Path
@@ -38,6 +46,8 @@ from cardan_forces.solvers import get as get_backend
 from . import bench_metrics as metrics
 from . import bench_report as out
 from . import bench_run as runs
+from . import export as exporting
+from . import qpbench_harness as harness
 
 
 def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float) -> dict:
@@ -45,6 +55,7 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
     by formulation (its problems built once, then dropped).
     """
     rows, acc_rows, stages, references, setup, conic = [], [], {}, {}, {}, set()
+    qps = {}
     for name, solvers in backends.items():
         runs.progress(f"bench: building {name} at {len(op.t)} instants ...")
         prepared = runs.prepare(op, name, np.arange(len(op.t)))
@@ -56,8 +67,36 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
         stages.update({(name, solver): parts for solver, parts in batched.items()})
         new, references[name] = runs.accuracy(prepared, solvers, samples, ladder, budget_s)
         acc_rows += new
+        qps |= {f"{name}_{int(i):04d}": prepared.problems[int(i)] for i in samples
+                if exporting.as_qp(prepared.problems[int(i)]) is not None}
     return {"rows": rows, "acc_rows": acc_rows, "stages": stages, "references": references,
-            "setup": setup, "conic": conic}
+            "setup": setup, "conic": conic, "qps": qps}
+
+
+def views(qps: dict, solvers: list[str], folder: Path, with_qpbenchmark: bool) -> dict:
+    """The two-view harness on ``qps`` with the qpsolvers backends among ``solvers``;
+    with ``with_qpbenchmark``, the QPs exported into ``folder/qpbenchmark`` and
+    qpbenchmark itself run on them.
+    """
+    backends = harness.backends_with_profiles(solvers)
+    if not qps or not backends:
+        return {"views": [], "view_rows": [], "view_problems": 0, "qpbenchmark_ran": False}
+    runs.progress(f"bench: {len(qps)} QPs x {len(backends)} backends x 4 settings, "
+                  "scored in both views ...")
+    rows = harness.run_package(qps, backends)
+    theirs = []
+    if with_qpbenchmark:
+        target = folder / "qpbenchmark"
+        target.mkdir(parents=True, exist_ok=True)
+        path = exporting.write_qpbenchmark(target, "cardan_bench",
+                                           {k: exporting.as_qp(p) for k, p in qps.items()},
+                                           "cardan bench QPs")
+        results = target / "qpbenchmark_results.csv"
+        results.unlink(missing_ok=True)
+        runs.progress(f"bench: qpbenchmark itself on {path} ...")
+        theirs = harness.run_qpbenchmark(path, [b.split("-", 1)[1] for b in backends], results)
+    return {"views": harness.side_by_side(harness.package_tables(rows), theirs),
+            "view_rows": rows, "view_problems": len(qps), "qpbenchmark_ran": with_qpbenchmark}
 
 
 def evaluate(measured: dict, ladder, wall_s: float | None) -> dict:
@@ -68,6 +107,7 @@ def evaluate(measured: dict, ladder, wall_s: float | None) -> dict:
     return measured | {
         "summary": summary, "points": metrics.pareto(measured["acc_rows"]),
         "success": success, "profiles": metrics.profiles(measured["acc_rows"], ladder),
+        "overhead": metrics.overhead(summary),
         "targets": metrics.targets(summary, success, measured["conic"], wall_s),
     }
 
@@ -93,6 +133,8 @@ def run(args) -> int:
                                     else runs.SAMPLES).round().astype(int))
     backends = runs.plan(op, args.formulation, args.solver, args.quick)
     measured = measure(op, backends, samples, ladder, args.budget_s)
+    measured |= views(measured["qps"], sorted({s for v in backends.values() for s in v}),
+                      folder, args.harness == "qpbenchmark")
     results = evaluate(measured, ladder, time.perf_counter() - started)
     _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
@@ -114,6 +156,7 @@ def _write(folder: Path, results: dict, settings: dict) -> None:
     out.write_csv(folder / "bench_accuracy.csv", results["acc_rows"], out.ACCURACY_COLUMNS)
     out.write_csv(folder / "bench_profiles.csv", out.profile_rows(results["profiles"]),
                   out.PROFILE_COLUMNS)
+    out.write_csv(folder / "bench_views.csv", results["view_rows"], out.VIEW_COLUMNS)
     out.plot_pareto(results["points"], folder / "bench_pareto.png")
     out.plot_profiles(results["profiles"], folder / "bench_profiles.png")
     (folder / "report.md").write_text(out.report(results, settings))
@@ -149,4 +192,17 @@ def add_parser(subparsers) -> None:
     p.add_argument("--budget-s", type=_seconds, default=runs.BUDGET_S,
                    help=f"seconds per per-instant run before it stops (default "
                         f"{runs.BUDGET_S:g})")
+    p.add_argument("--harness", type=_harness,
+                   help="also run qpbenchmark itself on the bench's QPs (value: qpbenchmark; "
+                        'needs pip install "cardan-forces[bench]")')
     p.set_defaults(func=run)
+
+
+def _harness(text: str) -> str:
+    """``qpbenchmark``, when it is installed (argparse type)."""
+    if text != "qpbenchmark":
+        raise argparse.ArgumentTypeError(f"the only harness is qpbenchmark, got {text!r}")
+    if importlib.util.find_spec("qpbenchmark") is None:
+        raise argparse.ArgumentTypeError('qpbenchmark is not installed: pip install '
+                                         '"cardan-forces[bench]"')
+    return text

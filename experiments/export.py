@@ -165,6 +165,8 @@ def run(args) -> int:
     """``cardan export``: write the chosen problems into ``args.out``."""
     problems = collect(args.scene or ["paper"], args.formulation or QP_FORMULATIONS,
                        args.instants)
+    if not problems:
+        raise NotApplicable("none of the chosen formulations applies to the chosen scenes")
     written = export(Path(args.out), problems, args.module)
     for kind, path in written.items():
         print(f"{kind}: {path}")

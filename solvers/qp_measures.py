@@ -77,7 +77,7 @@ def _Pz(P, z: np.ndarray) -> np.ndarray:
     if P is None:
         return np.zeros_like(z)
     P = np.asarray(P, float)
-    return z @ P.T if P.ndim == 2 else np.einsum("tij,tj->ti", P, z)
+    return z @ P.T if P.ndim == 2 else np.matmul(P, z[:, :, None])[:, :, 0]
 
 
 @functools.lru_cache(maxsize=64)
@@ -139,8 +139,8 @@ def conic_residuals(P, q, A, b, cones, z, y, *, check_dual_cone: bool) -> dict:
     A, b, q = np.asarray(A, float), np.asarray(b, float), np.asarray(q, float)
     bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
     z, y = np.where(bad[:, None], 0.0, z), np.where(bad[:, None], 0.0, y)
-    Az = z @ A.T if A.ndim == 2 else np.einsum("tmn,tn->tm", A, z)
-    Aty = y @ A if A.ndim == 2 else np.einsum("tmn,tm->tn", A, y)
+    Az = z @ A.T if A.ndim == 2 else np.matmul(A, z[:, :, None])[:, :, 0]
+    Aty = y @ A if A.ndim == 2 else np.matmul(y[:, None, :], A)[:, 0]
     Pz = _Pz(P, z)
     dual = np.abs(Pz + q + Aty).max(axis=1, initial=0.0)
     if check_dual_cone:

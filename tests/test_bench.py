@@ -10,9 +10,9 @@ import pytest
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
-from cardan_forces.experiments import bench, bench_metrics, bench_report, bench_run
+from cardan_forces.experiments import bench, bench_metrics, bench_report, bench_run, study
 from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.solvers import SolverNotFound, failed_record, registry, solve
+from cardan_forces.solvers import SolverNotFound, failed_record, qp_measures, registry, solve
 
 
 def _args(*argv):
@@ -75,21 +75,25 @@ def test_no_ladder_for_a_backend_a_tolerance_does_not_change(half_second, formul
     assert np.array_equal(loose.x, tight.x)
 
 
-def _row(solver, instant, time_s, ok=True, tol="default", **measures):
+def _row(solver, instant, time_s, ok=True, tol="default", solve_s=None, **measures):
     base = {"primal": 0.0, "dual": 0.0, "gap": 0.0, "distance": math.nan}
     return {"formulation": "f", "solver": solver, "instant": instant, "time_s": time_s,
+            "solve_s": time_s if solve_s is None else solve_s,
             "tol": tol, "status": "solved" if ok else "failed", "equilibrium": 0.0,
             **(base if ok else dict.fromkeys(base, math.inf)), **measures}
 
 
 def test_performance_profile_on_a_hand_made_table():
-    # instant:        0    1    2    3
-    # a (fast):       1    1    1    fails
-    # b:              2    4    1    3
-    rows = ([_row("a", i, 1.0) for i in range(3)] + [_row("a", 3, 1.0, ok=False)]
-            + [_row("b", i, t) for i, t in enumerate((2.0, 4.0, 1.0, 3.0))])
-    found = {p["solver"]: p for p in bench_metrics.profiles(rows, (1e-8,))
-             if p["profile"] == "default"}
+    # solver time per instant:  0    1    2    3
+    # a (fast):                 1    1    1    fails
+    # b:                        2    4    1    3
+    # end to end: the solver's time + 100 s of the package at every instant
+    rows = ([_row("a", i, 101.0, solve_s=1.0) for i in range(3)]
+            + [_row("a", 3, 101.0, ok=False, solve_s=1.0)]
+            + [_row("b", i, 100.0 + t, solve_s=t) for i, t in enumerate((2.0, 4.0, 1.0, 3.0))])
+    profiles = bench_metrics.profiles(rows, (1e-8,))
+    found = {p["solver"]: p for p in profiles
+             if p["profile"] == "default" and p["clock"] == "solver"}
     taus = list(bench_metrics.TAUS)
     at = {tau: next(k for k, t in enumerate(taus) if t >= tau) for tau in (1.0, 2.0, 4.0)}
     # ratios to the best per instant: a (1, 1, 1, inf), b (2, 4, 1, 1)
@@ -97,11 +101,16 @@ def test_performance_profile_on_a_hand_made_table():
     assert found["b"]["curve"][at[1.0]] == 0.5
     assert found["b"]["curve"][at[2.0]] == 0.75 and found["b"]["curve"][at[4.0]] == 1.0
     assert found["a"]["solved"] == 0.75 and found["b"]["solved"] == 1.0
-    # shifted geometric means, the failure counted at 10 x the slowest success (40 s)
-    sgm_a = bench_metrics.shifted_geometric_mean([1.0, 1.0, 1.0, 40.0])
+    # shifted geometric means (qpbenchmark's shift), the run without an answer counted
+    # at qpbenchmark's time limit
+    sgm_a = bench_metrics.shifted_geometric_mean([1.0, 1.0, 1.0, qp_measures.TIME_LIMIT_S])
     sgm_b = bench_metrics.shifted_geometric_mean([2.0, 4.0, 1.0, 3.0])
     assert found["b"]["sgm_ratio"] == pytest.approx(sgm_b / min(sgm_a, sgm_b))
     assert found["a"]["sgm_ratio"] == pytest.approx(sgm_a / min(sgm_a, sgm_b))
+    # on the end-to-end clock the package's constant time compresses b's ratios
+    wide = {p["solver"]: p for p in profiles
+            if p["profile"] == "default" and p["clock"] == "end_to_end"}
+    assert wide["b"]["curve"][at[1.0] + 1] == 1.0 > found["b"]["curve"][at[1.0] + 1]
 
 
 def test_success_needs_every_measure_and_ignores_the_absent_ones():
@@ -135,10 +144,15 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
         return real(problem, solver, **kwargs)
 
     monkeypatch.setattr(bench_run, "solve", lemke_fails)
+    monkeypatch.setattr(study, "solve", lemke_fails)  # the per-instant loop's solve
     args = _args("--quick", "--json", "--out", str(tmp_path))
     assert args.func(args) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"throughput", "pareto", "success", "profiles", "targets", "best"}
+    assert set(out) == {"throughput", "pareto", "success", "profiles", "targets", "best",
+                        "solver_optimality", "overhead"}
+    views = {(r["solver"], r["setting"]) for r in out["solver_optimality"]}
+    assert views == {("qpsolvers-osqp", s) for s in qp_measures.SETTINGS}
+    assert {p["clock"] for p in out["profiles"]} == {"solver", "end_to_end"}
     assert {"formulation", "solver", "mode", "instants_per_s", "success_rate",
             "time_split_s"} <= set(out["throughput"][0])
     assert set(out["throughput"][0]["time_split_s"]) >= set(bench_run.SPLIT)
@@ -148,7 +162,7 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     assert {("paper", "cold"), ("paper", "warm"), ("min_norm", "batched"),
             ("positive", "batched")} <= modes
     lemke = next(e for e in out["throughput"] if e["solver"] == "lcp-lemke")
-    assert lemke["success_rate"] == 0.0 and lemke["max_equilibrium"] == "inf"
+    assert lemke["success_rate"] == 0.0 and lemke["max_equilibrium"] is None  # undefined
     best = {b["formulation"]: b for b in out["best"]}
     assert best["paper"]["paper_ratio"] == 1.0 and "min_norm" in best
 
@@ -165,8 +179,11 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     assert (tmp_path / "bench_profiles.png").stat().st_size > 10_000
     assert _read(tmp_path / "bench_profiles.csv")
     report = (tmp_path / "report.md").read_text()
+    views = _read(tmp_path / "bench_views.csv")
+    assert {r["formulation"] for r in views} >= {"min_norm", "positive"}
     for heading in ("## Throughput", "## Best backend", "## Whose time", "## Targets",
                     "## Success per accuracy level", "## Performance profiles",
+                    "## Solver optimality", "## The package's time around the solver",
                     "## Pareto front", "## Known limitations"):
         assert heading in report
     assert "numpy" in report and "scipy" in report and "machine:" in report
