@@ -38,7 +38,7 @@ from cardan_forces.commands import sets as sets_command
 from cardan_forces.commands import solve as solve_command
 from cardan_forces.commands import solvers as solvers_command
 from cardan_forces.driveline.dynamics import DynamicsError
-from cardan_forces.driveline.scene import LIMITS, MAX_ARTICULATION_DEG, MAX_INSTANTS, SceneError
+from cardan_forces.driveline.scene import LIMITS, MAX_INSTANTS, SceneError
 from cardan_forces.experiments import bench, export, hard, report, secondary, sweep
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import SolverNotFound
@@ -85,8 +85,9 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _check_args(args) -> None:
-    """Every numeric option within its range (:data:`ARGUMENTS`), and a sweep's
-    articulations and amplitudes within the scene limits, before any work.
+    """Every numeric option within its range (:data:`ARGUMENTS`), before any work (what
+    depends on the scene, each command checks: ``sets --t`` its span, ``sweep`` its
+    angles and amplitudes).
     """
     for attribute, flag, least, most, inclusive in ARGUMENTS:
         value = getattr(args, attribute, None)
@@ -96,15 +97,6 @@ def _check_args(args) -> None:
         if not (math.isfinite(value) and low and value <= most):
             bound = f"[{least:g}, {most:g}]" if inclusive else f"({least:g}, {most:g}]"
             raise UsageError(f"{flag} {value}: must be a finite number in {bound}")
-    if args.command == "sweep":
-        for value in sweep.grid((args.angle or []) + (args.angles or [])):
-            if abs(value) > MAX_ARTICULATION_DEG:
-                raise UsageError(f"--angle {value:g}: |articulation| must be at most "
-                                 f"{MAX_ARTICULATION_DEG:g} deg")
-        for value in sweep.grid(args.amplitude):
-            if abs(value) > LIMITS["torque_N_m"][1]:
-                raise UsageError(f"--amplitude {value:g}: must be at most "
-                                 f"{LIMITS['torque_N_m'][1]:g} N m in magnitude")
 
 
 @contextlib.contextmanager
