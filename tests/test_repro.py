@@ -2,6 +2,7 @@
 
 import matplotlib.pyplot as plt
 import numpy as np
+import pytest
 from cardan_forces.paper_repro import figures, repro
 
 
@@ -79,3 +80,43 @@ def test_one_penalty_simulation_per_scene_and_the_runs_listed(tmp_path, monkeypa
     report = repro.run_repro(figs=(11,), out=tmp_path, quick=True, penalty=False,
                              progress=lambda s: None).read_text()
     assert made == [] and "penalty simulations: not made (`--no-penalty`" in report
+
+
+def _hide(monkeypatch, *names):
+    """The registry as on a machine without the packages of backends ``names``."""
+    from cardan_forces.solvers import available, registry
+
+    available()  # loaded, so that the hidden names stay hidden
+    for name in names:
+        if name in registry._CACHE:
+            monkeypatch.delitem(registry._CACHE, name)
+
+
+def test_default_backend_falls_back_when_its_first_choice_is_absent(monkeypatch, paper):
+    from cardan_forces.driveline.dynamics import simulate
+    from cardan_forces.driveline.equilibrium import build_operator
+    from cardan_forces.experiments import study
+    from cardan_forces.formulations import FORMULATIONS
+    from cardan_forces.solvers import available, backends_for
+
+    op = build_operator(simulate(paper, [0.1, 0.2]))
+    first = study.DEFAULT_BACKENDS["positive"][0]
+    _hide(monkeypatch, first)
+    problem = FORMULATIONS["positive"](op, 0)
+    chosen = study.default_backend("positive", problem)
+    assert chosen != first and chosen in available() and chosen in backends_for(problem)
+    assert study.solve_over_time(op, "positive").solved == 2
+    _hide(monkeypatch, *backends_for(problem))
+    with pytest.raises(study.NoBackend, match="no backend"):
+        study.default_backend("positive", problem)
+
+
+def test_repro_without_the_optional_qp_backend(monkeypatch, tmp_path):
+    """``cardan repro --fig 13 --quick --no-penalty`` on the core dependencies alone."""
+    from cardan_forces.cli import main
+
+    _hide(monkeypatch, "qpsolvers-daqp")
+    assert main(["repro", "--fig", "13", "--quick", "--no-penalty", "--out",
+                 str(tmp_path)]) == 0
+    report = next(tmp_path.rglob("*.md")).read_text()
+    assert "qpsolvers-daqp" not in report
