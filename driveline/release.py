@@ -26,7 +26,6 @@ from math import comb
 
 from .determinacy import Determinacy, determinacy, holding
 from .dynamics import Motion
-from .elements import check_elements
 from .equilibrium import Operator, build_operator
 from .modes import Mode, counts, name_modes
 from .scene import Scene, SceneError, SlipJoint
@@ -94,8 +93,8 @@ def _slip_offset(shaft) -> float:
 
 
 def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) -> Scene:
-    """``scene`` with ``releases`` applied (element checks re-run: SceneError if a part of
-    the line is left unheld).
+    """``scene`` with ``releases`` applied, validated again (SceneError if a part of the
+    line is left unheld).
     """
     shafts, slips = list(scene.shafts), list(scene.slip_joints)
     for r in releases:
@@ -111,14 +110,12 @@ def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) 
     order = {s.name: k for k, s in enumerate(shafts)}
     slips.sort(key=lambda s: order[s.shaft])
     labels = ", ".join(r.label for r in releases) or "none"
-    out = dataclasses.replace(scene, shafts=tuple(shafts), slip_joints=tuple(slips),
-                              name=f"{scene.name}+released",
-                              description=f"{scene.name} with releases: {labels}")
     try:
-        check_elements(out)
+        return scene.with_changes(shafts=tuple(shafts), slip_joints=tuple(slips),
+                                  name=f"{scene.name}+released",
+                                  description=f"{scene.name} with releases: {labels}")
     except SceneError as err:
         raise SceneError(f"releases {labels} leave a mechanism: {err}") from None
-    return out
 
 
 def released_operator(motion: Motion, releases) -> Operator:

@@ -9,13 +9,12 @@ as NaN in the history (and counted), never drawn as if fine.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 
 import numpy as np
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.penalty import PenaltyResult, simulate_penalty
-from cardan_forces.driveline.scene import Scene, SceneError
+from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.study import History, solve_over_time
 from cardan_forces.solvers import Status
 
@@ -43,14 +42,12 @@ RELEASED = frozenset({"clearance", "crosspin_inertia", "penalty_dynamics"})
 def released(scene: Scene) -> Scene:
     """``scene`` with every joint released (``paper`` gives ``paper-penalty``'s model):
     the same bodies, loads and clearances, contacts by penalty forces (eqs. 75-78).
+    SceneError (from the scene's validation) when the scene is quasi-static.
     """
     if scene.has("penalty_dynamics"):
         return scene
-    if not scene.has("inertia"):
-        raise SceneError(f"scene {scene.name!r}: the penalty simulation is dynamic and needs "
-                         "the 'inertia' effect")
-    return dataclasses.replace(
-        scene, name=f"{scene.name}-penalty", effects=scene.effects | RELEASED,
+    return scene.with_changes(
+        name=f"{scene.name}-penalty", effects=scene.effects | RELEASED,
         description=f"{scene.description}; joints released (penalty contacts)")
 
 
