@@ -18,7 +18,7 @@ motion over it, the elements' layout (:mod:`.elements`), the support check
 (:mod:`.support`: the line must turn with exactly one degree of freedom while its
 contacts hold it) and the loads a friction-bound line can carry.
 
-This module is longer than most (about 500 lines): each table's reader is short, and
+This module is longer than most (about 650 lines): each table's reader is short, and
 keeping every field rule beside the one reader keeps one home for scene validation.
 """
 
