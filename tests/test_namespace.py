@@ -34,6 +34,25 @@ def test_layers_import_only_downwards():
             assert not above, f"{path.name} imports {above}"
 
 
+PAPER_REPRO_MAY_USE = {"study", "environment"}
+"""What paper_repro takes from experiments: the study layer and the run's environment."""
+
+
+def test_paper_repro_uses_experiments_one_way():
+    """paper_repro may use the study layer (and the environment record); experiments
+    never import paper_repro (no sideways dependency between the two)."""
+    for path in (ROOT / "experiments").glob("*.py"):
+        assert not re.search(r"^\s*(?:from|import) cardan_forces\.paper_repro", path.read_text(),
+                             flags=re.M), path.name
+    for path in (ROOT / "paper_repro").glob("*.py"):
+        text = path.read_text()
+        used = set(re.findall(r"^\s*from cardan_forces\.experiments\.(\w+)", text, flags=re.M))
+        for names in re.findall(r"^\s*from cardan_forces\.experiments import ([\w, ]+)", text,
+                                flags=re.M):
+            used |= {n.strip() for n in names.split(",")}
+        assert used <= PAPER_REPRO_MAY_USE, (path.name, used - PAPER_REPRO_MAY_USE)
+
+
 def test_readme_python_example_runs(capsys):
     text = (ROOT / "README.md").read_text()
     block = re.search(r"## From Python.*?```python\n(.*?)```", text, flags=re.S).group(1)
