@@ -40,7 +40,7 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments.environment import json_text
 from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.formulations.problems import Conic
+from cardan_forces.formulations.problems import LS, QP, Conic
 from cardan_forces.solvers import get as get_backend
 
 from . import bench_metrics as metrics
@@ -55,7 +55,7 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
     by formulation (its problems built once, then dropped).
     """
     rows, acc_rows, stages, references, setup, conic = [], [], {}, {}, {}, set()
-    qps = {}
+    problems = {}
     for name, solvers in backends.items():
         runs.progress(f"bench: building {name} at {len(op.t)} instants ...")
         prepared = runs.prepare(op, name, np.arange(len(op.t)))
@@ -67,25 +67,24 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
         stages.update({(name, solver): parts for solver, parts in batched.items()})
         new, references[name] = runs.accuracy(prepared, solvers, samples, ladder, budget_s)
         acc_rows += new
-        qps |= {f"{name}_{int(i):04d}": prepared.problems[int(i)] for i in samples
-                if exporting.as_qp(prepared.problems[int(i)]) is not None}
+        if isinstance(prepared.problems[0], (LS, QP, Conic)):
+            problems |= {f"{name}_{int(i):04d}": prepared.problems[int(i)] for i in samples}
     return {"rows": rows, "acc_rows": acc_rows, "stages": stages, "references": references,
-            "setup": setup, "conic": conic, "qps": qps}
+            "setup": setup, "conic": conic, "view_problems": problems}
 
 
-def views(qps: dict, solvers: list[str], folder: Path, with_qpbenchmark: bool) -> dict:
-    """The two-view harness on ``qps`` with the qpsolvers backends among ``solvers``;
-    with ``with_qpbenchmark``, the QPs exported into ``folder/qpbenchmark`` and
-    qpbenchmark itself run on them.
+def views(problems: dict, solvers: list[str], folder: Path, with_qpbenchmark: bool) -> dict:
+    """The two-view harness on ``problems`` (QPs, least norms and conic problems) with
+    the backends among ``solvers`` that declare qpbenchmark's settings; with
+    ``with_qpbenchmark``, the QPs exported into ``folder/qpbenchmark`` and qpbenchmark
+    itself run on them.
     """
     backends = harness.backends_with_profiles(solvers)
-    if not qps or not backends:
-        return {"views": [], "view_rows": [], "view_problems": 0, "qpbenchmark_ran": False}
-    runs.progress(f"bench: {len(qps)} QPs x {len(backends)} backends x 4 settings, "
-                  "scored in both views ...")
-    rows = harness.run_package(qps, backends)
+    rows = harness.run_package(problems, solvers)
+    runs.progress(f"bench: {len(rows)} solves scored in both views")
+    qps = {k: p for k, p in problems.items() if exporting.as_qp(p) is not None}
     theirs = []
-    if with_qpbenchmark:
+    if with_qpbenchmark and qps and backends:
         target = folder / "qpbenchmark"
         target.mkdir(parents=True, exist_ok=True)
         path = exporting.write_qpbenchmark(target, "cardan_bench",
@@ -96,7 +95,8 @@ def views(qps: dict, solvers: list[str], folder: Path, with_qpbenchmark: bool) -
         runs.progress(f"bench: qpbenchmark itself on {path} ...")
         theirs = harness.run_qpbenchmark(path, [b.split("-", 1)[1] for b in backends], results)
     return {"views": harness.side_by_side(harness.package_tables(rows), theirs),
-            "view_rows": rows, "view_problems": len(qps), "qpbenchmark_ran": with_qpbenchmark}
+            "view_rows": rows, "view_count": len({r["problem"] for r in rows}),
+            "qpbenchmark_ran": bool(theirs)}
 
 
 def evaluate(measured: dict, ladder, wall_s: float | None) -> dict:
@@ -133,7 +133,7 @@ def run(args) -> int:
                                     else runs.SAMPLES).round().astype(int))
     backends = runs.plan(op, args.formulation, args.solver, args.quick)
     measured = measure(op, backends, samples, ladder, args.budget_s)
-    measured |= views(measured["qps"], sorted({s for v in backends.values() for s in v}),
+    measured |= views(measured["view_problems"], sorted({s for v in backends.values() for s in v}),
                       folder, args.harness == "qpbenchmark")
     results = evaluate(measured, ladder, time.perf_counter() - started)
     _write(folder, results, {

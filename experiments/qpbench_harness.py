@@ -28,8 +28,10 @@ import time
 from pathlib import Path
 
 import numpy as np
+from cardan_forces.formulations.problems import Conic
+from cardan_forces.solvers import get, settings_profiles
 from cardan_forces.solvers import qp_measures as qm
-from cardan_forces.solvers import settings_profiles
+from cardan_forces.solvers.conversions import convert
 from cardan_forces.solvers.qpsolvers_ import conic_duals
 from cardan_forces.solvers.record import Outcome, Residuals, Status, finalize
 
@@ -78,9 +80,35 @@ def solve_both(problem, backend: str, setting: str) -> dict:
     measured = qm.qp_residuals(qp, found, sol.x, sol.y, sol.z, sol.z_box)
     duals = conic_duals(qp, sol) if sol.x is not None else None
     status = "solved" if found else ("inaccurate" if sol.x is not None else "failed")
-    # the multipliers are the 8th field (named ``y`` or ``duals`` as the record evolves)
-    record = finalize(problem, backend, Outcome(status, sol.x, None, message, None, 0.0,
-                                                runtime, duals))
+    record = finalize(problem, backend, Outcome(status, sol.x, message=message,
+                                                solve_s=runtime, y=duals))
+    solver_s = runtime if sol.solve_time is None else float(sol.solve_time)
+    return _row(problem, backend, setting, found, measured, record, runtime, solver_s, began)
+
+
+def solve_conic_both(problem, backend: str, setting: str) -> dict:
+    """One solve of a conic ``problem`` by backend ``backend`` (Clarabel's own API) at
+    qpbenchmark setting ``setting``: solver optimality is the conic analogue (absolute
+    KKT residuals of the standard form, :func:`~cardan_forces.solvers.qp_measures.
+    solver_optimality`), ``found`` the solver's own ``Solved``; one row.
+    """
+    began = time.perf_counter()
+    received = convert(problem, (Conic,))
+    try:
+        outcome = get(backend).solve(received, **settings_profiles.options(backend, setting))
+    except Exception as exc:  # a failing solver is a solve not found
+        outcome = Outcome("failed", None, message=f"{type(exc).__name__}: {exc}")
+    found = outcome.status == "solved"
+    measured = (qm.solver_optimality(received, outcome.z, outcome.y) if found
+                else dict.fromkeys(qm.MEASURES, math.inf))
+    record = finalize(problem, backend, outcome)
+    return _row(problem, backend, setting, found, measured, record,
+                outcome.setup_s + outcome.solve_s, outcome.solve_s, began)
+
+
+def _row(problem, backend, setting, found, measured, record, runtime, solver_s,
+         began) -> dict:
+    """One harness row: both views of a solve, its rules and its three times."""
     force = {k: float(record.residuals[k]) for k in Residuals.KEYS}
     chosen = qm.SETTINGS[setting]
     return {
@@ -91,8 +119,7 @@ def solve_both(problem, backend: str, setting: str) -> dict:
         "force_ok": record.status.has_answer
                     and all(v <= FORCE_LEVEL for v in force.values()),
         "force_rule": force_rule(record.status, force),
-        "runtime_s": runtime,
-        "solver_s": runtime if sol.solve_time is None else float(sol.solve_time),
+        "runtime_s": runtime, "solver_s": solver_s,
         "end_to_end_s": time.perf_counter() - began,
     }
 
@@ -112,17 +139,26 @@ def backends_with_profiles(available) -> list[str]:
             and settings_profiles.has_profile(b)]
 
 
+CONIC_BACKENDS = ("clarabel",)
+"""Conic backends the harness runs at qpbenchmark's settings (those with a profile)."""
+
+
 def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTINGS)):
-    """Rows of :func:`solve_both` for every QP problem x backend x setting (with the
-    problem's name in ``problem``).
+    """Rows of :func:`solve_both` for every QP problem x qpsolvers backend x setting,
+    and of :func:`solve_conic_both` for every conic problem x conic backend among
+    ``backends`` x setting (with the problem's name in ``problem``).
     """
     rows = []
     for name, problem in problems.items():
-        if as_qp(problem) is None:
-            continue
-        for backend in backends:
+        if as_qp(problem) is not None:
+            runs = [(solve_both, b) for b in backends_with_profiles(backends)]
+        elif convert(problem, (Conic,)) is not None:
+            runs = [(solve_conic_both, b) for b in backends if b in CONIC_BACKENDS]
+        else:
+            runs = []
+        for solve, backend in runs:
             for setting in settings:
-                rows.append({"problem": name} | solve_both(problem, backend, setting))
+                rows.append({"problem": name} | solve(problem, backend, setting))
     return rows
 
 

@@ -151,7 +151,8 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     assert set(out) == {"throughput", "pareto", "success", "profiles", "targets", "best",
                         "solver_optimality", "overhead"}
     views = {(r["solver"], r["setting"]) for r in out["solver_optimality"]}
-    assert views == {("qpsolvers-osqp", s) for s in qp_measures.SETTINGS}
+    assert views == {(b, s) for b in ("qpsolvers-osqp", "clarabel")  # QPs / conic problems
+                     for s in qp_measures.SETTINGS}
     assert {p["clock"] for p in out["profiles"]} == {"solver", "end_to_end"}
     assert {"formulation", "solver", "mode", "instants_per_s", "success_rate",
             "time_split_s"} <= set(out["throughput"][0])
@@ -180,7 +181,7 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     assert _read(tmp_path / "bench_profiles.csv")
     report = (tmp_path / "report.md").read_text()
     views = _read(tmp_path / "bench_views.csv")
-    assert {r["formulation"] for r in views} >= {"min_norm", "positive"}
+    assert {r["formulation"] for r in views} >= {"min_norm", "positive", "min_max"}
     for heading in ("## Throughput", "## Best backend", "## Whose time", "## Targets",
                     "## Success per accuracy level", "## Performance profiles",
                     "## Solver optimality", "## The package's time around the solver",

@@ -163,3 +163,25 @@ def test_verdicts_equal_qpbenchmarks_on_the_same_solves(qpbenchmark, problems, s
     for setting in qm.SETTINGS:
         rate = 100.0 * np.mean([ours[key, setting] for key in problems])
         assert rate == pytest.approx(theirs.at[name, setting]), setting
+
+
+def test_conic_view_checks_the_dual_cone_and_a_qp_view_does_not():
+    """min z0 s.t. (z0, z1, z2) in the second-order cone, z1 = 3, z2 = 4: z = (5, 3, 4).
+    Stationarity q + A'y = 0 gives y = (y3, y4, 1, y3, y4) and complementarity with
+    the cone's slack (5, 3, 4) gives (y3, y4) = (-3/5, -4/5). Doubling (y3, y4) keeps
+    stationarity but leaves the dual cone by ||(1.2, 1.6)|| - 1 = 1: only the conic
+    view's dual residual sees it."""
+    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0],
+                  [0.0, 0.0, -1.0]])
+    b = np.array([[3.0, 4.0, 0.0, 0.0, 0.0]])
+    cones = (("zero", 2), ("soc", 3))
+    z, q = np.array([[5.0, 3.0, 4.0]]), np.array([[1.0, 0.0, 0.0]])
+    y = np.array([[-0.6, -0.8, 1.0, -0.6, -0.8]])
+    exact = qm.conic_residuals(None, q, A, b, cones, z, y, check_dual_cone=True)
+    assert all(v[0] == pytest.approx(0.0, abs=1e-12) for v in exact.values())
+    outside = np.array([[-1.2, -1.6, 1.0, -1.2, -1.6]])
+    found = qm.conic_residuals(None, q, A, b, cones, z, outside, check_dual_cone=True)
+    assert found["dual"][0] == pytest.approx(1.0)
+    assert found["gap"][0] == pytest.approx(5.0)  # 5 + 3 (-1.2) + 4 (-1.6)
+    plain = qm.conic_residuals(None, q, A, b, cones, z, outside, check_dual_cone=False)
+    assert plain["dual"][0] == pytest.approx(0.0, abs=1e-12)
