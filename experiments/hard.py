@@ -21,7 +21,6 @@ Formulations that genuinely cannot handle a case are listed once, with the reaso
 
 from __future__ import annotations
 
-import copy
 import csv
 import dataclasses
 import json
@@ -35,8 +34,8 @@ import numpy as np
 from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.driveline.loading import load_scene, scene_from_dict
-from cardan_forces.driveline.scene import Scene, SceneError
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
 from cardan_forces.experiments.environment import json_number, number_text
 from cardan_forces.experiments.study import History, solve_over_time
 from cardan_forces.formulations import FORMULATIONS
@@ -72,94 +71,82 @@ QUICK_SOLVERS = ("clarabel", "numpy-kkt", "qpsolvers-daqp", "lcp-lemke", "scipy-
 """The reduced backend set of ``--quick``: at least one per formulation."""
 
 
-def base_tables(base: str) -> dict:
-    """The ``shafts``, ``joints`` and ``effects`` of scene ``base`` as TOML-like tables
-    (``extends`` resolved), so that a case can override them entry by entry.
-    """
-    scene = load_scene(base)
-
-    def plain(value):
-        if isinstance(value, (tuple, list)):
-            return [plain(v) for v in value]
-        if isinstance(value, dict):
-            return {k: plain(v) for k, v in value.items()}
-        return value
-
-    return {"shafts": plain([dataclasses.asdict(s) for s in scene.shafts]),
-            "joints": plain([dataclasses.asdict(j) for j in scene.joints]),
-            "effects": sorted(scene.effects), "input_harmonic":
-            scene.input_torque.amplitude_N_m != 0 or scene.input_torque.frequency_hz != 0}
+Changes = Callable[[Scene], dict]
+"""A case's changes of a scene: ``Scene`` field -> new value (for ``Scene.with_changes``)."""
 
 
-def _tables(key: str, **fields) -> Callable[[dict], dict]:
-    """Overrides replacing every entry of the array ``key`` (``shafts``, ``joints``) with
-    the base's entry updated by ``fields`` (a value, or a list: entry ``k`` takes item
+def _joints(**fields) -> Changes:
+    """Every joint with ``fields`` changed (a value, or a list: joint ``k`` takes item
     ``min(k, len - 1)``, so ``[10, 40]`` puts the first joint at 10 and the others at 40).
     """
-    def build(base: dict) -> dict:
-        entries = copy.deepcopy(base[key])
-        for k, entry in enumerate(entries):
-            entry.update({f: v[min(k, len(v) - 1)] if isinstance(v, list) else v
-                          for f, v in fields.items()})
-        return {key: entries}
+    def build(scene: Scene) -> dict:
+        return {"joints": tuple(
+            dataclasses.replace(j, **{f: v[min(k, len(v) - 1)] if isinstance(v, list) else v
+                                      for f, v in fields.items()})
+            for k, j in enumerate(scene.joints))}
     return build
 
 
-def _mass_ratio(ratio: float) -> Callable[[dict], dict]:
+def _mass_ratio(ratio: float) -> Changes:
     """The middle shafts' (all but the first and the last; the intermediate shaft in
     ``paper``) mass and all their principal moments times ``ratio``.
     """
-    def build(base: dict) -> dict:
-        shafts = copy.deepcopy(base["shafts"])
-        for middle in shafts[1:-1]:
-            middle["mass_kg"] *= ratio
-            middle["inertia_kg_m2"] = [ratio * j for j in middle["inertia_kg_m2"]]
-        return {"shafts": shafts}
+    def build(scene: Scene) -> dict:
+        last = len(scene.shafts) - 1
+        return {"shafts": tuple(
+            s if k in (0, last) else dataclasses.replace(
+                s, mass_kg=ratio * s.mass_kg, inertia_kg_m2=tuple(ratio * j for j in
+                                                                 s.inertia_kg_m2))
+            for k, s in enumerate(scene.shafts))}
     return build
 
 
-def _stiffness_ratio(ratio: float) -> Callable[[dict], dict]:
+def _stiffness_ratio(ratio: float) -> Changes:
     """Bearing stiffness = ``ratio`` x the joints' linear (secant) Hertz stiffness, the
     one the ``compliance`` formulation uses (K d_max^(n-1)).
     """
-    def build(base: dict) -> dict:
-        scene = load_scene(base["name"])
+    def build(scene: Scene) -> dict:
         joint = hertz_stiffness(scene, scene.joints[0]) * \
             scene.contact.damping_full_depth_m ** (scene.contact.exponent - 1.0)
-        return {"contact": {"bearing_stiffness_N_m": ratio * float(joint)}}
+        return {"contact": dataclasses.replace(scene.contact,
+                                               bearing_stiffness_N_m=ratio * float(joint))}
     return build
 
 
-def _clearance(gap_m: float) -> Callable[[dict], dict]:
+def _clearance(gap_m: float) -> Changes:
     """Radial, axial and bearing clearances all ``gap_m``, the ``clearance`` effect on."""
-    def build(base: dict) -> dict:
-        joints = copy.deepcopy(base["joints"])
-        for j in joints:
-            j.update(rb_m=j["rs_m"] + gap_m, hb_m=j["ht_m"] + gap_m)
-        return {"joints": joints, "effects": [*base["effects"], "clearance"],
-                "contact": {"bearing_clearance_m": gap_m}}
+    def build(scene: Scene) -> dict:
+        return {"joints": tuple(dataclasses.replace(j, rb_m=j.rs_m + gap_m, hb_m=j.ht_m + gap_m)
+                                for j in scene.joints),
+                "effects": scene.effects | {"clearance"},
+                "contact": dataclasses.replace(scene.contact, bearing_clearance_m=gap_m)}
     return build
 
 
-def _fixed(**overrides) -> Callable[[dict], dict]:
-    return lambda base: overrides
+def _fixed(**changes) -> Changes:
+    return lambda scene: changes
 
 
-def _huge_torque(base: dict) -> dict:
+def _huge_torque(scene: Scene) -> dict:
     """1e6 N m through the line: the mean of a harmonic input, or a constant one."""
-    drive = {"mean_N_m": 1e6} if base["input_harmonic"] else 1e6
-    return {"torque": {"input": drive, "load": 1e6}}
+    harmonic = scene.input_torque.amplitude_N_m != 0 or scene.input_torque.frequency_hz != 0
+    drive = dataclasses.replace(scene.input_torque, mean_N_m=1e6) if harmonic else \
+        TorqueLaw(1e6)
+    return {"input_torque": drive, "load_torque": TorqueLaw(1e6)}
+
+
+NO_TORQUE = TorqueLaw(0.0)
 
 
 @dataclass(frozen=True)
 class Case:
-    """A hard case: ``overrides(base_tables)`` gives the keys that replace the base
-    scene's; instants are spread over ``[start, start + stop_s]``.
+    """A hard case: ``changes(scene)`` gives the fields that replace the base scene's;
+    instants are spread over ``[start, start + stop_s]``.
     """
 
     name: str
     what: str  # ``{joints}`` stands for the base scene's joints in words
-    overrides: Callable[[dict], dict]
+    changes: Changes
     stop_s: float = 0.5
 
     def describe(self, n_joints: int = 2) -> str:
@@ -168,24 +155,23 @@ class Case:
         return self.what.format(joints=joints)
 
     def scene(self, base: str = "paper") -> Scene:
-        tables = {**base_tables(base), "name": base}
-        return scene_from_dict({"extends": base, "name": f"hard-{self.name}",
-                                **self.overrides(tables)},
-                               source=f"<hard case {self.name} of {base}>")
+        """The variant of scene ``base`` (validated again: SceneError if it is none)."""
+        scene = load_scene(base)
+        return scene.with_changes(name=f"hard-{self.name}", **self.changes(scene))
 
 
 CASES = (
     Case("base", "the scene as it is (what the variants are measured against)", _fixed()),
     Case("articulation-0", "{joints} straight (0 deg)",
-         _tables("joints", articulation_deg=0.0)),
+         _joints(articulation_deg=0.0)),
     Case("articulation-1e-6rad", "{joints} at 1e-6 rad (in degrees)",
-         _tables("joints", articulation_deg=math.degrees(1e-6))),
-    Case("articulation-89", "{joints} at 89 deg", _tables("joints", articulation_deg=89.0)),
+         _joints(articulation_deg=math.degrees(1e-6))),
+    Case("articulation-89", "{joints} at 89 deg", _joints(articulation_deg=89.0)),
     Case("W", "W arrangement (input and output not parallel)", _fixed(arrangement="W")),
     Case("unequal-10-40", "joint angles 10 and 40 deg (the first 10, the others 40)",
-         _tables("joints", articulation_deg=[10.0, 40.0])),
+         _joints(articulation_deg=[10.0, 40.0])),
     Case("torque-0", "no input torque: at rest under gravity",
-         _fixed(torque={"input": 0.0})),
+         _fixed(input_torque=NO_TORQUE)),
     Case("torque-1e6", "1e6 N m mean input torque against a 1e6 N m load (transmitted)",
          _huge_torque),
     Case("mass-1e6", "middle shafts' mass and inertia x 1e6", _mass_ratio(1e6)),
@@ -197,11 +183,12 @@ CASES = (
     Case("clearance-1e-7", "all clearances 1e-7 m, clearance effect on", _clearance(1e-7)),
     Case("clearance-2mm", "all clearances 2 mm, clearance effect on", _clearance(2e-3)),
     Case("surface-contact", "quasi-static, gravity only, no torque: theta1 = theta2",
-         _fixed(effects=["gravity"], torque={"input": 0.0}, initial={"speed_rad_s": 1.0})),
+         _fixed(effects=frozenset({"gravity"}), input_torque=NO_TORQUE,
+                initial_speed_rad_s=1.0)),
     Case("gravity-horizontal", "gravity +9.8 m/s^2 along +y, normal to the articulation plane",
-         _fixed(gravity_m_s2=[0.0, 9.8, 0.0])),
+         _fixed(gravity_m_s2=(0.0, 9.8, 0.0))),
     Case("speed-1000", "initial speed 1000 rad/s (instants over 2 ms: 0.2 rad apart)",
-         _fixed(initial={"speed_rad_s": 1000.0}), stop_s=0.002),
+         _fixed(initial_speed_rad_s=1000.0), stop_s=0.002),
 )
 
 _RANK = "its 34x34 Jacobian is singular everywhere (rank 33 of 34, the closed loop)"
@@ -301,13 +288,14 @@ class NotApplicable:
 
 
 def run_case(case: Case, formulations=None, solvers=None, instants: int = INSTANTS,
-             tol: float | None = TOL, base: str = "paper") -> list[Run]:
+             tol: float | None = TOL, base: str = "paper", scene: Scene | None = None
+             ) -> list[Run]:
     """Solve ``case`` (a variant of scene ``base``) at ``instants`` instants over its
     window with every requested formulation and backend (``None``: all), one history
-    per formulation x backend. Raises :class:`SceneError` when the variant is no valid
-    scene (see :func:`applies`).
+    per formulation x backend (``scene``: the variant, when made already). Raises
+    :class:`SceneError` when the variant is no valid scene (see :func:`applies`).
     """
-    scene = case.scene(base)
+    scene = scene or case.scene(base)
     t = scene.time.start_s + np.linspace(0.0, case.stop_s, instants)
     op = build_operator(simulate(scene, t))
     runs = []
@@ -325,13 +313,12 @@ def run_case(case: Case, formulations=None, solvers=None, instants: int = INSTAN
     return runs
 
 
-def applies(case: Case, base: str) -> NotApplicable | None:
-    """``None`` when ``case`` makes a valid scene of ``base``; else why it does not apply."""
+def applies(case: Case, base: str) -> Scene | NotApplicable:
+    """The variant ``case`` makes of scene ``base``, or why it does not apply."""
     try:
-        case.scene(base)
+        return case.scene(base)
     except SceneError as err:
         return NotApplicable(case.name, " ".join(str(err).split()))
-    return None
 
 
 def covered(runs: list[Run], tol: float | None = TOL) -> bool:
@@ -505,11 +492,12 @@ def run(args) -> int:
     runs, skipped = [], []
     for k, case in enumerate(cases, 1):
         print(f"hard: case {k}/{len(cases)} {case.name}", file=sys.stderr, flush=True)
-        refused = applies(case, args.scene)
-        if refused is not None:
-            skipped.append(refused)
+        variant = applies(case, args.scene)
+        if isinstance(variant, NotApplicable):
+            skipped.append(variant)
             continue
-        runs += run_case(case, args.formulation, solvers, instants, args.tol, args.scene)
+        runs += run_case(case, args.formulation, solvers, instants, args.tol, args.scene,
+                         variant)
     rows = summarize(runs, args.tol)
     settings = (f"{instants} instants per window, tolerance {args.tol:g}, backends: "
                 f"{', '.join(solvers) if solvers else 'all available'}; forces judged by the "
