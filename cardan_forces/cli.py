@@ -128,10 +128,14 @@ def _one_thread_each():
     """One BLAS/OpenMP thread in this process while a command runs (threadpoolctl), and
     in the worker processes it starts (their environment, unless the user set it).
     """
-    for name in THREADS:
-        os.environ.setdefault(name, "1")
-    with threadpool_limits(limits=1):
-        yield
+    unset = [name for name in THREADS if name not in os.environ]
+    os.environ.update(dict.fromkeys(unset, "1"))
+    try:
+        with threadpool_limits(limits=1):
+            yield
+    finally:
+        for name in unset:
+            os.environ.pop(name, None)
 
 
 @contextlib.contextmanager

@@ -219,3 +219,35 @@ def test_a_bad_apply_is_one_line_exit_2(capsys, extra):
     out, err = capsys.readouterr()
     assert out == "" and err.startswith("cardan: error: release 'nonsense:foo'")
     assert err.count("\n") == 1
+
+
+def test_a_command_runs_with_one_blas_thread_and_its_workers_too(monkeypatch):
+    """The problems are small dense matrices: one BLAS/OpenMP thread in the process while
+    a command runs, and the environment its worker processes start with says the same."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from threadpoolctl import threadpool_info
+
+    seen = {}
+
+    def command(args):
+        seen["here"] = {pool["num_threads"] for pool in threadpool_info()}
+        with ProcessPoolExecutor(1) as pool:
+            seen["worker"] = pool.submit(_threads).result()
+        return 0
+
+    for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr("cardan_forces.commands.solvers.run", command)
+    assert main(["solvers"]) == 0
+    assert seen["here"] <= {1} and seen["worker"][0] <= {1}
+    assert seen["worker"][1] == "1"
+
+
+def _threads():
+    import os
+
+    from threadpoolctl import threadpool_info
+
+    return {pool["num_threads"] for pool in threadpool_info()}, os.environ.get(
+        "OPENBLAS_NUM_THREADS")
