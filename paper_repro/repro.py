@@ -1,20 +1,26 @@
 """``cardan repro``: the paper's Figs. 11-15 and a report, on the embedded scenes.
 
-Figs. 11-12 come from the motion; 13-15 from contact-force histories of the paper's
-method and the convex formulations (:mod:`cardan_forces.paper_repro.histories`), with the rigid
-solution set's interval shaded where a bearing load is not unique. Every figure also
-carries the penalty-contact simulation of the same scene with its joints released
-(the paper's ADAMS model, :mod:`cardan_forces.driveline.penalty`), and the report compares it with
-the ``compliance`` formulations on the same stiffness and clearances. The report
-states versions, machine, settings, and per figure what the numbers say next to the
-paper's text.
+Figs. 11-12 come from the motion; 13-15 from contact-force histories of the methods
+chosen (the paper's method and the convex formulations,
+:mod:`cardan_forces.paper_repro.histories`), drawn over the rigid solution set's interval
+(the study layer's :func:`~cardan_forces.experiments.study.value_range`). Every figure
+also carries the penalty-contact simulation of the same scene with its joints released
+(the paper's ADAMS model, :mod:`cardan_forces.driveline.penalty`), and the report compares
+it with the ``compliance`` formulations on the same stiffness and clearances. Fig. 15 is
+drawn for both horizontal gravities (the paper does not say which) and the report says
+which one matches the paper's text. The report states versions, machine, settings, and
+per figure what the numbers say next to the paper's text.
 """
 
 from __future__ import annotations
 
 import datetime
+import os
+import signal
 import time
 from collections.abc import Callable
+from concurrent.futures import Future, ProcessPoolExecutor
+from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
 
 import numpy as np
@@ -27,15 +33,22 @@ from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.environment import machine, versions
 from cardan_forces.experiments.study import value_range
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import NotApplicable
 from scipy.stats import binomtest
 
 from . import figures
-from .figures import SMOOTH_S, moving_average
+from .figures import PENALTY, SMOOTH_S, moving_average
 from .histories import METHODS, History, history, penalty_history, released, run_penalty
 
 FIGURES = (11, 12, 13, 14, 15)
+FIG15_SCENES = ("paper-fig15", "paper-fig15-axial")
+"""Fig. 15's scenes: the paper says "horizontal" gravity but not which; +y (normal to
+the articulation plane) and +x (along the input shaft) are both drawn."""
+ALL_METHODS = (*METHODS, PENALTY)
+"""What ``cardan repro`` can draw: the rigid-model methods and the penalty simulation."""
 BOUND_INSTANTS = 41
-"""Instants (evenly spread) at which Figs. 14-15's solution-set intervals are computed."""
+"""Instants (evenly spread) at which Figs. 13-15's solution-set intervals are computed."""
 QUICK_S = 0.15
 """Window of ``--quick`` (s from the start)."""
 SETTLED_S = 0.1
@@ -49,17 +62,37 @@ COMPLIANCE_VS_PENALTY = {"compliance": "clarabel", "compliance_hertz": "clarabel
 same effects, so the compliance formulations see the same clearances as gaps)."""
 
 
-def bearing_bounds(op: Operator, shaft: int = 0) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Intervals of Fig. 14's loads (:func:`figures.bearing_loads`) over the rigid set at
-    ``BOUND_INSTANTS`` instants (NaN elsewhere), in the shaft's frame. Axial: the exact
-    range of the sum of the bearings' axial loads. Radial: the range of the radial
-    length allowed by the in-plane and normal component intervals (their box hull).
+def joint_quantities(op: Operator, joint: int = 0) -> dict[str, np.ndarray]:
+    """Fig. 13's quantities as rows over the forces: per contact ``F1`` ... ``F8`` of
+    joint ``joint``, the unit rows of its columns (two for a radial force, whose
+    magnitude is their length; one for an end face's push).
+    """
+    eye = np.eye(len(op.names))
+    return {label: eye[list(link.columns)] for label, link in op.joint_contacts(joint).items()}
+
+
+def bearing_quantities(op: Operator, shaft: int = 0) -> dict[str, np.ndarray]:
+    """Figs. 14-15's quantities as rows over the forces, in the shaft's frame: per
+    bearing ``<label>_radial`` its two rows normal to the axis; ``axial`` the one row of
+    the sum of its bearings' axial loads.
+    """
+    rows = {c.label: op.bearing_matrix(c) for c in op.bearings(shaft)}
+    out = {f"{label}_radial": m[:2] for label, m in rows.items()}
+    out["axial"] = sum(m[2] for m in rows.values())[None, :]
+    return out
+
+
+def set_bounds(op: Operator, quantities: dict[str, np.ndarray]
+               ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """The interval of each quantity over the rigid set at ``BOUND_INSTANTS`` instants
+    (NaN elsewhere, and where an LP failed; +-inf where unbounded). A quantity of one row
+    ``c``: the exact range of ``c x`` (:func:`value_range`). Of two rows: the range of
+    the length of ``(c1 x, c2 x)`` allowed by the two components' intervals (their box
+    hull: it contains the exact range).
     """
     T = len(op.t)
     picks = np.unique(np.linspace(0, T - 1, min(BOUND_INSTANTS, T)).round().astype(int))
-    rows = {c.label: op.bearing_matrix(c) for c in op.bearings(shaft)}
-    out = {q: (np.full(T, np.nan), np.full(T, np.nan))
-           for q in [f"{label}_radial" for label in rows] + ["axial"]}
+    out = {q: (np.full(T, np.nan), np.full(T, np.nan)) for q in quantities}
 
     def span(i, c):  # None: unbounded on that side; a failed LP is not computed (NaN)
         r = value_range(op, i, c)
@@ -69,21 +102,53 @@ def bearing_bounds(op: Operator, shaft: int = 0) -> dict[str, tuple[np.ndarray, 
                 np.inf if r["max"] is None else r["max"])
 
     for i in picks:
-        out["axial"][0][i], out["axial"][1][i] = span(i, sum(m[2] for m in rows.values()))
-        for label, matrix in rows.items():
-            ranges = [span(i, matrix[a]) for a in (0, 1)]
+        for q, rows in quantities.items():
+            ranges = [span(i, c) for c in rows]
+            if len(ranges) == 1:
+                out[q][0][i], out[q][1][i] = ranges[0]
+                continue
             closest = [0.0 if lo <= 0.0 <= hi else min(abs(lo), abs(hi)) for lo, hi in ranges]
-            farthest = [max(abs(lo), abs(hi)) for lo, hi in ranges]
-            out[f"{label}_radial"][0][i] = np.hypot(*closest)
-            out[f"{label}_radial"][1][i] = np.hypot(*farthest)
+            out[q][0][i] = np.hypot(*closest)
+            out[q][1][i] = np.hypot(*[max(abs(lo), abs(hi)) for lo, hi in ranges])
     return out
 
 
-def _histories(op: Operator, progress, penalty: History | None) -> dict[str, History]:
-    hist = {m: history(op, m, progress=progress) for m in METHODS}
-    if penalty is not None:
-        hist["penalty"] = penalty
-    return hist
+def _refusal(scene: Scene, op: Operator, method: str) -> str:
+    """Why ``method`` cannot draw ``scene`` (empty if it can): its problem cannot be
+    built (the paper's method on a slip joint), or the penalty simulation of a
+    quasi-static scene.
+    """
+    if method == PENALTY:
+        return "" if scene.has("inertia") else "it is dynamic and needs the 'inertia' effect"
+    try:
+        FORMULATIONS[method](op, 0)
+    except NotApplicable as exc:
+        return str(exc)
+    return ""
+
+
+def check_request(scene: Scene, op: Operator, methods, figs) -> None:
+    """Refuse, before any long work, what the chosen methods or figures cannot do on
+    ``scene`` (:class:`NotApplicable`, one line): a method that does not apply
+    (:func:`_refusal`), Fig. 12 without an intermediate shaft, Figs. 13-15 without joint
+    1's contacts or the first shaft's bearings.
+    """
+    why = {m: _refusal(scene, op, m) for m in ALL_METHODS}
+    refused = [f"{m!r} ({why[m]})" for m in methods if why[m]]
+    if refused:
+        usable = ",".join(m for m in ALL_METHODS if not why[m]) or "none"
+        raise NotApplicable(f"cardan repro {scene.name}: {'; '.join(refused)}; choose "
+                            f"--methods among those that apply here: {usable}")
+    needs = []
+    if 12 in figs and len(scene.shafts) < 3:
+        needs.append("Fig. 12 draws an intermediate shaft (a line of at least 3 shafts)")
+    if 13 in figs and not op.joint_contacts(0):
+        needs.append("Fig. 13 draws joint 1's cross-pin contacts")
+    if any(f in figs for f in (14, 15)) and not op.bearings(0):
+        needs.append("Figs. 14-15 draw the first shaft's bearings")
+    if needs:
+        raise NotApplicable(f"cardan repro {scene.name}: {'; '.join(needs)}; leave them out "
+                            "with --fig")
 
 
 def _settled(t: np.ndarray) -> np.ndarray:
@@ -145,15 +210,42 @@ def _fig13_notes(op: Operator, hist: dict[str, History]) -> list[str]:
     lines = [f"- components of joint 1 that the rigid model determines (at t = "
              f"{op.t[len(op.t) // 2]:.3f} s): {', '.join(unique) or 'none'}; all others "
              "depend on the selection rule."]
-    rigid = [m for m in mags if m != "penalty"]
-    for label in mags["positive"]:
-        spread = np.nanmax([np.nanmax(np.abs(mags[m][label] - mags["positive"][label]))
+    rigid = [m for m in mags if m != PENALTY]
+    ref = "positive" if "positive" in rigid else rigid[0] if rigid else None
+    for label in mags[ref] if ref else ():
+        spread = np.nanmax([np.nanmax(np.abs(mags[m][label] - mags[ref][label]))
                             for m in rigid])
         peak = np.nanmax([np.nanmax(mags[m][label]) for m in rigid])
         lines.append(f"- |{label}|: peak {peak:.1f} N over the rigid methods; largest "
-                     f"difference from `positive`: {spread:.1f} N")
-    if "penalty" in mags:
-        lines += _frequency_note(op, mags) + _larger_note(op, mags)
+                     f"difference from `{ref}`: {spread:.1f} N")
+    lines += _both_faces_note(op, hist)
+    if PENALTY in mags and "paper" in mags:
+        return lines + _frequency_note(op, mags) + _larger_note(op, mags)
+    return lines + ["- the paper's text on Fig. 13 (penalty vs the paper's method): not "
+                    "judged, the run draws only " + ", ".join(f"`{m}`" for m in mags)]
+
+
+def _both_faces_note(op: Operator, hist: dict[str, History]) -> list[str]:
+    """Where a method lets both end faces of one trunnion pair push at once (the paper's
+    complementarity, eqs. 39, 46, does not hold): a force no contact can make.
+    """
+    lines = []
+    for m, h in hist.items():
+        if m == PENALTY or not op.pairs:
+            continue
+        both = np.max([np.minimum(h.forces[:, a], h.forces[:, b]) for a, b in op.pairs],
+                      axis=0)
+        hit = np.isfinite(both) & (both > 1e-3)
+        if hit.any():
+            k = int(np.nanargmax(both))
+            lines.append(f"- `{m}`: both end faces of a pair push at once at {hit.sum()} of "
+                         f"{len(both)} instants (up to {both[k]:.1f} N each, t = "
+                         f"{op.t[k]:.3f} s): it does not impose the faces' complementarity "
+                         "(eqs. 39, 46), so its curves are a comparison, not a physical "
+                         "selection (the figures' legend says so)")
+    clean = [f"`{m}`" for m in hist if m != PENALTY and not any(f"`{m}`:" in s for s in lines)]
+    if clean:
+        lines.append(f"- {', '.join(clean)}: no pair of end faces pushes at once (above 1 mN)")
     return lines
 
 
@@ -196,31 +288,39 @@ def _larger_note(op: Operator, mags) -> list[str]:
             f"**{verdict}**."]
 
 
-def _bearing_notes(op: Operator, hist: dict[str, History], bounds, number: int) -> list[str]:
+def _bearing_notes(op: Operator, hist: dict[str, History], bounds, number: int
+                   ) -> tuple[list[str], dict[str, str]]:
+    """The report's notes on Fig. 14 or 15, and the verdicts on the paper's text
+    (``radial``, ``axial``; empty without the paper's method and the penalty).
+    """
     lines = []
     loads = {m: figures.bearing_loads(op, h.forces) for m, h in hist.items()}
-    for q in ("far_radial", "near_radial", "axial"):
-        lo, hi = bounds[q]
+    rigid = [m for m in loads if m != PENALTY]
+    for q, (lo, hi) in bounds.items():
         ok = ~np.isnan(lo)
-        unbounded = np.mean(np.isinf(hi[ok]) | np.isinf(lo[ok]))
-        spread = np.nanmax([np.nanmax(np.abs(loads[m][q] - loads["positive"][q]))
-                            for m in loads if m != "penalty"])
+        unbounded = np.mean(np.isinf(hi[ok]) | np.isinf(lo[ok])) if ok.any() else np.nan
+        spread = np.nanmax([np.nanmax(np.abs(loads[m][q] - loads[rigid[0]][q]))
+                            for m in rigid]) if rigid else np.nan
         lines.append(f"- {q}: the rigid set is unbounded at {100 * unbounded:.0f} % of the "
                      f"instants checked; the rigid methods differ by up to {spread:.1f} N")
-    if "penalty" not in loads:
-        return lines
-    return lines + _penalty_bearing_notes(op, loads, number)
+    if PENALTY not in loads or "paper" not in loads:
+        return lines + [f"- the paper's text on Fig. {number} (penalty vs the paper's "
+                        "method): not judged, the run draws only "
+                        + ", ".join(f"`{m}`" for m in loads)], {}
+    more, verdicts = _penalty_bearing_notes(op, loads, number)
+    return lines + more, verdicts
 
 
-def _penalty_bearing_notes(op: Operator, loads, number: int) -> list[str]:
+def _penalty_bearing_notes(op: Operator, loads, number: int
+                           ) -> tuple[list[str], dict[str, str]]:
     """The paper's Fig. 14/15 text against the penalty simulation, each verdict with its
-    criterion (thresholds below), checked on both halves of the run.
+    criterion (thresholds below), checked on both halves of the run; and the verdicts.
     """
     avg = {q: moving_average(loads["penalty"][q], op.t) for q in loads["penalty"]}
 
     def radial(ok):  # the larger |log10| of the penalty / paper ratio of median loads
         return max(abs(np.log10(np.nanmedian(avg[q][ok]) / np.nanmedian(loads["paper"][q][ok])))
-                   for q in ("far_radial", "near_radial"))
+                   for q in avg if q.endswith("_radial"))
 
     def axial(ok):  # median |difference| over the median paper-method axial load (>= 1 N)
         return (np.nanmedian(np.abs(avg["axial"][ok] - loads["paper"]["axial"][ok]))
@@ -251,22 +351,65 @@ def _penalty_bearing_notes(op: Operator, loads, number: int) -> list[str]:
             "than 20 % apart (>= 0.079), disagrees within 5 % (<= 0.021): "
             f"**{r}**. Axial: relative difference {av}; criterion: \"hardly\" = within 20 % "
             f"of the load, disagrees beyond 50 %: **{a}**.")
-    return lines
+    return lines, {"radial": r, "axial": a}
 
 
 class _Runs:
     """The simulations of one ``cardan repro`` run: each penalty simulation made once per
     scene and reused by every figure that shows it, and a list of what was made, what
     for, and how long it took (for the report).
+
+    With ``workers`` > 0 the penalty simulations (the slow part: seconds per simulated
+    second each, one per scene) run in that many worker processes, started at once
+    (:meth:`start`), while this process solves the rigid-model methods; with 0 each is
+    run here on first use.
     """
 
-    def __init__(self, times: np.ndarray, penalty: bool, progress):
+    def __init__(self, times: np.ndarray, penalty: bool, progress, workers: int = 0):
         self.times, self.penalty, self.progress = times, penalty, progress
+        self.workers = workers
         self.penalties: dict[str, PenaltyResult] = {}
+        self.pending: dict[str, Future] = {}
+        self.pool: ProcessPoolExecutor | None = None
         self.uses: dict[str, list[str]] = {}
         self.motions: list[tuple[str, int, float, str]] = []
         self.load_s: float | None = None
+        self.kernel_s: float | None = None
         self.cpu0 = time.process_time()
+        self.children0 = sum(os.times()[2:4])  # CPU of ended worker processes
+
+    def start(self, scenes: list[Scene]) -> None:
+        """Start the penalty simulations of ``scenes`` (one per released scene) in the
+        worker processes; they ignore SIGINT (the main process handles a Ctrl-C).
+        """
+        todo = {released(s).name: s for s in scenes} if self.penalty else {}
+        if not self.workers or not todo:
+            return
+        start = time.perf_counter()  # compiled kernels loaded here are inherited by fork
+        run_penalty(next(iter(todo.values())), self.times[:2])
+        self.kernel_s = time.perf_counter() - start
+        context = get_context("fork") if "fork" in get_all_start_methods() else None
+        self.pool = ProcessPoolExecutor(max_workers=min(self.workers, len(todo)),
+                                        mp_context=context, initializer=signal.signal,
+                                        initargs=(signal.SIGINT, signal.SIG_IGN))
+        self.progress(f"repro: penalty simulations of {', '.join(todo)} started in "
+                      f"{self.pool._max_workers} worker processes ...")
+        self.pending = {name: self.pool.submit(run_penalty, s, self.times)
+                        for name, s in todo.items()}
+
+    def close(self, interrupted: bool = False) -> None:
+        """End the worker processes: at once when ``interrupted`` (the simulations still
+        running are lost), else after they finish.
+        """
+        if self.pool is None:
+            return
+        workers = list((self.pool._processes or {}).values())  # no public handle (< 3.14)
+        self.pool.shutdown(wait=not interrupted, cancel_futures=interrupted)
+        if interrupted:
+            for process in workers:
+                process.terminate()
+                process.join(timeout=5.0)
+        self.pool = None
 
     def motion(self, scene: Scene, purpose: str) -> Motion:
         """The 1-DOF motion of ``scene`` at the run's instants, timed; the first call also
@@ -282,13 +425,19 @@ class _Runs:
         return motion
 
     def penalty_result(self, scene: Scene, purpose: str) -> PenaltyResult | None:
-        """The penalty simulation of ``released(scene)``: run on first use, reused after."""
+        """The penalty simulation of ``released(scene)``: from its worker, or run here on
+        first use; reused after.
+        """
         if not self.penalty:
             return None
         name = released(scene).name
         if name not in self.penalties:
-            self.progress(f"repro: penalty simulation of {name} ({purpose}) ...")
-            self.penalties[name] = run_penalty(scene, self.times, self.progress)
+            if name in self.pending:
+                self.progress(f"repro: waiting for the penalty simulation of {name} ...")
+                self.penalties[name] = self.pending.pop(name).result()
+            else:
+                self.progress(f"repro: penalty simulation of {name} ({purpose}) ...")
+                self.penalties[name] = run_penalty(scene, self.times, self.progress)
         self.uses.setdefault(name, []).append(purpose)
         return self.penalties[name]
 
@@ -296,6 +445,9 @@ class _Runs:
         """What was simulated, what for, and its cost."""
         out = [f"- the first motion's set-up (once per process; it loads the compiled kernels "
                f"where numba is installed): {1e3 * (self.load_s or 0.0):.0f} ms"]
+        if self.kernel_s is not None:
+            out.append(f"- the penalty kernels loaded (or compiled) once, before the worker "
+                       f"processes start (they inherit them): {self.kernel_s:.1f} s")
         out += [f"- motion of `{name}` ({n} instants, 1-DOF): {1e3 * s:.0f} ms, for {why}"
                 for name, n, s, why in self.motions]
         for name, r in self.penalties.items():
@@ -323,28 +475,62 @@ class _Runs:
 
 
 def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "results",
-              quick: bool = False, fig15_scene: str = "paper-fig15",
-              progress: Callable[[str], None] = print, penalty: bool = True) -> Path:
-    """Write the requested figures (CSV + PNG) and ``report.md`` into ``out``;
-    ``penalty``: also run the penalty-contact simulation (once per scene) and overlay it.
+              quick: bool = False, fig15_scenes=FIG15_SCENES,
+              progress: Callable[[str], None] = print, methods=ALL_METHODS,
+              formats=("png",), workers: int | None = None) -> Path:
+    """Write the requested figures (CSV, and an image per format of ``formats``) and
+    ``report.md`` into ``out``. ``methods``: what the figures draw (of
+    :data:`ALL_METHODS`; ``penalty`` runs the penalty-contact simulation, once per
+    scene); ``fig15_scenes``: Fig. 15's scenes, one figure each; ``workers``: processes
+    for the penalty simulations (default: the CPUs; 0: in this process, one by one).
+    A method or figure that cannot draw the scene is refused before any long work.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     scene = load_scene(scene_name)
+    fig15 = [load_scene(s) for s in fig15_scenes] if 15 in figs else []
     times = scene.time.instants()
     if quick:
         times = times[times <= scene.time.start_s + QUICK_S + 1e-12]
-    runs = _Runs(times, penalty, progress)
+    runs = _Runs(times, PENALTY in methods, progress,
+                 (os.cpu_count() or 1) if workers is None else workers)
+    rigid = tuple(m for m in methods if m != PENALTY)
     progress(f"repro: simulating {scene.name} over {len(times)} instants ...")
     shown = [f"Fig. {f}" for f in figs if f in (11, 12, 13, 14)]
     motion = runs.motion(scene, ", ".join(shown) or "the report")
     op = build_operator(motion)
-    sections = []
+    check_request(scene, op, methods, figs)
+    fig15_ops = [(s, build_operator(runs.motion(s, "Fig. 15"))) for s in fig15]
+    for s, o in fig15_ops:
+        check_request(s, o, methods, (15,))
+    runs.start(([scene] if shown else []) + fig15)
+    try:
+        sections = _main_figures(runs, scene, motion, op, figs, rigid, out, formats)
+        sections += _fig15(runs, fig15_ops, rigid, out, formats)
+    except BaseException:
+        runs.close(interrupted=True)
+        raise
+    runs.close()
+    report = _report(scene, motion, sections, quick, [s.name for s in fig15], methods,
+                     formats, runs, time.perf_counter() - started)
+    path = out / "report.md"
+    path.write_text(report)
+    progress(f"repro: report -> {path} ({time.perf_counter() - started:.1f} s in all)")
+    return path
+
+
+def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs, rigid,
+                  out: Path, formats) -> list:
+    """Figs. 11-14 on the run's scene and the compliance comparison: report sections."""
+    progress = runs.progress
+    shown = [f"Fig. {f}" for f in figs if f in (11, 12, 13, 14)]
     pen = (runs.penalty_result(scene, ", ".join(shown) + " and the compliance comparison")
            if shown else None)
+    pen_omega = None if pen is None else pen.omega
+    sections = []
     if 11 in figs:
-        csv = figures.fig11(motion, out, None if pen is None else pen.omega)
+        csv = figures.fig11(motion, out, pen_omega, formats)
         diff = np.max(np.abs(motion.omega[-1] - motion.omega[0]))
         sections.append(("Fig. 11: input and output angular velocity", csv, [
             f"- the output turns with the input: max |omega_out - omega_in| = {diff:.1e} rad/s "
@@ -352,7 +538,7 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
             f"- input speed at t = {motion.t[-1]:g} s: {motion.omega[0][-1]:.3f} rad/s",
             *_speed_notes(motion, pen, (0, -1))]))
     if 12 in figs:
-        csv = figures.fig12(motion, out, None if pen is None else pen.omega)
+        csv = figures.fig12(motion, out, pen_omega, formats)
         ratio = motion.omega[1][1:] / motion.omega[0][1:]
         g1 = scene.joints[0].articulation_deg
         sections.append(("Fig. 12: intermediate shaft angular velocity", csv, [
@@ -362,18 +548,11 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
             f"g1 = {g1:g} deg)",
             *_speed_notes(motion, pen, (1,))]))
     if any(f in figs for f in (13, 14)):
-        sections += _contact_figures(op, figs, out, progress,
+        sections += _contact_figures(op, figs, rigid, out, formats, progress,
                                      None if pen is None else penalty_history(pen, op.names))
     if pen is not None:
         sections.append(_compliance_vs_penalty(runs, scene, pen, out, progress))
-    if 15 in figs:
-        sections += _fig15(runs, load_scene(fig15_scene), out, progress)
-    report = _report(scene, motion, sections, quick, fig15_scene, runs,
-                     time.perf_counter() - started)
-    path = out / "report.md"
-    path.write_text(report)
-    progress(f"repro: report -> {path} ({time.perf_counter() - started:.1f} s in all)")
-    return path
+    return sections
 
 
 def _speed_notes(motion: Motion, pen, shafts) -> list[str]:
@@ -411,32 +590,72 @@ def _speed_notes(motion: Motion, pen, shafts) -> list[str]:
     return lines
 
 
-def _contact_figures(op: Operator, figs, out: Path, progress, penalty) -> list:
-    hist = _histories(op, progress, penalty)
+def _histories(op: Operator, rigid, progress, penalty: History | None) -> dict[str, History]:
+    hist = {m: history(op, m, progress=progress) for m in rigid}
+    if penalty is not None:
+        hist[PENALTY] = penalty
+    return hist
+
+
+def _contact_figures(op: Operator, figs, rigid, out: Path, formats, progress, penalty
+                     ) -> list:
+    hist = _histories(op, rigid, progress, penalty)
     forces = {m: h.forces for m, h in hist.items()}
     sections = []
     if 13 in figs:
-        csv = figures.fig13(op, forces, out)
+        progress("repro: fig 13 solution-set intervals ...")
+        csv = figures.fig13(op, forces, set_bounds(op, joint_quantities(op)), out, formats)
         sections.append(("Fig. 13: contact forces of joint 1", csv,
                          _fig13_notes(op, hist) + _status_lines(hist)))
     if 14 in figs:
         progress("repro: fig 14 solution-set intervals ...")
-        bounds = bearing_bounds(op)
-        csv = figures.fig14(op, forces, bounds, out)
+        bounds = set_bounds(op, bearing_quantities(op))
+        csv = figures.fig14(op, forces, bounds, out, formats=formats)
         sections.append(("Fig. 14: input shaft bearing loads", csv,
-                         _bearing_notes(op, hist, bounds, 14)))
+                         _bearing_notes(op, hist, bounds, 14)[0]))
     return sections
 
 
-def _fig15(runs: _Runs, scene: Scene, out: Path, progress):
-    progress(f"repro: fig 15 on {scene.name} ...")
-    op = build_operator(runs.motion(scene, "Fig. 15"))
-    pen = runs.penalty_result(scene, "Fig. 15")
-    hist = _histories(op, progress, None if pen is None else penalty_history(pen, op.names))
-    bounds = bearing_bounds(op)
-    csv = figures.fig14(op, {m: h.forces for m, h in hist.items()}, bounds, out, number=15)
-    return [(f"Fig. 15: input shaft bearing loads, gravity {scene.gravity_m_s2} m/s^2", csv,
-             _bearing_notes(op, hist, bounds, 15))]
+def _gravity(scene: Scene) -> str:
+    return "gravity (" + ", ".join(f"{g:g}" for g in scene.gravity_m_s2) + ") m/s^2"
+
+
+def _fig15(runs: _Runs, scenes_ops, rigid, out: Path, formats) -> list:
+    """Fig. 15 on each of its scenes (a figure ``fig15_<scene>`` each), and a section
+    saying which of them matches the paper's text (both verdicts ``agrees``).
+    """
+    sections, verdicts = [], []
+    for scene, op in scenes_ops:
+        runs.progress(f"repro: fig 15 on {scene.name} ...")
+        pen = runs.penalty_result(scene, f"Fig. 15 ({scene.name})")
+        hist = _histories(op, rigid, runs.progress,
+                          None if pen is None else penalty_history(pen, op.names))
+        bounds = set_bounds(op, bearing_quantities(op))
+        csv = figures.fig14(op, {m: h.forces for m, h in hist.items()}, bounds, out,
+                            number=15, stem=f"fig15_{scene.name}",
+                            subtitle=f", {_gravity(scene)}", formats=formats)
+        notes, verdict = _bearing_notes(op, hist, bounds, 15)
+        sections.append((f"Fig. 15 on `{scene.name}`: input shaft bearing loads, "
+                         f"{_gravity(scene)}", csv, notes))
+        verdicts.append((scene, verdict))
+    if len(verdicts) > 1 or any(v for _, v in verdicts):
+        sections.append(_fig15_summary(verdicts))
+    return sections
+
+
+def _fig15_summary(verdicts: list[tuple[Scene, dict[str, str]]]):
+    """Which Fig. 15 scene matches the paper's text: both of its verdicts ``agrees``."""
+    lines = ["The paper says only that gravity is horizontal in Fig. 15. Its text: the "
+             "radial loads differ from ADAMS, the axial load hardly (criteria in each "
+             "figure's section)."]
+    for scene, v in verdicts:
+        said = (f"radial **{v['radial']}**, axial **{v['axial']}**" if v else
+                "not judged (needs the paper's method and the penalty simulation)")
+        lines.append(f"- `{scene.name}` ({scene.description}; {_gravity(scene)}): {said}")
+    match = [f"`{s.name}`" for s, v in verdicts if v and set(v.values()) == {"agrees"}]
+    lines.append("- matches the paper's text (both verdicts agree): "
+                 + (", ".join(match) if match else "none of the scenes drawn"))
+    return ("Fig. 15: which horizontal gravity matches the paper's text", None, lines)
 
 
 def _compliance_vs_penalty(runs: _Runs, scene: Scene, result, out: Path, progress):
@@ -451,8 +670,11 @@ def _compliance_vs_penalty(runs: _Runs, scene: Scene, result, out: Path, progres
     groups = {"bearings": bearings, "joints": ~bearings}
     pen = np.column_stack([result.forces[n] for n in op.names])
     ok = _settled(op.t) & np.all(np.isfinite(pen), axis=1)
-    rows = []
+    rows, skipped = [], []
     for method, solver in COMPLIANCE_VS_PENALTY.items():
+        if _refusal(op.scene, op, method):
+            skipped.append(f"`{method}` ({_refusal(op.scene, op, method)})")
+            continue
         h = history(op, method, solver)
         row = {"method": method, "solver": solver, "solved": f"{h.solved}/{len(h.statuses)}",
                "seconds": h.seconds}
@@ -490,6 +712,8 @@ def _compliance_vs_penalty(runs: _Runs, scene: Scene, result, out: Path, progres
               "clearance-bearing line picks. What remains is the released line's own choice "
               "(its rattle, the cross-pins' play, the bearings' axial split under impacts), "
               "not a failure of either."]
+    if skipped:
+        lines.append(f"- left out, they do not apply to `{op.scene.name}`: {'; '.join(skipped)}")
     return ("Compliance vs penalty", path, lines)
 
 
@@ -499,21 +723,24 @@ def _status_lines(hist: dict[str, History]) -> list[str]:
             for m, h in hist.items()]
 
 
-def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15_scene: str,
-            runs: _Runs, seconds: float) -> str:
+def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str], methods,
+            formats, runs: _Runs, seconds: float) -> str:
     penalty_s = [(r.wall_s / max(r.t[-1] - r.t[0], 1e-12), r.cpu_s / max(r.t[-1] - r.t[0], 1e-12))
                  for r in runs.penalties.values()]
+    children = sum(os.times()[2:4]) - runs.children0
+    cpu = time.process_time() - runs.cpu0 + children
     lines = [
         "# cardan repro: the paper's Figs. 11-15",
         "",
         f"- date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC",
         f"- machine: {machine()}",
         f"- versions: {versions()}",
-        f"- scene: `{scene.name}` ({scene.description}); Fig. 15: `{fig15_scene}`",
+        f"- scene: `{scene.name}` ({scene.description}); Fig. 15: "
+        + (", ".join(f"`{s}`" for s in fig15) or "not drawn"),
         f"- instants: {len(motion.t)} from {motion.t[0]:g} to {motion.t[-1]:g} s"
         + (" (quick run)" if quick else ""),
         "- methods (formulations; each figure's notes name the backend that drew it): "
-        + ", ".join(f"`{m}`" for m in METHODS)
+        + ", ".join(f"`{m}`" for m in methods if m != PENALTY)
         + (", `penalty`: the released scene's penalty-contact simulation"
            if runs.penalties else ""),
         f"- **timings** (measured by this run): total wall {seconds:.1f} s (target <= 120 s "
@@ -522,7 +749,8 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15_scene: st
         + " (target <= 50 ms for 1001 instants); penalty simulation "
         + (", ".join(f"{w:.2f} ({c:.2f} of CPU)" for w, c in penalty_s)
            + " s per simulated second (target <= 2)" if penalty_s else "not run")
-        + f"; CPU time of the whole run {time.process_time() - runs.cpu0:.1f} s",
+        + f"; CPU time of the whole run {cpu:.1f} s ({children:.1f} s of it in the "
+        "penalty simulations' worker processes)",
         "",
         "## Runs",
         "",
@@ -534,8 +762,10 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15_scene: st
         "both give is **undecided**.",
     ]
     for title, csv, notes in sections:
-        files = f"`{csv.name}`" + (f", `{csv.with_suffix('.png').name}`"
-                                   if csv.name.startswith("fig") else "")
-        lines += ["", f"## {title}", "", files, ""]
+        lines += ["", f"## {title}", ""]
+        if csv is not None:
+            images = formats if csv.name.startswith("fig") else ()
+            lines += [", ".join(f"`{csv.with_suffix(s).name}`"
+                                for s in (".csv", *(f".{f}" for f in images))), ""]
         lines += notes
     return "\n".join(lines) + "\n"

@@ -3,7 +3,11 @@
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.experiments.study import History
 from cardan_forces.paper_repro import figures, repro
+
+from cardan_forces.cli import main
 
 
 def test_a_verdict_the_halves_do_not_share_is_undecided():
@@ -42,16 +46,117 @@ def test_y_limits_follow_the_rigid_methods_not_the_spikes():
     assert flat_low < 100 < flat_high  # a flat line gets a margin, not a zero range
 
 
-def test_an_unbounded_set_is_written_not_shaded():
+def test_an_open_set_is_hatched_with_its_finite_bound_drawn():
     t = np.linspace(0, 1, 11)
     fig, ax = plt.subplots()
-    handles = figures._draw_set(ax, t, np.full(11, 10.0), np.full(11, np.inf), 0.0, 50.0)
-    texts = " ".join(x.get_text() for x in ax.texts)
-    assert "unbounded above at 100 %" in texts and "lower bound 10 to 10 N (dashed)" in texts
-    assert "rigid solution set" not in handles  # nothing shaded
-    handles = figures._draw_set(ax, t, np.full(11, -5.0), np.full(11, 5.0), -10.0, 10.0)
-    assert "rigid solution set" in handles
+    handles, note = figures._draw_set(ax, t, np.full(11, 10.0), np.full(11, np.inf), 0.0, 50.0)
+    assert "open above (100 % of 11 instants)" in note and "lower bound 10 to 10 N, dashed" \
+        in note
+    assert figures.SET_LABEL not in handles and figures.OPEN_LABEL in handles
+    line = handles[figures.BOUND_LABEL]
+    assert np.allclose(line.get_ydata(), 10.0)  # the finite bound, where it is drawn
+    _, note = figures._draw_set(ax, t, np.full(11, -90.0), np.full(11, np.inf), 0.0, 50.0)
+    assert "out of view" in note
     plt.close(fig)
+
+
+def test_a_band_is_drawn_exactly_where_both_bounds_are_finite():
+    """Bounded on the first half (lo = t, hi = t + 2), open above on the second: the
+    shaded band spans [lo, hi] over the first half only, the rest is hatched to the edge."""
+    t = np.linspace(0, 1, 11)
+    lo, hi = t.copy(), np.where(t <= 0.5, t + 2.0, np.inf)
+    fig, ax = plt.subplots()
+    handles, note = figures._draw_set(ax, t, lo, hi, -1.0, 5.0)
+    band = np.vstack([p.vertices for p in handles[figures.SET_LABEL].get_paths()])
+    assert band[:, 0].min() == 0.0 and band[:, 0].max() == 0.5
+    for x in (0.0, 0.2, 0.5):
+        at = band[np.isclose(band[:, 0], x), 1]
+        assert np.isclose(at.min(), x) and np.isclose(at.max(), x + 2.0)
+    hatch = np.vstack([p.vertices for p in handles[figures.OPEN_LABEL].get_paths()])
+    assert np.isclose(hatch[:, 0].min(), 0.6) and np.isclose(hatch[:, 1].max(), 5.0)  # to the edge
+    assert "open above (45 % of 11 instants)" in note
+    plt.close(fig)
+
+
+def test_the_y_range_holds_every_bold_curve_and_only_raw_spikes_are_clipped():
+    """Rigid methods at 500-530 N, the penalty's average 244-742 N (Fig. 14(a)'s case),
+    raw spikes 0-1500 N: the axis holds the rigid curves and the average; the raw line
+    leaves it, and the panel says so."""
+    t = np.linspace(0, 5, 201)
+    avg = 493 + 249 * np.sin(t)
+    cols = {"t": t, "q_paper": 500 + 30 * (t / 5), "q_positive": np.full_like(t, 515.0),
+            "q_penalty": np.where(np.arange(201) % 20 == 0, 1500.0, avg) * (t > 0.01),
+            "q_penalty_avg": avg}
+    fig, ax = plt.subplots()
+    handles = figures._draw_panel(ax, cols, figures.Panel("q", "q", "N", ("paper", "positive")))
+    low, high = ax.get_ylim()
+    for name in ("q_paper", "q_positive", "q_penalty_avg"):
+        assert low < cols[name].min() and cols[name].max() < high
+    assert "raw penalty clipped (impacts): it spans 0 to 1500" in ax.get_title(loc="right")
+    assert figures.method_label("paper") in handles  # the paper's method, as computed here
+    plt.close(fig)
+
+
+def test_speed_smoothing_keeps_the_twice_per_revolution_fluctuation():
+    """A 0.25 s fluctuation of amplitude 1 under rattle: the speeds' smoothing keeps its
+    amplitude within 3 % (a 0.1 s moving average takes 1/4 off) and removes most of the
+    rattle."""
+    t = np.arange(0, 5.0001, 0.005)
+    clean = 10 + np.sin(2 * np.pi * t / 0.25)
+    rattle = 0.5 * np.random.default_rng(3).standard_normal(len(t))
+    kept = figures.smooth_speed(clean + rattle, t)[100:-100]
+    assert abs(np.ptp(figures.smooth_speed(clean, t)[100:-100]) / 2 - 1) < 0.03
+    assert np.ptp(figures.moving_average(clean, t)[100:-100]) / 2 < 0.8
+    assert np.std(kept - clean[100:-100]) < 0.5 * np.std(rattle)
+
+
+def test_a_method_whose_end_faces_both_push_is_named_not_a_physical_selection():
+    class Op:  # two pairs of end faces: columns (0, 1) and (2, 3)
+        pairs = ((0, 1), (2, 3))
+        t = np.array([0.0, 0.02, 0.04])
+
+    both = np.array([[0, 3, 0, 0], [5.8, 5.8, 0, 1], [0, 0, 2, 0]], float)
+    one = np.array([[0, 3, 0, 0], [5.8, 0, 0, 1], [0, 0, 2, 0]], float)
+    hist = {m: History(m, "s", Op.t, x, (), 0.0) for m, x in (("min_max", both),
+                                                              ("positive", one))}
+    lines = repro._both_faces_note(Op, hist)
+    assert "`min_max`: both end faces of a pair push at once at 1 of 3 instants (up to " \
+           "5.8 N each, t = 0.020 s)" in lines[0]
+    assert lines[1].startswith("- `positive`: no pair of end faces pushes at once")
+
+
+def test_fig15_names_the_scene_whose_verdicts_both_agree():
+    y, x = load_scene("paper-fig15"), load_scene("paper-fig15-axial")
+    _, _, lines = repro._fig15_summary([(y, {"radial": "disagrees", "axial": "disagrees"}),
+                                        (x, {"radial": "agrees", "axial": "agrees"})])
+    assert lines[-1] == "- matches the paper's text (both verdicts agree): `paper-fig15-axial`"
+    _, _, lines = repro._fig15_summary([(y, {"radial": "agrees", "axial": "undecided"})])
+    assert lines[-1].endswith("none of the scenes drawn")
+
+
+def test_both_fig15_scenes_by_default_in_every_format_asked(tmp_path):
+    report = repro.run_repro(figs=(15,), out=tmp_path, quick=True, methods=("positive",),
+                             formats=("png", "svg", "pdf"), progress=lambda s: None)
+    for scene in repro.FIG15_SCENES:
+        for ext in ("csv", "png", "svg", "pdf"):
+            assert (tmp_path / f"fig15_{scene}.{ext}").stat().st_size > 0
+    text = report.read_text()
+    assert "## Fig. 15: which horizontal gravity matches the paper's text" in text
+    assert "not judged (needs the paper's method and the penalty simulation)" in text
+
+
+def test_a_slip_joint_scene_gets_its_figures_with_the_methods_that_apply(tmp_path, capsys):
+    out = str(tmp_path)
+    args = ["repro", "paper-slip", "--quick", "--no-penalty", "--fig", "13", "--out", out]
+    assert main(args) == 2  # the paper's method does not apply to a slip joint
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("cardan: error: cardan repro paper-slip: 'paper' (") and \
+        "choose --methods among those that apply here: positive,min_max,compliance," in err
+    assert not list(tmp_path.glob("fig*"))  # refused before any work
+    assert main(args + ["--methods", "positive,compliance"]) == 0
+    cols = figures.read_csv(tmp_path / "fig13.csv")
+    assert {"F1_positive", "F1_compliance", "F1_set_min"} <= set(cols)
+    assert "F1_paper" not in cols
 
 
 def test_moving_average_of_a_line_is_the_line():
@@ -70,14 +175,14 @@ def test_one_penalty_simulation_per_scene_and_the_runs_listed(tmp_path, monkeypa
         return real(scene, times, progress)
 
     monkeypatch.setattr(repro, "run_penalty", counted)
-    report = repro.run_repro(figs=(11, 15), out=tmp_path, quick=True, fig15_scene="paper",
-                             progress=lambda s: None).read_text()
+    report = repro.run_repro(figs=(11, 15), out=tmp_path, quick=True, fig15_scenes=("paper",),
+                             progress=lambda s: None, workers=0).read_text()
     assert made == ["paper"]
     assert "penalty simulation `paper-penalty` (made once, used for Fig. 11 and the " \
-           "compliance comparison, Fig. 15)" in report
+           "compliance comparison, Fig. 15 (paper))" in report
     assert "s per simulated second" in report and "motion of `paper`" in report
     made.clear()
-    report = repro.run_repro(figs=(11,), out=tmp_path, quick=True, penalty=False,
+    report = repro.run_repro(figs=(11,), out=tmp_path, quick=True, methods=repro.METHODS,
                              progress=lambda s: None).read_text()
     assert made == [] and "penalty simulations: not made (`--no-penalty`" in report
 
