@@ -95,28 +95,30 @@ def grid(values: list[str] | None, flag: str = "--angle") -> list[float]:
     """
     out: dict[str, float] = {}
     for value in values or ():
-        parts = value.split(":")
-        try:
-            if len(parts) == 1:
-                new = [float(value)]
-            elif len(parts) == 3 and int(parts[2]) >= 1:
-                count = int(parts[2])
-                new = list(np.linspace(float(parts[0]), float(parts[1]), min(count, 2)))
-            else:
-                raise ValueError
-        except ValueError:
-            raise SweepError(f"{value!r}: expected a number or a:b:n (n >= 1 values from a "
-                             "to b)") from None
-        if len(new) > 1 and count > MAX_POINTS:
-            raise SweepError(f"{flag} {value}: {count} values; at most {MAX_POINTS}")
-        if len(new) > 1:
-            new = list(np.linspace(new[0], new[1], count))
+        new = _values(value, flag)
         if not all(math.isfinite(v) for v in new):
             raise SweepError(f"{value!r}: values must be finite")
-        out.update((spell(float(v)), float(v)) for v in new if spell(float(v)) not in out)
+        out.update((spell(v), v) for v in new if spell(v) not in out)
         if len(out) > MAX_POINTS:
-            raise SweepError(f"{flag}: at most {MAX_POINTS} values, got more")
+            raise SweepError(f"{flag}: {len(out)} values or more; at most {MAX_POINTS}")
     return list(out.values())
+
+
+def _values(value: str, flag: str) -> list[float]:
+    """The values of one ``value`` (a number or ``a:b:n``), its count checked first."""
+    parts = value.split(":")
+    try:
+        if len(parts) == 1:
+            return [float(value)]
+        if len(parts) != 3 or int(parts[2]) < 1:
+            raise ValueError
+        first, last, count = float(parts[0]), float(parts[1]), int(parts[2])
+    except ValueError:
+        raise SweepError(f"{value!r}: expected a number or a:b:n (n >= 1 values from a "
+                         "to b)") from None
+    if count > MAX_POINTS:
+        raise SweepError(f"{flag} {value}: {count} values; at most {MAX_POINTS}")
+    return [float(v) for v in np.linspace(first, last, count)]
 
 
 def _within(values: list[float], most: float, words: str) -> None:
