@@ -108,10 +108,14 @@ from .elements import shaft_segments
 from .equilibrium import build_operator
 from .scene import Scene, SceneError
 
+COMPILED = "BDF-numba"
 DAMPING_LENGTH_UNIT_M = 1e-3
 """Length unit in which ``c_max = fraction * K`` is read (ADAMS's mm; see the module)."""
 
-METHODS = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA}
+METHODS = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA, COMPILED: None}
+"""Integrators: SciPy's (stepped from Python or, LSODA, from Fortran, calling the
+right-hand side back through Python) and ``BDF-numba``, the same BDF as SciPy's
+compiled end to end around the compiled kernels (:mod:`penalty_kernels`)."""
 KERNELS = ("numba", "numpy")
 """Right-hand sides: compiled (:mod:`penalty_kernels`) or the NumPy array model."""
 
@@ -134,9 +138,12 @@ class PenaltyResult:
     are NaN). ``nfev`` counts right-hand-side evaluations (a vectorized Jacobian call
     counts as one), ``njev`` Jacobians, ``nlu`` LU factorizations, ``nsteps`` steps.
     ``kernel``: ``numba`` (compiled right-hand side and Jacobian) or ``numpy``;
-    ``rhs_s`` and ``jacobian_s``: wall time spent in them (the rest of ``wall_s`` is the
-    integrator's own work and the set-up); ``cpu_s``: the process's CPU time over
-    ``wall_s`` (below it where other jobs share the cores).
+    ``rhs_s`` and ``jacobian_s``: wall time spent in them where the integrator calls
+    them from Python (the rest of ``wall_s`` is the integrator's own work and the
+    set-up; NaN under ``BDF-numba``, whose calls are not timed one by one); ``cpu_s``:
+    the process's CPU time over ``wall_s`` (below it where other jobs share the cores).
+    ``compile_s``: loading (or, the first time, compiling) the compiled code, before
+    ``wall_s`` starts and not part of it (0 once loaded in this process).
     """
 
     scene: Scene
@@ -153,13 +160,35 @@ class PenaltyResult:
     status: int
     message: str
     kernel: str = "numpy"
-    rhs_s: float = 0.0
-    jacobian_s: float = 0.0
+    rhs_s: float = np.nan
+    jacobian_s: float = np.nan
     cpu_s: float = 0.0
+    compile_s: float = 0.0
 
     @property
     def success(self) -> bool:
         return self.status == 0
+
+    def cost_text(self) -> str:
+        """Where the simulation's time went, in one sentence for a report: seconds per
+        simulated second (wall and CPU), steps, and per step what was measured; the
+        compiled code's loading stated apart (it is not in ``wall_s``).
+        """
+        span = max(float(self.t.max() - self.t.min()), 1e-12)
+        steps = max(self.nsteps, 1)
+        text = (f"{self.wall_s:.1f} s wall ({self.cpu_s:.1f} s of CPU) for {span:g} s "
+                f"simulated = {self.wall_s / span:.2f} s per simulated second "
+                f"({self.cpu_s / span:.2f} of CPU), {self.method}, {self.kernel} kernels; "
+                f"{self.nsteps / span:.0f} steps per simulated second (mean step "
+                f"{1e6 * span / steps:.1f} us), {1e6 * self.wall_s / steps:.1f} us per step "
+                f"with {self.nfev / steps:.2f} right-hand sides, {self.njev / steps:.2f} "
+                f"Jacobians and {self.nlu / steps:.2f} LU factorizations a step")
+        if np.isfinite(self.rhs_s) and np.isfinite(self.jacobian_s):
+            text += (f" (right-hand sides {1e6 * self.rhs_s / steps:.1f} us, Jacobians "
+                     f"{1e6 * self.jacobian_s / steps:.1f} us a step)")
+        text += (f"; compiled code loaded in {self.compile_s:.1f} s before, not counted"
+                 if self.compile_s > 0 else "")
+        return f"{text}; {self.message}"
 
 
 def contact_law(d, rate, stiffness, exponent, c_max, d_max):
@@ -610,7 +639,7 @@ def simulate_penalty(
     times,
     progress: Callable[[float], None] | None = None,
     *,
-    method: str = "LSODA",
+    method: str = "auto",
     atol_m: float = 1e-8,
     progress_every_s: float = 0.1,
     damping_length_unit_m: float = DAMPING_LENGTH_UNIT_M,
@@ -640,42 +669,76 @@ def simulate_penalty(
         raise SceneError(
             f"scene {scene.name!r}: the penalty-contact simulation models a slip joint's "
             "spline as frictionless; set its friction_coefficient to 0")
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
     if kernel == "auto":
         kernel = "numba" if kernels.HAVE_NUMBA else "numpy"
     if kernel not in KERNELS or (kernel == "numba" and not kernels.HAVE_NUMBA):
         raise ValueError(f"kernel {kernel!r} not available; available: "
                          f"{', '.join(k for k in KERNELS if k != 'numba' or kernels.HAVE_NUMBA)}")
+    if method == "auto":
+        method = COMPILED if kernel == "numba" else "LSODA"
+    if method not in METHODS:
+        raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
+    if method == COMPILED and kernel != "numba":
+        raise ValueError(f"method {COMPILED!r} runs the compiled kernels; kernel {kernel!r} "
+                         "asked for")
     t = np.atleast_1d(np.asarray(times, float))
     t0 = scene.time.start_s
     if np.any(t < t0):
         raise ValueError(f"instants before the scene's start {t0} s")
+    compile_s = _load_compiled(scene, kernel, method, damping_length_unit_m)
     start, cpu = _time.perf_counter(), _time.process_time()
-    clock = {"rhs": 0.0, "jacobian": 0.0}
     model = _Model(scene, damping_length_unit_m)
     y0 = model.initial_state()
     atol, step = model.tolerances(atol_m)
     states = np.full((len(t), model.n_state), np.nan)
     states[t == t0] = y0
-    status, message, counts = 0, "no motion asked for", (0, 0, 0)
+    status, message, counts = 0, "no motion asked for", (0, 0, 0, 0)
+    clock = {"rhs": np.nan, "jacobian": np.nan}
     if t.max() > t0:
-        if kernel == "numba":  # load (or compile) the kernels before the clocks start
-            kernels.rhs(t0, y0, *model.kernel_args)
-            model.jacobian_compiled(t0, y0)
-        fun, jac = _timed(model, kernel, step, clock)
         marks = _Marks(progress, t0, float(t.max()), progress_every_s)
-        integrate = _odeint if method == "LSODA" else _stepped
-        status, message, counts = integrate(METHODS[method], fun, jac, t0, y0, t, atol, states,
-                                            marks)
+        if method == COMPILED:
+            status, message, counts = _compiled(model, t0, y0, t, atol, states, marks)
+        else:
+            clock = {"rhs": 0.0, "jacobian": 0.0}
+            fun, jac = _timed(model, kernel, step, clock)
+            integrate = _odeint if method == "LSODA" else _stepped
+            status, message, counts = integrate(METHODS[method], fun, jac, t0, y0, t, atol,
+                                                states, marks)
+            counts = (*counts, model.n_calls)
     forces, omega, depth = _sample(model, states)
     return PenaltyResult(
         scene=scene, t=t, omega=omega, forces=forces, penetration=depth,
-        wall_s=_time.perf_counter() - start, nfev=model.n_calls, njev=counts[1],
+        wall_s=_time.perf_counter() - start, nfev=counts[3], njev=counts[1],
         nlu=counts[2], nsteps=counts[0], method=method, status=status, message=message,
         kernel=kernel, rhs_s=clock["rhs"], jacobian_s=clock["jacobian"],
-        cpu_s=_time.process_time() - cpu,
+        cpu_s=_time.process_time() - cpu, compile_s=compile_s,
     )
+
+
+def _load_compiled(scene: Scene, kernel: str, method: str, damping_length_unit_m: float
+                   ) -> float:
+    """Load (from numba's cache) or compile the compiled code ``method`` and ``kernel``
+    call, on a short run of ``scene``'s model: seconds taken, 0 once done in this
+    process. Kept out of the simulation's own clocks.
+    """
+    key = (kernel, method == COMPILED)
+    if kernel != "numba" or key in _LOADED:
+        return 0.0
+    begin = _time.perf_counter()
+    model = _Model(scene, damping_length_unit_m)
+    y0, t0 = model.initial_state(), scene.time.start_s
+    kernels.rhs(t0, y0, *model.kernel_args)
+    model.jacobian_compiled(t0, y0)
+    if method == COMPILED:
+        atol, _ = model.tolerances(1e-8)
+        run = kernels.start(t0, y0, t0 + 1e-6, atol, _RTOL, model.kernel_args)
+        kernels.advance(run, t0, t0 + 1e-6, atol, _RTOL, model.kernel_args, np.zeros(0),
+                        np.zeros((0, len(y0))))
+    _LOADED.add(key)
+    return _time.perf_counter() - begin
+
+
+_LOADED: set[tuple[str, bool]] = set()
 
 
 class _Marks:
@@ -726,6 +789,36 @@ def _odeint(_, fun, jac, t0, y0, t, atol, states, marks: _Marks):
     jacobians = int(info["nje"][-1]) if len(info["nje"]) else 0
     return (0 if ok and valid.all() else -1, "finished" if ok else str(info["message"]),
             (steps, jacobians, jacobians))
+
+
+def _compiled(model: _Model, t0, y0, t, atol, states, marks: _Marks):
+    """``BDF-numba``: the compiled integrator (:func:`penalty_kernels.advance`) run from
+    one progress mark to the next; ``states`` rows are filled at the instants ``t``
+    from its dense output. Returns status, message and (steps, Jacobians, LU
+    factorizations, right-hand sides).
+    """
+    order = np.argsort(t)
+    later = order[t[order] > t0]
+    end, args = float(t.max()), model.kernel_args
+    out = np.full((len(later), len(y0)), np.nan)
+    run = kernels.start(t0, y0, end, atol, _RTOL, args)
+    ints = run[1]
+    stops = np.append(np.arange(t0 + marks.every, end, marks.every), end)
+    for stop in stops:
+        kernels.advance(run, stop, end, atol, _RTOL, args, t[later], out)
+        if ints[kernels.I_STATUS] != kernels.RUNNING:
+            break
+        marks.reached(run[0][kernels.F_T])
+    marks.reached(run[0][kernels.F_T])
+    states[later] = out
+    ok = ints[kernels.I_STATUS] == kernels.FINISHED and np.all(np.isfinite(out))
+    message = kernels.MESSAGES.get(int(ints[kernels.I_STATUS]), "failed")
+    if not ok and message == "finished":
+        message = "the state is not finite"
+    counts = (ints[kernels.I_STEPS], ints[kernels.I_JEV], ints[kernels.I_NLU],
+              ints[kernels.I_FEV])
+    return (0 if ok else -1), (f"{message} at t = {run[0][kernels.F_T]:.6g} s" if not ok
+                               else message), tuple(int(c) for c in counts)
 
 
 def _stepped(solver_class, fun, jac, t0, y0, t, atol, states, marks: _Marks):

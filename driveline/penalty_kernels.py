@@ -15,8 +15,13 @@ contact's two bodies, by hand; then the Newton-Euler equations differentiated by
 About ten right-hand sides' worth of work, exact where a forward difference loses half
 the digits (the tests hold it to the NumPy model's complex-step Jacobian).
 
+**Integrator.** At the end, SciPy's variable-order BDF written as numba loops
+(:func:`start`, :func:`advance`): the whole integration runs compiled, the kernels
+called with no Python in between (why, and how it differs from SciPy's, above
+:data:`MAX_ORDER`).
+
 Without numba the functions below still run (as plain Python, slowly); the simulation
-then uses the NumPy model instead (:data:`HAVE_NUMBA`).
+then uses the NumPy model and SciPy's integrators instead (:data:`HAVE_NUMBA`).
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ import numpy as np
 
 from .compiled import HAVE_NUMBA, harmonic, njit
 
-__all__ = ["HAVE_NUMBA", "contact_forces", "jacobian", "rhs"]
+__all__ = ["HAVE_NUMBA", "advance", "contact_forces", "jacobian", "rhs", "start"]
 
 COMPLEX_STEP = 1e-30
 """Imaginary step (per unit of a quantity's scale); far below round-off, so the
@@ -350,6 +355,7 @@ def _local_rates(y, nb, ka, kb, g, frames, drot, p, dloc, cols):
     rot, omega = frames[2], frames[4]
     dloc[:] = 0.0
     cols[:] = -1
+    turned = np.zeros(3)
     for side in range(2):
         k, sign, off = (ka, 1.0, 0) if side == 0 else (kb, -1.0, 13)
         if k == nb:
@@ -382,9 +388,11 @@ def _local_rates(y, nb, ka, kb, g, frames, drot, p, dloc, cols):
                 dloc[9 + i, off + 10 + j] = sign * (rot[k, i, b] * point[a]
                                                     - rot[k, i, a] * point[b])
         if side == 1:  # rel has - (R_b w_b) x p: its rates in q_b and w_b
-            for kq in range(4):
-                dom = drot[k, kq] @ wk
-                _cross_add(p, dom, 1.0, dloc[9:12, off + 3 + kq])
+            for kq in range(4):  # (dR/dq) w, by hand: a 3 x 3 product through BLAS costs more
+                for i in range(3):
+                    turned[i] = drot[k, kq, i, 0] * wk[0] + drot[k, kq, i, 1] * wk[1] \
+                        + drot[k, kq, i, 2] * wk[2]
+                _cross_add(p, turned, 1.0, dloc[9:12, off + 3 + kq])
             for j in range(3):
                 _cross_add(p, rot[k, :, j], 1.0, dloc[9:12, off + 10 + j])
     if kb < nb:  # and - omega_b x dp
@@ -436,3 +444,337 @@ def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, j
             jac[q + 1 + j, q + 1 + b] -= 0.5 * wk[a]
             jac[q + 1 + j, w + b] += 0.5 * qk[1 + a]
             jac[q + 1 + j, w + a] -= 0.5 * qk[1 + b]
+
+
+# ------------------------------------------------------------------ the integrator
+# The penalty simulation's implicit integrator, compiled end to end by numba (in this
+# module because numba's cache knows only a function's own file: an integrator cached
+# elsewhere would keep stale copies of the kernels it calls).
+#
+# SciPy's variable-order BDF (``solve_ivp(method="BDF")``: the numerical
+# differentiation formulas of Shampine & Reichelt, *The MATLAB ODE suite*, SIAM J. Sci.
+# Comput. 18 (1997), orders 1-5, quasi-constant step size, the backward-difference array
+# ``D`` rescaled on every change of step) written as numba loops, so that every step
+# calls the compiled right-hand side and Jacobian of
+# :mod:`~cardan_forces.driveline.penalty_kernels` with no Python in between. The one
+# piece of dense linear algebra, the LU factorization of ``I - c J`` (65 x 65 on
+# ``paper``), is LAPACK's ``getrf`` through numba's own binding; its two triangular
+# solves are loops. Why not a library: ODEPACK and SUNDIALS reach these kernels only
+# through a Python callback per call (``odeint``, ``scikit-sundae``), ``numbalsoda`` does
+# not build for this Python, and ``diffrax`` spends 0.2-0.3 ms a step on a 65-state
+# system even with a trivial right-hand side, where the penalty model needs ~10 us.
+#
+# Same error control as SciPy's ``BDF``: the local error estimate of every component
+# below ``atol + rtol |y|``. One difference: the Newton iteration stops at
+# :data:`NEWTON_TOL` (SciPy's value for ordinary tolerances) of that error scale, where
+# SciPy would tie it to ``sqrt(rtol)`` (1e-5 at the floor ``rtol = 1e-10`` that the
+# penalty model's absolute control uses); a converged Newton iterate within 3 % of the
+# error tolerance does not move the accepted solution beyond that tolerance, and the
+# tighter rule costs a Jacobian every two steps.
+
+MAX_ORDER = 5
+NEWTON_MAXITER = 4
+NEWTON_TOL = 0.03
+"""Newton's stopping tolerance, in units of the error tolerance (see above)."""
+MIN_FACTOR, MAX_FACTOR = 0.2, 10.0
+LU_KEEP = 0.3
+"""The LU of ``I - c J`` is kept while ``c`` stays within 30 % of the ``c`` it was
+factored with (SUNDIALS CVODE's rule, ``dgmax``); SciPy refactors on every change of
+step. A Newton iteration with the kept matrix converges to the same solution, a little
+slower, and its rate test rejects it where it would not converge."""
+
+_KAPPA = np.array([0.0, -0.1850, -1.0 / 9.0, -0.0823, -0.0415, 0.0])
+_GAMMA = np.concatenate([[0.0], np.cumsum(1.0 / np.arange(1, MAX_ORDER + 1))])
+_ALPHA = (1.0 - _KAPPA) * _GAMMA
+_ERROR_CONST = _KAPPA * _GAMMA + 1.0 / np.arange(1, MAX_ORDER + 2)
+_COEFFS = np.stack([_GAMMA, _ALPHA, _ERROR_CONST])
+"""Rows: gamma, alpha, error constants of the NDF of each order (SciPy's ``BDF``)."""
+
+# integer state (``ints``) and float state (``floats``) of a run, kept between calls
+I_ORDER, I_EQUAL, I_LU, I_JAC_CURRENT, I_STEPS, I_FEV, I_JEV, I_NLU, I_STATUS, I_OUT = range(10)
+F_T, F_H, F_C = range(3)
+RUNNING, FINISHED, STEP_TOO_SMALL, NOT_FINITE = 0, 1, 2, 3
+MESSAGES = {FINISHED: "finished", STEP_TOO_SMALL: "required step size is less than spacing "
+            "between numbers", NOT_FINITE: "the right-hand side is not finite"}
+
+if HAVE_NUMBA:
+    from numba import types
+    from numba.np.linalg import _LAPACK, F_INT_nptype
+
+    _getrf = _LAPACK().numba_xxgetrf(types.float64)
+else:  # pragma: no cover - the caller uses SciPy's integrators instead
+    F_INT_nptype, _getrf = np.int32, None
+
+
+@njit(cache=True)
+def _factor(jac, c, lu, pivots):
+    """LU factors of ``I - c J`` into ``lu`` (held transposed: LAPACK's column-major
+    view of it is the matrix) and ``pivots``; LAPACK's ``info`` (0: regular).
+    """
+    n = jac.shape[0]
+    for i in range(n):
+        for j in range(n):
+            lu[j, i] = -c * jac[i, j]
+        lu[i, i] += 1.0
+    return _getrf(ord("d"), n, n, lu.ctypes, n, pivots.ctypes)
+
+
+@njit(cache=True)
+def _solve(lu, pivots, b):
+    """``b <- (I - c J)^-1 b`` from :func:`_factor`'s factors (row swaps, then the unit
+    lower and the upper triangle, column by column: rows of the transposed ``lu``).
+    """
+    n = b.shape[0]
+    for k in range(n):
+        p = pivots[k] - 1
+        if p != k:
+            b[k], b[p] = b[p], b[k]
+    for j in range(n):
+        bj = b[j]
+        if bj != 0.0:
+            for i in range(j + 1, n):
+                b[i] -= lu[j, i] * bj
+    for j in range(n - 1, -1, -1):
+        b[j] /= lu[j, j]
+        bj = b[j]
+        for i in range(j):
+            b[i] -= lu[j, i] * bj
+
+
+@njit(cache=True)
+def _norm(x, scale):
+    """RMS norm of ``x / scale``."""
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += (x[i] / scale[i]) ** 2
+    return np.sqrt(s / x.shape[0])
+
+
+@njit(cache=True)
+def _r_matrix(order, factor):
+    """SciPy's ``compute_R``: the map of backward differences for a step times ``factor``."""
+    m = np.zeros((order + 1, order + 1))
+    m[0, :] = 1.0
+    for i in range(1, order + 1):
+        for j in range(1, order + 1):
+            m[i, j] = (i - 1 - factor * j) / i
+    for i in range(1, order + 1):
+        for j in range(order + 1):
+            m[i, j] *= m[i - 1, j]
+    return m
+
+
+@njit(cache=True)
+def _change_d(d, order, factor):
+    """Rescale the differences ``d`` for a step size times ``factor`` (in place):
+    ``D <- (R U)^T D`` over the first ``order + 1`` rows, as SciPy's ``change_D``.
+    """
+    ru = _r_matrix(order, factor) @ _r_matrix(order, 1.0)
+    old = d[:order + 1].copy()
+    for i in range(order + 1):
+        row = d[i]
+        row[:] = 0.0
+        for j in range(order + 1):
+            weight = ru[j, i]
+            if weight != 0.0:
+                for k in range(row.shape[0]):
+                    row[k] += weight * old[j, k]
+
+
+@njit(cache=True)
+def _rhs(t, y, ints, args):
+    """The compiled right-hand side, counted."""
+    ints[I_FEV] += 1
+    return rhs(t, y, args[0], args[1], args[2], args[3], args[4], args[5])
+
+
+@njit(cache=True)
+def initial_step(t0, y0, t_bound, atol, rtol, ints, args):
+    """SciPy's ``select_initial_step`` for a first-order estimate (Hairer, Norsett and
+    Wanner, Solving ODEs I, sec. II.4).
+    """
+    f0 = _rhs(t0, y0, ints, args)
+    scale = atol + rtol * np.abs(y0)
+    d0, d1 = _norm(y0, scale), _norm(f0, scale)
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    h0 = min(h0, t_bound - t0)
+    f1 = _rhs(t0 + h0, y0 + h0 * f0, ints, args)
+    d2 = _norm(f1 - f0, scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** 0.5
+    return min(100.0 * h0, h1, t_bound - t0), f0
+
+
+@njit(cache=True)
+def start(t0, y0, t_bound, atol, rtol, args):
+    """A run's state at ``t0``: (floats, ints, differences ``D``, Jacobian, LU factors,
+    pivots), for :func:`advance`.
+    """
+    n = y0.shape[0]
+    ints = np.zeros(10, dtype=np.int64)
+    ints[I_ORDER] = 1
+    h, f0 = initial_step(t0, y0, t_bound, atol, rtol, ints, args)
+    d = np.zeros((MAX_ORDER + 3, n))
+    d[0], d[1] = y0, f0 * h
+    ints[I_JEV] += 1
+    jac = jacobian(t0, y0, args[0], args[1], args[2], args[3], args[4], args[5])
+    ints[I_JAC_CURRENT] = 1
+    floats = np.array([t0, h, h])
+    return floats, ints, d, jac, np.zeros((n, n)), np.zeros(n, dtype=F_INT_nptype)
+
+
+@njit(cache=True)
+def _newton(t_new, y_predict, c, psi, lu, pivots, scale, ints, args):
+    """SciPy's ``solve_bdf_system``: the simplified Newton iteration of one step;
+    (converged, iterations, y, d = y - y_predict).
+    """
+    y, d = y_predict.copy(), np.zeros_like(y_predict)
+    dy_norm_old, converged, k = -1.0, False, 0
+    for k in range(NEWTON_MAXITER):
+        f = _rhs(t_new, y, ints, args)
+        if not np.all(np.isfinite(f)):
+            break
+        dy = c * f - psi - d
+        _solve(lu, pivots, dy)
+        dy_norm = _norm(dy, scale)
+        rate = dy_norm / dy_norm_old if dy_norm_old > 0.0 else -1.0
+        if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - k) / (1.0 - rate)
+                            * dy_norm > NEWTON_TOL):
+            break
+        y += dy
+        d += dy
+        if dy_norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * dy_norm < NEWTON_TOL):
+            converged = True
+            break
+        dy_norm_old = dy_norm
+    return converged, k + 1, y, d
+
+
+@njit(cache=True)
+def _attempt(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args):
+    """SciPy's ``BDF._step_impl`` up to the accepted step: shrink the step until Newton
+    converges (with a fresh Jacobian once per step) and the error test passes; returns
+    (t_new, y_new, d, error scale, Newton iterations), or ``t_new = nan`` with the
+    status set when the step would fall below the spacing of floats at ``t``.
+    """
+    t, h_abs, order = floats[F_T], floats[F_H], ints[I_ORDER]
+    gamma, alpha, error_const = _COEFFS[0], _COEFFS[1], _COEFFS[2]
+    min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
+    if h_abs < min_step:
+        _change_d(d, order, min_step / h_abs)
+        h_abs, ints[I_EQUAL] = min_step, 0
+    while True:
+        if h_abs < min_step:
+            ints[I_STATUS] = STEP_TOO_SMALL
+            return np.nan, d[0], d[0], d[0], 0
+        t_new = t + h_abs
+        if t_new > t_bound:
+            t_new = t_bound
+            _change_d(d, order, (t_new - t) / h_abs)
+            ints[I_EQUAL] = 0
+        h_abs = t_new - t
+        y_predict = d[:order + 1].sum(axis=0)
+        scale = atol + rtol * np.abs(y_predict)
+        psi = np.zeros_like(y_predict)
+        for j in range(1, order + 1):
+            psi += d[j] * (gamma[j] / alpha[order])
+        c = h_abs / alpha[order]
+        while True:
+            if ints[I_LU] == 0 or abs(c / floats[F_C] - 1.0) > LU_KEEP:
+                _factor(jac, c, lu, pivots)
+                ints[I_NLU] += 1
+                ints[I_LU], floats[F_C] = 1, c
+            converged, n_iter, y_new, dd = _newton(t_new, y_predict, c, psi, lu, pivots,
+                                                   scale, ints, args)
+            if converged or ints[I_JAC_CURRENT] == 1:
+                break
+            jac[:] = jacobian(t_new, y_predict, args[0], args[1], args[2], args[3],
+                                      args[4], args[5])
+            ints[I_JEV] += 1
+            ints[I_LU], ints[I_JAC_CURRENT] = 0, 1
+        if not converged:
+            h_abs *= 0.5
+            _change_d(d, order, 0.5)
+            ints[I_EQUAL], ints[I_LU] = 0, 0
+            continue
+        safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
+        scale = atol + rtol * np.abs(y_new)
+        error_norm = _norm(error_const[order] * dd, scale)
+        if error_norm <= 1.0:
+            floats[F_H] = h_abs
+            return t_new, y_new, dd, scale, n_iter
+        factor = max(MIN_FACTOR, safety * error_norm ** (-1.0 / (order + 1)))
+        h_abs *= factor
+        _change_d(d, order, factor)  # the LU stays: Newton converged with it
+        ints[I_EQUAL] = 0
+
+
+@njit(cache=True)
+def _step(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args):
+    """One accepted step of SciPy's ``BDF``: :func:`_attempt`, then the differences
+    updated and, after ``order + 1`` steps of one size, the order and step chosen
+    from the error estimates of the orders either side.
+    """
+    ints[I_JAC_CURRENT] = 0
+    t_new, _, dd, scale, n_iter = _attempt(floats, ints, d, jac, lu, pivots, t_bound,
+                                           atol, rtol, args)
+    if np.isnan(t_new):
+        return
+    order, error_const = ints[I_ORDER], _COEFFS[2]
+    ints[I_STEPS] += 1
+    ints[I_EQUAL] += 1
+    floats[F_T] = t_new
+    d[order + 2] = dd - d[order + 1]
+    d[order + 1] = dd
+    for i in range(order, -1, -1):
+        d[i] += d[i + 1]
+    if ints[I_EQUAL] < order + 1:
+        return
+    safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
+    norms = np.array([np.inf, _norm(error_const[order] * dd, scale), np.inf])
+    if order > 1:
+        norms[0] = _norm(error_const[order - 1] * d[order], scale)
+    if order < MAX_ORDER:
+        norms[2] = _norm(error_const[order + 1] * d[order + 2], scale)
+    factors = np.empty(3)
+    for k in range(3):
+        factors[k] = np.inf if norms[k] == 0.0 else norms[k] ** (-1.0 / (order + k))
+    delta = int(np.argmax(factors)) - 1
+    ints[I_ORDER] = order + delta
+    factor = min(MAX_FACTOR, safety * factors.max())
+    floats[F_H] *= factor
+    _change_d(d, order + delta, factor)
+    ints[I_EQUAL] = 0
+
+
+@njit(cache=True)
+def _dense(d, t, h, order, tq, out):
+    """SciPy's ``BdfDenseOutput`` at ``tq``: the interpolating polynomial of the last
+    step from its backward differences (step ``h``, ending at ``t``).
+    """
+    out[:] = d[0]
+    p = 1.0
+    for i in range(order):
+        p *= (tq - (t - h * i)) / (h * (1 + i))
+        out += d[i + 1] * p
+
+
+@njit(cache=True)
+def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
+    """Step the run (:func:`start`'s arrays) until ``t >= t_stop`` (or ``t_bound``, the
+    end, where the status becomes finished), filling the rows of ``out`` at the sorted
+    instants ``t_out`` as they are passed; the status and counters are in ``run[1]``.
+    """
+    floats, ints, d, jac, lu, pivots = run
+    while ints[I_STATUS] == RUNNING and floats[F_T] < t_stop:
+        _step(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args)
+        if ints[I_STATUS] != RUNNING:
+            break
+        t = floats[F_T]
+        while ints[I_OUT] < t_out.shape[0] and t_out[ints[I_OUT]] <= t:
+            _dense(d, t, floats[F_H], ints[I_ORDER], t_out[ints[I_OUT]], out[ints[I_OUT]])
+            ints[I_OUT] += 1
+        if t >= t_bound:
+            ints[I_STATUS] = FINISHED
