@@ -2,11 +2,17 @@
 
 The chain is LS -> QP -> Conic and LP -> Conic; each step keeps ``checks``,
 ``formulation`` and ``to_forces``, so the record is judged on the original forces.
+
+The reduced form (:func:`eliminate_equalities`) is a reformulation for speed: a conic
+problem without its equality rows, solved in the null space of those rows; its answers
+are lifted back (:meth:`Reduced.lift`) to the full problem's variable and multipliers,
+where the package judges them as any other.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 
 import numpy as np
 from cardan_forces.formulations.problems import LP, LS, QP, Conic
@@ -42,3 +48,127 @@ def convert(problem, accepts: tuple[type, ...]):
     while not isinstance(problem, accepts):
         problem = NEXT_STEP[type(problem)][1](problem)
     return problem
+
+
+RANK_RTOL = 1e-10
+"""Zero-cone rows whose QR diagonal (singular values) fall below this, relative to the
+largest, are dependent: their null space then comes from the SVD."""
+
+
+@dataclass(frozen=True)
+class Reduced:
+    """Conic problems (T stacked, one structure) with their zero-cone rows eliminated.
+
+    Every ``z`` with ``A_eq z = b_eq`` is ``z = z0 + N y`` (``z0`` the least-norm
+    solution, ``N`` an orthonormal basis of the null space of ``A_eq``), so
+    ``min 1/2 z'Pz + q'z, A z + s = b, s in K`` becomes, over ``y``,
+    ``min 1/2 y'(N'PN)y + (N'(P z0 + q))'y, A_in N y + s = b_in - A_in z0, s in K_in``:
+    the same optimum, fewer unknowns, no equality rows, and a structure (sizes, cones)
+    fixed per formulation while ``z0`` and ``N`` change per instant.
+
+    ``P`` (T, k, k), ``q`` (T, k), ``A`` (T, m_in, k), ``b`` (T, m_in), ``cones`` the
+    reduced problem's; ``z0`` (T, n), ``N`` (T, n, k); ``L`` (T, r, n) the pseudo-inverse
+    of ``A_eq'``, which gives the equality rows' multipliers;
+    ``rows_eq`` / ``rows_in`` the full problem's row indices of each part; ``offset``
+    (T,) the objective at ``z0`` (the reduced objective plus it is the full one).
+    """
+
+    P: np.ndarray
+    q: np.ndarray
+    A: np.ndarray
+    b: np.ndarray
+    cones: tuple
+    z0: np.ndarray
+    N: np.ndarray
+    L: np.ndarray
+    rows_eq: np.ndarray
+    rows_in: np.ndarray
+    offset: np.ndarray
+    P_full: np.ndarray
+    q_full: np.ndarray
+    A_full: np.ndarray
+
+    def lift(self, y: np.ndarray, dual_in: np.ndarray | None):
+        """The full problem's ``z`` (T, n) from the reduced answers ``y`` (T, k), and its
+        multipliers (T, m) from the reduced ones ``dual_in`` (None: none): the equality
+        rows' by least squares on stationarity ``P z + q + A_eq' l + A_in' u = 0``
+        (exact at an optimum; the least-norm ``l`` where the rows are dependent).
+        """
+        z = self.z0 + np.einsum("tnk,tk->tn", self.N, y)
+        if dual_in is None:
+            return z, None
+        A_in = self.A_full[:, self.rows_in]
+        g = -(np.einsum("tij,tj->ti", self.P_full, z) + self.q_full
+              + np.einsum("tmn,tm->tn", A_in, dual_in))
+        lam = np.einsum("trn,tn->tr", self.L, g)
+        duals = np.empty((len(z), len(self.rows_eq) + len(self.rows_in)))
+        duals[:, self.rows_eq], duals[:, self.rows_in] = lam, dual_in
+        return z, duals
+
+
+def _zero_rows(cones) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """Row indices of the zero-cone blocks, of the others, and the others' cones."""
+    eq, rest, kept, row = [], [], [], 0
+    for kind, size in cones:
+        count = 3 if kind == "pow" else int(size)
+        (eq if kind == "zero" else rest).extend(range(row, row + count))
+        if kind != "zero":
+            kept.append((kind, size))
+        row += count
+    return np.array(eq, int), np.array(rest, int), tuple(kept)
+
+
+def _null_space(A_eq: np.ndarray, b_eq: np.ndarray):
+    """``(z0, N, L)`` per instant: the least-norm solution of ``A_eq z = b_eq``, an
+    orthonormal basis of the null space of ``A_eq`` and ``L = pinv(A_eq')`` (multipliers
+    from stationarity). From one complete QR of the stacked ``A_eq'``; where the rows
+    are dependent (the QR's diagonal says so), from the SVD at the rank every instant
+    shares (``ValueError`` if the rank changes: the reduced structure would).
+    """
+    r = A_eq.shape[1]
+    At = np.transpose(A_eq, (0, 2, 1))
+    Q, R = np.linalg.qr(At, mode="complete")
+    diag = np.abs(np.diagonal(R[:, :r], axis1=1, axis2=2))
+    if not r or np.all(diag.min(axis=1) > RANK_RTOL * diag.max(axis=1)):
+        L = np.linalg.solve(R[:, :r], np.transpose(Q[:, :, :r], (0, 2, 1)))
+        return np.einsum("trn,tr->tn", L, b_eq), Q[:, :, r:], L
+    V, s, Ut = np.linalg.svd(At)
+    ranks = np.sum(s > RANK_RTOL * s[:, :1], axis=1)
+    if np.any(ranks != ranks[0]):
+        raise ValueError("the zero-cone rows change rank between instants: no reduced form")
+    k = int(ranks[0])
+    L = np.transpose(Ut[:, :k], (0, 2, 1)) @ (np.transpose(V[:, :, :k], (0, 2, 1)) /
+                                              s[:, :k, None])
+    return np.einsum("trn,tr->tn", L, b_eq), V[:, :, k:], L
+
+
+def eliminate_equalities(P, q, A, b, cones) -> Reduced:
+    """The stacked conic problems ``(P, q, A, b)`` (``P`` (n, n), (T, n, n) or None;
+    ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m)) in their reduced form (:class:`Reduced`).
+    """
+    A, b, q = np.asarray(A, float), np.asarray(b, float), np.asarray(q, float)
+    T, _, n = A.shape
+    P = np.zeros((n, n)) if P is None else np.asarray(P, float)
+    P = np.broadcast_to(P, (T, n, n))
+    eq, rest, kept = _zero_rows(cones)
+    A_in = A[:, rest]
+    z0, N, L = _null_space(A[:, eq], b[:, eq])
+    Pz0 = np.einsum("tij,tj->ti", P, z0)
+    Nt = np.transpose(N, (0, 2, 1))
+    return Reduced(
+        P=Nt @ P @ N, q=np.einsum("tkn,tn->tk", Nt, Pz0 + q), A=A_in @ N,
+        b=b[:, rest] - np.einsum("tmn,tn->tm", A_in, z0), cones=kept, z0=z0, N=N, L=L,
+        rows_eq=eq, rows_in=rest,
+        offset=0.5 * np.einsum("tn,tn->t", z0, Pz0) + np.einsum("tn,tn->t", q, z0),
+        P_full=P, q_full=q, A_full=A)
+
+
+def reduced_conic(conic: Conic) -> tuple[Conic, Reduced]:
+    """One :class:`Conic` in its reduced form (a problem in ``y`` whose checks are still
+    the original's: only a solver sees it) and the :class:`Reduced` that lifts answers.
+    """
+    red = eliminate_equalities(conic.P, conic.q[None], np.asarray(conic.A, float)[None],
+                               np.asarray(conic.b, float)[None], conic.cones)
+    problem = Conic(checks=conic.checks, formulation=conic.formulation, P=red.P[0],
+                    q=red.q[0], A=red.A[0], b=red.b[0], cones=red.cones)
+    return problem, red

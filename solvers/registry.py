@@ -29,8 +29,8 @@ from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
 from .conversions import convert, reachable
 from .record import Outcome, Record, Status, failed_record, finalize
 
-ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "lcp_",
-            "numpy_batched_", "moreau_")
+ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
+            "numpy_batched_", "moreau_", "reduced_")
 """Adapter modules of this package, loaded lazily by :func:`available`."""
 
 

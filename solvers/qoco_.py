@@ -1,0 +1,112 @@
+"""Backend ``qoco``: QOCO (an interior-point solver for second-order cone programs with a
+quadratic objective) on a :class:`Conic` without power cones (LS, QP, LP converted).
+
+QOCO's form is ``min 1/2 x'Px + c'x s.t. A x = b, G x <=_C h`` with
+``C = R+^l x SOC(q_1) x ...``: the package's zero-cone rows are ``A``, the others ``G``
+(nonnegative rows first, then the second-order blocks, each apex first as in the
+package's form), so the rows are permuted into that order and the multipliers permuted
+back. Its stationarity is ``P x + c + A'y + G'z = 0``, Clarabel's sign convention.
+
+Every solve builds a new solver from this problem's own data (as ``clarabel`` does):
+QOCO equilibrates the data it is built with, so reusing a solver across instants would
+make an answer depend on which instant came first. Only ``verbose`` is set; numerical
+settings change only when ``tol`` or ``options`` are given. Optional extra ``qoco``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from cardan_forces.formulations.problems import Conic
+
+from . import settings
+from .record import Outcome
+from .registry import Backend
+
+EXTRAS: dict[str, str | None] = {"qoco": "qoco"}
+
+TOLERANCES = ("abstol", "reltol")
+"""QOCO's settings a requested tolerance sets."""
+
+STATUS = {"QOCO_SOLVED": "solved", "QOCO_SOLVED_INACCURATE": "inaccurate",
+          "QOCO_MAX_ITER": "inaccurate"}
+"""QOCO status -> ours; anything else (numerical error, unsolved) is failed."""
+
+CLAIM_TOL = 1e-5
+"""QOCO has no certificate of infeasibility or unboundedness (no homogeneous
+embedding): on an unbounded LP its iterates diverge and it reports solved, its tolerances
+being relative to them, with a dual residual near 1. A solved whose own absolute dual
+residual or gap exceeds this (QOCO's default ``abstol_inacc``; the package's problems
+are scaled to O(1)) is reported inaccurate."""
+
+
+def _status(sol) -> str:
+    if sol.status == "QOCO_SOLVED" and max(sol.dres, sol.gap) > CLAIM_TOL:
+        return "inaccurate"
+    return STATUS.get(sol.status, "failed")
+
+
+def supports(problem: Conic) -> bool:
+    """Zero, nonnegative and second-order cones only (QOCO has no power cone)."""
+    return all(kind in ("zero", "nonneg", "soc") for kind, _ in problem.cones)
+
+
+def layout(cones) -> tuple[np.ndarray, np.ndarray, int, list[int]]:
+    """QOCO's row order: the zero-cone rows, the nonnegative rows, then each second-order
+    block (stable within a kind); ``(equality rows, cone rows, l, q)``.
+    """
+    rows = {"zero": [], "nonneg": [], "soc": []}
+    sizes, start = [], 0
+    for kind, size in cones:
+        block = list(range(start, start + int(size)))
+        rows[kind].extend(block)
+        if kind == "soc":
+            sizes.append(int(size))
+        start += int(size)
+    return (np.array(rows["zero"], int), np.array(rows["nonneg"] + rows["soc"], int),
+            len(rows["nonneg"]), sizes)
+
+
+def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
+    """Solve the conic problem with a new QOCO solver (QOCO has no warm start).
+
+    ``setup_s`` is the package's side (row layout, CSC matrices); ``solve_s`` QOCO's
+    (its setup, equilibration and symbolic factorization, and the solve).
+    """
+    import qoco
+    import scipy.sparse as spa
+
+    start = time.perf_counter()
+    n = problem.n
+    A, b = np.asarray(problem.A, float), np.asarray(problem.b, float)
+    eq, cone, nonneg, sizes = layout(problem.cones)
+    P = None if problem.P is None else spa.csc_matrix(np.triu(np.asarray(problem.P, float)))
+    parts = [spa.csc_matrix(A[rows]) if len(rows) else None for rows in (eq, cone)]
+    chosen = {"verbose": 0} | settings.options_for(TOLERANCES, tol) | options
+    setup_done = time.perf_counter()
+    solver = qoco.QOCO()
+    solver.setup(n, len(cone), len(eq), P, np.asarray(problem.q, float), parts[0],
+                 b[eq] if len(eq) else None, parts[1], b[cone] if len(cone) else None,
+                 nonneg, len(sizes), np.array(sizes, np.int32), **chosen)
+    sol = solver.solve()
+    solved = time.perf_counter()
+    y = np.empty(len(b))
+    y[eq], y[cone] = np.asarray(sol.y), np.asarray(sol.z)
+    status = _status(sol)
+    return Outcome(status, np.asarray(sol.x, float).copy(), iterations=int(sol.iters),
+                   message="" if status == "solved" else
+                   f"QOCO status {sol.status} (dual residual {sol.dres:.1e}, gap {sol.gap:.1e})",
+                   objective=float(sol.obj), setup_s=setup_done - start,
+                   solve_s=solved - setup_done, y=y)
+
+
+def backends() -> list[Backend]:
+    """The QOCO backend, if QOCO is installed."""
+    try:
+        import qoco  # noqa: F401
+    except ImportError:
+        return []
+    return [Backend(name="qoco", family="qoco", distributions=("qoco",), extra="qoco",
+                    accepts=(Conic,), solve=solve_conic, supports=supports,
+                    tolerances=TOLERANCES)]

@@ -1,0 +1,122 @@
+"""The reduced form (equality rows eliminated) and the QOCO backend.
+
+The reduction is checked on a problem whose answer and multipliers are known by hand,
+and on the package's conic formulations, where every reduced backend must give the
+full form's optimal objective and pass the package's optimality measures on the full
+problem (residuals, dual residual and gap with the lifted multipliers).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.formulations.problems import Conic, ForceChecks
+from cardan_forces.solvers import ACCEPT, available, solve
+from cardan_forces.solvers.conversions import eliminate_equalities, reduced_conic
+from cardan_forces.solvers.optimality import measures, objective_value
+from cardan_forces.solvers.registry import solve_batch
+
+FORMULATIONS = ("socp_face", "min_max", "compliance_hertz", "positive")
+INSTANTS = (0, 7, 15)
+TOL = 1e-8
+AGREE = 100 * TOL
+"""Relative objective difference allowed between two interior-point answers at TOL."""
+
+
+def _need(name: str) -> None:
+    if name not in available():
+        pytest.skip(f"{name} not installed")
+
+
+def _simplex(rows: np.ndarray, rhs: np.ndarray) -> Conic:
+    """min 1/2 ||z||^2 on ``rows z = rhs``, z >= 0 (three unknowns)."""
+    checks = ForceChecks(A=rows, b=rhs, names=("a", "b", "c"), unilateral=np.ones(3, bool))
+    return Conic(checks=checks, formulation="ref", P=np.eye(3), q=np.zeros(3),
+                 A=np.vstack([rows, -np.eye(3)]), b=np.concatenate([rhs, np.zeros(3)]),
+                 cones=(("zero", len(rhs)), ("nonneg", 3)))
+
+
+def test_reduction_by_hand():
+    # z = (1, 1, 1) on a + b + c = 3: interior, so the bound multipliers are 0 and the
+    # equality's is -1 (P z + A'y = 0 with A = (1, 1, 1)).
+    problem = _simplex(np.ones((1, 3)), np.array([3.0]))
+    inner, red = reduced_conic(problem)
+    assert inner.cones == (("nonneg", 3),) and inner.n == 2
+    z, y = red.lift(np.zeros((1, 2)), np.zeros((1, 3)))  # y = 0 is z0 itself
+    assert z[0] == pytest.approx([1.0, 1.0, 1.0])
+    assert y[0] == pytest.approx([-1.0, 0.0, 0.0, 0.0])
+    assert red.offset[0] == pytest.approx(1.5)
+
+
+def test_dependent_rows_reduce_at_their_rank():
+    # the same plane twice: one independent row, the same answer and objective
+    twice = _simplex(np.ones((2, 3)), np.array([3.0, 3.0]))
+    _, red = reduced_conic(twice)
+    assert red.N.shape == (1, 3, 2)
+    assert red.z0[0] == pytest.approx([1.0, 1.0, 1.0])
+
+
+def test_rank_changing_between_instants_is_refused():
+    A = np.stack([np.vstack([np.ones((2, 3)), -np.eye(3)]),
+                  np.vstack([np.eye(3)[:2], -np.eye(3)])])
+    with pytest.raises(ValueError, match="rank"):
+        eliminate_equalities(None, np.zeros((2, 3)), A, np.zeros((2, 5)),
+                             (("zero", 2), ("nonneg", 3)))
+
+
+@pytest.fixture(scope="module")
+def problems():
+    scene = load_scene("paper")
+    op = build_operator(simulate(scene, scene.time.instants()[:16]))
+    return {name: fbatch.build_problems(op, name, INSTANTS) for name in FORMULATIONS}
+
+
+def _agree(problem, record, fresh) -> None:
+    assert record.status.has_answer and fresh.status.has_answer, record.message
+    # complementarity is left out: in positive it is no constraint but a property of the
+    # optimum, met to about the square root of an interior point's gap by any solver
+    assert max(record.residuals[k] for k in ("equilibrium", "sign", "cone")) <= ACCEPT
+    ours, theirs = objective_value(problem, record.z), objective_value(problem, fresh.z)
+    assert ours == pytest.approx(theirs, rel=AGREE, abs=AGREE * 1e-6)
+    for key in ("dual", "gap"):
+        assert record.optimality[key] <= max(AGREE, 10 * fresh.optimality[key])
+
+
+@pytest.mark.parametrize("solver", ["clarabel-reduced", "qoco", "qoco-reduced"])
+@pytest.mark.parametrize("name", FORMULATIONS)
+def test_per_instant_agrees_with_clarabel(problems, name, solver):
+    _need(solver)
+    for problem in problems[name]:
+        conic = fbatch.as_conic(problem)
+        if not available()[solver].supports(conic):
+            pytest.skip(f"{solver} does not take {name}")
+        _agree(problem, solve(problem, solver, tol=TOL), solve(problem, "clarabel", tol=TOL))
+
+
+@pytest.mark.parametrize("name", FORMULATIONS)
+def test_lifted_multipliers_are_the_full_problems(problems, name):
+    """The lifted ``y`` satisfies the full problem's stationarity: its measures come from
+    the full data, not from the reduced problem the solver saw."""
+    conic = fbatch.as_conic(problems[name][0])
+    record = solve(conic, "clarabel-reduced", tol=TOL)
+    found = measures(conic.P, conic.q[None], conic.A[None], conic.b[None], conic.cones,
+                     record.z[None], record.y[None])
+    assert record.duals == "solver"
+    assert found["dual"][0] <= AGREE and found["gap"][0] <= AGREE
+
+
+@pytest.mark.parametrize("name", FORMULATIONS)
+def test_batched_reduced_agrees_with_full(problems, name):
+    _need("moreau-reduced")
+    batch = fbatch.conic_batch(problems[name], INSTANTS)
+    full, reduced = (solve_batch(batch, s, tol=TOL) for s in ("moreau", "moreau-reduced"))
+    assert set(reduced.status) == {"solved"}, reduced.messages
+    for k, problem in enumerate(batch.problems):
+        ours = objective_value(problem, reduced.z[k])
+        assert ours == pytest.approx(objective_value(problem, full.z[k]), rel=AGREE,
+                                     abs=AGREE * 1e-6)
+    assert np.all(reduced.optimality.within(max(AGREE, ACCEPT)))
