@@ -18,13 +18,15 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
 from . import settings
-from .record import Outcome
+from .batch import BatchOutcome
+from .record import Outcome, Status
 from .registry import Backend
 
-EXTRAS: dict[str, str | None] = {"qoco": "qoco"}
+EXTRAS: dict[str, str | None] = {"qoco": "qoco", "qoco-batched": "qoco"}
 
 TOLERANCES = ("abstol", "reltol")
 """QOCO's settings a requested tolerance sets."""
@@ -101,12 +103,70 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
                    solve_s=solved - setup_done, y=y)
 
 
+def _structure(stack: np.ndarray):
+    """CSC pattern of the union of nonzeros of a (T, r, c) stack: a matrix of ones in it
+    (a placeholder that no value can thin out) and the (row, col) of its entries in CSC
+    order, which is the order QOCO's updates take the values in.
+    """
+    import scipy.sparse as spa
+
+    cols, rows = np.nonzero(np.any(stack != 0, axis=0).T)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=stack.shape[2]))])
+    ones = spa.csc_matrix((np.ones(len(rows)), rows, indptr), shape=stack.shape[1:])
+    return ones, rows, cols
+
+
+def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
+    """Every instant of the batch with one QOCO solver built for the batch's structure
+    (the union sparsity of its instants); each instant's numbers replace the last ones.
+
+    The answer does not depend on the order: QOCO starts every solve from its own
+    initial point, and its default settings do no equilibration (``ruiz_iters`` 0), so
+    nothing of an earlier instant remains. ``stages``: ``setup`` (structure, the solver
+    and its symbolic factorization, once) and ``solve`` (updates and solves).
+    """
+    import qoco
+
+    start = time.perf_counter()
+    T, m, n = batch.A.shape
+    eq, cone, nonneg, sizes = layout(batch.cones)
+    P = np.zeros((n, n)) if batch.P is None else np.asarray(batch.P, float)
+    P = np.triu(np.broadcast_to(P, (T, n, n)))
+    parts = [_structure(M) for M in (P, batch.A[:, eq], batch.A[:, cone])]
+    solver = qoco.QOCO()
+    chosen = {"verbose": 0} | settings.options_for(TOLERANCES, tol) | options
+    b = np.asarray(batch.b, float)
+    solver.setup(n, len(cone), len(eq), parts[0][0], np.zeros(n),
+                 parts[1][0] if len(eq) else None, np.zeros(len(eq)) if len(eq) else None,
+                 parts[2][0] if len(cone) else None, np.zeros(len(cone)) if len(cone) else None,
+                 nonneg, len(sizes), np.array(sizes, np.int32), **chosen)
+    values = [M[:, r, c] for M, (_, r, c) in zip((P, batch.A[:, eq], batch.A[:, cone]), parts)]
+    built = time.perf_counter()
+    z, y = np.zeros((T, n)), np.zeros((T, m))
+    status, iterations, messages = np.empty(T, object), np.zeros(T, int), []
+    for k in range(T):
+        solver.update_matrix_data(*(v[k] if v.shape[1] else None for v in values))
+        solver.update_vector_data(batch.q[k], b[k, eq] if len(eq) else None,
+                                  b[k, cone] if len(cone) else None)
+        sol = solver.solve()
+        z[k], y[k, eq], y[k, cone] = sol.x, sol.y, sol.z
+        status[k], iterations[k] = _status(sol), sol.iters
+        messages.append("" if status[k] == Status.SOLVED else f"QOCO status {sol.status}")
+    solved = time.perf_counter()
+    return BatchOutcome(status=status, z=z, y=y, iterations=iterations, setup_s=0.0,
+                        solve_s=solved - start, messages=tuple(messages),
+                        stages={"setup": built - start, "solve": solved - built})
+
+
 def backends() -> list[Backend]:
-    """The QOCO backend, if QOCO is installed."""
+    """The QOCO backends (per instant, and over a batch), if QOCO is installed."""
     try:
         import qoco  # noqa: F401
     except ImportError:
         return []
     return [Backend(name="qoco", family="qoco", distributions=("qoco",), extra="qoco",
                     accepts=(Conic,), solve=solve_conic, supports=supports,
-                    tolerances=TOLERANCES)]
+                    tolerances=TOLERANCES),
+            Backend(name="qoco-batched", family="qoco", distributions=("qoco",), extra="qoco",
+                    supports=supports, tolerances=TOLERANCES, batch=solve_batch,
+                    batch_accepts=(ConicBatch,))]

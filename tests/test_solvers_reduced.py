@@ -120,3 +120,19 @@ def test_batched_reduced_agrees_with_full(problems, name):
         assert ours == pytest.approx(objective_value(problem, full.z[k]), rel=AGREE,
                                      abs=AGREE * 1e-6)
     assert np.all(reduced.optimality.within(max(AGREE, ACCEPT)))
+
+
+@pytest.mark.parametrize("solver", ["qoco-batched", "qoco-batched-reduced"])
+@pytest.mark.parametrize("name", ["socp_face", "min_max"])
+def test_qoco_batch_answers_do_not_depend_on_the_order(problems, name, solver):
+    """One QOCO solver per batch, its numbers replaced instant by instant: each answer,
+    in either order, is the answer of that instant solved alone."""
+    _need(solver)
+    by_instant = dict(zip(INSTANTS, problems[name]))
+    alone = {i: solve_batch(fbatch.conic_batch([p], [i]), solver, tol=TOL).record(0)
+             for i, p in by_instant.items()}
+    for order in (INSTANTS, INSTANTS[::-1]):
+        result = solve_batch(fbatch.conic_batch([by_instant[i] for i in order], order),
+                             solver, tol=TOL)
+        for k, i in enumerate(order):
+            _agree(by_instant[i], result.record(k), alone[i])
