@@ -22,6 +22,7 @@ Optional extra ``moreau``; absent when moreau is not installed.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -31,7 +32,7 @@ from .batch import BatchOutcome
 from .record import Status
 from .registry import Backend
 
-EXTRAS: dict[str, str | None] = {"moreau": "moreau"}
+EXTRAS: dict[str, str | None] = {"moreau": "moreau", "moreau-warm": "moreau"}
 
 TOLERANCES = ("tol_gap_abs", "tol_gap_rel", "tol_feas")
 """moreau's interior-point settings a requested tolerance sets."""
@@ -116,6 +117,49 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     """Every instant of the batch with one compiled structure (compiled on the first
     call for a structure, reused after).
     """
+    return _solve(batch, tol, options)[0]
+
+
+def solve_batch_warm(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
+    """The even instants cold, then each odd instant warm-started from the even instant
+    before it (moreau's ``BatchedWarmStart``: its primal, dual and slack, which moreau
+    smooths towards the central path and retries cold if the warm solve fails). An
+    answer depends only on its own data and its neighbour's, never on the batches
+    solved before; the stages add up both halves.
+    """
+    import moreau
+
+    T = len(batch.instants)
+    even, odd = np.arange(0, T, 2), np.arange(1, T, 2)
+    first, sol = _solve(_subset(batch, even), tol, options)
+    if not len(odd):
+        return first
+    start = moreau.BatchedWarmStart(x=np.asarray(sol.x)[odd // 2],
+                                    z=np.asarray(sol.z)[odd // 2],
+                                    s=np.asarray(sol.s)[odd // 2])
+    second, _ = _solve(_subset(batch, odd), tol, options, start)
+    merged = {}
+    for name in ("status", "z", "y", "iterations"):
+        parts = (getattr(first, name), getattr(second, name))
+        merged[name] = np.empty((T, *np.shape(parts[0])[1:]), np.asarray(parts[0]).dtype)
+        merged[name][even], merged[name][odd] = parts
+    messages = np.empty(T, object)
+    messages[even], messages[odd] = first.messages, second.messages
+    stages = {k: first.stages[k] + second.stages[k] for k in first.stages}
+    return BatchOutcome(**merged, setup_s=first.setup_s + second.setup_s,
+                        solve_s=first.solve_s + second.solve_s, stages=stages,
+                        messages=tuple(messages))
+
+
+def _subset(batch: ConicBatch, rows: np.ndarray) -> ConicBatch:
+    """The batch at ``rows`` (its numbers only: what the solver reads)."""
+    P = batch.P[rows] if np.ndim(batch.P) == 3 else batch.P
+    return dataclasses.replace(batch, instants=batch.instants[rows], P=P, q=batch.q[rows],
+                               A=batch.A[rows], b=batch.b[rows], problems=())
+
+
+def _solve(batch: ConicBatch, tol, options, warm=None):
+    """:func:`solve_batch`'s outcome and moreau's raw solution, ``warm`` its start."""
     start = time.perf_counter()
     T, m, n = batch.A.shape
     order, cones = grouped_rows(batch.cones)
@@ -131,7 +175,7 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     P_values = np.ascontiguousarray(np.broadcast_to(P[:, p_r, p_c], (T, len(p_r))))
     solver.setup(P_values, A[:, a_r, a_c])
     setup_done = time.perf_counter()
-    sol = solver.solve(batch.q, b)
+    sol = solver.solve(batch.q, b, warm_start=warm)
     solve_s = time.perf_counter() - setup_done
     names = [s.name for s in solver.info.status]
     duals = np.empty((T, m))
@@ -139,19 +183,25 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     iterations = np.broadcast_to(np.asarray(solver.info.iterations), (T,)).astype(int)
     messages = tuple("" if s == "Solved" else f"moreau status {s}" for s in names)
     # the package's share is the row layout; compiling, setup and solve are moreau's
-    return BatchOutcome(status=np.array([STATUS.get(s, Status.FAILED) for s in names], object),
-                        z=np.asarray(sol.x), y=duals, iterations=iterations,
-                        setup_s=converted - start, solve_s=time.perf_counter() - converted,
-                        stages={"layout": converted - start, "compile": compiled - converted,
-                                "setup": setup_done - compiled, "solve": solve_s},
-                        messages=messages)
+    outcome = BatchOutcome(
+        status=np.array([STATUS.get(s, Status.FAILED) for s in names], object),
+        z=np.asarray(sol.x), y=duals, iterations=iterations, setup_s=converted - start,
+        solve_s=time.perf_counter() - converted,
+        stages={"layout": converted - start, "compile": compiled - converted,
+                "setup": setup_done - compiled, "solve": solve_s}, messages=messages)
+    return outcome, sol
 
 
 def backends() -> list[Backend]:
-    """The moreau backend, if moreau is installed."""
+    """The moreau backends (cold, and warm-started from the neighbouring instant), if
+    moreau is installed.
+    """
     try:
         import moreau  # noqa: F401
     except ImportError:
         return []
     return [Backend(name="moreau", family="moreau", distributions=("moreau",), extra="moreau",
-                    tolerances=TOLERANCES, batch=solve_batch, batch_accepts=(ConicBatch,))]
+                    tolerances=TOLERANCES, batch=solve_batch, batch_accepts=(ConicBatch,)),
+            Backend(name="moreau-warm", family="moreau", distributions=("moreau",),
+                    extra="moreau", tolerances=TOLERANCES, batch=solve_batch_warm,
+                    batch_accepts=(ConicBatch,))]

@@ -26,7 +26,8 @@ from .conversions import eliminate_equalities, reduced_conic
 from .record import Outcome
 from .registry import Backend
 
-WRAPPED = {"clarabel": clarabel_, "qoco": qoco_, "qoco-batched": qoco_, "moreau": moreau_}
+WRAPPED = {"clarabel": clarabel_, "qoco": qoco_, "qoco-batched": qoco_, "moreau": moreau_,
+           "moreau-warm": moreau_}
 """Backend name -> its adapter module; each gets a ``<name>-reduced`` variant."""
 
 EXTRAS: dict[str, str | None] = {f"{name}-reduced": module.EXTRAS[name]

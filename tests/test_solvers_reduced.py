@@ -136,3 +136,14 @@ def test_qoco_batch_answers_do_not_depend_on_the_order(problems, name, solver):
                              solver, tol=TOL)
         for k, i in enumerate(order):
             _agree(by_instant[i], result.record(k), alone[i])
+
+
+@pytest.mark.parametrize("solver", ["moreau-warm", "moreau-warm-reduced"])
+@pytest.mark.parametrize("name", ["socp_face", "compliance_hertz"])
+def test_moreau_warm_agrees_with_cold(problems, name, solver):
+    """Odd instants started from their even neighbour reach the cold optimum."""
+    _need(solver)
+    batch = fbatch.conic_batch(problems[name], INSTANTS)
+    cold, warm = (solve_batch(batch, s, tol=TOL) for s in ("moreau", solver))
+    for k, problem in enumerate(batch.problems):
+        _agree(problem, warm.record(k), cold.record(k))
