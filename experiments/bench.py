@@ -55,7 +55,7 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
     by formulation (its problems built once, then dropped).
     """
     rows, acc_rows, stages, references, setup, conic = [], [], {}, {}, {}, set()
-    problems = {}
+    problems, forces = {}, {}
     for name, solvers in backends.items():
         runs.progress(f"bench: building {name} at {len(op.t)} instants ...")
         prepared = runs.prepare(op, name, np.arange(len(op.t)))
@@ -69,18 +69,23 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
         acc_rows += new
         if isinstance(prepared.problems[0], (LS, QP, Conic)):
             problems |= {f"{name}_{int(i):04d}": prepared.problems[int(i)] for i in samples}
+            found = runs.references(prepared, samples)[0] or {}
+            forces |= {f"{name}_{i:04d}": x for i, (x, _) in found.items()}
     return {"rows": rows, "acc_rows": acc_rows, "stages": stages, "references": references,
-            "setup": setup, "conic": conic, "view_problems": problems}
+            "setup": setup, "conic": conic, "view_problems": problems,
+            "view_references": forces}
 
 
-def views(problems: dict, solvers: list[str], folder: Path, with_qpbenchmark: bool) -> dict:
+def views(problems: dict, references: dict, solvers: list[str], folder: Path,
+          with_qpbenchmark: bool) -> dict:
     """The two-view harness on ``problems`` (QPs, least norms and conic problems) with
-    the backends among ``solvers`` that declare qpbenchmark's settings; with
+    the backends among ``solvers`` that declare qpbenchmark's settings (``references``:
+    reference forces by problem name, for the distance where the optimum is unique); with
     ``with_qpbenchmark``, the QPs exported into ``folder/qpbenchmark`` and qpbenchmark
     itself run on them.
     """
     backends = harness.backends_with_profiles(solvers)
-    rows = harness.run_package(problems, solvers)
+    rows = harness.run_package(problems, solvers, references=references)
     runs.progress(f"bench: {len(rows)} solves scored in both views")
     qps = {k: p for k, p in problems.items() if exporting.as_qp(p) is not None}
     theirs = []
@@ -133,8 +138,9 @@ def run(args) -> int:
                                     else runs.SAMPLES).round().astype(int))
     backends = runs.plan(op, args.formulation, args.solver, args.quick)
     measured = measure(op, backends, samples, ladder, args.budget_s)
-    measured |= views(measured["view_problems"], sorted({s for v in backends.values() for s in v}),
-                      folder, args.harness == "qpbenchmark")
+    measured |= views(measured["view_problems"], measured["view_references"],
+                      sorted({s for v in backends.values() for s in v}), folder,
+                      args.harness == "qpbenchmark")
     results = evaluate(measured, ladder, time.perf_counter() - started)
     _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",

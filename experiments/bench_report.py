@@ -21,7 +21,7 @@ PROFILE_COLUMNS = ("formulation", "profile", "clock", "level", "solver", "solved
                    "tau", "fraction")
 VIEW_COLUMNS = ("problem", "formulation", "solver", "setting", "found", "primal", "dual", "gap",
                 "solver_ok", "solver_rule", "equilibrium", "sign", "complementarity", "cone",
-                "force_ok", "force_rule", "runtime_s", "solver_s", "end_to_end_s")
+                "distance", "force_ok", "force_rule", "runtime_s", "solver_s", "end_to_end_s")
 """Columns of ``bench_views.csv``: each solve of the two-view harness, one row."""
 
 
@@ -298,7 +298,8 @@ def _views(tables, problems: int, qpbenchmark_ran: bool) -> list[str]:
              "the setting's tolerance: default 1, low 1e-3, mid 1e-6, high 1e-9; for a conic "
              "problem the KKT residuals of its standard form); *force accuracy* is the "
              "package's physics on the same answer (equilibrium, signs, complementarity, "
-             "cones, each over ||b||, <= 1e-6). The failing rule of each failed solve is "
+             "cones, each over ||b||, and the distance to the reference answer where the "
+             "optimum is unique, <= 1e-6). The failing rule of each failed solve is "
              "counted. Runtime: qpbenchmark's (the qpsolvers call), shifted geometric mean "
              f"(shift {SHIFT_S:g} s, not found at {TIME_LIMIT_S:g} s) over the best "
              "backend's.", "",

@@ -10,7 +10,8 @@ every solve twice:
   (found, and all three strictly below the setting's tolerance);
 - **force accuracy** (the package's physics, ``ForceChecks.residuals``): equilibrium
   ``||Ax - b|| / ||b||``, pulling unilateral forces, end-face complementarity and cones,
-  each relative to ``||b||``, against :data:`FORCE_LEVEL`.
+  each relative to ``||b||``, and the distance to a reference answer where the optimum
+  is unique, against :data:`FORCE_LEVEL`.
 
 A QP solve here is qpbenchmark's own call (``qpsolvers.solve_problem`` on the problem
 with the setting's options, timed around that call alone, sparse conversion outside
@@ -32,6 +33,7 @@ from cardan_forces.formulations.problems import Conic
 from cardan_forces.solvers import get, settings_profiles
 from cardan_forces.solvers import qp_measures as qm
 from cardan_forces.solvers.conversions import convert
+from cardan_forces.solvers.optimality import unique_optimum
 from cardan_forces.solvers.qpsolvers_ import conic_duals
 from cardan_forces.solvers.record import Outcome, Residuals, Status, finalize
 
@@ -57,7 +59,7 @@ def qpsolvers_problem(qp, solver: str):
     return problem
 
 
-def solve_both(problem, backend: str, setting: str) -> dict:
+def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
     """One solve of ``problem`` (LS or QP) by qpsolvers backend ``backend`` at
     qpbenchmark setting ``setting``, scored in both views: one row.
     """
@@ -81,12 +83,12 @@ def solve_both(problem, backend: str, setting: str) -> dict:
     duals = conic_duals(qp, sol) if sol.x is not None else None
     status = "solved" if found else ("inaccurate" if sol.x is not None else "failed")
     record = finalize(problem, backend, Outcome(status, sol.x, message=message,
-                                                solve_s=runtime, y=duals))
+                                                solve_s=runtime, y=duals), reference=reference)
     solver_s = runtime if sol.solve_time is None else float(sol.solve_time)
     return _row(problem, backend, setting, found, measured, record, runtime, solver_s, began)
 
 
-def solve_conic_both(problem, backend: str, setting: str) -> dict:
+def solve_conic_both(problem, backend: str, setting: str, reference=None) -> dict:
     """One solve of a conic ``problem`` by backend ``backend`` (Clarabel's own API) at
     qpbenchmark setting ``setting``: solver optimality is the conic analogue (absolute
     KKT residuals of the standard form, :func:`~cardan_forces.solvers.qp_measures.
@@ -101,7 +103,7 @@ def solve_conic_both(problem, backend: str, setting: str) -> dict:
     found = outcome.status == "solved"
     measured = (qm.solver_optimality(received, outcome.z, outcome.y) if found
                 else dict.fromkeys(qm.MEASURES, math.inf))
-    record = finalize(problem, backend, outcome)
+    record = finalize(problem, backend, outcome, reference=reference)
     return _row(problem, backend, setting, found, measured, record,
                 outcome.setup_s + outcome.solve_s, outcome.solve_s, began)
 
@@ -110,6 +112,8 @@ def _row(problem, backend, setting, found, measured, record, runtime, solver_s,
          began) -> dict:
     """One harness row: both views of a solve, its rules and its three times."""
     force = {k: float(record.residuals[k]) for k in Residuals.KEYS}
+    if record.residuals.reference is not None and unique_optimum(problem):
+        force["distance"] = float(record.residuals.reference)
     chosen = qm.SETTINGS[setting]
     return {
         "formulation": problem.formulation, "solver": backend, "setting": setting,
@@ -126,7 +130,8 @@ def _row(problem, backend, setting, found, measured, record, runtime, solver_s,
 
 def force_rule(status: str, force: dict[str, float]) -> str:
     """Which force check an answer fails at :data:`FORCE_LEVEL` (``""``: none): ``"no
-    answer"`` or the residuals above the level, joined by ``+``.
+    answer"`` or the residuals (and the distance, where measured) above the level,
+    joined by ``+``.
     """
     if not Status(status).has_answer:
         return "no answer"
@@ -143,10 +148,13 @@ CONIC_BACKENDS = ("clarabel",)
 """Conic backends the harness runs at qpbenchmark's settings (those with a profile)."""
 
 
-def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTINGS)):
+def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTINGS),
+                references=None):
     """Rows of :func:`solve_both` for every QP problem x qpsolvers backend x setting,
     and of :func:`solve_conic_both` for every conic problem x conic backend among
-    ``backends`` x setting (with the problem's name in ``problem``).
+    ``backends`` x setting (with the problem's name in ``problem``); ``references``
+    maps a problem's name to reference forces (the force view's distance, where the
+    optimum is unique).
     """
     rows = []
     for name, problem in problems.items():
@@ -158,7 +166,8 @@ def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTING
             runs = []
         for solve, backend in runs:
             for setting in settings:
-                rows.append({"problem": name} | solve(problem, backend, setting))
+                rows.append({"problem": name} | solve(problem, backend, setting,
+                                                      (references or {}).get(name)))
     return rows
 
 
