@@ -28,6 +28,7 @@ from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
+from cardan_forces.solvers import get as get_backend
 
 # ---------------------------------------------------------------------------- backends
 
@@ -142,15 +143,16 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     picks = list(range(len(op.t)) if instants is None else instants)
     make = problem or (lambda i: FORMULATIONS[formulation](op, i))
     solver = solver or default_backend(formulation, make(picks[0]))
+    get_backend(solver)  # an unknown or absent backend is an error, not failed records
     records, walls, start, previous = [], [], time.perf_counter(), None
     for k, i in enumerate(picks):
         if records and time.perf_counter() - start > budget_s:
             break
         began = time.perf_counter()
-        record = _solve_one(op, make, int(i), solver, tol, previous if warm else None,
-                            references)
+        record = _solve_one(op, formulation, make, int(i), solver, tol,
+                            previous if warm else None, references)
         if restart and previous is not None and not record.solved:
-            record = _solve_one(op, make, int(i), solver, tol, None, references)
+            record = _solve_one(op, formulation, make, int(i), solver, tol, None, references)
         walls.append(time.perf_counter() - began)
         records.append(record)
         answered = record.status.has_answer and record.z is not None
@@ -160,12 +162,13 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     return history_of(op, formulation, solver, picks[: len(records)], records, walls)
 
 
-def _solve_one(op: Operator, make, i: int, solver: str, tol, initvals, references) -> Record:
+def _solve_one(op: Operator, formulation: str, make, i: int, solver: str, tol, initvals,
+               references) -> Record:
     ref, best = (None, None) if references is None else references.get(i, (None, None))
     try:
         problem = make(i)
     except Exception as exc:  # a problem that cannot be built at this instant
-        return _failed(op, solver, exc)
+        return _failed(op, formulation, solver, exc)
     try:
         return solve(problem, solver, tol=tol, initvals=initvals, reference=ref,
                      optimal_value=best)
@@ -173,9 +176,9 @@ def _solve_one(op: Operator, make, i: int, solver: str, tol, initvals, reference
         return failed_record(problem, solver, f"{type(exc).__name__}: {exc}")
 
 
-def _failed(op: Operator, solver: str, exc: Exception) -> Record:
+def _failed(op: Operator, formulation: str, solver: str, exc: Exception) -> Record:
     """A ``failed`` record for an instant whose problem could not be built."""
-    return Record(formulation="", solver=solver, status=Status.FAILED,
+    return Record(formulation=formulation, solver=solver, status=Status.FAILED,
                   x=np.full(len(op.names), np.nan), names=op.names, iterations=None,
                   setup_s=0.0, solve_s=0.0, residuals=Residuals(*[math.inf] * 4),
                   message=f"{type(exc).__name__}: {exc}")

@@ -1,0 +1,43 @@
+"""The study layer: solve-over-time answers that do not depend on the order of instants,
+histories that keep failures as records, and the unknown-backend error."""
+
+import numpy as np
+import pytest
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.experiments import study
+from cardan_forces.solvers import SolverNotFound, Status
+
+
+@pytest.fixture(scope="module")
+def op(paper):
+    return build_operator(simulate(paper, np.linspace(0.0, 0.5, 5)))
+
+
+@pytest.mark.parametrize("formulation", ["positive", "compliance_hertz", "min_max"])
+def test_an_instant_has_one_answer_whatever_was_solved_before(op, formulation):
+    """Backwards, forwards, or alone: the same forces within the solver's tolerance."""
+    forward = study.solve_over_time(op, formulation, tol=1e-9)
+    backward = study.solve_over_time(op, formulation, tol=1e-9, instants=[4, 3, 2, 1, 0])
+    assert forward.solved == backward.solved == 5
+    scale = np.abs(forward.forces).max()
+    assert np.allclose(forward.forces, backward.forces[::-1], atol=1e-6 * scale)
+    alone = study.solve_over_time(op, formulation, tol=1e-9, instants=[2])
+    assert np.allclose(alone.forces[0], forward.forces[2], atol=1e-6 * scale)
+
+
+def test_a_problem_that_cannot_be_built_is_a_failed_instant(op):
+    def problem(i):
+        if i == 1:
+            raise ValueError("no problem at this instant")
+        return study.FORMULATIONS["positive"](op, i)
+    h = study.solve_over_time(op, "positive", instants=[0, 1, 2], problem=problem)
+    assert h.statuses[1] is Status.FAILED and h.status is Status.FAILED
+    assert "no problem at this instant" in h.records[1].message
+    assert np.isnan(h.forces[1]).all() and np.isfinite(h.forces[[0, 2]]).all()
+    assert np.isinf(h.jumps()[1:]).all() and h.jumps()[0] == 0.0
+
+
+def test_an_unknown_backend_is_an_error_not_failed_records(op):
+    with pytest.raises(SolverNotFound):
+        study.solve_over_time(op, "positive", "no-such-backend")
