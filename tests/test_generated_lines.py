@@ -129,6 +129,7 @@ COMMANDS = (
     (["sets", "--t", str(T), "--json"], check_sets),
     (["solve", "--t", str(T), "--formulation", "positive", "--solver", "clarabel", "--json"],
      check_solve),
+    (["sets", "--t", str(T), "--release", "--json"], lambda report: check_sets(report["released"])),
     (["secondary", "--torque", "50", "--out", "{out}"], None),
 )
 """Each command (the scene file goes after its first word) and its check of a JSON answer."""
