@@ -58,6 +58,9 @@ instead of running for hours."""
 MAX_SOLVES = 200_000
 """Most solves of one sweep (points x formulations x instants)."""
 
+MAX_WORKERS = 1024
+"""Most local worker processes."""
+
 
 # ---------------------------------------------------------------------------- the request
 
@@ -152,8 +155,12 @@ def plan(args) -> Study:
     if not (math.isfinite(stop_s) and stop_s > scene.time.start_s):
         raise SweepError(f"--stop {stop_s}: must be after the scene's start "
                          f"{scene.time.start_s} s")
-    if instants < 1 or args.workers < 1:
-        raise SweepError("--instants and --workers must be at least 1")
+    if instants < 1:
+        raise SweepError(f"--instants {instants}: must be at least 1")
+    if not 1 <= args.workers <= MAX_WORKERS:
+        raise SweepError(f"--workers {args.workers}: must be in [1, {MAX_WORKERS}]")
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise SweepError(f"--timeout {args.timeout}: must be a finite number of seconds > 0")
     study = Study(
         scene=spec,
         angles=tuple(angles or [scene.joints[0].articulation_deg]),

@@ -269,7 +269,9 @@ def test_rows_read_back_with_their_fields_types(base):
 
 
 @pytest.mark.parametrize("extra", [["--angle", "95"], ["--amplitude=-2e9"],
-                                   ["--instants", "30000"], ["--stop", "100000"]])
+                                   ["--instants", "30000"], ["--stop", "100000"],
+                                   ["--stop", "nan"], ["--workers", "0"],
+                                   ["--timeout", "inf"]])
 def test_the_plan_itself_holds_the_scene_limits(extra):
     """The sweep's own checks, without the command line's (a caller of ``plan``)."""
     parser = argparse.ArgumentParser()
