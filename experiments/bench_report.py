@@ -15,7 +15,7 @@ THROUGHPUT_COLUMNS = ("formulation", "solver", "mode", "instant", "t_s", "status
                       "dual", "gap", "distance", "equilibrium", "sign", "complementarity",
                       "cone")
 ACCURACY_COLUMNS = ("formulation", "solver", "tol", "instant", "t_s", "status", "time_s",
-                    "primal", "dual", "gap", "distance", "equilibrium", "sign",
+                    "solve_s", "primal", "dual", "gap", "distance", "equilibrium", "sign",
                     "complementarity", "cone", "iterations")
 PROFILE_COLUMNS = ("formulation", "profile", "clock", "level", "solver", "solved", "sgm_ratio",
                    "tau", "fraction")
@@ -176,7 +176,8 @@ def _header(results, settings) -> list[str]:
 def _throughput(summary) -> list[str]:
     lines = ["", "## Throughput per formulation x backend x mode (time split in us per "
              "instant)", "",
-             "| formulation | solver | mode | instants | instants/s | sgm ms | solved | build "
+             "| formulation | solver | mode | instants | instants/s | sgm ms (solver) | solved "
+             "| build "
              "| conversion | solver | checks | other | solver share |",
              "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for e in summary:
