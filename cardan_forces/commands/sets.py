@@ -17,6 +17,7 @@ from cardan_forces.driveline.release import (
     parse_release,
     released_operator,
 )
+from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.paper_method import multistart
 from cardan_forces.experiments.study import intervals
 
@@ -97,12 +98,12 @@ def print_table(name, result, ranges, starts=None, n_starts=0) -> None:
     for j, (name, det, value) in enumerate(zip(result.names, result.determinate,
                                                result.min_norm)):
         lo, hi = ranges[name]["min"], ranges[name]["max"]
-        lo = "-inf" if lo is None else f"{lo + 0.0:.4f}"
-        hi = "+inf" if hi is None else f"{hi + 0.0:.4f}"
+        lo, hi = number_text(lo, ".4f", "-inf"), number_text(hi, ".4f", "+inf")
         spread = "" if starts is None or not len(starts) else \
-            f"  paper: [{starts[:, j].min():.3f}, {starts[:, j].max():.3f}]"
-        print(f"{name:{width}s} {'yes' if det else 'no':>11s} {value:14.4f} {lo:>12s} {hi:>12s}"
-              f"{spread}")
+            f"  paper: [{number_text(starts[:, j].min(), '.3f')}, " \
+            f"{number_text(starts[:, j].max(), '.3f')}]"
+        print(f"{name:{width}s} {'yes' if det else 'no':>11s} {number_text(value, '14.4f')} "
+              f"{lo:>12s} {hi:>12s}{spread}")
 
 
 def print_modes(modes) -> None:
