@@ -146,7 +146,7 @@ def _heartbeat(command: str):
     def beat():
         while not done.wait(HEARTBEAT_S):
             progress(f"cardan {command}: still running after "
-                      f"{time.monotonic() - started:.0f} s (Ctrl-C stops it)")
+                     f"{time.monotonic() - started:.0f} s (Ctrl-C stops it)")
 
     thread = threading.Thread(target=beat, daemon=True)
     thread.start()
