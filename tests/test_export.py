@@ -81,3 +81,17 @@ def test_qpbenchmark_runs_the_export_unchanged(exported, tmp_path):
     qps = [n for n in problems if "min_max" not in n]
     assert sorted(r["problem"] for r in rows) == sorted(qps * len(qp_measures.SETTINGS))
     assert {r["solver"] for r in rows} == {"quadprog"}
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--name", "1bad"], "Python identifier"),
+    (["--instants", "0"], "positive whole number"),
+    (["--formulation", "friction"], "none of the chosen formulations"),
+])
+def test_bad_export_requests_are_one_line_and_exit_2(argv, says, tmp_path, capsys):
+    from cardan_forces.cli import main
+
+    assert main(["export", *argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("cardan: error:") and says in err[0]
+    assert not any(tmp_path.iterdir())
