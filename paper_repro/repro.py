@@ -505,9 +505,13 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     for s, o in fig15_ops:
         check_request(s, o, methods, (15,))
     runs.start(([scene] if shown else []) + fig15)
-    try:
-        sections = _main_figures(runs, scene, motion, op, figs, rigid, out, formats)
-        sections += _fig15(runs, fig15_ops, rigid, out, formats)
+    try:  # the rigid-model work first, while the penalty simulations run
+        work = _rigid_work(op, [f for f in figs if f in (13, 14)], rigid, progress)
+        work15 = [(s, o, _rigid_work(o, (15,), rigid, progress)) for s, o in fig15_ops]
+        compliance = _compliance_histories(runs, scene) if runs.penalty and shown else None
+        sections = _main_figures(runs, scene, motion, op, figs, work, compliance, out,
+                                 formats)
+        sections += _fig15(runs, work15, out, formats)
     except BaseException:
         runs.close(interrupted=True)
         raise
@@ -520,10 +524,26 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     return path
 
 
-def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs, rigid,
-                  out: Path, formats) -> list:
+def _rigid_work(op: Operator, figs, rigid, progress) -> dict:
+    """The rigid-model work of Figs. 13-15 on ``op``: the methods' histories
+    (``"hist"``) and the rigid set's bounds (``13``: joint 1's contacts; ``14``: the
+    first shaft's bearings, for Figs. 14 and 15).
+    """
+    if not figs:
+        return {"hist": {}}
+    work = {"hist": _histories(op, rigid, progress, None)}
+    if 13 in figs:
+        progress("repro: fig 13 solution-set intervals ...")
+        work[13] = set_bounds(op, joint_quantities(op))
+    if 14 in figs or 15 in figs:
+        progress(f"repro: fig {max(figs)} solution-set intervals ...")
+        work[14] = set_bounds(op, bearing_quantities(op))
+    return work
+
+
+def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs, work,
+                  compliance, out: Path, formats) -> list:
     """Figs. 11-14 on the run's scene and the compliance comparison: report sections."""
-    progress = runs.progress
     shown = [f"Fig. {f}" for f in figs if f in (11, 12, 13, 14)]
     pen = (runs.penalty_result(scene, ", ".join(shown) + " and the compliance comparison")
            if shown else None)
@@ -548,10 +568,10 @@ def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs,
             f"g1 = {g1:g} deg)",
             *_speed_notes(motion, pen, (1,))]))
     if any(f in figs for f in (13, 14)):
-        sections += _contact_figures(op, figs, rigid, out, formats, progress,
+        sections += _contact_figures(op, figs, work, out, formats,
                                      None if pen is None else penalty_history(pen, op.names))
     if pen is not None:
-        sections.append(_compliance_vs_penalty(runs, scene, pen, out, progress))
+        sections.append(_compliance_vs_penalty(compliance, pen, out))
     return sections
 
 
@@ -597,19 +617,16 @@ def _histories(op: Operator, rigid, progress, penalty: History | None) -> dict[s
     return hist
 
 
-def _contact_figures(op: Operator, figs, rigid, out: Path, formats, progress, penalty
-                     ) -> list:
-    hist = _histories(op, rigid, progress, penalty)
+def _contact_figures(op: Operator, figs, work, out: Path, formats, penalty) -> list:
+    hist = dict(work["hist"]) | ({} if penalty is None else {PENALTY: penalty})
     forces = {m: h.forces for m, h in hist.items()}
     sections = []
     if 13 in figs:
-        progress("repro: fig 13 solution-set intervals ...")
-        csv = figures.fig13(op, forces, set_bounds(op, joint_quantities(op)), out, formats)
+        csv = figures.fig13(op, forces, work[13], out, formats)
         sections.append(("Fig. 13: contact forces of joint 1", csv,
                          _fig13_notes(op, hist) + _status_lines(hist)))
     if 14 in figs:
-        progress("repro: fig 14 solution-set intervals ...")
-        bounds = set_bounds(op, bearing_quantities(op))
+        bounds = work[14]
         csv = figures.fig14(op, forces, bounds, out, formats=formats)
         sections.append(("Fig. 14: input shaft bearing loads", csv,
                          _bearing_notes(op, hist, bounds, 14)[0]))
@@ -620,17 +637,16 @@ def _gravity(scene: Scene) -> str:
     return "gravity (" + ", ".join(f"{g:g}" for g in scene.gravity_m_s2) + ") m/s^2"
 
 
-def _fig15(runs: _Runs, scenes_ops, rigid, out: Path, formats) -> list:
+def _fig15(runs: _Runs, scenes_work, out: Path, formats) -> list:
     """Fig. 15 on each of its scenes (a figure ``fig15_<scene>`` each), and a section
     saying which of them matches the paper's text (both verdicts ``agrees``).
     """
     sections, verdicts = [], []
-    for scene, op in scenes_ops:
-        runs.progress(f"repro: fig 15 on {scene.name} ...")
+    for scene, op, work in scenes_work:
         pen = runs.penalty_result(scene, f"Fig. 15 ({scene.name})")
-        hist = _histories(op, rigid, runs.progress,
-                          None if pen is None else penalty_history(pen, op.names))
-        bounds = set_bounds(op, bearing_quantities(op))
+        hist = dict(work["hist"]) | ({} if pen is None else
+                                     {PENALTY: penalty_history(pen, op.names)})
+        bounds = work[14]
         csv = figures.fig14(op, {m: h.forces for m, h in hist.items()}, bounds, out,
                             number=15, stem=f"fig15_{scene.name}",
                             subtitle=f", {_gravity(scene)}", formats=formats)
@@ -658,25 +674,36 @@ def _fig15_summary(verdicts: list[tuple[Scene, dict[str, str]]]):
     return ("Fig. 15: which horizontal gravity matches the paper's text", None, lines)
 
 
-def _compliance_vs_penalty(runs: _Runs, scene: Scene, result, out: Path, progress):
+def _compliance_histories(runs: _Runs, scene: Scene):
+    """The methods of :data:`COMPLIANCE_VS_PENALTY` over time on the released scene's
+    rigid operator (those that do not apply left out, with why): the operator, the
+    histories by method, the refusals.
+    """
+    runs.progress("repro: compliance vs penalty ...")
+    op = build_operator(runs.motion(released(scene), "the compliance comparison"))
+    hist, skipped = {}, []
+    for method, solver in COMPLIANCE_VS_PENALTY.items():
+        if _refusal(op.scene, op, method):
+            skipped.append(f"`{method}` ({_refusal(op.scene, op, method)})")
+        else:
+            hist[method] = history(op, method, solver)
+    return op, hist, skipped
+
+
+def _compliance_vs_penalty(compliance, result, out: Path):
     """The compliance formulations (and two rigid selections for contrast) on the released
     scene's rigid operator vs the penalty simulation: relative distance per contact group
     and instant, raw and both smoothed over ``SMOOTH_S``; cost of each.
     """
-    progress("repro: compliance vs penalty ...")
-    op = build_operator(runs.motion(released(scene), "the compliance comparison"))
+    op, hist, skipped = compliance
     bearings = np.zeros(len(op.names), bool)
     bearings[[c for link in op.bearings() for c in link.columns]] = True
     groups = {"bearings": bearings, "joints": ~bearings}
     pen = np.column_stack([result.forces[n] for n in op.names])
     ok = _settled(op.t) & np.all(np.isfinite(pen), axis=1)
-    rows, skipped = [], []
-    for method, solver in COMPLIANCE_VS_PENALTY.items():
-        if _refusal(op.scene, op, method):
-            skipped.append(f"`{method}` ({_refusal(op.scene, op, method)})")
-            continue
-        h = history(op, method, solver)
-        row = {"method": method, "solver": solver, "solved": f"{h.solved}/{len(h.statuses)}",
+    rows = []
+    for method, h in hist.items():
+        row = {"method": method, "solver": h.solver, "solved": f"{h.solved}/{len(h.statuses)}",
                "seconds": h.seconds}
         for g, cols in groups.items():
             for label, a, b in (("raw", h.forces, pen),
