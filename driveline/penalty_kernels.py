@@ -303,6 +303,7 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     grad = np.zeros((3, 12))
     dloc = np.zeros((18, 26))  # d(p, ea, ub, rel, arm, arm_b)/d(states of a, then b)
     dforce, dmom_a, dmom_b = np.zeros((3, 26)), np.zeros((3, 26)), np.zeros((3, 26))
+    dpoint = np.zeros((3, 26))  # d(p + arm_b)
     cols = np.zeros(26, dtype=np.int64)
     for c in range(m):
         ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
@@ -321,16 +322,22 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
             local[k] = local[k].real
         _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work[0], dloc, cols)
         dforce[:] = 0.0
-        for i in range(3):
+        for i in range(3):  # loops, not row operations: no temporaries
             for k in range(12):
-                if grad[i, k] != 0.0:
-                    dforce[i] += grad[i, k] * dloc[k]
+                g = grad[i, k]
+                if g != 0.0:
+                    for col in range(26):
+                        dforce[i, col] += g * dloc[k, col]
         p, arm, arm_b, f = work[0], work[4], work[5], work[6]
+        for i in range(3):
+            p[i] += arm_b[i]  # the contact point from b's centre
+            for col in range(26):
+                dpoint[i, col] = dloc[i, col] + dloc[15 + i, col]
         dmom_a[:], dmom_b[:] = 0.0, 0.0
         _cross_columns(arm, dforce, 1.0, dmom_a)  # M_a = arm x F
         _cross_columns(f, dloc[12:15], -1.0, dmom_a)
-        _cross_columns(p + arm_b, dforce, -1.0, dmom_b)  # M_b = -(p + arm_b) x F
-        _cross_columns(f, dloc[0:3] + dloc[15:18], 1.0, dmom_b)
+        _cross_columns(p, dforce, -1.0, dmom_b)  # M_b = -(p + arm_b) x F
+        _cross_columns(f, dpoint, 1.0, dmom_b)
         for k in range(26):
             col = cols[k]
             if col < 0:
@@ -492,7 +499,7 @@ _COEFFS = np.stack([_GAMMA, _ALPHA, _ERROR_CONST])
 
 # integer state (``ints``) and float state (``floats``) of a run, kept between calls
 I_ORDER, I_EQUAL, I_LU, I_JAC_CURRENT, I_STEPS, I_FEV, I_JEV, I_NLU, I_STATUS, I_OUT = range(10)
-F_T, F_H, F_C = range(3)
+F_T, F_H, F_C, F_RATE = range(4)
 RUNNING, FINISHED, STEP_TOO_SMALL, NOT_FINITE = 0, 1, 2, 3
 MESSAGES = {FINISHED: "finished", STEP_TOO_SMALL: "required step size is less than spacing "
             "between numbers", NOT_FINITE: "the right-hand side is not finite"}
@@ -507,22 +514,84 @@ else:  # pragma: no cover - the caller uses SciPy's integrators instead
 
 
 @njit(cache=True)
-def _factor(jac, c, lu, pivots):
-    """LU factors of ``I - c J`` into ``lu`` (held transposed: LAPACK's column-major
-    view of it is the matrix) and ``pivots``; LAPACK's ``info`` (0: regular).
+def _factor(jac, c, lu, pivots, blocks):
+    """Factor ``M = I - c J`` for :func:`_solve`, eliminating first what the equations'
+    structure gives (state layout of :class:`penalty._Model`): the displacement rows
+    read ``x_u - c x_v = b_u`` and each body's quaternion rows involve only its own
+    quaternion and rate, ``A_k x_q - c J_qw x_w = b_q`` (``A_k = I - c J_qq``, 4 x 4).
+    What is left is the ``6 nb`` rows of the velocities and rates,
+    ``M_rr + c M_ru E_v + c M_rq A^-1 J_qw``, factored by LAPACK's ``getrf`` into ``lu``
+    (held transposed: LAPACK's column-major view of it is the matrix); ``blocks`` gets
+    the ``A_k^-1``. A 30 x 30 factorization on ``paper`` instead of 65 x 65.
     """
-    n = jac.shape[0]
-    for i in range(n):
-        for j in range(n):
-            lu[j, i] = -c * jac[i, j]
+    nb = blocks.shape[0]
+    r0, m = 7 * nb, 6 * nb
+    for k in range(nb):
+        q = 3 * nb + 4 * k
+        a = -c * jac[q:q + 4, q:q + 4]
+        for i in range(4):
+            a[i, i] += 1.0
+        blocks[k] = np.linalg.inv(a)
+    for i in range(m):
+        row = r0 + i
+        for j in range(m):
+            lu[j, i] = -c * jac[row, r0 + j]
         lu[i, i] += 1.0
-    return _getrf(ord("d"), n, n, lu.ctypes, n, pivots.ctypes)
+        for k in range(nb):
+            for e in range(3):  # x_u = b_u + c x_v: M_ru's columns onto x_v's
+                lu[3 * k + e, i] += -c * jac[row, 3 * k + e] * c
+            q, w = 3 * nb + 4 * k, 3 * nb + 3 * k
+            for e in range(3):  # x_q = A^-1 (b_q + c J_qw x_w)
+                total = 0.0
+                for i4 in range(4):
+                    g = 0.0
+                    for j4 in range(4):
+                        g += blocks[k, i4, j4] * jac[q + j4, r0 + w + e]
+                    total += -c * jac[row, q + i4] * g
+                lu[w + e, i] += total * c
+    return _getrf(ord("d"), m, m, lu.ctypes, m, pivots.ctypes)
 
 
 @njit(cache=True)
-def _solve(lu, pivots, b):
-    """``b <- (I - c J)^-1 b`` from :func:`_factor`'s factors (row swaps, then the unit
-    lower and the upper triangle, column by column: rows of the transposed ``lu``).
+def _solve(jac, c, lu, pivots, blocks, b):
+    """``b <- (I - c J)^-1 b`` from :func:`_factor`'s elimination and factors."""
+    nb = blocks.shape[0]
+    r0, m = 7 * nb, 6 * nb
+    xq = np.empty(4 * nb)
+    for k in range(nb):  # A^-1 b_q
+        q = 3 * nb + 4 * k
+        for i in range(4):
+            xq[4 * k + i] = (blocks[k, i, 0] * b[q] + blocks[k, i, 1] * b[q + 1]
+                             + blocks[k, i, 2] * b[q + 2] + blocks[k, i, 3] * b[q + 3])
+    r = b[r0:].copy()
+    for i in range(m):
+        row = r0 + i
+        total = 0.0
+        for j in range(3 * nb):
+            total += jac[row, j] * b[j]
+        for j in range(4 * nb):
+            total += jac[row, 3 * nb + j] * xq[j]
+        r[i] += c * total  # b_r - M_ru b_u - M_rq A^-1 b_q, with M = -c J off the diagonal
+    _lu_solve(lu, pivots, r)
+    b[r0:] = r
+    for j in range(3 * nb):
+        b[j] += c * r[j]  # x_u = b_u + c x_v
+    for k in range(nb):
+        q, w = 3 * nb + 4 * k, 3 * nb + 3 * k
+        for i in range(4):
+            total = xq[4 * k + i]
+            for e in range(3):
+                g = 0.0
+                for j4 in range(4):
+                    g += blocks[k, i, j4] * jac[q + j4, r0 + w + e]
+                total += c * g * r[w + e]
+            b[q + i] = total
+
+
+@njit(cache=True)
+def _lu_solve(lu, pivots, b):
+    """``b <- M^-1 b`` from LAPACK's ``getrf`` factors of ``M`` (held transposed): row
+    swaps, then the unit lower and the upper triangle, column by column.
     """
     n = b.shape[0]
     for k in range(n):
@@ -610,7 +679,7 @@ def initial_step(t0, y0, t_bound, atol, rtol, ints, args):
 @njit(cache=True)
 def start(t0, y0, t_bound, atol, rtol, args):
     """A run's state at ``t0``: (floats, ints, differences ``D``, Jacobian, LU factors,
-    pivots), for :func:`advance`.
+    pivots, quaternion blocks: :func:`_factor`), for :func:`advance`.
     """
     n = y0.shape[0]
     ints = np.zeros(10, dtype=np.int64)
@@ -621,31 +690,43 @@ def start(t0, y0, t_bound, atol, rtol, args):
     ints[I_JEV] += 1
     jac = jacobian(t0, y0, args[0], args[1], args[2], args[3], args[4], args[5])
     ints[I_JAC_CURRENT] = 1
-    floats = np.array([t0, h, h])
-    return floats, ints, d, jac, np.zeros((n, n)), np.zeros(n, dtype=F_INT_nptype)
+    floats = np.array([t0, h, h, 1.0])
+    m = 6 * (n // 13)
+    return (floats, ints, d, jac, np.zeros((m, m)), np.zeros(m, dtype=F_INT_nptype),
+            np.zeros((n // 13, 4, 4)))
 
 
 @njit(cache=True)
-def _newton(t_new, y_predict, c, psi, lu, pivots, scale, ints, args):
+def _newton(t_new, y_predict, c, psi, jac, lu, pivots, blocks, scale, floats, ints, args):
     """SciPy's ``solve_bdf_system``: the simplified Newton iteration of one step;
-    (converged, iterations, y, d = y - y_predict).
+    (converged, iterations, y, d = y - y_predict). As CVODE (and unlike SciPy), a first
+    correction already below the tolerance times the last rate seen with this LU is
+    accepted without a second evaluation.
     """
-    y, d = y_predict.copy(), np.zeros_like(y_predict)
+    n = y_predict.shape[0]
+    y, d, dy = y_predict.copy(), np.zeros(n), np.empty(n)
     dy_norm_old, converged, k = -1.0, False, 0
     for k in range(NEWTON_MAXITER):
         f = _rhs(t_new, y, ints, args)
-        if not np.all(np.isfinite(f)):
+        finite = True
+        for i in range(n):
+            finite &= np.isfinite(f[i])
+            dy[i] = c * f[i] - psi[i] - d[i]
+        if not finite:
             break
-        dy = c * f - psi - d
-        _solve(lu, pivots, dy)
+        _solve(jac, c, lu, pivots, blocks, dy)
         dy_norm = _norm(dy, scale)
         rate = dy_norm / dy_norm_old if dy_norm_old > 0.0 else -1.0
         if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - k) / (1.0 - rate)
                             * dy_norm > NEWTON_TOL):
             break
-        y += dy
-        d += dy
-        if dy_norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * dy_norm < NEWTON_TOL):
+        for i in range(n):
+            y[i] += dy[i]
+            d[i] += dy[i]
+        if rate >= 0.0:
+            floats[F_RATE] = rate
+        if dy_norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * dy_norm < NEWTON_TOL) or (
+                rate < 0.0 and min(1.0, floats[F_RATE]) * dy_norm < NEWTON_TOL):
             converged = True
             break
         dy_norm_old = dy_norm
@@ -653,7 +734,7 @@ def _newton(t_new, y_predict, c, psi, lu, pivots, scale, ints, args):
 
 
 @njit(cache=True)
-def _attempt(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args):
+def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args):
     """SciPy's ``BDF._step_impl`` up to the accepted step: shrink the step until Newton
     converges (with a fresh Jacobian once per step) and the error test passes; returns
     (t_new, y_new, d, error scale, Newton iterations), or ``t_new = nan`` with the
@@ -683,11 +764,11 @@ def _attempt(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args):
         c = h_abs / alpha[order]
         while True:
             if ints[I_LU] == 0 or abs(c / floats[F_C] - 1.0) > LU_KEEP:
-                _factor(jac, c, lu, pivots)
+                _factor(jac, c, lu, pivots, blocks)
                 ints[I_NLU] += 1
-                ints[I_LU], floats[F_C] = 1, c
-            converged, n_iter, y_new, dd = _newton(t_new, y_predict, c, psi, lu, pivots,
-                                                   scale, ints, args)
+                ints[I_LU], floats[F_C], floats[F_RATE] = 1, c, 1.0
+            converged, n_iter, y_new, dd = _newton(t_new, y_predict, c, psi, jac, lu, pivots,
+                                                   blocks, scale, floats, ints, args)
             if converged or ints[I_JAC_CURRENT] == 1:
                 break
             jac[:] = jacobian(t_new, y_predict, args[0], args[1], args[2], args[3],
@@ -712,13 +793,13 @@ def _attempt(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args):
 
 
 @njit(cache=True)
-def _step(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args):
+def _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args):
     """One accepted step of SciPy's ``BDF``: :func:`_attempt`, then the differences
     updated and, after ``order + 1`` steps of one size, the order and step chosen
     from the error estimates of the orders either side.
     """
     ints[I_JAC_CURRENT] = 0
-    t_new, _, dd, scale, n_iter = _attempt(floats, ints, d, jac, lu, pivots, t_bound,
+    t_new, _, dd, scale, n_iter = _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound,
                                            atol, rtol, args)
     if np.isnan(t_new):
         return
@@ -767,9 +848,9 @@ def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
     end, where the status becomes finished), filling the rows of ``out`` at the sorted
     instants ``t_out`` as they are passed; the status and counters are in ``run[1]``.
     """
-    floats, ints, d, jac, lu, pivots = run
+    floats, ints, d, jac, lu, pivots, blocks = run
     while ints[I_STATUS] == RUNNING and floats[F_T] < t_stop:
-        _step(floats, ints, d, jac, lu, pivots, t_bound, atol, rtol, args)
+        _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args)
         if ints[I_STATUS] != RUNNING:
             break
         t = floats[F_T]
