@@ -399,8 +399,12 @@ def _draw_set(ax, t, set_min, set_max, low, high) -> tuple[dict, str]:
         notes.append(f"{word} bound {bound[finite].min():.3g} to {bound[finite].max():.3g} "
                      f"N, {where}")
     above, below = np.mean(~np.isfinite(hi)), np.mean(~np.isfinite(lo))
+    single = both & (hi - lo <= 1e-6 * (high - low))
+    if single.any():  # a determinate quantity: the band is a line under the curves
+        notes.insert(0, f"one value (determinate) at {single.sum()} of {checked.sum()} "
+                        "instants")
     if not (above or below):
-        return handles, ""
+        return handles, "rigid set: " + "; ".join(notes) if notes else ""
     side = "above and below" if above and below else "above" if above else "below"
     return handles, (f"rigid set open {side} ({100 * max(above, below):.0f} % of "
                      f"{checked.sum()} instants)" + "".join(f"; {n}" for n in notes))

@@ -397,6 +397,12 @@ class _Runs:
         self.pending = {name: self.pool.submit(run_penalty, s, self.times)
                         for name, s in todo.items()}
 
+    def submit(self, fn, *args) -> Future | None:
+        """``fn(*args)`` in a worker process (after the penalty simulations), or ``None``
+        when there are no workers (the caller then runs it here).
+        """
+        return None if self.pool is None else self.pool.submit(fn, *args)
+
     def close(self, interrupted: bool = False) -> None:
         """End the worker processes: at once when ``interrupted`` (the simulations still
         running are lost), else after they finish.
@@ -506,12 +512,13 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
         check_request(s, o, methods, (15,))
     runs.start(([scene] if shown else []) + fig15)
     try:  # the rigid-model work first, while the penalty simulations run
+        work15 = [(s, o, runs.submit(_rigid_work_of, s, times, (15,), rigid))
+                  for s, o in fig15_ops]  # in the workers when there are workers
         work = _rigid_work(op, [f for f in figs if f in (13, 14)], rigid, progress)
-        work15 = [(s, o, _rigid_work(o, (15,), rigid, progress)) for s, o in fig15_ops]
         compliance = _compliance_histories(runs, scene) if runs.penalty and shown else None
         sections = _main_figures(runs, scene, motion, op, figs, work, compliance, out,
                                  formats)
-        sections += _fig15(runs, work15, out, formats)
+        sections += _fig15(runs, work15, rigid, out, formats)
     except BaseException:
         runs.close(interrupted=True)
         raise
@@ -532,13 +539,21 @@ def _rigid_work(op: Operator, figs, rigid, progress) -> dict:
     if not figs:
         return {"hist": {}}
     work = {"hist": _histories(op, rigid, progress, None)}
+    say = progress or (lambda _: None)
     if 13 in figs:
-        progress("repro: fig 13 solution-set intervals ...")
+        say("repro: fig 13 solution-set intervals ...")
         work[13] = set_bounds(op, joint_quantities(op))
     if 14 in figs or 15 in figs:
-        progress(f"repro: fig {max(figs)} solution-set intervals ...")
+        say(f"repro: fig {max(figs)} solution-set intervals ...")
         work[14] = set_bounds(op, bearing_quantities(op))
     return work
+
+
+def _rigid_work_of(scene: Scene, times: np.ndarray, figs, rigid) -> dict:
+    """:func:`_rigid_work` on ``scene``'s motion at ``times`` (what a worker process runs:
+    the same motion and operator as this process builds, from the same scene).
+    """
+    return _rigid_work(build_operator(simulate(scene, times)), figs, rigid, None)
 
 
 def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs, work,
@@ -637,12 +652,19 @@ def _gravity(scene: Scene) -> str:
     return "gravity (" + ", ".join(f"{g:g}" for g in scene.gravity_m_s2) + ") m/s^2"
 
 
-def _fig15(runs: _Runs, scenes_work, out: Path, formats) -> list:
+def _fig15(runs: _Runs, scenes_work, rigid, out: Path, formats) -> list:
     """Fig. 15 on each of its scenes (a figure ``fig15_<scene>`` each), and a section
     saying which of them matches the paper's text (both verdicts ``agrees``).
+    ``scenes_work``: ``(scene, operator, its rigid work's Future or None)``; ``None``:
+    that work is done here.
     """
     sections, verdicts = [], []
     for scene, op, work in scenes_work:
+        if work is None:
+            work = _rigid_work(op, (15,), rigid, runs.progress)
+        else:
+            runs.progress(f"repro: waiting for the fig 15 methods on {scene.name} ...")
+            work = work.result()
         pen = runs.penalty_result(scene, f"Fig. 15 ({scene.name})")
         hist = dict(work["hist"]) | ({} if pen is None else
                                      {PENALTY: penalty_history(pen, op.names)})
