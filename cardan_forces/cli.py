@@ -38,7 +38,7 @@ from cardan_forces.commands import sets as sets_command
 from cardan_forces.commands import solve as solve_command
 from cardan_forces.commands import solvers as solvers_command
 from cardan_forces.driveline.dynamics import DynamicsError
-from cardan_forces.driveline.scene import LIMITS, MAX_INSTANTS, SceneError
+from cardan_forces.driveline.scene import LIMITS, SceneError
 from cardan_forces.experiments import bench, export, hard, report, secondary, sweep
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import SolverNotFound
@@ -58,12 +58,10 @@ ARGUMENTS = (
     ("t", "--t", 0.0, LIMITS["time_s"][1], True),
     ("tol", "--tol", 0.0, 1.0, False),
     ("multistart", "--multistart", 0, 1000, True),
-    ("instants", "--instants", 1, MAX_INSTANTS, True),
-    ("stop", "--stop", 0.0, LIMITS["time_s"][1], False),
-    ("workers", "--workers", 1, 1024, True),
-    ("timeout", "--timeout", 0.0, 1e5, False),
 )
-"""Ranges of the numeric options, checked before any work (whichever command has them)."""
+"""Ranges of the numeric options ``sets``, ``solve`` and ``hard`` share, checked before
+any work; the other commands check their own (``sweep`` its window and workers against
+the scene, ``report``/``export`` their instants by argument type)."""
 
 
 class _Parser(argparse.ArgumentParser):

@@ -167,23 +167,18 @@ COMMANDS = [
     ("hard --tol -1", "--tol -1.0: must be a finite number in (0, 1]"),
     ("sweep --angle 95", "--angle 95: |articulation| must be at most 89 deg"),
     ("sweep --amplitude 1e300", "--amplitude 1e+300: must be at most 1e+09 N m in magnitude"),
-    ("sweep --instants 0", "--instants 0: must be a finite number in [1, 20001]"),
-    ("sweep --workers -1", "--workers -1: must be a finite number in [1, 1024]"),
+    ("sweep --instants 0", "--instants 0: must be at least 1"),
+    ("sweep --workers -1", "--workers -1: must be in [1, 1024]"),
     ("", "the following arguments are required: command (see 'cardan --help')"),
     ("scene check {dir}", "scene {dir}: is a directory, not a scene file"),
     ("sets no-such-scene", f"scene no-such-scene: not a built-in name "
                            f"({', '.join(builtin_names())}) and no such file"),
-    ("repro {renamed} --quick --no-penalty",
-     "scene {renamed}: cardan repro needs the paper's layout; missing: a first shaft named "
-     "'input' (it is 'drive')"),
 ]
 
 
 @pytest.mark.parametrize("argv,message", COMMANDS, ids=[c[0] or "nothing" for c in COMMANDS])
 def test_bad_command_line_is_one_line_exit_2(tmp_path, capsys, argv, message):
-    renamed = tmp_path / "renamed.toml"
-    renamed.write_text(PAPER.replace('name = "input"', 'name = "drive"'))
-    names = {"dir": tmp_path, "renamed": renamed}
+    names = {"dir": tmp_path}
     assert main(argv.format(**names).split()) == 2
     out, err = capsys.readouterr()
     assert out == ""
