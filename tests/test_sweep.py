@@ -155,7 +155,7 @@ def test_bad_requests_exit_2(tmp_path, capsys):
         (["--solver", "no-such-backend"], "unknown backend"),
         (["--angles", "0:30"], "expected a number or a:b:n"),
         ([str(constant), "--amplitude", "5"], "input torque is constant"),
-        (["--instants", "0"], "--instants 0: must be a finite number in [1, 20001]"),
+        (["--instants", "0"], "--instants 0: must be at least 1"),
     ):
         assert main(["sweep", "--quick", "--out", str(tmp_path), *extra]) == 2, extra
         assert message in capsys.readouterr().err
