@@ -462,14 +462,18 @@ def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, j
 # differentiation formulas of Shampine & Reichelt, *The MATLAB ODE suite*, SIAM J. Sci.
 # Comput. 18 (1997), orders 1-5, quasi-constant step size, the backward-difference array
 # ``D`` rescaled on every change of step) written as numba loops, so that every step
-# calls the compiled right-hand side and Jacobian of
-# :mod:`~cardan_forces.driveline.penalty_kernels` with no Python in between. The one
-# piece of dense linear algebra, the LU factorization of ``I - c J`` (65 x 65 on
-# ``paper``), is LAPACK's ``getrf`` through numba's own binding; its two triangular
-# solves are loops. Why not a library: ODEPACK and SUNDIALS reach these kernels only
+# calls the compiled right-hand side and Jacobian above with no Python in between. The
+# one piece of dense linear algebra, the LU factorization of ``I - c J``, is LAPACK's
+# ``getrf`` through numba's own binding, on what is left after the rows whose structure
+# is known are eliminated (:func:`_factor`: 30 x 30 on ``paper`` instead of 65 x 65);
+# its two triangular solves are loops. SUNDIALS CVODE's rules where they save work:
+# the LU is kept while ``c`` changes by less than 30 % (:data:`LU_KEEP`), and a first
+# Newton correction already within tolerance is accepted (:func:`_newton`).
+#
+# Why not a library: ODEPACK and SUNDIALS reach these kernels only
 # through a Python callback per call (``odeint``, ``scikit-sundae``), ``numbalsoda`` does
 # not build for this Python, and ``diffrax`` spends 0.2-0.3 ms a step on a 65-state
-# system even with a trivial right-hand side, where the penalty model needs ~10 us.
+# system even with a trivial right-hand side, where the penalty model needs ~20 us.
 #
 # Same error control as SciPy's ``BDF``: the local error estimate of every component
 # below ``atol + rtol |y|``. One difference: the Newton iteration stops at
@@ -526,12 +530,13 @@ def _factor(jac, c, lu, pivots, blocks):
     """
     nb = blocks.shape[0]
     r0, m = 7 * nb, 6 * nb
-    for k in range(nb):
-        q = 3 * nb + 4 * k
-        a = -c * jac[q:q + 4, q:q + 4]
+    for k in range(nb):  # J_qq = Omega(w) / 2 is skew with Omega^2 = -|w|^2 I, so
+        q = 3 * nb + 4 * k  # (I - c J_qq)^-1 = (I + c J_qq) / (1 + c^2 |w|^2 / 4)
+        scale = 1.0 / (1.0 + c * c * (jac[q, q + 1] ** 2 + jac[q, q + 2] ** 2
+                                      + jac[q, q + 3] ** 2))
         for i in range(4):
-            a[i, i] += 1.0
-        blocks[k] = np.linalg.inv(a)
+            for j in range(4):
+                blocks[k, i, j] = scale * ((1.0 if i == j else 0.0) + c * jac[q + i, q + j])
     for i in range(m):
         row = r0 + i
         for j in range(m):
