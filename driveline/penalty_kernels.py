@@ -100,11 +100,12 @@ def _frames(y, rest_centre, centre, vel, rot, rate, omega):
 @njit(cache=True)
 def _new_frames(y, nb):
     """Zeroed frame arrays for ``nb`` bodies and the ground (rotation: identity)."""
-    rot = np.zeros((nb + 1, 3, 3), dtype=y.dtype)
+    vectors = np.zeros((3, nb + 1, 3), dtype=y.dtype)  # one allocation each: the
+    matrices = np.zeros((2, nb + 1, 3, 3), dtype=y.dtype)  # right-hand side is ~3 us
+    rot = matrices[0]
     for i in range(3):
         rot[nb, i, i] = 1.0
-    return (np.zeros((nb + 1, 3), dtype=y.dtype), np.zeros((nb + 1, 3), dtype=y.dtype), rot,
-            np.zeros((nb + 1, 3, 3), dtype=y.dtype), np.zeros((nb + 1, 3), dtype=y.dtype))
+    return vectors[0], vectors[1], rot, matrices[1], vectors[2]
 
 
 @njit(cache=True, inline="always")
@@ -191,10 +192,9 @@ def contact_forces(y, bodies, topology, geometry, laws, d_max):
     nb, m = bodies.shape[0], topology.shape[0]
     frames = _new_frames(y, nb)
     _frames(y, bodies[:, 4:], *frames)
-    depth, push = np.zeros(m, dtype=y.dtype), np.zeros(m, dtype=y.dtype)
+    pushes, loads = np.zeros((2, m), dtype=y.dtype), np.zeros((2, nb + 1, 3), dtype=y.dtype)
+    depth, push, force, moment = pushes[0], pushes[1], loads[0], loads[1]
     on_a = np.zeros((m, 3), dtype=y.dtype)
-    force = np.zeros((nb + 1, 3), dtype=y.dtype)
-    moment = np.zeros((nb + 1, 3), dtype=y.dtype)
     _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force, moment,
               np.zeros((7, 3), dtype=y.dtype))
     return depth, push, on_a, force, moment, frames
