@@ -491,9 +491,7 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     for the penalty simulations (default: the CPUs; 0: in this process, one by one).
     A method or figure that cannot draw the scene is refused before any long work.
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    started = time.perf_counter()
+    out, started = Path(out), time.perf_counter()
     scene = load_scene(scene_name)
     fig15 = [load_scene(s) for s in fig15_scenes] if 15 in figs else []
     times = scene.time.instants()
@@ -510,6 +508,7 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     fig15_ops = [(s, build_operator(runs.motion(s, "Fig. 15"))) for s in fig15]
     for s, o in fig15_ops:
         check_request(s, o, methods, (15,))
+    out.mkdir(parents=True, exist_ok=True)
     runs.start(([scene] if shown else []) + fig15)
     try:  # the rigid-model work first, while the penalty simulations run
         work15 = [(s, o, runs.submit(_rigid_work_of, s, times, (15,), rigid))

@@ -85,7 +85,7 @@ def test_sets_multistart_points_lie_in_the_intervals(capsys):
 
 def test_repro_quick_writes_all_figures_and_report(tmp_path):
     assert main(["repro", "--quick", "--no-penalty", "--out", str(tmp_path)]) == 0
-    for n in (11, 12, 13, 14, 15):
+    for n in ("11", "12", "13", "14", "15_paper-fig15", "15_paper-fig15-axial"):
         assert (tmp_path / f"fig{n}.csv").is_file() and (tmp_path / f"fig{n}.png").is_file()
     report = (tmp_path / "report.md").read_text()
     assert "## Fig. 13" in report and "## Fig. 15" in report
