@@ -40,6 +40,7 @@ from cardan_forces.commands import solvers as solvers_command
 from cardan_forces.driveline.dynamics import DynamicsError
 from cardan_forces.driveline.scene import LIMITS, SceneError
 from cardan_forces.experiments import bench, export, hard, report, secondary, sweep
+from cardan_forces.experiments import progress as progress_bars
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import SolverNotFound
 
@@ -79,7 +80,19 @@ def _parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
     for command in COMMANDS:
         command.add_parser(sub)
+    _add_quiet(sub)
     return p
+
+
+def _add_quiet(sub) -> None:
+    """``--quiet`` on every command (the innermost parsers, ``scene list`` too)."""
+    for parser in sub.choices.values():
+        inner = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        for action in inner:
+            _add_quiet(action)
+        if not inner:
+            parser.add_argument("--quiet", action="store_true",
+                                help="no progress bars, progress lines or heartbeat on stderr")
 
 
 def _check_args(args) -> None:
@@ -142,7 +155,7 @@ def _heartbeat(command: str):
     done, started = threading.Event(), time.monotonic()
 
     def beat():
-        while not done.wait(HEARTBEAT_S):
+        while not done.wait(HEARTBEAT_S) and not progress_bars.quiet():
             progress(f"cardan {command}: still running after "
                      f"{time.monotonic() - started:.0f} s (Ctrl-C stops it)")
 
@@ -165,6 +178,7 @@ def main(argv: list[str] | None = None) -> int:
         json_out = getattr(args, "json", False)
         np.set_printoptions(precision=4, suppress=True)
         _check_args(args)
+        progress_bars.configure(quiet=getattr(args, "quiet", False))
         with _heartbeat(args.command), _one_thread_each(), _library_output_to_stderr(), \
                 contextlib.redirect_stdout(buffer):
             code = args.func(args)

@@ -47,6 +47,7 @@ from . import bench_metrics as metrics
 from . import bench_report as out
 from . import bench_run as runs
 from . import export as exporting
+from . import progress
 from . import qpbench_harness as harness
 
 
@@ -56,7 +57,7 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
     """
     rows, acc_rows, stages, references, setup, conic = [], [], {}, {}, {}, set()
     problems, forces = {}, {}
-    for name, solvers in backends.items():
+    for name, solvers in progress.bar(backends.items(), "bench", len(backends), "formulation"):
         runs.progress(f"bench: building {name} at {len(op.t)} instants ...")
         prepared = runs.prepare(op, name, np.arange(len(op.t)))
         setup[name] = prepared.build_s

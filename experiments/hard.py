@@ -36,6 +36,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
+from cardan_forces.experiments import progress
 from cardan_forces.experiments.environment import json_number, number_text
 from cardan_forces.experiments.study import History, solve_over_time
 from cardan_forces.formulations import FORMULATIONS
@@ -490,7 +491,7 @@ def run(args) -> int:
     solvers = args.solver or (list(QUICK_SOLVERS) if args.quick else None)
     instants = QUICK_INSTANTS if args.quick else INSTANTS
     runs, skipped = [], []
-    for k, case in enumerate(cases, 1):
+    for k, case in enumerate(progress.bar(cases, "hard", unit="case"), 1):
         print(f"hard: case {k}/{len(cases)} {case.name}", file=sys.stderr, flush=True)
         variant = applies(case, args.scene)
         if isinstance(variant, NotApplicable):

@@ -40,7 +40,7 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Status
 from cardan_forces.solvers import get as get_backend
 
-from . import sweep_exec
+from . import progress, sweep_exec
 from .sweep_point import KEY, PEAKS, Point, Row, SweepError, point_scene, run_point, variant
 from .sweep_store import COLUMNS, FORMATS, append, key_of, read_rows, spell
 
@@ -275,7 +275,8 @@ def _run(tasks: list[Point], path: Path, workers: int, client, say, resumed: int
     with closing(results), open(path, "a", newline="", encoding="utf-8") as f:
         if f.tell() == 0:
             append(f, [], header=True)
-        for k, (task, rows) in enumerate(results, 1):
+        for k, (task, rows) in enumerate(progress.bar(results, "sweep", len(tasks), "point"),
+                                         1):
             point = f"{task.angle_deg:g} deg, {task.amplitude_N_m:g} N m"
             if isinstance(rows, Exception):
                 lost.append(f"{point}: {type(rows).__name__}: {rows}")

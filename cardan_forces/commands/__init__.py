@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import sys
 
+from cardan_forces.experiments import progress as progress_bars
 from cardan_forces.experiments.environment import json_text
 
 
@@ -20,8 +21,11 @@ class UsageError(ValueError):
 
 
 def progress(message: str) -> None:
-    """One line of progress on stderr (stdout stays the command's answer)."""
-    print(message, file=sys.stderr, flush=True)
+    """One line of progress on stderr (stdout stays the command's answer; none with
+    ``--quiet``).
+    """
+    if not progress_bars.quiet():
+        print(message, file=sys.stderr, flush=True)
 
 
 def print_json(value) -> None:

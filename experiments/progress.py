@@ -1,0 +1,46 @@
+"""Progress bars of the long commands (``repro``, ``bench``, ``hard``, ``report``,
+``sweep``): tqdm on stderr, with the count, rate and time left.
+
+Bars are off by default, so the Python API prints nothing; the command line turns them
+on (:func:`configure`) unless ``--quiet`` is given, and they stay off whenever stderr is
+not a terminal (a log file or a pipe gets the plain progress lines and the 30 s
+heartbeat instead). stdout, the command's answer, is never touched.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable
+
+from tqdm import tqdm
+
+_STATE = {"on": False, "quiet": False}
+
+
+def configure(quiet: bool) -> None:
+    """What the command line asks: bars (when stderr is a terminal) and progress lines,
+    or with ``quiet`` neither.
+    """
+    _STATE.update(on=not quiet, quiet=bool(quiet))
+
+
+def quiet() -> bool:
+    """Whether ``--quiet`` asked for no progress at all (no lines, no heartbeat)."""
+    return _STATE["quiet"]
+
+
+def shown() -> bool:
+    """Whether a bar is drawn now: enabled and stderr is a terminal."""
+    isatty = getattr(sys.stderr, "isatty", None)
+    return _STATE["on"] and bool(isatty and isatty())
+
+
+def bar(items: Iterable, desc: str, total: int | None = None, unit: str = "it") -> Iterable:
+    """``items`` as they come, with a bar on stderr when :func:`shown` (else ``items``
+    unchanged): ``desc`` before it, ``total`` items (default ``len(items)``) counted in
+    ``unit``.
+    """
+    if not shown():
+        return items
+    return tqdm(items, desc=desc, total=total, unit=unit, file=sys.stderr, leave=False,
+                dynamic_ncols=True, mininterval=0.5)
