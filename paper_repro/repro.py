@@ -32,6 +32,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.environment import machine, versions
+from cardan_forces.experiments.progress import bar
 from cardan_forces.experiments.study import value_range
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
@@ -625,7 +626,7 @@ def _speed_notes(motion: Motion, pen, shafts) -> list[str]:
 
 
 def _histories(op: Operator, rigid, progress, penalty: History | None) -> dict[str, History]:
-    hist = {m: history(op, m, progress=progress) for m in rigid}
+    hist = {m: history(op, m, progress=progress) for m in bar(rigid, "repro", unit="method")}
     if penalty is not None:
         hist[PENALTY] = penalty
     return hist
