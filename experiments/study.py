@@ -29,6 +29,7 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.registry import Pending, check, solve_unchecked
 
 # ---------------------------------------------------------------------------- backends
 
@@ -150,7 +151,7 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
             break
         began = time.perf_counter()
         record = _solve_one(op, formulation, make, int(i), solver, tol,
-                            previous if warm else None, references)
+                            previous if warm else None, references, defer=not restart)
         if restart and previous is not None and not record.solved:
             record = _solve_one(op, formulation, make, int(i), solver, tol, None, references)
         walls.append(time.perf_counter() - began)
@@ -159,19 +160,32 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
         previous = np.asarray(record.z, float) if answered else None
         if progress and (k + 1) % 200 == 0:
             progress(f"{formulation} ({solver}) {k + 1}/{len(picks)} instants")
+    records, walls = _checked(records, walls)
     return history_of(op, formulation, solver, picks[: len(records)], records, walls)
 
 
+def _checked(records: list, walls: list) -> tuple[list[Record], list[float]]:
+    """The deferred solves among ``records`` checked at once (:func:`check`), each
+    instant's wall time with its share of the checks.
+    """
+    deferred = [k for k, r in enumerate(records) if isinstance(r, Pending)]
+    found = dict(zip(deferred, check([records[k] for k in deferred])))
+    return ([found.get(k, r) for k, r in enumerate(records)],
+            [w + (found[k].checks_s if k in found else 0.0) for k, w in enumerate(walls)])
+
+
 def _solve_one(op: Operator, formulation: str, make, i: int, solver: str, tol, initvals,
-               references) -> Record:
+               references, defer: bool = False) -> Record | Pending:
+    """One instant's record, or with ``defer`` its solve with the checks to come."""
     ref, best = (None, None) if references is None else references.get(i, (None, None))
     try:
         problem = make(i)
     except Exception as exc:  # a problem that cannot be built at this instant
         return _failed(op, formulation, solver, exc)
     try:
-        return solve(problem, solver, tol=tol, initvals=initvals, reference=ref,
-                     optimal_value=best)
+        return (solve_unchecked if defer else solve)(problem, solver, tol=tol,
+                                                      initvals=initvals, reference=ref,
+                                                      optimal_value=best)
     except Exception as exc:  # a backend that rejects this instant's problem
         return failed_record(problem, solver, f"{type(exc).__name__}: {exc}")
 

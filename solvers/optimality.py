@@ -27,6 +27,7 @@ All functions take a batch: ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m), ``z`` (
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -47,7 +48,7 @@ def blocks(cones) -> list[tuple[str, float, slice]]:
     return out
 
 
-def _Pz(P, z: np.ndarray) -> np.ndarray:
+def times_P(P, z: np.ndarray) -> np.ndarray:
     if P is None:
         return np.zeros_like(z)
     P = np.asarray(P, float)
@@ -109,7 +110,7 @@ def measures(P, q, A, b, cones, z, y) -> dict[str, np.ndarray]:
 
     ``objective`` is the primal objective ``1/2 z'Pz + q'z`` (for an objective gap).
     """
-    return combine(_Pz(P, z), q, np.einsum("tmn,tm->tn", A, y), np.einsum("tm,tm->t", b, y),
+    return combine(times_P(P, z), q, np.einsum("tmn,tm->tn", A, y), np.einsum("tm,tm->t", b, y),
                    z, y, dual_cone_violation(cones, y))
 
 
@@ -188,7 +189,7 @@ def recover(P, q, A, b, cones, z) -> np.ndarray:
     y = np.zeros(len(b))
     if not columns:
         return y
-    target = -(_Pz(P, z[None])[0] + np.asarray(q, float))
+    target = -(times_P(P, z[None])[0] + np.asarray(q, float))
     M = np.array(columns).T
     coef = lsq_linear(M, target, bounds=(np.array(lower), np.inf), method="bvls").x
     for value, (rows, normal) in zip(coef, owners):
@@ -226,4 +227,156 @@ def objective_value(problem, z) -> float | None:
     if conic is None or z is None:
         return None
     z = np.asarray(z, float)
-    return float(0.5 * z @ _Pz(conic.P, z[None])[0] + np.asarray(conic.q, float) @ z)
+    return float(0.5 * z @ times_P(conic.P, z[None])[0] + np.asarray(conic.q, float) @ z)
+
+
+def _stack(problems, name: str) -> np.ndarray:
+    return np.array([getattr(p, name) for p in problems], float)
+
+
+def _shared_P(problems) -> np.ndarray:
+    """``P`` (n, n) when every problem holds the same matrix object, else (T, n, n)."""
+    first = problems[0].P
+    if all(p.P is first for p in problems):
+        return np.asarray(first, float)
+    return _stack(problems, "P")
+
+
+@dataclass(frozen=True)
+class Stacked:
+    """T problems of one structure in Clarabel's standard form, stacked: ``P`` (n, n)
+    when shared, (T, n, n) or ``None``; ``q`` (T, n), ``b`` (T, m), ``cones``; the rows
+    of ``A`` as ``blocks`` in row order, each a dense (T, r, n) array or a bound block
+    ``(sign, columns)`` (rows ``sign * e_j'``, a QP's finite bounds), so bounds are
+    never written out as identity rows.
+    """
+
+    P: np.ndarray | None
+    q: np.ndarray
+    b: np.ndarray
+    cones: tuple
+    blocks: tuple
+
+    def Az(self, z: np.ndarray) -> np.ndarray:
+        """``A z`` per instant (T, m)."""
+        return np.concatenate([np.einsum("trn,tn->tr", blk, z) if isinstance(blk, np.ndarray)
+                               else blk[0] * z[:, blk[1]] for blk in self.blocks]
+                              + [np.zeros((len(z), 0))], axis=1)
+
+    def Aty(self, y: np.ndarray) -> np.ndarray:
+        """``A'y`` per instant (T, n)."""
+        out, row = np.zeros_like(self.q), 0
+        for blk in self.blocks:
+            rows = blk.shape[1] if isinstance(blk, np.ndarray) else len(blk[1])
+            part = y[:, row:row + rows]
+            if isinstance(blk, np.ndarray):
+                out += np.einsum("trn,tr->tn", blk, part)
+            else:
+                np.add.at(out, (slice(None), blk[1]), blk[0] * part)
+            row += rows
+        return out
+
+    def A(self, k: int) -> np.ndarray:
+        """Instant ``k``'s ``A`` (m, n), dense."""
+        n = self.q.shape[1]
+        return np.vstack([np.zeros((0, n))] + [
+            blk[k] if isinstance(blk, np.ndarray) else blk[0] * np.eye(n)[blk[1]]
+            for blk in self.blocks])
+
+    def take(self, rows: np.ndarray) -> Stacked:
+        """The instants ``rows`` of the stack."""
+        P = self.P if self.P is None or self.P.ndim == 2 else self.P[rows]
+        return Stacked(P, self.q[rows], self.b[rows], self.cones,
+                       tuple(blk[rows] if isinstance(blk, np.ndarray) else blk
+                             for blk in self.blocks))
+
+    def Pk(self, k: int) -> np.ndarray | None:
+        """Instant ``k``'s ``P``."""
+        return self.P if self.P is None or self.P.ndim == 2 else self.P[k]
+
+
+def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
+    """:func:`measures` of T answers to the stacked problems ``st``."""
+    return combine(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y), z, y,
+                   dual_cone_violation(st.cones, y))
+
+
+def _stack_qp(problems) -> Stacked | None:
+    """:meth:`QP.as_conic` of T QPs of one structure at once (``None`` when their
+    bounds are finite in different places, so their conic forms differ in rows).
+    """
+    first = problems[0]
+    blocks, rhs, cones, ineq = [], [], [], None
+    if first.A is not None:
+        blocks.append(_stack(problems, "A"))
+        rhs.append(_stack(problems, "b"))
+        cones.append(("zero", len(first.b)))
+    if first.G is not None:
+        blocks.append(_stack(problems, "G"))
+        rhs.append(_stack(problems, "h"))
+        ineq = len(first.h)
+    for name, sign in (("lb", -1.0), ("ub", 1.0)):
+        if getattr(first, name) is not None:
+            bounds = _stack(problems, name)
+            keep = np.isfinite(bounds[0])
+            if not np.array_equal(np.isfinite(bounds), np.broadcast_to(keep, bounds.shape)):
+                return None
+            blocks.append((sign, np.flatnonzero(keep)))
+            rhs.append(sign * bounds[:, keep])
+            ineq = (ineq or 0) + int(keep.sum())
+    if ineq is not None:
+        cones.append(("nonneg", ineq))
+    b = np.concatenate(rhs, axis=1) if rhs else np.zeros((len(problems), 0))
+    return Stacked(_shared_P(problems), _stack(problems, "q"), b, tuple(cones), tuple(blocks))
+
+
+def _stack_ls(problems) -> Stacked:
+    """``LS.as_qp().as_conic()`` of T least norms of one structure at once."""
+    T, (m, n) = len(problems), np.shape(problems[0].A)
+    weights = (np.ones((T, n)) if problems[0].weights is None
+               else _stack(problems, "weights"))
+    P = np.zeros((T, n, n))
+    P[:, np.arange(n), np.arange(n)] = weights
+    return Stacked(P, np.zeros((T, n)), _stack(problems, "b"), (("zero", m),),
+                   (_stack(problems, "A"),))
+
+
+def conic_key(problem) -> tuple | None:
+    """What T problems must share to be stacked by :func:`stack_conic` (``None``: no
+    conic form).
+    """
+    from cardan_forces.formulations.problems import LS, QP, Conic
+
+    if isinstance(problem, QP):
+        return (QP, problem.n, *(None if (v := getattr(problem, k)) is None else np.shape(v)
+                                 for k in ("A", "G")),
+                problem.lb is None, problem.ub is None)
+    if isinstance(problem, LS):
+        return LS, np.shape(problem.A), problem.weights is None
+    if isinstance(problem, Conic):
+        return Conic, np.shape(problem.A), tuple(problem.cones), problem.P is None
+    from .conversions import convert
+
+    conic = convert(problem, (Conic,))
+    return None if conic is None else (type(problem), *conic_key(conic)[1:])
+
+
+def stack_conic(problems) -> Stacked:
+    """T problems of one :func:`conic_key` in Clarabel's standard form, stacked
+    (:class:`Stacked`): the same numbers as ``convert(problem, (Conic,))`` per instant,
+    without building T problems where the problems' own data stack (least norms, QPs
+    whose bounds are finite in the same places).
+    """
+    from cardan_forces.formulations.problems import LS, QP, Conic
+
+    from .conversions import convert
+
+    if isinstance(problems[0], LS):
+        return _stack_ls(problems)
+    stacked = _stack_qp(problems) if isinstance(problems[0], QP) else None
+    if stacked is not None:
+        return stacked
+    conics = [convert(p, (Conic,)) for p in problems]
+    P = None if conics[0].P is None else _shared_P(conics)
+    return Stacked(P, _stack(conics, "q"), _stack(conics, "b"), conics[0].cones,
+                   (_stack(conics, "A"),))

@@ -135,19 +135,29 @@ def conic_residuals(P, q, A, b, cones, z, y, *, check_dual_cone: bool) -> dict:
 
     ``inf`` where the answer or the multipliers are missing or not finite.
     """
+    A = np.asarray(A, float)
     z, y = np.asarray(z, float), np.asarray(y, float)
-    A, b, q = np.asarray(A, float), np.asarray(b, float), np.asarray(q, float)
     bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
-    z, y = np.where(bad[:, None], 0.0, z), np.where(bad[:, None], 0.0, y)
+    z, y = np.where(bad[:, None], 0.0, z), np.where(bad[:, None], np.nan, y)
     Az = z @ A.T if A.ndim == 2 else np.matmul(A, z[:, :, None])[:, :, 0]
     Aty = y @ A if A.ndim == 2 else np.matmul(y[:, None, :], A)[:, 0]
-    Pz = _Pz(P, z)
+    return residuals_from(_Pz(P, z), q, Az, Aty, b, cones, z, y,
+                          check_dual_cone=check_dual_cone)
+
+
+def residuals_from(Pz, q, Az, Aty, b, cones, z, y, *, check_dual_cone: bool) -> dict:
+    """:func:`conic_residuals` from the products ``P z``, ``A z`` and ``A'y`` (for
+    stacked data whose products are cheaper than dense ones, e.g. a QP's bound rows).
+    """
+    z, y, b, q = (np.asarray(v, float) for v in (z, y, b, q))
+    bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
     dual = np.abs(Pz + q + Aty).max(axis=1, initial=0.0)
     if check_dual_cone:
         dual = np.maximum(dual, dual_cone_violation(cones, y))
-    out = {"primal": cone_violation(cones, b - Az), "dual": dual,
-           "gap": np.abs(np.einsum("ti,ti->t", z, Pz) + np.einsum("ti,ti->t", q, z)
-                         + np.einsum("tm,tm->t", b, y))}
+    with np.errstate(invalid="ignore", over="ignore"):
+        out = {"primal": cone_violation(cones, b - Az), "dual": dual,
+               "gap": np.abs(np.einsum("ti,ti->t", z, Pz) + np.einsum("ti,ti->t", q, z)
+                             + np.einsum("tm,tm->t", b, y))}
     for value in out.values():
         value[bad] = np.inf
     return out

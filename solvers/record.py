@@ -17,10 +17,17 @@ from dataclasses import dataclass, field, fields
 from typing import ClassVar
 
 import numpy as np
-from cardan_forces.formulations.problems import RESIDUALS, Conic
+from cardan_forces.formulations.problems import LCP, LS, NLS, QP, RESIDUALS, residuals_batch
 
-from .conversions import convert
-from .optimality import measures, recover, unique_optimum
+from .optimality import (
+    conic_key,
+    recover,
+    stack_conic,
+    stacked_measures,
+    times_P,
+    unique_optimum,
+)
+from .qp_measures import residuals_from
 
 
 class Status(str, enum.Enum):
@@ -40,7 +47,7 @@ class Status(str, enum.Enum):
     @property
     def has_answer(self) -> bool:
         """Whether the record carries forces (``SOLVED`` or ``INACCURATE``)."""
-        return self in (Status.SOLVED, Status.INACCURATE)
+        return self in _ANSWERED
 
     @classmethod
     def answered(cls) -> tuple[str, ...]:
@@ -70,6 +77,8 @@ class Status(str, enum.Enum):
     def __format__(self, spec: str) -> str:
         return format(self.value, spec)
 
+
+_ANSWERED = frozenset({Status.SOLVED, Status.INACCURATE})
 
 ACCEPT = 1e-6
 """Largest relative residual (equilibrium, sign, complementarity, cone) of a solved record."""
@@ -197,6 +206,15 @@ class Record:
     ``"recovered"`` (least squares on the active constraints), ``"lcp"`` (the LCP's own
     ``w``) or ``"none"``; ``gap_kind`` whether ``gap`` is the duality gap or the
     objective gap to a given optimal value. ``checks_s`` is the time of these checks.
+
+    Two views of the same answer: ``optimality`` is the package's (relative to the
+    data, :mod:`.optimality`), ``solver_optimality`` the solver's (absolute primal,
+    dual residual and duality gap of the problem the backend received, with the
+    solver's own multipliers, :mod:`.qp_measures`; ``None`` where the solver gave no
+    multipliers or the problem has no conic form). ``solver_status`` is the status the
+    adapter reported, before the package judged it. Times (s): ``solve_s`` the solver's
+    own, ``setup_s`` conversion and setup, ``checks_s`` the checks, ``wall_s`` the
+    package's whole call (end to end; 0 for a record not made by ``solve``).
     """
 
     formulation: str
@@ -216,6 +234,9 @@ class Record:
     gap_kind: str = ""
     checks_s: float = 0.0
     y: np.ndarray | None = field(default=None, repr=False)
+    solver_status: Status | None = None
+    solver_optimality: Optimality | None = None
+    wall_s: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "status", Status(self.status))
@@ -255,6 +276,11 @@ class Record:
             "optimality": {k: _json_float(v) for k, v in self.optimality.items()},
             "duals": self.duals,
             "gap_kind": self.gap_kind,
+            "solver_status": None if self.solver_status is None else str(self.solver_status),
+            "solver_optimality": None if self.solver_optimality is None else {
+                k: _json_float(v) for k, v in self.solver_optimality.items()},
+            "checks_s": _json_float(self.checks_s),
+            "wall_s": _json_float(self.wall_s),
         }
 
 
@@ -297,28 +323,154 @@ def confirm(status, optimality: Optimality, duals: str):
     (Clarabel's ``AlmostSolved``, a stalled iteration) becomes ``solved`` where the
     package's own measures (primal, dual residual with the solver's or recovered
     multipliers, and gap) are all within :data:`ACCEPT`. Without multipliers nothing is
-    confirmed: the status stays as the solver and :func:`judge` left it.
+    confirmed: the status stays as the solver and :func:`judge` left it (``duals``:
+    where the multipliers came from, one source for all or one per instant).
     """
     status = np.asarray(status, object)
-    if duals == "none":
-        return status
-    return np.where((status == Status.INACCURATE) & optimality.confirms(), Status.SOLVED,
-                    status)
+    with_duals = np.asarray(duals, object) != "none"
+    return np.where((status == Status.INACCURATE) & optimality.confirms() & with_duals,
+                    Status.SOLVED, status)
 
 
 def _forces(problem, outcome: Outcome, n: int) -> tuple[np.ndarray, str]:
-    """The forces of an answered outcome, or NaN and why they are not to be had."""
+    """The forces of an answered outcome, or NaN and why they are not to be had
+    (non-finite forces are found by :func:`finalize_all` for all instants at once).
+    """
     try:
         if outcome.z is None:
             raise ValueError("solver returned no solution")
         x = np.asarray(problem.to_forces(np.asarray(outcome.z, float)), float)
         if x.shape != (n,):
             raise ValueError(f"forces have shape {x.shape}, expected {(n,)}")
-        if not np.all(np.isfinite(x)):
-            raise ValueError("solver returned NaN or inf")
     except Exception as exc:  # any bad output is a failure, never a crash
         return np.full(n, np.nan), f"{type(exc).__name__}: {exc}"
     return x, ""
+
+
+def _start(problem, outcome: Outcome) -> tuple[Status, np.ndarray, list[str]]:
+    """Status, forces and notes of one outcome before the checks."""
+    n = len(problem.checks.names)
+    notes = [outcome.message] if outcome.message else []
+    try:
+        status = Status(outcome.status)
+    except ValueError:
+        status, notes = Status.FAILED, [*notes, f"unknown status {outcome.status!r}"]
+    x = np.full(n, np.nan)
+    if status.has_answer:
+        x, why = _forces(problem, outcome, n)
+        if why:
+            status, notes = Status.FAILED, [*notes, why]
+    return status, x, notes
+
+
+def _groups(items, key) -> list[np.ndarray]:
+    """Indices of ``items`` grouped by ``key(item)``, groups in order of appearance."""
+    out: dict = {}
+    for k, item in enumerate(items):
+        out.setdefault(key(item), []).append(k)
+    return [np.array(v, int) for v in out.values()]
+
+
+def _checks_key(problem) -> tuple:
+    c = problem.checks
+    return np.shape(c.A), np.asarray(c.unilateral, bool).tobytes(), c.pairs, c.cones
+
+
+def _residuals(problems, X: list[np.ndarray]) -> dict[str, np.ndarray]:
+    """``ForceChecks.residuals`` of every answer, one ``residuals_batch`` per structure."""
+    out = {k: np.full(len(X), np.inf) for k in Residuals.KEYS}
+    for idx in _groups(problems, _checks_key):
+        c = problems[idx[0]].checks
+        found = residuals_batch(np.array([problems[k].checks.A for k in idx]),
+                                np.array([problems[k].checks.b for k in idx]),
+                                np.array([X[k] for k in idx]), c.unilateral, c.pairs,
+                                c.cones)
+        for key, value in found.items():
+            out[key][idx] = value
+    return out
+
+
+@dataclass
+class _Views:
+    """The optimality views of T answers, filled group by group."""
+
+    primal: np.ndarray
+    dual: np.ndarray
+    gap: np.ndarray
+    duals: np.ndarray
+    kinds: np.ndarray
+    y: list
+    solver: list  # the solver-optimality Optimality per instant, None where it does not apply
+
+
+def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_values=None,
+                 extra_setup_s=None, received=None, elapsed_s=None) -> list[Record]:
+    """Judge T outcomes at once: :func:`finalize` of each, with the residuals and the
+    optimality measured by one vectorized pass per problem structure, so the checks
+    cost microseconds per instant (``checks_s`` is the pass's time over T).
+
+    ``received[k]``: the problem the backend received (after conversion; default the
+    problem), for the solver-optimality view; ``elapsed_s[k]``: seconds spent before the
+    checks (conversion and solver), giving ``wall_s``. The other lists are per instant
+    as :func:`finalize`'s arguments.
+    """
+    began, T = time.perf_counter(), len(problems)
+    references = references if references is not None else [None] * T
+    optimal_values = optimal_values if optimal_values is not None else [None] * T
+    received = received if received is not None else problems
+    started = [_start(p, o) for p, o in zip(problems, outcomes)]
+    X = [x for _, x, _ in started]
+    found = _residuals(problems, X)
+    primal = np.max(np.array([found[k] for k in Residuals.KEYS]), axis=0)
+    for k in np.flatnonzero(~np.isfinite(primal)):  # an answer with NaN or inf forces
+        first, x, notes = started[k]
+        if first.has_answer and not np.all(np.isfinite(x)):
+            started[k] = (Status.FAILED, np.full(len(x), np.nan),
+                          [*notes, "ValueError: solver returned NaN or inf"])
+            X[k] = started[k][1]
+    status = judge([s for s, _, _ in started], primal)
+    answered = np.array([s in _ANSWERED for s in status], bool)
+    views = _optimality_all(problems, outcomes, answered, primal, optimal_values, received)
+    distance = [None if ref is None else _reference_distance(x, ref)
+                for x, ref in zip(X, references)]
+    measured = zip(views.primal.tolist(), views.dual.tolist(), views.gap.tolist())
+    optimality = [Optimality(*(None if math.isnan(v) else v for v in values))
+                  for values in measured]
+    for k in range(T):
+        if distance[k] is not None and unique_optimum(problems[k]):
+            optimality[k] = Optimality(**optimality[k], distance=distance[k])
+    confirmed = confirm(status, Optimality(primal=views.primal, dual=views.dual,
+                                           gap=views.gap), views.duals)
+    checks_s = (time.perf_counter() - began) / T if T else 0.0
+    return [_record(problems[k], solver, outcomes[k], started[k], status[k], confirmed[k],
+                    {key: float(found[key][k]) for key in Residuals.KEYS}, distance[k],
+                    optimality[k], views, k, checks_s,
+                    (extra_setup_s or [0.0] * T)[k], (elapsed_s or [0.0] * T)[k])
+            for k in range(T)]
+
+
+def _record(problem, solver, outcome, started, judged, confirmed, found, distance,
+            optimality, views, k, checks_s, extra_setup_s, elapsed_s) -> Record:
+    """Instant ``k``'s record from the checks of :func:`finalize_all`."""
+    first, x, notes = started
+    if judged != first:
+        worst = max(Residuals.KEYS, key=found.get)
+        notes = [*notes, f"{worst} residual {found[worst]:.1e} > {ACCEPT:.0e}"]
+    if confirmed != judged:
+        notes = [*notes, "confirmed by the package's primal, dual and gap measures"]
+    answered = Status(confirmed).has_answer
+    objective = outcome.objective if answered else None
+    return Record(
+        formulation=problem.formulation, solver=solver, status=confirmed, x=x,
+        names=tuple(problem.checks.names),
+        iterations=None if outcome.iterations is None else int(outcome.iterations),
+        setup_s=outcome.setup_s + extra_setup_s, solve_s=outcome.solve_s,
+        residuals=Residuals(**found, reference=distance), message="; ".join(notes),
+        z=None if outcome.z is None else np.asarray(outcome.z),
+        objective=None if objective is None else float(objective),
+        optimality=optimality, duals=str(views.duals[k]), gap_kind=str(views.kinds[k]),
+        checks_s=checks_s, y=views.y[k], solver_status=first,
+        solver_optimality=views.solver[k], wall_s=elapsed_s + checks_s)
 
 
 def finalize(
@@ -328,89 +480,94 @@ def finalize(
     reference: np.ndarray | None = None,
     extra_setup_s: float = 0.0,
     optimal_value: float | None = None,
+    received=None,
 ) -> Record:
     """Turn an adapter's outcome into a record, deciding the final status from residuals
     and measuring optimality (``optimal_value``: the problem's optimal objective from a
-    high-precision solve, for the objective gap of a record without solver duals).
+    high-precision solve, for the objective gap of a record without solver duals;
+    ``received``: the problem the backend received, for the solver-optimality view).
+    One instant of :func:`finalize_all`: one rule for every path.
     """
-    began = time.perf_counter()
-    names = problem.checks.names
-    notes = [outcome.message] if outcome.message else []
-    try:
-        status = Status(outcome.status)
-    except ValueError:
-        status, notes = Status.FAILED, [*notes, f"unknown status {outcome.status!r}"]
-    x = np.full(len(names), np.nan)
-    if status.has_answer:
-        x, why = _forces(problem, outcome, len(names))
-        if why:
-            status, notes = Status.FAILED, [*notes, why]
-    found = problem.checks.residuals(x)
-    worst = max(Residuals.KEYS, key=found.get)
-    decided = Status(judge(status, found[worst]).item())
-    if decided != status:
-        notes.append(f"{worst} residual {found[worst]:.1e} > {ACCEPT:.0e}")
-    status = decided
-    distance = None if reference is None else _reference_distance(x, reference)
-    residuals = Residuals(**found, reference=distance)
-    answered = status.has_answer
-    optimality, duals, gap_kind, y = _optimality(problem, outcome if answered else None,
-                                                 found[worst], optimal_value)
-    if reference is not None and unique_optimum(problem):
-        optimality = Optimality(**optimality, distance=distance)
-    confirmed = Status(confirm(status, optimality, duals).item())
-    if confirmed != status:
-        notes.append("confirmed by the package's primal, dual and gap measures")
-    objective = outcome.objective if answered else None
-    return Record(
-        formulation=problem.formulation,
-        solver=solver,
-        status=confirmed,
-        x=x,
-        names=tuple(names),
-        iterations=None if outcome.iterations is None else int(outcome.iterations),
-        setup_s=outcome.setup_s + extra_setup_s,
-        solve_s=outcome.solve_s,
-        residuals=residuals,
-        message="; ".join(notes),
-        z=None if outcome.z is None else np.asarray(outcome.z),
-        objective=None if objective is None else float(objective),
-        optimality=optimality,
-        duals=duals,
-        gap_kind=gap_kind,
-        checks_s=time.perf_counter() - began,
-        y=y,
-    )
+    return finalize_all([problem], solver, [outcome], references=[reference],
+                        optimal_values=[optimal_value], extra_setup_s=[extra_setup_s],
+                        received=None if received is None else [received])[0]
 
 
-def _optimality(problem, outcome, primal: float, optimal_value):
-    """``(measures, duals source, gap kind, multipliers)`` of an answered outcome
-    (``None``: none).
+def _optimality_all(problems, outcomes, answered, primal, optimal_values, received) -> _Views:
+    """The package's optimality (relative) and the solver's (absolute, where the
+    problem has a conic form) of T answers; NaN marks a measure a record has none of.
     """
-    from cardan_forces.formulations.problems import LCP, NLS
+    T = len(problems)
+    views = _Views(primal=primal.copy(), dual=np.full(T, np.nan), gap=np.full(T, np.nan),
+                   duals=np.full(T, "none", object), kinds=np.full(T, "", object),
+                   y=[None] * T, solver=[None] * T)
+    views.primal[~answered] = math.inf
+    views.dual[~answered], views.gap[~answered] = math.inf, math.inf
+    live = [k for k in range(T) if answered[k]]
+    for idx in _groups([problems[k] for k in live], _kind_key):
+        idx = np.array(live)[idx]
+        problem = problems[idx[0]]
+        if isinstance(problem, LCP):
+            _lcp(problems, outcomes, idx, views)
+        elif not isinstance(problem, NLS) and conic_key(problem) is not None:
+            _conic(problems, outcomes, idx, views, optimal_values, received)
+    return views
 
-    if outcome is None:
-        return Optimality(primal=math.inf, dual=math.inf, gap=math.inf), "none", "", None
-    if isinstance(problem, NLS):
-        return Optimality(primal=primal), "none", "", None
-    z = np.asarray(outcome.z, float)
-    if isinstance(problem, LCP):
-        w = np.asarray(problem.M, float) @ z + np.asarray(problem.q, float)
-        unit = max(float(np.abs(problem.q).max(initial=0.0)), float(np.abs(z).max(initial=0.0)),
-                   1e-300)
-        return Optimality(primal=primal, dual=max(0.0, -float(w.min(initial=0.0))) / unit,
-                          gap=abs(float(z @ w)) / unit ** 2), "lcp", "complementarity", w
-    conic = convert(problem, (Conic,))
-    if conic is None:
-        return Optimality(primal=primal), "none", "", None
-    source = "solver" if outcome.y is not None else "recovered"
-    y = np.asarray(outcome.y if source == "solver" else
-                   recover(conic.P, conic.q, conic.A, conic.b, conic.cones, z), float)
-    found = measures(conic.P, conic.q[None], np.asarray(conic.A, float)[None],
-                     np.asarray(conic.b, float)[None], conic.cones, z[None], y[None])
-    gap, kind = float(found["gap"][0]), "duality"
-    if source != "solver" and optimal_value is not None:
-        objective = float(found["objective"][0])
-        gap = abs(objective - optimal_value) / max(abs(optimal_value), 1e-300)
-        kind = "objective"
-    return (Optimality(primal=primal, dual=float(found["dual"][0]), gap=gap), source, kind, y)
+
+def _kind_key(problem) -> tuple:
+    if isinstance(problem, (LCP, NLS)):
+        return type(problem), len(problem.checks.names)
+    return "conic", conic_key(problem)
+
+
+def _lcp(problems, outcomes, idx, views: _Views) -> None:
+    """The LCP's own measures: ``w = Mz + q``, dual ``max(0, -min w)`` and gap
+    ``|z'w|``, relative to ``max(||q||_inf, ||z||_inf)`` (and its square).
+    """
+    M = np.array([np.asarray(problems[k].M, float) for k in idx])
+    q = np.array([np.asarray(problems[k].q, float) for k in idx])
+    z = np.array([np.asarray(outcomes[k].z, float) for k in idx])
+    w = np.einsum("tij,tj->ti", M, z) + q
+    unit = np.maximum.reduce([np.abs(q).max(axis=1, initial=0.0),
+                              np.abs(z).max(axis=1, initial=0.0), np.full(len(idx), 1e-300)])
+    views.dual[idx] = np.maximum(0.0, -w.min(axis=1, initial=0.0)) / unit
+    views.gap[idx] = np.abs(np.einsum("ti,ti->t", z, w)) / unit ** 2
+    views.duals[idx], views.kinds[idx] = "lcp", "complementarity"
+    for j, k in enumerate(idx):
+        views.y[k] = w[j]
+
+
+def _conic(problems, outcomes, idx, views: _Views, optimal_values, received) -> None:
+    """Optimality of answers to problems with one conic form (:func:`stack_conic`):
+    the package's relative measures with the solver's multipliers (recovered where it
+    gave none), and the solver's absolute ones (:func:`~.qp_measures.residuals_from`)
+    where it gave them.
+    """
+    st = stack_conic([problems[k] for k in idx])
+    m = st.b.shape[1]
+    z = np.array([outcomes[k].z for k in idx], float)
+    given = np.array([outcomes[k].y is not None and len(outcomes[k].y) == m for k in idx])
+    y = np.array([outcomes[k].y if given[j] else
+                  recover(st.Pk(j), st.q[j], st.A(j), st.b[j], st.cones, z[j])
+                  for j, k in enumerate(idx)], float).reshape(len(idx), m)
+    found = stacked_measures(st, z, y)
+    gap, kinds = found["gap"], np.full(len(idx), "duality", object)
+    best = np.array([np.nan if optimal_values[k] is None else optimal_values[k] for k in idx])
+    objective_gap = ~given & ~np.isnan(best)
+    gap = np.where(objective_gap, np.abs(found["objective"] - best)
+                   / np.maximum(np.abs(best), 1e-300), gap)
+    kinds[objective_gap] = "objective"
+    views.dual[idx], views.gap[idx], views.kinds[idx] = found["dual"], gap, kinds
+    views.duals[idx] = np.where(given, "solver", "recovered")
+    for j, k in enumerate(idx):
+        views.y[k] = y[j]
+    if given.any():
+        as_qp = isinstance(received[idx[0]], (LS, QP))
+        zs, ys = z[given], y[given]
+        sub = st if given.all() else st.take(np.flatnonzero(given))
+        solver = residuals_from(times_P(sub.P, zs), sub.q, sub.Az(zs), sub.Aty(ys), sub.b,
+                                st.cones, zs, ys, check_dual_cone=not as_qp)
+        for j, k in enumerate(idx[given]):
+            views.solver[k] = Optimality(primal=float(solver["primal"][j]),
+                                         dual=float(solver["dual"][j]),
+                                         gap=float(solver["gap"][j]))

@@ -27,7 +27,7 @@ import numpy as np
 from . import settings
 from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
 from .conversions import convert, reachable
-from .record import Outcome, Record, Status, failed_record, finalize
+from .record import Outcome, Record, Status, finalize_all
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
             "numpy_batched_", "moreau_", "reduced_")
@@ -156,6 +156,55 @@ def backends_for(problem) -> list[str]:
     return names
 
 
+@dataclass(frozen=True)
+class Pending:
+    """A solve whose checks are still to come (:func:`solve_unchecked`): the adapter's
+    outcome, the problem it received and what the checks need. :func:`check` turns a
+    list of them into records in one vectorized pass (a few microseconds per instant),
+    so a loop over instants pays the checks once, not per call.
+    """
+
+    problem: object
+    solver: str
+    outcome: Outcome
+    received: object
+    reference: np.ndarray | None
+    optimal_value: float | None
+    convert_s: float
+    elapsed_s: float
+
+    @property
+    def status(self) -> Status:
+        """The provisional status: the solver's, ``failed`` for an answer without a
+        finite ``z`` (the checks may still turn ``solved`` into ``inaccurate`` or back).
+        """
+        try:
+            status = Status(self.outcome.status)
+        except ValueError:
+            return Status.FAILED
+        z = self.outcome.z
+        finite = z is not None and bool(np.all(np.isfinite(np.asarray(z, float))))
+        return status if finite or not status.has_answer else Status.FAILED
+
+    @property
+    def z(self) -> np.ndarray | None:
+        """The solver's variable."""
+        return self.outcome.z
+
+
+def check(pending: list[Pending]) -> list[Record]:
+    """The package-judged records of deferred solves, as :func:`solve` returns them."""
+    if not pending:
+        return []
+    return finalize_all([p.problem for p in pending], pending[0].solver,
+                        [p.outcome for p in pending],
+                        references=[p.reference for p in pending],
+                        optimal_values=[p.optimal_value for p in pending],
+                        extra_setup_s=[p.convert_s for p in pending],
+                        received=[p.received for p in pending],
+                        elapsed_s=[p.elapsed_s for p in pending])
+
+
 def solve(
     problem,
     solver: str,
@@ -175,18 +224,33 @@ def solve(
     ``options`` go to the backend unchanged and override ``tol``. Solver failures of any
     kind (exceptions, NaN, iteration limits) come back as records; only an unknown
     backend (:class:`SolverNotFound`) or a problem class it cannot take
-    (:class:`UnsupportedProblem`) raise.
+    (:class:`UnsupportedProblem`) raise. :func:`solve_unchecked` and :func:`check` do
+    the same in two steps, the checks of many instants at once.
     """
+    return check([solve_unchecked(problem, solver, tol, initvals, reference, optimal_value,
+                                  **options)])[0]
+
+
+def solve_unchecked(problem, solver: str, tol: float | None = None,
+                    initvals: np.ndarray | None = None, reference: np.ndarray | None = None,
+                    optimal_value: float | None = None, **options) -> Pending:
+    """:func:`solve` without the checks: the backend's outcome, for :func:`check`."""
     backend = get(solver)
     if backend.solve is None or not reachable(type(problem), backend.accepts):
         raise UnsupportedProblem(f"{solver} takes {[c.__name__ for c in backend.accepts]}, "
                                  f"not {type(problem).__name__}")
     start = time.perf_counter()
+
+    def pending(outcome, received, convert_s=0.0):
+        return Pending(problem, solver, outcome, received, reference, optimal_value,
+                       convert_s, time.perf_counter() - start)
+
     try:
         converted = convert(problem, backend.accepts)
     except Exception as exc:
-        return failed_record(problem, solver, f"conversion failed: {type(exc).__name__}: {exc}",
-                             setup_s=time.perf_counter() - start, reference=reference)
+        return pending(Outcome(Status.FAILED, None, setup_s=time.perf_counter() - start,
+                               message=f"conversion failed: {type(exc).__name__}: {exc}"),
+                       problem)
     if not backend.supports(converted):
         raise UnsupportedProblem(f"{solver} does not support this {type(converted).__name__}")
     convert_s = time.perf_counter() - start
@@ -198,15 +262,13 @@ def solve(
             raise
         except BaseException as exc:  # Rust panics (pyo3) derive from BaseException
             elapsed = time.perf_counter() - start
-            return failed_record(problem, solver, f"{type(exc).__name__}: {exc}",
-                                 setup_s=convert_s, solve_s=elapsed - convert_s,
-                                 reference=reference)
+            return pending(Outcome(Status.FAILED, None, message=f"{type(exc).__name__}: {exc}",
+                                   setup_s=convert_s, solve_s=elapsed - convert_s), converted)
     notes = dict.fromkeys(str(w.message) for w in caught)
     if notes:
         message = "; ".join(filter(None, [outcome.message, *notes]))
         outcome = dataclasses.replace(outcome, message=message)
-    return finalize(problem, solver, outcome, reference=reference, extra_setup_s=convert_s,
-                    optimal_value=optimal_value)
+    return pending(outcome, converted, convert_s)
 
 
 def batch_backends(batch) -> list[str]:

@@ -13,6 +13,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import bench, bench_metrics, bench_report, bench_run, study
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers import SolverNotFound, failed_record, qp_measures, registry, solve
+from cardan_forces.solvers.record import Outcome
 
 
 def _args(*argv):
@@ -143,8 +144,18 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
             return failed_record(problem, solver, "injected failure")
         return real(problem, solver, **kwargs)
 
+    unchecked = registry.solve_unchecked
+
+    def lemke_fails_unchecked(problem, solver, **kwargs):  # the per-instant loop's solve
+        if solver == "lcp-lemke":
+            return registry.Pending(problem, solver, Outcome("failed", None,
+                                                             message="injected failure"),
+                                    problem, None, None, 0.0, 0.0)
+        return unchecked(problem, solver, **kwargs)
+
     monkeypatch.setattr(bench_run, "solve", lemke_fails)
-    monkeypatch.setattr(study, "solve", lemke_fails)  # the per-instant loop's solve
+    monkeypatch.setattr(study, "solve", lemke_fails)
+    monkeypatch.setattr(study, "solve_unchecked", lemke_fails_unchecked)
     args = _args("--quick", "--json", "--out", str(tmp_path))
     assert args.func(args) == 0
     out = json.loads(capsys.readouterr().out)

@@ -30,7 +30,8 @@ from cardan_forces.solvers.reference_problems import references
 
 REFS = {ref.name: ref for ref in references()}
 JSON_KEYS = {"formulation", "solver", "status", "residuals", "forces", "setup_s", "solve_s",
-             "iterations", "message", "optimality", "duals", "gap_kind"}
+             "iterations", "message", "optimality", "duals", "gap_kind", "solver_status",
+             "solver_optimality", "checks_s", "wall_s"}
 
 
 def _nan_ls():

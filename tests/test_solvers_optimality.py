@@ -209,3 +209,74 @@ def test_the_batched_path_follows_the_same_rule():
         assert result.record(k).status == alone.status
         for key, value in alone.optimality.items():
             assert result.optimality[key][k] == pytest.approx(value, rel=1e-9, abs=1e-18)
+
+
+def _variants(k: int):
+    """Constructed problems of three classes whose numbers change with ``k`` (the same
+    structure), and answers near their optima with the multipliers perturbed."""
+    qp = _projection()
+    lifted = QP(checks=qp.checks, formulation="ref", P=(1 + k) * np.eye(3), q=qp.q - 0.1 * k,
+                A=qp.A, b=qp.b + 0.2 * k, lb=np.array([0.0, -np.inf, 0.0]),
+                ub=np.array([np.inf, 3.0, np.inf]))
+    cone = Conic(checks=_checks(np.eye(3), [1.0, 0.5, 0.5], [False] * 3), formulation="ref",
+                 P=np.eye(3), q=np.array([0.0, 1.0 + k, -1.0]), A=-np.eye(3),
+                 b=np.zeros(3), cones=(("soc", 3),))
+    return lifted, cone
+
+
+def test_checks_of_many_instants_at_once_equal_each_instant_alone():
+    """finalize_all stacks problems per structure (bounds as rows never written out);
+    every record must equal the one finalize gives for its instant alone, for QPs with
+    bounds, a second-order cone, answers without multipliers (recovered) or with NaN."""
+    from cardan_forces.solvers.record import finalize_all
+
+    rng = np.random.default_rng(3)
+    problems, outcomes, refs = [], [], []
+    for k in range(4):
+        for problem in _variants(k):
+            conic = registry.convert(problem, (Conic,))
+            found = solve(problem, "clarabel", tol=1e-10)
+            z = found.z if isinstance(problem, Conic) else found.x
+            y = None if k == 1 else found.y + 1e-4 * rng.standard_normal(len(conic.b))
+            z = np.full_like(z, np.nan) if k == 3 and isinstance(problem, QP) else z
+            problems.append(problem)
+            outcomes.append(Outcome("solved" if k != 2 else "inaccurate", z, y=y))
+            refs.append(found.x)
+    together = finalize_all(problems, "hand", outcomes, references=refs)
+    for problem, outcome, ref, record in zip(problems, outcomes, refs, together):
+        alone = finalize(problem, "hand", outcome, reference=ref)
+        assert (record.status, record.duals, record.gap_kind) == (alone.status, alone.duals,
+                                                                  alone.gap_kind)
+        assert dict(record.optimality) == pytest.approx(dict(alone.optimality), rel=1e-12)
+        assert dict(record.residuals) == pytest.approx(dict(alone.residuals), rel=1e-12)
+        assert (record.solver_optimality is None) == (alone.solver_optimality is None)
+    assert {r.duals for r in together} >= {"solver", "recovered", "none"}
+
+
+def test_stacked_conic_form_equals_each_conversion():
+    from cardan_forces.solvers.optimality import stack_conic
+
+    problems = [_variants(k)[0] for k in range(3)]
+    stacked = stack_conic(problems)
+    z, y = np.random.default_rng(0).standard_normal((3, 3)), np.ones((3, 4))
+    for k, problem in enumerate(problems):
+        conic = problem.as_conic()
+        assert np.array_equal(stacked.A(k), conic.A)
+        assert np.array_equal(stacked.b[k], conic.b)
+        assert stacked.cones == conic.cones
+        assert np.allclose(stacked.Az(z)[k], conic.A @ z[k], rtol=0, atol=1e-14)
+        assert np.allclose(stacked.Aty(y)[k], conic.A.T @ y[k], rtol=0, atol=1e-14)
+
+
+def test_every_record_carries_the_solver_view_of_the_problem_it_received():
+    """The record's solver optimality is qp_measures.solver_optimality of the received
+    problem with the solver's multipliers (absolute), beside the package's relative
+    measures; the adapter's own status is kept."""
+    from cardan_forces.solvers import qp_measures
+
+    problem = _variants(1)[0]
+    record = solve(problem, "clarabel")
+    expected = qp_measures.solver_optimality(problem.as_conic(), record.z, record.y)
+    assert record.solver_status == "solved"
+    assert dict(record.solver_optimality) == pytest.approx(expected, rel=1e-12, abs=1e-300)
+    assert record.wall_s >= record.solve_s + record.checks_s
