@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 import math
 import sys
 from collections.abc import Callable
@@ -37,7 +36,7 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
 from cardan_forces.experiments import progress
-from cardan_forces.experiments.environment import json_number, number_text
+from cardan_forces.experiments.environment import json_number, json_text, number_text
 from cardan_forces.experiments.study import History, solve_over_time
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable as NotApplicableProblem
@@ -512,11 +511,11 @@ def run(args) -> int:
         write_md(rows, out / "hard.md", settings, cases, skipped, len(scene.joints))
     failed = 1 if any(_verdict(r) == "FAIL" for r in rows) else 0  # unexpected failures
     if args.json:
-        print(json.dumps({"cases": [r.to_json() for r in runs],
-                          "not_applicable": [dataclasses.asdict(c) for c in skipped],
-                          "failed": [{"case": r["case"], "formulation": r["formulation"],
-                                      "why": r["why"]} for r in rows
-                                     if _verdict(r) == "FAIL"]}, indent=2))
+        print(json_text({"cases": [r.to_json() for r in runs],
+                         "not_applicable": [dataclasses.asdict(c) for c in skipped],
+                         "failed": [{"case": r["case"], "formulation": r["formulation"],
+                                     "why": r["why"]} for r in rows
+                                    if _verdict(r) == "FAIL"]}))
         return failed
     print(settings)
     print("\n".join(_table(rows)))

@@ -18,7 +18,6 @@ and the size of the grid (:data:`MAX_POINTS`, :data:`MAX_SOLVES`).
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 import os
 import sys
@@ -33,7 +32,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import builtin_names, load_scene
 from cardan_forces.driveline.scene import LIMITS, MAX_ARTICULATION_DEG, Scene, SceneError
-from cardan_forces.experiments.environment import number_text
+from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.study import NoBackend, default_backend
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
@@ -427,9 +426,9 @@ def run(args) -> int:
     for message in result.lost:
         print(f"sweep: lost {message}", file=sys.stderr)
     if args.json:
-        print(json.dumps({"settings": _settings(study), "backend": result.backend,
-                          "cost": costs(result.rows),
-                          "rows": [_typed(r) for r in result.rows]}, indent=2))
+        print(json_text({"settings": _settings(study), "backend": result.backend,
+                         "cost": costs(result.rows),
+                         "rows": [_typed(r) for r in result.rows]}))
     else:
         c = costs(result.rows)
         print(f"{_settings(study)}\ncost per point: mean {number_text(c['mean_s'], '.3f')} "
