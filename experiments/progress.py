@@ -9,8 +9,9 @@ heartbeat instead). stdout, the command's answer, is never touched.
 
 from __future__ import annotations
 
+import contextlib
 import sys
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from tqdm import tqdm
 
@@ -44,3 +45,18 @@ def bar(items: Iterable, desc: str, total: int | None = None, unit: str = "it") 
         return items
     return tqdm(items, desc=desc, total=total, unit=unit, file=sys.stderr, leave=False,
                 dynamic_ncols=True, mininterval=0.5)
+
+
+@contextlib.contextmanager
+def ticks(total: int, desc: str, unit: str = "it",
+          lines: Callable[[str], None] | None = None):
+    """A progress callback for a study-layer loop that calls it once per item (as
+    ``interval_history`` does per instant): a bar of ``total`` items when :func:`shown`,
+    else ``lines`` (the plain progress lines, or ``None``) unchanged.
+    """
+    if not shown():
+        yield lines
+        return
+    with tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False,
+              dynamic_ncols=True, mininterval=0.5) as counter:
+        yield lambda _message: counter.update()

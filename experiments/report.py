@@ -6,9 +6,11 @@ component of the operator, the member ``positive`` picks (least force, end faces
 pushing only), the interval ``[min, max]`` over every rigid solution with end faces
 >= 0 (two LPs per component that is not determinate, the band; a determinate one's
 interval is its value), and whether the component is determinate.
-Written as ``report.csv`` (long format), ``report.png`` (one panel per contact: a
-bearing, a slip joint, a trunnion, an end face) and ``report.md`` (the determinacy
-table and the named modes).
+Written as ``report.csv`` (long format, with each component's unit), ``report.png``
+(and ``.svg``/``.pdf`` with ``--format``: one panel per contact and unit, a slip
+joint's forces in N apart from its moments in N m; each component's legend entry says
+whether it is determinate or which side of its set is open) and ``report.md`` (the
+determinacy table and the named modes).
 """
 
 from __future__ import annotations
@@ -16,15 +18,18 @@ from __future__ import annotations
 import csv
 import math
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
-from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.equilibrium import Link, Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.release import named_modes
+from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import number_text
+from cardan_forces.experiments.images import format_list, save
 from cardan_forces.experiments.study import interval_history, solve_over_time
 
 INSTANTS = 41
@@ -41,7 +46,8 @@ def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
     """
     chosen = solve_over_time(op, SELECTION)
     say = None if progress is None else (lambda m: progress(f"report: {m}"))
-    sets = interval_history(op, progress=say)
+    with bars.ticks(len(op.t), "report: intervals", "instant", say) as tick:
+        sets = interval_history(op, progress=tick)
     return {"value": chosen.forces, "min": sets.min, "max": sets.max,
             "determinate": sets.determinate}
 
@@ -53,59 +59,146 @@ def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s", "component", "contact", "kind", f"{SELECTION}_N", "min_N", "max_N",
-                    "determinate"])
+                    "determinate", "unit"])
         for c in op.contacts:
-            for j in c.columns:
+            for j, unit in zip(c.columns, c.units or ("N",) * len(c.columns)):
                 for i, t in enumerate(op.t):
                     w.writerow([f"{t:.6g}", op.names[j], c.name, c.kind,
                                 *(number_text(h[k][i, j], ".9g", "")
                                   for k in ("value", "min", "max")),
-                                bool(h["determinate"][i, j])])
+                                bool(h["determinate"][i, j]), unit])
 
 
-def write_png(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
-    """One panel per contact: the solution set shaded where both its ends are finite, a
-    finite end dashed where the other is not; an unbounded side is said in the title
-    rather than shaded to the panel's edge.
+UNIT_AXIS = {"N": "force [N]", "N m": "moment [N m]"}
+"""The y label of a panel by the unit of its components."""
+
+KIND_WORDS = {"bearing-locating": "locating bearing", "bearing-floating": "floating bearing",
+              "slip": "slip joint", "trunnion-radial": "trunnion, radial",
+              "end-face": "end face"}
+
+
+@dataclass(frozen=True)
+class Panel:
+    """One panel: the components of one contact that share a unit (a slip joint's
+    forces, N, and moments, N m, get one each, so a 2500 N m torque does not flatten a
+    shear of tens of newtons).
     """
+
+    contact: Link
+    unit: str
+    columns: tuple[int, ...]
+
+    @property
+    def title(self) -> str:
+        kind = KIND_WORDS.get(self.contact.kind, self.contact.kind)
+        split = len(set(self.contact.units)) > 1
+        what = {"N": ", forces", "N m": ", moments"}[self.unit] if split else ""
+        return f"{self.contact.name} ({kind}{what})"
+
+
+def panels(op: Operator) -> list[Panel]:
+    """The report's panels, contact by contact, one per unit of its components."""
+    out = []
+    for c in op.contacts:
+        units = c.units or ("N",) * len(c.columns)
+        for unit in dict.fromkeys(units):
+            out.append(Panel(c, unit, tuple(j for j, u in zip(c.columns, units) if u == unit)))
+    return out
+
+
+def set_words(lo: np.ndarray, hi: np.ndarray, determinate: np.ndarray) -> str:
+    """One component's rigid solution set over the instants, in words: ``determinate``
+    (one value, every instant), ``bounded`` (a band) or which side is open, and at how
+    many instants where not at all of them. ``lo``, ``hi``: its ends (NaN: open).
+    """
+    n = len(lo)
+    if determinate.all():
+        return "determinate"
+    below, above = int(np.sum(~np.isfinite(lo))), int(np.sum(~np.isfinite(hi)))
+    if not below and not above:
+        return "bounded" if not determinate.any() else \
+            f"bounded, determinate at {int(determinate.sum())} of {n}"
+
+    def side(count: int, word: str) -> str:
+        return word if count == n else f"{word} at {count} of {n}"
+
+    if below == above == n:
+        return "open below and above"
+    return "open " + " and ".join(side(k, w) for k, w in ((below, "below"), (above, "above"))
+                                  if k)
+
+
+def _draw(ax, op: Operator, h: dict[str, np.ndarray], panel: Panel) -> None:
+    """One panel: each component's selected value as a line, its rigid set in the same
+    colour: shaded where both ends are finite; where one side is open, the finite end
+    dashed and hatched from it to the axis edge on the open side. The y range holds the
+    lines and every finite end.
+    """
+    parts = []
+    for k, j in enumerate(panel.columns):
+        lo, hi = h["min"][:, j], h["max"][:, j]
+        both = np.isfinite(lo) & np.isfinite(hi)
+        name = op.names[j][len(panel.contact.name) + 1:] or "force"
+        ax.plot(op.t, h["value"][:, j], lw=1.4, color=f"C{k}", zorder=3,
+                label=f"{name}: {set_words(lo, hi, h['determinate'][:, j])}")
+        ax.fill_between(op.t, np.where(both, lo, np.nan), np.where(both, hi, np.nan),
+                        color=f"C{k}", alpha=0.2, lw=0, zorder=1)
+        parts.append((f"C{k}", both, lo, hi, h["value"][:, j]))
+    low, high = _limits([v for _, _, *curves in parts for v in curves])
+    for colour, both, lo, hi, _ in parts:
+        for bound, edge in ((lo, high), (hi, low)):  # a finite lower end: open above
+            one_sided = np.where(np.isfinite(bound) & ~both, bound, np.nan)
+            if np.isfinite(one_sided).any():
+                ax.plot(op.t, one_sided, ls="--", lw=1.1, color=colour, zorder=2)
+                ax.fill_between(op.t, one_sided, np.where(np.isfinite(one_sided), edge, np.nan),
+                                facecolor="none", edgecolor=colour, hatch="///", alpha=0.25,
+                                lw=0, zorder=0)
+    ax.set_ylim(low, high)
+    ax.set_title(panel.title, fontsize=9)
+    ax.set_xlabel("time t [s]", fontsize=8)
+    ax.set_ylabel(UNIT_AXIS.get(panel.unit, f"[{panel.unit}]"), fontsize=8)
+    ax.tick_params(labelsize=7)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=6.5, loc="best", framealpha=0.85)
+
+
+def _limits(curves: list[np.ndarray]) -> tuple[float, float]:
+    """A y range holding every finite value of ``curves``, with a margin (8 % of the
+    range, at least 5 % of the largest magnitude, so a flat line is not drawn as noise).
+    """
+    finite = np.concatenate([c[np.isfinite(c)] for c in curves] + [np.zeros(0)])
+    if not finite.size:
+        return -1.0, 1.0
+    low, high = float(finite.min()), float(finite.max())
+    margin = max(0.08 * (high - low), 0.05 * max(abs(low), abs(high)), 1e-6)
+    return low - margin, high + margin
+
+
+def write_figure(op: Operator, h: dict[str, np.ndarray], stem: Path,
+                 formats=("png",)) -> list[Path]:
+    """Every :func:`panels` panel in a grid, written as ``stem.<format>`` per format."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    contacts = op.contacts
-    cols = 4
-    rows = math.ceil(len(contacts) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 2.6 * rows), squeeze=False)
-    for ax, c in zip(axes.ravel(), contacts):
-        lines = [ax.plot(op.t, h["value"][:, j], lw=1.2,
-                         label=op.names[j][len(c.name) + 1:] or "force")[0] for j in c.columns]
-        bottom, top = ax.get_ylim()
-        sides = set()
-        for line, j in zip(lines, c.columns):
-            lo, hi = h["min"][:, j], h["max"][:, j]
-            finite_lo, finite_hi = np.isfinite(lo), np.isfinite(hi)
-            sides |= {"below"} if not finite_lo.all() else set()
-            sides |= {"above"} if not finite_hi.all() else set()
-            both = finite_lo & finite_hi
-            ax.fill_between(op.t, np.where(both, lo, np.nan), np.where(both, hi, np.nan),
-                            color=line.get_color(), alpha=0.15, lw=0)
-            for bound, finite in ((lo, finite_lo), (hi, finite_hi)):
-                ax.plot(op.t, np.where(finite & ~both, bound, np.nan), ls="--", lw=0.8,
-                        color=line.get_color())
-        ax.set_ylim(bottom, top)
-        words = " and ".join(sorted(sides, reverse=True))
-        ax.set_title(f"{c.name} ({c.kind})" + (f", set unbounded {words}" if sides else ""),
-                     fontsize=8)
-        ax.tick_params(labelsize=7)
-        ax.legend(fontsize=6)
-    for ax in axes.ravel()[len(contacts):]:
+    grid = panels(op)
+    cols = min(4, len(grid))
+    rows = math.ceil(len(grid) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.1 * rows + 0.8),
+                             squeeze=False, layout="constrained")
+    for ax, panel in zip(axes.ravel(), grid):
+        _draw(ax, op, h, panel)
+    for ax in axes.ravel()[len(grid):]:
         ax.set_visible(False)
-    fig.suptitle(f"{op.scene.name}: {SELECTION} (lines) and the rigid solution set (bands), "
-                 "N / N m against t (s)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1, 0.97))
-    fig.savefig(path, dpi=100)
+    fig.suptitle(f"{op.scene.name}: the {SELECTION} selection (lines) and the rigid solution "
+                 "set of each component (same colour): shaded where both ends are finite,\n"
+                 "the finite end dashed where one side is open; each legend says per "
+                 "component whether it is determinate or which side of its set is open",
+                 fontsize=10)
+    paths = save(fig, stem, formats, dpi=100)
     plt.close(fig)
+    return paths
 
 
 def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path) -> None:
@@ -127,19 +220,20 @@ def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path) -> None:
 
 
 def run_report(scene_spec: str, out: Path, instants: int = INSTANTS,
-               progress=None) -> list[Path]:
-    """Write ``report.csv``, ``report.png`` and ``report.md`` for one scene into ``out``."""
+               progress=None, formats=("png",)) -> list[Path]:
+    """Write ``report.csv``, ``report.<format>`` for each of ``formats`` and
+    ``report.md`` for one scene into ``out``; their paths.
+    """
     scene = load_scene(scene_spec)
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
     motion = simulate(scene, t)
     op = build_operator(motion)
     h = histories(op, progress)
     out.mkdir(parents=True, exist_ok=True)
-    paths = [out / "report.csv", out / "report.png", out / "report.md"]
-    write_csv(op, h, paths[0])
-    write_png(op, h, paths[1])
-    write_md(op, h, named_modes(motion, 0, op), paths[2])
-    return paths
+    write_csv(op, h, out / "report.csv")
+    images = write_figure(op, h, out / "report", formats)
+    write_md(op, h, named_modes(motion, 0, op), out / "report.md")
+    return [out / "report.csv", *images, out / "report.md"]
 
 
 def add_parser(subparsers) -> None:
@@ -150,6 +244,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", default="results/report", help="output folder")
     p.add_argument("--instants", type=_count, default=INSTANTS,
                    help=f"instants over the scene's window (default {INSTANTS})")
+    p.add_argument("--format", type=format_list, default=("png",),
+                   help="comma-separated image formats (default png; any of png,svg,pdf)")
     p.set_defaults(func=run)
 
 
@@ -167,7 +263,8 @@ def _count(text: str) -> int:
 
 def run(args) -> int:
     """Write the report; the paths written on stdout, progress on stderr."""
-    for path in run_report(args.scene, Path(args.out), args.instants,
-                           progress=lambda m: print(m, file=sys.stderr, flush=True)):
+    say = None if bars.quiet() else (lambda m: print(m, file=sys.stderr, flush=True))
+    for path in run_report(args.scene, Path(args.out), args.instants, progress=say,
+                           formats=args.format):
         print(path)
     return 0
