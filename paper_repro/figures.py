@@ -35,6 +35,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from cardan_forces.driveline.dynamics import Motion  # noqa: E402
 from cardan_forces.driveline.equilibrium import Operator  # noqa: E402
+from cardan_forces.experiments.images import save  # noqa: E402
 from scipy.ndimage import uniform_filter1d  # noqa: E402
 from scipy.signal import savgol_filter  # noqa: E402
 
@@ -47,8 +48,6 @@ keeps the intermediate shaft's peaks (14.94 vs the rigid 14.98 rad/s after 4 s, 
 0.1 s moving average gives 14.33) while taking out the rattle."""
 PENALTY = "penalty"
 """The method name of the penalty-contact simulation in histories and columns."""
-FORMATS = ("png", "svg", "pdf")
-"""Image formats the figures can be written in."""
 METHOD_LABELS = {
     "paper": "the paper's method (as computed here; end faces at the rim, eqs. 33-36)",
     "min_max": "min_max (comparison only: both end faces of a pair may push)",
@@ -286,9 +285,7 @@ def _plot_grid(csv: Path, panels: list[Panel], title: str, ncols: int,
                fontsize=7.5, frameon=False)
     rows = -(-len(handles) // ncol)
     fig.tight_layout(rect=(0, (0.12 + 0.2 * rows) / fig.get_figheight(), 1, 1))
-    paths = [csv.with_suffix(f".{fmt}") for fmt in formats]
-    for path in paths:
-        fig.savefig(path, dpi=110)
+    paths = save(fig, csv.with_suffix(""), formats, dpi=110)
     plt.close(fig)
     return paths
 

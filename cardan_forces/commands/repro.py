@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from cardan_forces.experiments.images import format_list
+
 from . import UsageError, progress
 
 FIGURES = (11, 12, 13, 14, 15)
@@ -21,7 +23,7 @@ def add_parser(subparsers) -> None:
                          "to the scene, e.g. the paper's method on a slip joint")
     rp.add_argument("--no-penalty", dest="penalty", action="store_false",
                     help="leave out the penalty-contact simulation (the slow part)")
-    rp.add_argument("--format", type=_words, default=("png",),
+    rp.add_argument("--format", type=format_list, default=("png",),
                     help="comma-separated image formats (default png; any of png,svg,pdf)")
     rp.add_argument("--fig15-scene", action="append",
                     help="scene of Fig. 15 (repeatable; default both paper-fig15, gravity "
@@ -43,7 +45,6 @@ def _check(words: tuple[str, ...], allowed: tuple[str, ...], flag: str) -> tuple
 
 
 def run(args) -> int:
-    from cardan_forces.paper_repro.figures import FORMATS
     from cardan_forces.paper_repro.repro import ALL_METHODS, FIG15_SCENES, run_repro
 
     figures = sorted(set(args.fig or FIGURES))
@@ -53,5 +54,5 @@ def run(args) -> int:
         raise UsageError("--methods penalty with --no-penalty: nothing left to draw")
     run_repro(args.scene, figures, args.out, args.quick,
               tuple(args.fig15_scene or FIG15_SCENES), progress=progress, methods=methods,
-              formats=_check(args.format, FORMATS, "--format"))
+              formats=args.format)
     return 0
