@@ -175,6 +175,11 @@ class PenaltyResult:
     def success(self) -> bool:
         return self.status == 0
 
+    @property
+    def integrator(self) -> str:
+        """Who integrated: ``numba-BDF`` (compiled end to end) or ``scipy-<method>``."""
+        return "numba-BDF" if self.method == COMPILED else f"scipy-{self.method}"
+
     def cost_text(self) -> str:
         """Where the simulation's time went, in one sentence for a report: seconds per
         simulated second (wall and CPU), steps, and per step what was measured; the

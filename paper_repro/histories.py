@@ -68,5 +68,5 @@ def penalty_history(result: PenaltyResult, names: tuple[str, ...]) -> History:
     forces = np.column_stack([result.forces[n] for n in names])
     statuses = tuple(Status.SOLVED if np.all(np.isfinite(row)) else Status.FAILED
                      for row in forces)
-    return History("penalty", f"scipy-{result.method}", np.asarray(result.t), forces, statuses,
+    return History("penalty", result.integrator, np.asarray(result.t), forces, statuses,
                    result.wall_s)

@@ -199,6 +199,7 @@ def test_compiled_integration_follows_the_numpy_reference(scene):
     compiled = simulate_penalty(scene, t)
     reference = simulate_penalty(scene, t, method="LSODA", kernel="numpy")
     assert compiled.method == penalty.COMPILED and compiled.success and reference.success
+    assert (compiled.integrator, reference.integrator) == ("numba-BDF", "scipy-LSODA")
     assert np.abs(compiled.omega - reference.omega).max() <= 1e-4 * np.abs(reference.omega).max()
     assert np.abs(compiled.penetration - reference.penetration).max() <= 3e-7
     assert compiled.nsteps > 0 and compiled.nfev >= compiled.nsteps
