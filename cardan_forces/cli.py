@@ -3,9 +3,9 @@
 Every command is a module with ``add_parser(subparsers)`` and ``run(args) -> exit
 code``: ``scene``, ``sets``, ``solvers``, ``solve``, ``repro`` in
 :mod:`cardan_forces.commands`; ``bench``, ``hard``, ``sweep``, ``report``,
-``secondary`` in :mod:`cardan_forces.experiments`. A command prints its answer on
-stdout (JSON through the one encoder, ``experiments.environment.json_text``: strict,
-non-finite numbers as ``null``) and its progress on stderr.
+``secondary``, ``engine`` in :mod:`cardan_forces.experiments`. A command prints its
+answer on stdout (JSON through the one encoder, ``experiments.environment.json_text``:
+strict, non-finite numbers as ``null``) and its progress on stderr.
 
 Here, around every command: numeric options checked against their ranges before any
 work; errors in the user's input (scene or arguments) end with one line ``cardan:
@@ -39,13 +39,13 @@ from cardan_forces.commands import solve as solve_command
 from cardan_forces.commands import solvers as solvers_command
 from cardan_forces.driveline.dynamics import DynamicsError
 from cardan_forces.driveline.scene import LIMITS, SceneError
-from cardan_forces.experiments import bench, export, hard, report, secondary, sweep
+from cardan_forces.experiments import bench, engine, export, hard, report, secondary, sweep
 from cardan_forces.experiments import progress as progress_bars
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import SolverNotFound
 
 COMMANDS = (scene_command, sets_command, solvers_command, solve_command, repro_command,
-            bench, export, hard, sweep, report, secondary)
+            bench, export, hard, sweep, report, secondary, engine)
 """The command modules, in the order ``cardan --help`` lists them."""
 
 HEARTBEAT_S = 30.0

@@ -360,10 +360,20 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def _number(text: str, kind=float):
+    """``text`` as a ``kind`` (an argparse type error in one line otherwise)."""
+    import argparse
+
+    try:
+        return kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+
+
 def _stop(text: str) -> float:
     import argparse
 
-    value = float(text)
+    value = _number(text)
     if not 0.0 < value <= 1e6:
         raise argparse.ArgumentTypeError(f"a time in (0, 1e6] s, got {text}")
     return value
@@ -372,7 +382,7 @@ def _stop(text: str) -> float:
 def _instants(text: str) -> int:
     import argparse
 
-    value = int(text)
+    value = _number(text, int)
     if not 2 <= value <= 1001:
         raise argparse.ArgumentTypeError(f"2 ... 1001, got {text}")
     return value
