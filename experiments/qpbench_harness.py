@@ -67,7 +67,7 @@ def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
 
     began = time.perf_counter()
     qp = as_qp(problem)
-    solver = settings_profiles.BACKEND_SOLVER[backend]
+    solver = settings_profiles.profile(backend).solver
     data = qpsolvers_problem(qp, solver)
     options = settings_profiles.options(backend, setting)
     start = time.perf_counter()
@@ -140,12 +140,16 @@ def force_rule(status: str, force: dict[str, float]) -> str:
 
 def backends_with_profiles(available) -> list[str]:
     """The qpsolvers backends among ``available`` that declare qpbenchmark's settings."""
-    return [b for b in available if b.startswith("qpsolvers-")
+    return [b for b in available if get(b).family == "qpsolvers"
             and settings_profiles.has_profile(b)]
 
 
-CONIC_BACKENDS = ("clarabel",)
-"""Conic backends the harness runs at qpbenchmark's settings (those with a profile)."""
+def conic_backends(available) -> list[str]:
+    """The backends among ``available`` that take a conic problem per instant and
+    declare qpbenchmark's settings (Clarabel's own API).
+    """
+    return [b for b in available if get(b).family != "qpsolvers" and get(b).solve is not None
+            and Conic in get(b).accepts and settings_profiles.has_profile(b)]
 
 
 def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTINGS),
@@ -161,7 +165,7 @@ def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTING
         if as_qp(problem) is not None:
             runs = [(solve_both, b) for b in backends_with_profiles(backends)]
         elif convert(problem, (Conic,)) is not None:
-            runs = [(solve_conic_both, b) for b in backends if b in CONIC_BACKENDS]
+            runs = [(solve_conic_both, b) for b in conic_backends(backends)]
         else:
             runs = []
         for solve, backend in runs:

@@ -23,11 +23,15 @@ from cardan_forces.formulations.problems import Conic
 from . import settings
 from .record import Outcome
 from .registry import Backend
+from .settings_profiles import Profile
 
 EXTRAS: dict[str, str | None] = {"clarabel": None}
 
 TOLERANCES = ("tol_gap_abs", "tol_gap_rel", "tol_feas")
 """Clarabel's settings a requested tolerance sets."""
+
+PROFILE = Profile("clarabel", ("tol_feas", "tol_gap_abs"), ("tol_gap_rel",))
+"""How Clarabel takes qpbenchmark's four settings (qpbenchmark 2.7's for ``clarabel``)."""
 
 STATUS = {
     "Solved": "solved",
@@ -96,4 +100,5 @@ def backends() -> list[Backend]:
     except ImportError:
         return []
     return [Backend(name="clarabel", family="clarabel", distributions=("clarabel",),
-                    accepts=(Conic,), solve=solve_conic, tolerances=TOLERANCES)]
+                    accepts=(Conic,), solve=solve_conic, tolerances=TOLERANCES,
+                    qpbenchmark=PROFILE)]

@@ -16,6 +16,7 @@ from cardan_forces.formulations.problems import QP
 from . import settings
 from .record import Outcome
 from .registry import Backend
+from .settings_profiles import Profile
 
 DISTRIBUTIONS: dict[str, str] = {
     "clarabel": "clarabel", "daqp": "daqp", "ecos": "ecos", "highs": "highspy", "osqp": "osqp",
@@ -42,6 +43,24 @@ TOLERANCES: dict[str, tuple[str, ...]] = {
     "scs": ("eps_abs", "eps_rel"),
 }
 """Each solver's own parameters a requested tolerance sets (quadprog: a direct method)."""
+
+PROFILES: dict[str, Profile] = {
+    "clarabel": Profile("clarabel", ("tol_feas", "tol_gap_abs"), ("tol_gap_rel",)),
+    "daqp": Profile("daqp", ("dual_tol", "primal_tol")),
+    "ecos": Profile("ecos", ("feastol",)),
+    "highs": Profile("highs", ("dual_feasibility_tolerance", "primal_feasibility_tolerance"),
+                     time_limit="time_limit"),
+    "osqp": Profile("osqp", ("eps_abs",), ("eps_rel",), time_limit="time_limit"),
+    "piqp": Profile("piqp", ("eps_abs", "eps_duality_gap_abs"),
+                    ("eps_duality_gap_rel", "eps_rel"), {"check_duality_gap": True}),
+    "proxqp": Profile("proxqp", ("eps_abs", "eps_duality_gap_abs"),
+                      ("eps_duality_gap_rel", "eps_rel"), {"check_duality_gap": True}),
+    "quadprog": Profile("quadprog"),
+    "scs": Profile("scs", ("eps_abs",), ("eps_rel",), time_limit="time_limit_secs"),
+}
+"""How each solver takes qpbenchmark's four settings: qpbenchmark 2.7's ``set_eps_abs``,
+``set_eps_rel``, ``set_param`` and ``set_time_limit`` for it
+(:class:`~.settings_profiles.Profile`)."""
 
 TIME_LIMITS = {"highs": "time_limit"}
 """Solvers given :data:`~.settings.TIME_LIMIT_S` as their own time limit (their iteration
@@ -183,6 +202,6 @@ def backends() -> list[Backend]:
                 distributions=("qpsolvers", DISTRIBUTIONS.get(name, name)),
                 extra=EXTRAS.get(f"qpsolvers-{name}"), accepts=(QP,), solve=_solve_with(name),
                 tolerances=TOLERANCES.get(name, ()), smallest_tol=SMALLEST_TOL.get(name, 0.0),
-                warm_start=name in WARM_STARTS)
+                warm_start=name in WARM_STARTS, qpbenchmark=PROFILES.get(name))
         for name in qpsolvers.available_solvers
     ]

@@ -28,6 +28,7 @@ from . import settings
 from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
 from .conversions import convert, reachable
 from .record import Outcome, Record, Status, finalize_all
+from .settings_profiles import Profile
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
             "numpy_batched_", "moreau_", "reduced_")
@@ -59,6 +60,8 @@ class Backend:
     clamped below at ``smallest_tol``; ``warm_start`` whether ``initvals`` reach the
     solver; ``batch(batch, tol, **options) -> BatchOutcome`` solves all instants of a
     formulation's batch of one of the ``batch_accepts`` classes at once.
+    ``qpbenchmark``: how it takes qpbenchmark's four settings (:mod:`.settings_profiles`;
+    ``None``: it does not).
     """
 
     name: str
@@ -73,6 +76,7 @@ class Backend:
     warm_start: bool = False
     batch: Callable | None = None
     batch_accepts: tuple[type, ...] = ()
+    qpbenchmark: Profile | None = None
 
     @property
     def version(self) -> str:

@@ -11,7 +11,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import qpbench_harness as harness
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.problems import QP, ForceChecks
-from cardan_forces.solvers import available, settings_profiles
+from cardan_forces.solvers import available, clarabel_, qpsolvers_, settings_profiles
 from cardan_forces.solvers import qp_measures as qm
 
 
@@ -109,9 +109,13 @@ def test_settings_profiles_are_qpbenchmarks(qpbenchmark):
         tol = probe.tolerances[name]
         assert (tol.primal, tol.dual, tol.gap, tol.runtime) == (
             setting.tolerance, setting.tolerance, setting.tolerance, setting.time_limit_s)
-        for solver in settings_profiles.PROFILES:
-            assert settings_profiles.options(f"qpsolvers-{solver}", name) == dict(
-                probe.solver_settings[name][solver]), (name, solver)
+        for profile in [*qpsolvers_.PROFILES.values(), clarabel_.PROFILE]:
+            assert profile.options(name) == dict(
+                probe.solver_settings[name][profile.solver]), (name, profile.solver)
+    for backend in available().values():  # each backend reads its own declaration
+        if backend.qpbenchmark is not None:
+            assert settings_profiles.options(backend.name, "high_accuracy") == (
+                backend.qpbenchmark.options("high_accuracy"))
 
 
 @pytest.fixture(scope="module")
@@ -131,7 +135,7 @@ def test_verdicts_equal_qpbenchmarks_on_the_same_solves(qpbenchmark, problems, s
 
     if solver not in available():
         pytest.skip(f"{solver} not installed")
-    name = settings_profiles.BACKEND_SOLVER[solver]
+    name = settings_profiles.profile(solver).solver
 
     class Empty(qpbenchmark.TestSet):
         description, title, sparse_only = "", "", False
