@@ -1,0 +1,125 @@
+"""``cardan report``'s figure: what each panel shows (units, bands, determinacy), tested
+on constructed solution sets whose drawing is known, and the command's image formats.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from cardan_forces.driveline.dynamics import simulate  # noqa: E402
+from cardan_forces.driveline.equilibrium import build_operator  # noqa: E402
+from cardan_forces.driveline.loading import load_scene  # noqa: E402
+from cardan_forces.experiments import report  # noqa: E402
+from matplotlib.collections import PolyCollection  # noqa: E402
+
+from cardan_forces.cli import main  # noqa: E402
+
+NAN = np.nan
+
+
+@pytest.fixture(scope="module")
+def op():
+    return build_operator(simulate(load_scene("propshaft"), [0.0, 0.1, 0.2, 0.3]))
+
+
+def _histories(op, columns: dict[int, tuple]) -> dict[str, np.ndarray]:
+    """Constructed histories: every component 0 and determinate except ``columns``,
+    ``{j: (value, min, max)}`` with each entry a number or an array over the instants.
+    """
+    shape = (len(op.t), len(op.names))
+    h = {"value": np.zeros(shape), "min": np.zeros(shape), "max": np.zeros(shape),
+         "determinate": np.ones(shape, bool)}
+    for j, (value, lo, hi) in columns.items():
+        h["value"][:, j], h["min"][:, j], h["max"][:, j] = value, lo, hi
+        h["determinate"][:, j] = False
+    return h
+
+
+def _panel(op, name: str, unit: str = "N") -> report.Panel:
+    return next(p for p in report.panels(op) if p.contact.name == name and p.unit == unit)
+
+
+def _filled(ax) -> list[np.ndarray]:
+    """The vertices of every non-empty filled region drawn on ``ax``."""
+    return [path.vertices for c in ax.collections if isinstance(c, PolyCollection)
+            for path in c.get_paths() if len(path.vertices)]
+
+
+def test_moments_have_their_own_panel_and_every_axis_its_unit(op):
+    grid = report.panels(op)
+    assert sorted(j for p in grid for j in p.columns) == list(range(len(op.names)))
+    for p in grid:  # no panel mixes N and N m
+        assert {p.contact.units[p.contact.columns.index(j)] for j in p.columns} == {p.unit}
+    spline = [p for p in grid if p.contact.name == "spline"]
+    assert sorted(p.unit for p in spline) == ["N", "N m"]
+    torque = op.index("spline.torque")
+    assert torque in _panel(op, "spline", "N m").columns
+    assert torque not in _panel(op, "spline", "N").columns
+    fig, ax = plt.subplots()
+    for panel, label in ((_panel(op, "spline", "N m"), "[N m]"), (_panel(op, "spline"), "[N]")):
+        ax.clear()
+        report._draw(ax, op, _histories(op, {}), panel)
+        assert ax.get_ylabel().endswith(label) and ax.get_xlabel() == "time t [s]"
+    plt.close(fig)
+
+
+def test_band_where_both_ends_are_finite_and_the_finite_end_where_one_side_is_open(op):
+    panel = _panel(op, "bearing.gearbox.rear")
+    x, y, z = panel.columns
+    h = _histories(op, {x: (0.0, -50.0, 80.0),       # bounded: a band from -50 to 80
+                        y: (10.0, 5.0, NAN),         # open above: its lower end, 5
+                        z: (0.0, NAN, NAN)})         # open both sides: nothing to shade
+    fig, ax = plt.subplots()
+    report._draw(ax, op, h, panel)
+    regions = _filled(ax)
+    band = [v for v in regions if np.isclose(v[:, 1].min(), -50) and np.isclose(
+        v[:, 1].max(), 80)]
+    assert band, "the bounded component's band is drawn"
+    low, high = ax.get_ylim()
+    assert low < -50 and high > 80  # the range holds the band
+    dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
+    ends = [np.asarray(line.get_ydata(), float) for line in dashed]
+    assert any(np.allclose(e, 5.0) for e in ends), "the finite end of the open set"
+    hatched = [v for v in regions if np.isclose(v[:, 1].min(), 5.0)
+               and np.isclose(v[:, 1].max(), high)]
+    assert hatched, "open above: hatched from the finite end to the axis edge"
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["x: bounded", "y: open above", "z: open below and above"]
+    plt.close(fig)
+
+
+def test_a_determinate_component_is_not_called_unbounded(op):
+    panel = _panel(op, "bearing.gearbox.rear")
+    x, y, z = panel.columns
+    fig, ax = plt.subplots()
+    report._draw(ax, op, _histories(op, {x: (0.0, NAN, NAN)}), panel)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["x: open below and above", "y: determinate", "z: determinate"]
+    assert "unbounded" not in ax.get_title() and "open" not in ax.get_title()
+    plt.close(fig)
+
+
+@pytest.mark.parametrize(("lo", "hi", "det", "words"), [
+    ([1.0, 2.0], [1.0, 2.0], [True, True], "determinate"),
+    ([0.0, 1.0], [3.0, 4.0], [False, False], "bounded"),
+    ([0.0, 0.0], [NAN, NAN], [False, False], "open above"),
+    ([NAN, NAN], [0.0, 0.0], [False, False], "open below"),
+    ([0.0, NAN], [NAN, NAN], [False, False], "open below at 1 of 2 and above"),
+    ([1.0, 0.0], [1.0, 5.0], [True, False], "bounded, determinate at 1 of 2"),
+])
+def test_set_words(lo, hi, det, words):
+    assert report.set_words(np.array(lo), np.array(hi), np.array(det)) == words
+
+
+def test_report_writes_every_format_asked(tmp_path, capsys):
+    assert main(["report", "propshaft", "--instants", "2", "--format", "png,svg",
+                 "--out", str(tmp_path), "--quiet"]) == 0
+    written = capsys.readouterr().out.split()
+    assert {p.rsplit(".", 1)[1] for p in written} == {"csv", "png", "svg", "md"}
+    assert (tmp_path / "report.svg").read_text().lstrip().startswith("<?xml")
+    assert main(["report", "propshaft", "--format", "gif", "--out", str(tmp_path)]) == 2
+    assert "--format" in capsys.readouterr().err
