@@ -4,6 +4,7 @@ instant: status, residuals, optimality, time.
 
 from __future__ import annotations
 
+import argparse
 import math
 
 from cardan_forces.driveline.dynamics import simulate
@@ -12,12 +13,19 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments.analysis import solve_all
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.solvers import Residuals
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.solvers import Residuals, backends_for
 from cardan_forces.solvers import get as get_backend
 
-from . import check_time, print_json, progress
+from . import UsageError, check_time, print_json, progress
 
 OPTIMALITY = ("dual", "gap", "distance")
+ENGINE = ("engine: MuJoCo is a forward simulation from the scene's start, not a formulation "
+          "solved at one instant; run 'cardan engine SCENE' or 'cardan repro --methods "
+          "...,engine'")
+"""Why ``engine`` is no ``--formulation`` or ``--solver`` here: its forces at ``t``
+depend on the motion it integrated up to ``t`` and its constraints' softness, and the
+table's measures (sign, complementarity, duality) are a solver's, not an engine's."""
 
 
 def add_parser(subparsers) -> None:
@@ -25,9 +33,10 @@ def add_parser(subparsers) -> None:
     so = subparsers.add_parser("solve", help="formulations x solvers at one instant")
     so.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     so.add_argument("--t", type=float, default=0.5, help="instant in s (default 0.5)")
-    so.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
-                    help="one formulation (repeatable); default all")
-    so.add_argument("--solver", action="append", help="one backend (repeatable); default all")
+    so.add_argument("--formulation", action="append", type=_not_engine,
+                    choices=list(FORMULATIONS), help="one formulation (repeatable); default all")
+    so.add_argument("--solver", action="append", type=_not_engine,
+                    help="one backend (repeatable); default all")
     so.add_argument("--tol", type=float, default=None,
                     help="one tolerance for every solver (default: each solver's own)")
     so.add_argument("--json", action="store_true", help="print JSON records")
@@ -40,6 +49,7 @@ def run(args) -> int:
     for name in args.solver or ():
         get_backend(name)  # unknown or absent backend: a clear error before any work
     op = build_operator(simulate(scene, [args.t]))
+    _check_pairs(op, args.formulation, args.solver)
     records = solve_all(op, 0, args.formulation, args.solver, tol=args.tol,
                         progress=None if args.json else progress)
     if args.json:
@@ -58,6 +68,38 @@ def run(args) -> int:
               + " ".join(number_text(v, "8.1e") for v in res)
               + f" {1e3 * (r.setup_s + r.solve_s):8.2f}")
     return 0
+
+
+def _not_engine(text: str) -> str:
+    """An argument type that refuses ``engine`` in words (:data:`ENGINE`)."""
+    if text == "engine":
+        raise argparse.ArgumentTypeError(ENGINE)
+    return text
+
+
+def _check_pairs(op, formulations, solvers) -> None:
+    """Every solver asked for takes every formulation asked for (else a
+    :class:`UsageError` naming the solvers that can); with no formulation named, the
+    solvers must take at least one of the scene's.
+    """
+    if not solvers:
+        return
+    usable = {}
+    for name in formulations or FORMULATIONS:
+        try:
+            usable[name] = backends_for(FORMULATIONS[name](op, 0))
+        except NotApplicable:
+            if formulations:
+                raise
+    if formulations:
+        bad = [f"{f} with {', '.join(s for s in solvers if s not in usable[f])} (solvers "
+               f"that take it: {', '.join(usable[f]) or 'none installed'})"
+               for f in formulations if set(solvers) - set(usable[f])]
+        if bad:
+            raise UsageError(f"a solver cannot take the formulation: {'; '.join(bad)}")
+    elif not any(s in u for s in solvers for u in usable.values()):
+        raise UsageError(f"{', '.join(solvers)} takes none of this scene's formulations; "
+                         + "; ".join(f"{f}: {', '.join(u)}" for f, u in usable.items()))
 
 
 def record_json(record) -> dict:
