@@ -1,4 +1,8 @@
-"""Optimality of an answer measured from the problem data (qpbenchmark's three measures).
+"""Optimality of an answer relative to the problem data: the package's measures.
+
+These are the *package-optimality* measures of the bench's ladder, relative to the data;
+qpbenchmark's are absolute and live in :mod:`.qp_measures` (the *solver-optimality*
+view), computed as qpbenchmark computes them.
 
 Every convex problem the package builds reaches Clarabel's standard form (``LS -> QP ->
 Conic``, ``LP -> Conic``), ``min 1/2 z'Pz + q'z s.t. A z + s = b, s in K``, whose
@@ -13,7 +17,22 @@ optimality conditions with multipliers ``y`` are
 the largest of ``||Pz||_inf, ||q||_inf, ||A'y||_inf`` and the dual-cone violation
 relative to ``||y||_inf``; ``gap`` is the duality gap relative to the larger objective.
 Both are dimensionless, so a level such as 1e-6 means the same for a problem in N and
-for one in units of the load.
+for one in units of the load. In formulas, with ``r = P z + q + A'y``:
+
+- ``primal = max(equilibrium, sign, complementarity, cone)`` of the forces, each over
+  ``||b_eq||_2`` (``ForceChecks.residuals``);
+- ``dual = max(||r||_inf / max(||Pz||_inf, ||q||_inf, ||A'y||_inf),
+  viol_K*(y) / ||y||_inf)``;
+- ``gap = |p - d| / max(|p|, |d|)``, ``p = 1/2 z'Pz + q'z``, ``d = -1/2 z'Pz - b'y``
+  (or ``|p - p*| / |p*|`` against a high-precision optimal value ``p*`` where the
+  multipliers are recovered).
+
+Where they differ from qpbenchmark's (``r_p, r_d, r_g`` of :mod:`.qp_measures`) and
+why: qpbenchmark's are absolute, in the units of the data, so on a least norm in
+newtons (objective near 1e9) no exact solver meets a 1e-9 gap while on a small
+objective the relative measure is the stricter; ``primal`` is taken on the forces and
+includes end-face complementarity, which the physics asks and the QP does not; the
+bench's success also asks the distance to a reference where the optimum is unique.
 
 Where a backend returns no multipliers they are recovered (:func:`recover`) by a
 nonnegative least-squares solve of stationarity on the constraints active at ``z``: a

@@ -1,6 +1,8 @@
 """Optimality measured from the problem data: dual residual, duality / objective gap,
-distance only where the optimum is unique (qpbenchmark's measures); and the status rule
-that uses them, on constructed outcomes whose measures are known by hand."""
+distance only where the optimum is unique (the package's relative measures, not
+qpbenchmark's absolute ones); the status rule that uses them, on constructed outcomes
+whose measures are known by hand; the checks of many instants at once against each
+instant alone."""
 
 import numpy as np
 import pytest
