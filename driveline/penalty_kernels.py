@@ -761,11 +761,14 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
             _change_d(d, order, (t_new - t) / h_abs)
             ints[I_EQUAL] = 0
         h_abs = t_new - t
-        y_predict = d[:order + 1].sum(axis=0)
-        scale = atol + rtol * np.abs(y_predict)
-        psi = np.zeros_like(y_predict)
-        for j in range(1, order + 1):
-            psi += d[j] * (gamma[j] / alpha[order])
+        n = d.shape[1]
+        y_predict, scale, psi = np.empty(n), np.empty(n), np.zeros(n)
+        for i in range(n):  # loops, not array expressions: no temporaries
+            y_predict[i] = d[0, i]
+            for j in range(1, order + 1):
+                y_predict[i] += d[j, i]
+                psi[i] += d[j, i] * (gamma[j] / alpha[order])
+            scale[i] = atol[i] + rtol * abs(y_predict[i])
         c = h_abs / alpha[order]
         while True:
             if ints[I_LU] == 0 or abs(c / floats[F_C] - 1.0) > LU_KEEP:
@@ -776,8 +779,8 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
                                                    blocks, scale, floats, ints, args)
             if converged or ints[I_JAC_CURRENT] == 1:
                 break
-            jac[:] = jacobian(t_new, y_predict, args[0], args[1], args[2], args[3],
-                                      args[4], args[5])
+            jac[:] = jacobian(t_new, y_predict, args[0], args[1], args[2], args[3], args[4],
+                              args[5])
             ints[I_JEV] += 1
             ints[I_LU], ints[I_JAC_CURRENT] = 0, 1
         if not converged:
