@@ -8,10 +8,11 @@ Every call returns a :class:`Record` whose status the package decides from its o
 residuals, with its optimality measured from the problem data (typed: :class:`Status`,
 :class:`Residuals`, :class:`Optimality`); solver failures are
 records, never exceptions. :func:`solve_batch` solves all instants of a formulation's
-batch (``cardan_forces.formulations.batch``) with a batched backend.
+batch (``cardan_forces.formulations.batch``) with a batched backend. :func:`register`
+adds a backend of one's own (or an entry point in the group ``cardan_forces.solvers``).
 """
 
-from .record import ACCEPT, Optimality, Record, Residuals, Status, failed_record
+from .record import ACCEPT, Optimality, Outcome, Record, Residuals, Status, failed_record
 from .registry import (
     Backend,
     SolverNotFound,
@@ -21,6 +22,8 @@ from .registry import (
     batch_backends,
     get,
     known_backends,
+    plugin_errors,
+    register,
     solve,
     solve_batch,
 )
@@ -29,6 +32,7 @@ __all__ = [
     "ACCEPT",
     "Backend",
     "Optimality",
+    "Outcome",
     "Record",
     "Residuals",
     "SolverNotFound",
@@ -40,6 +44,8 @@ __all__ = [
     "failed_record",
     "get",
     "known_backends",
+    "plugin_errors",
+    "register",
     "solve",
     "solve_batch",
 ]

@@ -10,6 +10,13 @@ A backend declares everything the rest of the package asks about it (:class:`Bac
 its tolerance parameters, whether it warm-starts, whether it solves batches, the
 distributions it runs on. Adding a backend is one adapter file and one entry in
 :data:`ADAPTERS`; no list elsewhere changes.
+
+Backends of other packages: :func:`register` adds one at run time, and a distribution
+that declares an entry point in the group :data:`ENTRY_POINTS` (pointing at a
+:class:`Backend`, a list of them, or a function returning either) has its backends
+registered when the registry first loads, so they appear in ``cardan solvers`` and
+every command without editing this package. A plugin that fails to load is left out
+and reported by :func:`plugin_errors`; it never breaks the registry.
 """
 
 from __future__ import annotations
@@ -101,6 +108,10 @@ def dist_version(*dists: str) -> str:
 
 _CACHE: dict[str, Backend] = {}
 _KNOWN: dict[str, str | None] = {}
+_PLUGIN_ERRORS: dict[str, str] = {}
+
+ENTRY_POINTS = "cardan_forces.solvers"
+"""Entry-point group of other packages' backends (see :func:`register`)."""
 
 
 def _load() -> None:
@@ -113,6 +124,46 @@ def _load() -> None:
         found.update((backend.name, backend) for backend in module.backends())
     _KNOWN.update(known | {name: backend.extra for name, backend in found.items()})
     _CACHE.update(found)
+    _load_plugins()
+
+
+def register(backend: Backend) -> Backend:
+    """Add ``backend`` (a :class:`Backend`) to the registry, so :func:`solve`, every
+    command and ``cardan solvers`` know it; returns it. Its ``solve`` receives a problem
+    of one of its ``accepts`` classes and returns an :class:`Outcome`; the package
+    judges the answer as it judges its own backends'. A name already taken by another
+    backend is a ``ValueError`` (registering the same object again is harmless).
+    """
+    if not isinstance(backend, Backend):
+        raise TypeError(f"register() takes a Backend, not {type(backend).__name__}")
+    _load()
+    if _CACHE.get(backend.name, backend) is not backend:
+        raise ValueError(f"backend {backend.name!r} is already registered")
+    _CACHE[backend.name] = backend
+    _KNOWN[backend.name] = backend.extra
+    return backend
+
+
+def plugin_errors() -> dict[str, str]:
+    """Entry points of :data:`ENTRY_POINTS` that could not be registered, with why."""
+    _load()
+    return dict(_PLUGIN_ERRORS)
+
+
+def _load_plugins() -> None:
+    """Register the backends every installed entry point of :data:`ENTRY_POINTS` gives;
+    one that raises, gives no backend or a taken name is recorded, not registered.
+    """
+    for point in importlib.metadata.entry_points(group=ENTRY_POINTS):
+        try:
+            given = point.load()
+            if callable(given) and not isinstance(given, Backend):
+                given = given()
+            backends = [given] if isinstance(given, Backend) else list(given)
+            for backend in backends:
+                register(backend)
+        except Exception as exc:  # a broken plugin is reported, never fatal
+            _PLUGIN_ERRORS[f"{point.name} ({point.value})"] = f"{type(exc).__name__}: {exc}"
 
 
 def available() -> dict[str, Backend]:

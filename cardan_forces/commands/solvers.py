@@ -4,8 +4,10 @@ the absent ones.
 
 from __future__ import annotations
 
+import sys
+
 from cardan_forces.solvers import available
-from cardan_forces.solvers.registry import known_backends
+from cardan_forces.solvers.registry import known_backends, plugin_errors
 
 from . import print_json
 
@@ -20,6 +22,8 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     backends = available()
+    for plugin, why in plugin_errors().items():  # stderr: --json stays strict JSON
+        print(f"cardan solvers: plugin {plugin} not loaded: {why}", file=sys.stderr)
     if args.json:
         print_json([{"name": b.name, "family": b.family, "version": b.version,
                      "classes": [c.__name__ for c in b.accepts], "extra": b.extra}
