@@ -29,6 +29,7 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.ranging import HAVE_HIGHSPY, ranges
 from cardan_forces.solvers.registry import Pending, check, solve_unchecked
 
 # ---------------------------------------------------------------------------- backends
@@ -219,18 +220,26 @@ INTERVAL_SOLVER = "scipy-highs"
 
 
 def value_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLVER) -> dict:
-    """``{"min", "max", "status"}`` of ``c'x`` over the rigid set at instant ``i``.
-
-    ``None`` marks an unbounded side, or a side whose LP failed (``status`` then says
-    which). Ends that cross by less than :func:`interval_slack` (the LP tolerance scaled
-    to the problem) are one value, their mean; ends that cross by more are not
-    reported (status ``inconsistent``): ``min <= max`` always.
+    """``{"min", "max", "status"}`` of ``c'x`` over the rigid set at instant ``i``, by two
+    cold LPs through the registry (:func:`joined_ends` says what the ends become).
     """
     ends, statuses = [], []
     for lp in range_problems(op, i, c):
         record = solve(lp, solver)
         statuses.append(record.status)
         ends.append(float(c @ record.x) if record.solved else None)
+    return joined_ends(op, i, c, ends, statuses)
+
+
+def joined_ends(op: Operator, i: int, c: np.ndarray, ends: Sequence[float | None],
+                statuses: Sequence[Status]) -> dict:
+    """``{"min", "max", "status"}`` from the two LP ends of ``c'x`` and their statuses.
+
+    ``None`` marks an unbounded side, or a side whose LP failed (``status`` then says
+    which). Ends that cross by less than :func:`interval_slack` (the LP tolerance scaled
+    to the problem) are one value, their mean; ends that cross by more are not
+    reported (status ``inconsistent``): ``min <= max`` always.
+    """
     fine = all(s in (Status.SOLVED, Status.UNBOUNDED) for s in statuses)
     status = Status.SOLVED.value if fine else "/".join(s.value for s in statuses)
     lo, hi = ends
@@ -247,10 +256,24 @@ def intervals(op: Operator, i: int, solver: str = INTERVAL_SOLVER) -> dict[str, 
     A determinate component (its null-space row vanishes) takes no LP: its interval is
     its one value, ``min = max`` = the least-norm value, when the rigid set is not
     empty; otherwise every component is ``None`` with the feasibility LP's status.
+    The others' ends come from :func:`~cardan_forces.solvers.ranging.ranges` (one warm
+    HiGHS model per instant, only the objective changing) when ``solver`` is
+    :data:`INTERVAL_SOLVER` and ``highspy`` is installed; an end it does not answer
+    (a failed or unverified solve) is solved again cold (:func:`value_range`), as is
+    every end with another ``solver``.
     """
-    det = determinacy(op, i)
-    feasible = solve(feasibility_problem(op, i), solver).status
+    return _intervals_at(op, i, determinacy(op, i), solver)
+
+
+def _intervals_at(op: Operator, i: int, det, solver: str) -> dict[str, dict]:
+    """:func:`intervals` with instant ``i``'s determinacy ``det`` already known."""
+    free = np.flatnonzero(~det.determinate)
     eye = np.eye(len(op.names))
+    warm = solver == INTERVAL_SOLVER and HAVE_HIGHSPY
+    found = ranges(feasibility_problem(op, i), eye[free]) if warm else None
+    feasible = found.feasible if warm else None
+    if feasible is not Status.SOLVED:  # a set the warm model calls empty is asked again
+        feasible = solve(feasibility_problem(op, i), solver).status
     out = {}
     for j, name in enumerate(op.names):
         if feasible is not Status.SOLVED:
@@ -259,8 +282,23 @@ def intervals(op: Operator, i: int, solver: str = INTERVAL_SOLVER) -> dict[str, 
             value = float(det.min_norm[j])
             out[name] = {"min": value, "max": value, "status": "solved"}
         else:
-            out[name] = value_range(op, i, eye[j], solver)
+            out[name] = _warm_range(op, i, eye[j], found, int(np.searchsorted(free, j)),
+                                    solver)
     return out
+
+
+def _warm_range(op: Operator, i: int, c: np.ndarray, found, k: int, solver: str) -> dict:
+    """Row ``k`` of the warm ranging ``found`` as :func:`joined_ends` has it; solved
+    cold (:func:`value_range`) when that row is absent or an end was not answered.
+    """
+    if found is None or found.feasible is not Status.SOLVED:
+        return value_range(op, i, c, solver)
+    statuses = found.statuses[k]
+    if any(s not in (Status.SOLVED, Status.UNBOUNDED) for s in statuses):
+        return value_range(op, i, c, solver)
+    ends = [None if s is not Status.SOLVED else float(v)
+            for s, v in zip(statuses, (found.low[k], found.high[k]))]
+    return joined_ends(op, i, c, ends, statuses)
 
 
 @dataclass(frozen=True)
@@ -284,8 +322,9 @@ def interval_history(op: Operator, instants: Sequence[int] | None = None,
     for k, i in enumerate(picks):
         if progress:
             progress(f"intervals: instant {k + 1}/{len(picks)}")
-        det[k] = determinacy(op, i).determinate
-        for j, entry in enumerate(intervals(op, i).values()):
+        found = determinacy(op, i)
+        det[k] = found.determinate
+        for j, entry in enumerate(_intervals_at(op, i, found, INTERVAL_SOLVER).values()):
             lo[k, j] = math.nan if entry["min"] is None else entry["min"]
             hi[k, j] = math.nan if entry["max"] is None else entry["max"]
     return IntervalHistory(np.asarray(op.t)[picks], lo, hi, det)

@@ -137,9 +137,14 @@ def test_interval_tolerance_follows_the_loads(paper_op):
 
 def test_a_determinate_component_is_its_value_whatever_its_lps_say(paper_op, monkeypatch):
     """A determinate component takes no LP: an LP failing on it (a badly scaled line)
-    cannot make it unbounded. Every LP of a bound is made to fail here; the
-    determinate components keep min = max = their value, the others say the failure."""
-    real = study.solve
+    cannot make it unbounded. Every LP of a bound is made to fail here, warm and cold;
+    the determinate components keep min = max = their value, the others say the
+    failure."""
+    real, warm = study.solve, study.ranges
+
+    def warm_failing(lp, objectives):
+        found = warm(lp, objectives)
+        return dataclasses.replace(found, statuses=((Status.FAILED,) * 2,) * len(objectives))
 
     def failing(problem, solver, **kwargs):
         record = real(problem, solver, **kwargs)
@@ -147,6 +152,7 @@ def test_a_determinate_component_is_its_value_whatever_its_lps_say(paper_op, mon
             return dataclasses.replace(record, status=Status.FAILED)
         return record
     monkeypatch.setattr(study, "solve", failing)
+    monkeypatch.setattr(study, "ranges", warm_failing)
     sets = study.intervals(paper_op, 0)
     d = determinacy(paper_op, 0)
     assert d.determinate.any() and not d.determinate.all()

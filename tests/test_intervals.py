@@ -1,0 +1,101 @@
+"""Solution-set intervals by the warm-started ranging: constructed LPs whose ranges are
+known, and agreement with the cold per-bound LPs on the built-in lines."""
+
+import numpy as np
+import pytest
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.experiments import study
+from cardan_forces.formulations.problems import LP, ForceChecks
+from cardan_forces.formulations.sets import interval_slack
+from cardan_forces.solvers import Status
+
+pytest.importorskip("highspy")
+from cardan_forces.solvers.ranging import ranges  # noqa: E402
+
+
+def _lp(A, b, lb, G=None, h=None) -> LP:
+    A, b = np.asarray(A, float), np.asarray(b, float)
+    n = A.shape[1]
+    checks = ForceChecks(A=A, b=b, names=tuple(f"x{k}" for k in range(n)),
+                         unilateral=np.zeros(n, bool))
+    return LP(checks=checks, formulation="test", c=np.zeros(n), A=A, b=b,
+              lb=np.asarray(lb, float), G=G, h=h)
+
+
+def test_ranges_of_a_simplex():
+    """On ``x >= 0, sum x = 1`` each coordinate spans [0, 1] and ``x0 - x1`` spans
+    [-1, 1]; a row ``x0 - x1 <= 0.5`` cuts that to [-1, 0.5] and ``x0`` to [0, 0.75]."""
+    lp = _lp([[1, 1, 1]], [1], [0, 0, 0])
+    rows = np.array([[1, 0, 0], [0, 0, 1], [1, -1, 0]], float)
+    found = ranges(lp, rows)
+    assert found.feasible is Status.SOLVED
+    assert np.allclose(found.low, [0, 0, -1], atol=1e-12)
+    assert np.allclose(found.high, [1, 1, 1], atol=1e-12)
+    cut = _lp([[1, 1, 1]], [1], [0, 0, 0], G=np.array([[1.0, -1.0, 0.0]]), h=np.array([0.5]))
+    found = ranges(cut, rows)
+    assert np.allclose(found.low, [0, 0, -1], atol=1e-12)
+    assert np.allclose(found.high, [0.75, 1, 0.5], atol=1e-12)
+
+
+def test_unbounded_sides_and_an_empty_set():
+    """``x0 = x1 >= 0``: x0 is at least 0 with no top; a free x2 has neither end; with
+    ``x0 + x1 = -1`` the set is empty and every row says so."""
+    lp = _lp([[1, -1, 0]], [0], [0, 0, -np.inf])
+    found = ranges(lp, np.eye(3)[[0, 2]])
+    assert found.low[0] == pytest.approx(0.0, abs=1e-12) and np.isnan(found.high[0])
+    assert found.statuses[0] == (Status.SOLVED, Status.UNBOUNDED)
+    assert found.statuses[1] == (Status.UNBOUNDED, Status.UNBOUNDED)
+    assert np.isnan(found.low[1]) and np.isnan(found.high[1])
+    empty = ranges(_lp([[1, 1, 0]], [-1], [0, 0, 0]), np.eye(3))
+    assert empty.feasible is Status.INFEASIBLE
+    assert all(s == (Status.INFEASIBLE,) * 2 for s in empty.statuses)
+
+
+def test_a_range_does_not_depend_on_the_objectives_before_it():
+    """The warm model carries a basis from one objective to the next: the values must
+    be the same in any order."""
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(3, 8))
+    lp = _lp(A, A @ rng.uniform(1, 2, 8), np.zeros(8))
+    rows = rng.normal(size=(6, 8))
+    ahead, behind = ranges(lp, rows), ranges(lp, rows[::-1])
+    assert np.allclose(ahead.low, behind.low[::-1], rtol=1e-9, atol=1e-9, equal_nan=True)
+    assert np.allclose(ahead.high, behind.high[::-1], rtol=1e-9, atol=1e-9, equal_nan=True)
+
+
+@pytest.mark.parametrize("name, times", [("paper", (0.13, 0.5)), ("paper-slip", (0.2, 0.7)),
+                                         ("propshaft", (0.05, 0.6))])
+def test_warm_intervals_agree_with_cold_lps(name, times):
+    """Every component's interval from the warm ranging equals the two cold LPs'
+    (registry, one LP per bound): the same unbounded sides, the same statuses, finite
+    ends within the problem-scaled tolerance."""
+    scene = load_scene(name)
+    op = build_operator(simulate(scene, [scene.time.start_s + t * (scene.time.stop_s
+                                                                   - scene.time.start_s)
+                                         for t in times]))
+    for i in range(len(times)):
+        warm, det = study.intervals(op, i), determinacy(op, i)
+        assert not det.determinate.all()
+        for j in np.flatnonzero(~det.determinate):
+            c = np.eye(len(op.names))[j]
+            cold, got = study.value_range(op, i, c), warm[op.names[j]]
+            assert got["status"] == cold["status"] == "solved", (name, op.names[j])
+            for side in ("min", "max"):
+                assert (got[side] is None) == (cold[side] is None), (name, op.names[j], side)
+                if cold[side] is not None:
+                    assert got[side] == pytest.approx(cold[side],
+                                                      abs=interval_slack(op, i, c))
+
+
+def test_a_history_is_the_intervals_of_its_instants():
+    """:func:`interval_history` holds, instant by instant, what :func:`intervals` says
+    (NaN where a side is unbounded)."""
+    op = build_operator(simulate(load_scene("paper"), [0.1, 0.4]))
+    history = study.interval_history(op)
+    for k in range(2):
+        for j, entry in enumerate(study.intervals(op, k).values()):
+            for side, got in (("min", history.min[k, j]), ("max", history.max[k, j])):
+                assert (entry[side] is None and np.isnan(got)) or got == entry[side]
