@@ -125,11 +125,17 @@ def _intervals(op, i: int) -> np.ndarray:
     return out
 
 
+def settle_s(runs: dict[str, EngineRun]) -> float:
+    """The engine's settling (s from the start): 10 time constants of the softest
+    constraint of any run (the line starts unloaded and sags into its constraints).
+    """
+    return 10 * max(r.softness.timeconst_s * max([1.0] + [f for _, f in r.softness.scaled])
+                    for r in runs.values())
+
+
 def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray) -> EngineStudy:
     """Set every run against the rigid analysis at the ``sampled`` instants."""
-    settle = 10 * max(r.softness.timeconst_s * max([1.0] + [f for _, f in r.softness.scaled])
-                      for r in runs.values())
-    settled = op.t[sampled] - op.t[0] >= settle
+    settled = op.t[sampled] - op.t[0] >= settle_s(runs)
     det0 = cf.determinacy(op, int(sampled[0]))
     intervals, rigid, forms, comparisons = {}, {}, {}, []
     for i in sampled:
@@ -173,17 +179,27 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
             raise NotApplicable(f"--stop {stop_s}: the scene's grid starts at "
                                 f"{scene.time.start_s} s with step {scene.time.step_s} s; "
                                 "give at least two of its instants")
-    op = cf.build_operator(cf.simulate(scene, t))
-    shafts = {s.name for s in scene.shafts}
-    runs = {}
+    return study_operator(cf.build_operator(cf.simulate(scene, t)), instants, settings)
+
+
+def study_operator(op, instants: int = 6, settings=SETTINGS) -> EngineStudy:
+    """:func:`study` on an operator already built: :func:`engine_runs`, compared at
+    ``instants`` evenly spaced instants.
+    """
+    sampled = np.unique(np.linspace(0, len(op.t) - 1, instants).round().astype(int))
+    return compare(op, engine_runs(op, settings), sampled)
+
+
+def engine_runs(op, settings=SETTINGS) -> dict[str, EngineRun]:
+    """The engine on the operator's scene under every setting whose ``scaled`` shafts
+    the scene has, by label (:class:`NotApplicable` where it cannot run).
+    """
+    shafts = {s.name for s in op.scene.shafts}
     try:
-        for s in settings:
-            if all(name in shafts for name, _ in s.scaled):
-                runs[s.label] = engine_mujoco.run(op, s)
+        return {s.label: engine_mujoco.run(op, s) for s in settings
+                if all(name in shafts for name, _ in s.scaled)}
     except EngineUnsupported as err:
         raise NotApplicable(str(err)) from None
-    sampled = np.unique(np.linspace(0, len(t) - 1, instants).round().astype(int))
-    return compare(op, runs, sampled)
 
 
 def _load_rows(op) -> dict[str, np.ndarray]:
@@ -259,7 +275,7 @@ def _end(value: float) -> str:
     return number_text(value, ".2f", "unbounded")
 
 
-def _spread(result: EngineStudy) -> np.ndarray:
+def spread(result: EngineStudy) -> np.ndarray:
     """Per component, the largest spread (max - min) over the settings at a settled
     sampled instant (N, N m); ``nan`` where no sampled instant is settled.
     """
@@ -314,7 +330,7 @@ def agreement_lines(result: EngineStudy) -> list[str]:
 
 
 def _sensitivity_lines(result: EngineStudy) -> list[str]:
-    op, spread = result.op, _spread(result)
+    op, spreads = result.op, spread(result)
     i = int(result.sampled[-1])
     lines = ["## Sensitivity to the softness (spread over the settings)", "",
              f"Interval and values at t = {op.t[i]:.3f} s; spread: the largest over "
@@ -326,11 +342,11 @@ def _sensitivity_lines(result: EngineStudy) -> list[str]:
         lo, hi = result.intervals[i][j]
         values = " | ".join(f"{r.forces[i, j]:.2f}" for r in result.runs.values())
         lines.append(f"| {name} | {'yes' if result.determinate[j] else 'no'} | "
-                     f"[{_end(lo)}, {_end(hi)}] | {values} | {_g(spread[j])} |")
+                     f"[{_end(lo)}, {_end(hi)}] | {values} | {_g(spreads[j])} |")
     det = result.determinate
     lines += ["", f"Largest spread: determinate components "
-              f"{_g(np.nanmax(spread[det], initial=0.0))}, indeterminate "
-              f"{_g(np.nanmax(spread[~det], initial=0.0))} (N, N m)."]
+              f"{_g(np.nanmax(spreads[det], initial=0.0))}, indeterminate "
+              f"{_g(np.nanmax(spreads[~det], initial=0.0))} (N, N m)."]
     return lines
 
 

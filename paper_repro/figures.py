@@ -136,6 +136,9 @@ class Panel:
     methods: tuple[str, ...] = ()
     sets: bool = False
     zero_line: bool = False
+    labels: tuple[tuple[str, str], ...] = ()
+    """Legend labels of ``methods`` as ``(method, label)`` pairs, where not
+    :func:`method_label`'s."""
 
 
 def fig11(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None,
@@ -265,6 +268,32 @@ def fig14(op: Operator, histories: dict[str, np.ndarray],
     return csv
 
 
+def engine_figure(op: Operator, runs: dict[str, np.ndarray],
+                  bounds: dict[str, tuple[np.ndarray, np.ndarray]], out: Path,
+                  formats=("png",)) -> Path:
+    """``engine``: MuJoCo's input shaft bearing loads (N, as Fig. 14's quantities) over
+    time, one curve per softness setting (``runs``: setting label -> forces (T, n) in
+    the operator's columns), over the rigid solution set's interval (``bounds`` as in
+    :func:`fig14`). Columns ``<quantity>_engine<k>`` in the order of ``runs``.
+    """
+    columns = {"t": op.t}
+    keys = {label: f"engine{k}" for k, label in enumerate(runs)}
+    for label, forces in runs.items():
+        for q, values in bearing_loads(op, forces).items():
+            columns[f"{q}_{keys[label]}"] = values
+    csv = write_csv(Path(out) / "engine.csv", _set_columns(columns, bounds))
+    labels = tuple((key, f"MuJoCo, {label}") for label, key in keys.items())
+    names = [c.label for c in op.bearings(0)]
+    titles = {f"{b}_radial": f"({'abcdefgh'[k]}) bearing '{b}', radial"
+              for k, b in enumerate(names)}
+    titles["axial"] = f"({'abcdefgh'[len(names)]}) axial (sum of its bearings)"
+    _plot_grid(csv, [Panel(title, q, "force [N]", tuple(keys.values()), sets=q in bounds,
+                           labels=labels) for q, title in titles.items()],
+               f"MuJoCo's input shaft bearing loads over the rigid set ({op.scene.name})",
+               ncols=1, formats=formats)
+    return csv
+
+
 def _plot_grid(csv: Path, panels: list[Panel], title: str, ncols: int,
                formats=("png",)) -> list[Path]:
     """Draw ``panels`` from the CSV in a grid with one shared legend below; write one
@@ -299,7 +328,8 @@ def _draw_panel(ax, cols: dict[str, np.ndarray], panel: Panel) -> dict:
     for k, method in enumerate(panel.methods):
         values = cols[f"{q}_{method}" if method else q]
         bold.append(values)
-        label = method_label(method) if method else "rigid model"
+        label = dict(panel.labels).get(method) or (method_label(method) if method
+                                                    else "rigid model")
         handles[label], = ax.plot(t, values, lw=1.3, color=f"C{k}", zorder=4,
                                   ls=("-", "--", "-.", ":")[k % 4], label=label)
     raw = cols.get(f"{q}_{PENALTY}")

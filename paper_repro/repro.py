@@ -15,6 +15,7 @@ per figure what the numbers say next to the paper's text.
 from __future__ import annotations
 
 import datetime
+import importlib.util
 import os
 import signal
 import time
@@ -24,14 +25,17 @@ from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
 
 import numpy as np
+from cardan_forces.driveline import engine_mujoco
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import Motion, simulate
+from cardan_forces.driveline.engine_mujoco import EngineUnsupported
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.kinematics import kinematics
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene
-from cardan_forces.experiments.environment import machine, versions
+from cardan_forces.experiments import engine as engine_study
+from cardan_forces.experiments.environment import machine, number_text, versions
 from cardan_forces.experiments.progress import bar
 from cardan_forces.experiments.study import value_range
 from cardan_forces.formulations import FORMULATIONS
@@ -46,8 +50,24 @@ FIGURES = (11, 12, 13, 14, 15)
 FIG15_SCENES = ("paper-fig15", "paper-fig15-axial")
 """Fig. 15's scenes: the paper says "horizontal" gravity but not which; +y (normal to
 the articulation plane) and +x (along the input shaft) are both drawn."""
-ALL_METHODS = (*METHODS, PENALTY)
-"""What ``cardan repro`` can draw: the rigid-model methods and the penalty simulation."""
+ENGINE = "engine"
+"""The method name of MuJoCo's forward simulation
+(:mod:`cardan_forces.experiments.engine`)."""
+ALL_METHODS = (*METHODS, PENALTY, ENGINE)
+"""What ``cardan repro`` can draw: the rigid-model methods, the penalty simulation and
+MuJoCo (its own figure and section)."""
+ENGINE_S = 0.5
+"""MuJoCo's window (s from the start): its settling (80 ms at the softest setting drawn)
+and some 100 ms of each load's swing, at about 0.7 s of CPU per setting."""
+ENGINE_INSTANTS = 3
+"""Instants of MuJoCo's window, after its settling, set against every component's
+interval and the formulations (:func:`cardan_forces.experiments.engine.compare`; some
+70 LPs each)."""
+ENGINE_BOUND_INSTANTS = 11
+"""Instants of MuJoCo's window at which its figure's rigid band is computed."""
+ENGINE_RTOL = 1e-4
+"""A load of MuJoCo's is inside the rigid band within this share of the largest load:
+its soft constraints leave ``A x = b`` at ~1e-5 (module doc of the engine's tests)."""
 BOUND_INSTANTS = 41
 """Instants (evenly spread) at which Figs. 13-15's solution-set intervals are computed."""
 QUICK_S = 0.15
@@ -61,6 +81,14 @@ COMPLIANCE_VS_PENALTY = {"compliance": "clarabel", "compliance_hertz": "clarabel
                          "positive": "qpsolvers-daqp", "min_norm": "numpy-kkt"}
 """Methods compared with the penalty simulation, on the released scene's operator (the
 same effects, so the compliance formulations see the same clearances as gaps)."""
+
+
+def default_methods() -> tuple[str, ...]:
+    """What ``cardan repro`` draws unless told: every method, MuJoCo only where it is
+    installed (the ``mujoco`` extra, in ``all``).
+    """
+    present = importlib.util.find_spec("mujoco") is not None
+    return tuple(m for m in ALL_METHODS if present or m != ENGINE)
 
 
 def joint_quantities(op: Operator, joint: int = 0) -> dict[str, np.ndarray]:
@@ -83,16 +111,16 @@ def bearing_quantities(op: Operator, shaft: int = 0) -> dict[str, np.ndarray]:
     return out
 
 
-def set_bounds(op: Operator, quantities: dict[str, np.ndarray]
+def set_bounds(op: Operator, quantities: dict[str, np.ndarray], instants: int = BOUND_INSTANTS
                ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """The interval of each quantity over the rigid set at ``BOUND_INSTANTS`` instants
+    """The interval of each quantity over the rigid set at ``instants`` instants
     (NaN elsewhere, and where an LP failed; +-inf where unbounded). A quantity of one row
     ``c``: the exact range of ``c x`` (:func:`value_range`). Of two rows: the range of
     the length of ``(c1 x, c2 x)`` allowed by the two components' intervals (their box
     hull: it contains the exact range).
     """
     T = len(op.t)
-    picks = np.unique(np.linspace(0, T - 1, min(BOUND_INSTANTS, T)).round().astype(int))
+    picks = np.unique(np.linspace(0, T - 1, min(instants, T)).round().astype(int))
     out = {q: (np.full(T, np.nan), np.full(T, np.nan)) for q in quantities}
 
     def span(i, c):  # None: unbounded on that side; a failed LP is not computed (NaN)
@@ -121,6 +149,13 @@ def _refusal(scene: Scene, op: Operator, method: str) -> str:
     """
     if method == PENALTY:
         return "" if scene.has("inertia") else "it is dynamic and needs the 'inertia' effect"
+    if method == ENGINE:
+        try:
+            engine_mujoco.check_expressible(scene)
+            engine_mujoco.mujoco_version()
+        except EngineUnsupported as exc:
+            return str(exc)
+        return ""
     try:
         FORMULATIONS[method](op, 0)
     except NotApplicable as exc:
@@ -500,7 +535,7 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
         times = times[times <= scene.time.start_s + QUICK_S + 1e-12]
     runs = _Runs(times, PENALTY in methods, progress,
                  (os.cpu_count() or 1) if workers is None else workers)
-    rigid = tuple(m for m in methods if m != PENALTY)
+    rigid = tuple(m for m in methods if m not in (PENALTY, ENGINE))
     progress(f"repro: simulating {scene.name} over {len(times)} instants ...")
     shown = [f"Fig. {f}" for f in figs if f in (11, 12, 13, 14)]
     motion = runs.motion(scene, ", ".join(shown) or "the report")
@@ -516,9 +551,12 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
                   for s, o in fig15_ops]  # in the workers when there are workers
         work = _rigid_work(op, [f for f in figs if f in (13, 14)], rigid, progress)
         compliance = _compliance_histories(runs, scene) if runs.penalty and shown else None
+        engine = _engine_work(scene, times, progress) if ENGINE in methods else None
         sections = _main_figures(runs, scene, motion, op, figs, work, compliance, out,
                                  formats)
         sections += _fig15(runs, work15, rigid, out, formats)
+        if engine is not None:
+            sections.append(_engine_section(engine, runs, out, formats))
     except BaseException:
         runs.close(interrupted=True)
         raise
@@ -789,9 +827,11 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str
         f"- instants: {len(motion.t)} from {motion.t[0]:g} to {motion.t[-1]:g} s"
         + (" (quick run)" if quick else ""),
         "- methods (formulations; each figure's notes name the backend that drew it): "
-        + ", ".join(f"`{m}`" for m in methods if m != PENALTY)
+        + ", ".join(f"`{m}`" for m in methods if m not in (PENALTY, ENGINE))
         + (", `penalty`: the released scene's penalty-contact simulation"
-           if runs.penalties else ""),
+           if runs.penalties else "")
+        + (", `engine`: MuJoCo's forward simulation (its own section)"
+           if ENGINE in methods else ""),
         f"- **timings** (measured by this run): total wall {seconds:.1f} s (target <= 120 s "
         "for all figures with the penalty simulation); motion "
         + ", ".join(f"{1e3 * s:.0f} ms" for _, _, s, _ in runs.motions)
@@ -813,8 +853,104 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str
     for title, csv, notes in sections:
         lines += ["", f"## {title}", ""]
         if csv is not None:
-            images = formats if csv.name.startswith("fig") else ()
+            images = formats if csv.name.startswith(("fig", "engine")) else ()
             lines += [", ".join(f"`{csv.with_suffix(s).name}`"
                                 for s in (".csv", *(f".{f}" for f in images))), ""]
         lines += notes
     return "\n".join(lines) + "\n"
+
+
+def _engine_work(scene: Scene, times: np.ndarray, progress) -> dict:
+    """MuJoCo on the run's first :data:`ENGINE_S` under the softness settings its figure
+    draws: the study (every component against its interval and the formulations at
+    :data:`ENGINE_INSTANTS` instants), the figure's rigid band, and the wall time of it.
+    """
+    settings = [s for s in engine_study.SETTINGS if s.label in engine_study.FIGURE_SETTINGS]
+    window = times[times <= times[0] + ENGINE_S + 1e-12]
+    progress(f"repro: MuJoCo on the first {window[-1] - window[0]:g} s, {len(settings)} "
+             "softness settings ...")
+    start = time.perf_counter()
+    op = build_operator(simulate(scene, window))
+    runs = engine_study.engine_runs(op, settings)
+    settled = np.flatnonzero(op.t >= op.t[0] + engine_study.settle_s(runs))
+    picks = np.linspace(0, len(settled) - 1, min(ENGINE_INSTANTS, len(settled)))
+    result = engine_study.compare(op, runs, settled[picks.round().astype(int)])
+    bounds = set_bounds(op, bearing_quantities(op), ENGINE_BOUND_INSTANTS)
+    return {"result": result, "bounds": bounds, "wall_s": time.perf_counter() - start,
+            "version": engine_mujoco.mujoco_version()}
+
+
+def _engine_section(work: dict, runs: _Runs, out: Path, formats):
+    """The report's MuJoCo section and its figure: what the engine says about the input
+    shaft's bearing loads, where that lies in the rigid set, how far softness settings
+    move it, and what it cost beside the penalty simulation.
+    """
+    result, bounds = work["result"], work["bounds"]
+    op, runs_e = result.op, result.runs
+    csv = figures.engine_figure(op, {k: r.forces for k, r in runs_e.items()}, bounds, out,
+                                formats)
+    settle = engine_study.settle_s(runs_e)
+    lines = [
+        f"MuJoCo {work['version']}, forward simulation of `{op.scene.name}` from its start "
+        f"over {op.t[-1] - op.t[0]:g} s ({len(op.t)} instants), every bearing a soft "
+        "`connect` equality, under the softness settings drawn (`solref`/`solimp`; the "
+        "relative softness of the input and output shafts' bearings). A MuJoCo user reads "
+        "the `default` curve. Statistics after the engine's settling "
+        f"({settle:g} s; {len(result.sampled)} instants for the table); a load is inside "
+        f"the rigid band within {ENGINE_RTOL:g} of the largest load. `cardan engine` "
+        "runs the full study (more settings, more instants).",
+        *_engine_load_lines(op, result, bounds, settle), "",
+        "Every component against its rigid interval and the formulations:", "",
+        *engine_study.agreement_lines(result)[2:], "",
+        *_engine_cost_lines(work, runs)]
+    return ("MuJoCo beside the rigid set: input shaft bearing loads", csv, lines)
+
+
+def _engine_load_lines(op: Operator, result, bounds, settle: float) -> list[str]:
+    """Per bearing load of the figure: what MuJoCo reads, inside the band or not, and
+    how far the settings move it against the band's width.
+    """
+    ok = op.t >= op.t[0] + settle
+    loads = {k: figures.bearing_loads(op, r.forces) for k, r in result.runs.items()}
+    first = next(iter(loads))
+    lines = []
+    for q, (lo, hi) in bounds.items():
+        values = np.array([loads[k][q] for k in loads])
+        slack = ENGINE_RTOL * max(np.nanmax(np.abs(values)), 1.0)
+        checked = ok & ~np.isnan(lo)
+        inside = np.all((values[:, checked] >= lo[checked] - slack)
+                        & (values[:, checked] <= hi[checked] + slack), axis=0)
+        width = float(np.median(hi[checked] - lo[checked])) if checked.any() else np.nan
+        moved = float(np.max(np.ptp(values[:, ok], axis=0))) if ok.any() else np.nan
+        share = (f" ({100 * moved / width:.0f} % of the band's median width "
+                 f"{width:.1f} N)" if np.isfinite(width) and width > slack else
+                 " (the band is unbounded)" if not np.isfinite(width) else
+                 " (the band is one value: the load is determinate)")
+        lines.append(
+            f"- {q}: MuJoCo (`{first}`) reads {np.nanmin(loads[first][q][ok]):.1f} to "
+            f"{np.nanmax(loads[first][q][ok]):.1f} N; every setting inside the rigid band at "
+            f"{inside.sum()} of {checked.sum()} instants checked; the settings move it by "
+            f"up to {moved:.1f} N{share}")
+    spread = engine_study.spread(result)
+    det = result.determinate
+    lines.append(f"- all components: the settings move the determinate ones by up to "
+                 f"{number_text(np.nanmax(spread[det], initial=0.0), '.3g')}, the "
+                 f"indeterminate ones by up to "
+                 f"{number_text(np.nanmax(spread[~det], initial=0.0), '.3g')} (N, N m): "
+                 "the engine's softness, not the machine, picks the member of the set")
+    return lines
+
+
+def _engine_cost_lines(work: dict, runs: _Runs) -> list[str]:
+    """MuJoCo's cost per simulated second beside the penalty simulation's (same run)."""
+    runs_e = work["result"].runs
+    span = max(work["result"].op.t[-1] - work["result"].op.t[0], 1e-12)
+    per = ", ".join(f"`{k}` {r.wall_s / span:.2f}" for k, r in runs_e.items())
+    pen = [(name, r.wall_s / max(r.t[-1] - r.t[0], 1e-12)) for name, r in runs.penalties.items()]
+    beside = ("; the penalty simulation " + ", ".join(f"`{n}` {s:.2f}" for n, s in pen)
+              + " s per simulated second (it ran in worker processes at the same time)"
+              if pen else "; no penalty simulation in this run")
+    return [f"- cost (this run): MuJoCo {per} s of wall time per simulated second "
+            f"({next(iter(runs_e.values())).steps / span:.0f} RK4 steps per second){beside}; "
+            f"MuJoCo's whole part of this report, the rigid comparisons included, "
+            f"{work['wall_s']:.1f} s"]

@@ -19,8 +19,9 @@ def add_parser(subparsers) -> None:
     rp.add_argument("--quick", action="store_true", help="first 0.15 s only (tests, CI)")
     rp.add_argument("--methods", type=_words,
                     help="comma-separated methods to draw (default all: paper,positive,"
-                         "min_max,compliance,penalty); leave out one that does not apply "
-                         "to the scene, e.g. the paper's method on a slip joint")
+                         "min_max,compliance,penalty, and engine where MuJoCo is "
+                         "installed); leave out one that does not apply to the scene, "
+                         "e.g. the paper's method on a slip joint")
     rp.add_argument("--no-penalty", dest="penalty", action="store_false",
                     help="leave out the penalty-contact simulation (the slow part)")
     rp.add_argument("--format", type=format_list, default=("png",),
@@ -45,10 +46,15 @@ def _check(words: tuple[str, ...], allowed: tuple[str, ...], flag: str) -> tuple
 
 
 def run(args) -> int:
-    from cardan_forces.paper_repro.repro import ALL_METHODS, FIG15_SCENES, run_repro
+    from cardan_forces.paper_repro.repro import (
+        ALL_METHODS,
+        FIG15_SCENES,
+        default_methods,
+        run_repro,
+    )
 
     figures = sorted(set(args.fig or FIGURES))
-    methods = _check(args.methods or ALL_METHODS, ALL_METHODS, "--methods")
+    methods = _check(args.methods or default_methods(), ALL_METHODS, "--methods")
     methods = tuple(m for m in methods if args.penalty or m != "penalty")
     if not methods:
         raise UsageError("--methods penalty with --no-penalty: nothing left to draw")
