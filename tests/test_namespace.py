@@ -34,8 +34,9 @@ def test_layers_import_only_downwards():
             assert not above, f"{path.name} imports {above}"
 
 
-PAPER_REPRO_MAY_USE = {"study", "environment"}
-"""What paper_repro takes from experiments: the study layer and the run's environment."""
+PAPER_REPRO_MAY_USE = {"study", "environment", "progress", "images"}
+"""What paper_repro takes from experiments: the study layer, the run's environment, the
+progress bars and the image files shared with ``cardan report``."""
 
 
 def test_paper_repro_uses_experiments_one_way():
