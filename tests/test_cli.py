@@ -251,3 +251,72 @@ def _threads():
 
     return {pool["num_threads"] for pool in threadpool_info()}, os.environ.get(
         "OPENBLAS_NUM_THREADS")
+
+
+def _one_error_line(capsys) -> str:
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("cardan: error: "), captured.err
+    return lines[0]
+
+
+def test_solve_refuses_a_solver_that_cannot_take_the_formulation(capsys):
+    """A solver outside the formulation's backends is one line and exit 2 naming those
+    that can (it printed an empty table and exit 0).
+    """
+    from cardan_forces.driveline.dynamics import simulate
+    from cardan_forces.driveline.equilibrium import build_operator
+    from cardan_forces.driveline.loading import load_scene
+    from cardan_forces.formulations import FORMULATIONS
+    from cardan_forces.solvers import available, backends_for
+
+    op = build_operator(simulate(load_scene("paper"), [0.5]))
+    can = backends_for(FORMULATIONS["compliance_hertz"](op, 0))
+    cannot = [n for n, b in available().items() if b.solve is not None and n not in can]
+    if not cannot or not can:
+        pytest.skip("every installed solver takes compliance_hertz")
+    assert main(["solve", "--formulation", "compliance_hertz", "--solver", cannot[0]]) == 2
+    line = _one_error_line(capsys)
+    assert cannot[0] in line and all(name in line for name in can)
+    assert capsys.readouterr().out == ""
+    assert main(["solve", "--formulation", "compliance_hertz", "--solver", can[0]]) == 0
+    assert "compliance_hertz" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("flag", ["--formulation", "--solver"])
+def test_solve_says_the_engine_is_a_simulation(capsys, flag):
+    assert main(["solve", flag, "engine"]) == 2
+    line = _one_error_line(capsys)
+    assert "simulation" in line and "cardan engine" in line
+
+
+@pytest.mark.parametrize("args, words", [
+    (["engine", "propshaft"], "'inertia'"),
+    (["engine", "paper", "--stop", "-1"], "--stop"),
+    (["engine", "paper", "--stop", "x"], "not a number"),
+    (["engine", "paper", "--instants", "1"], "--instants"),
+    (["engine", "paper", "--stop", "0.001"], "at least two"),
+])
+def test_engine_bad_input_is_one_line(tmp_path, capsys, args, words):
+    out = tmp_path / "engine"
+    assert main([*args, "--out", str(out)]) == 2
+    assert words in _one_error_line(capsys)
+    assert not out.exists()
+
+
+def test_engine_and_repro_without_mujoco_say_how_to_install(tmp_path, capsys, monkeypatch):
+    """Without MuJoCo: ``cardan engine`` and ``repro --methods engine`` are one line
+    naming the extra; repro's default leaves the engine out.
+    """
+    import sys
+
+    from cardan_forces.paper_repro import repro
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    assert main(["engine", "--out", str(tmp_path / "e")]) == 2
+    assert "[mujoco]" in _one_error_line(capsys)
+    assert main(["repro", "--quick", "--quiet", "--fig", "11", "--methods", "positive,engine",
+                 "--out", str(tmp_path / "r")]) == 2
+    assert "[mujoco]" in _one_error_line(capsys)
+    assert not (tmp_path / "e").exists() and not (tmp_path / "r").exists()
+    assert "engine" not in repro.default_methods()
