@@ -18,18 +18,57 @@ The small public API, in the order a study uses it::
     advice = cf.advise(motion, 100)         # the smallest releases that make it unique
     problem = cf.build_formulation("positive", op, 100)
     record = cf.solve(problem, "clarabel")  # status and residuals computed here
+    sets = cf.intervals(op, 100)            # {name: {"min", "max", "status"}}
+    history = cf.solve_over_time(op, "positive")   # forces (T, n) and a record per instant
+    released = cf.apply_releases(motion, ["slip:intermediate"])  # the motion, released line
+
+What the command line gives, the API gives: ``cardan sets`` is :func:`determinacy`,
+:func:`intervals` and :func:`named_modes` (``--apply``: :func:`apply_releases`,
+``--release``: :func:`advise`); ``cardan report`` is :func:`solve_over_time` and
+:func:`interval_history`; :func:`register` adds a solver backend of one's own.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
+from threadpoolctl import threadpool_limits
+
+from .driveline import release as _release
 from .driveline.determinacy import Determinacy, determinacy
 from .driveline.dynamics import Motion, simulate
 from .driveline.equilibrium import Operator, build_operator
 from .driveline.loading import load_scene
-from .driveline.release import advise, named_modes
+from .driveline.modes import Mode
+from .driveline.release import Release, parse_release, released_operator
 from .driveline.scene import Scene, SceneError
+from .experiments.study import (
+    History,
+    IntervalHistory,
+    interval_history,
+    intervals,
+    solve_over_time,
+)
 from .formulations import FORMULATIONS
-from .solvers import Record, SolverNotFound, available, solve
+from .solvers import Backend, Outcome, Record, SolverNotFound, available, register, solve
+
+
+def advise(motion: Motion, i: int) -> _release.Advice:
+    """The smallest set of releases that leaves only end-face pair modes at instant
+    ``i`` (:func:`cardan_forces.driveline.release.advise`), run as ``cardan sets
+    --release`` runs it: one BLAS thread (its matrices are small; more threads contend).
+    """
+    with threadpool_limits(limits=1):
+        return _release.advise(motion, i)
+
+
+def named_modes(motion: Motion, i: int, op: Operator | None = None) -> list[Mode]:
+    """Each null-space direction at instant ``i`` in words, with the releases that
+    remove a closed loop (:func:`cardan_forces.driveline.release.named_modes`), on one
+    BLAS thread as the command line runs it.
+    """
+    with threadpool_limits(limits=1):
+        return _release.named_modes(motion, i, op)
 
 
 def build_formulation(name: str, op: Operator, i: int):
@@ -44,22 +83,45 @@ def build_formulation(name: str, op: Operator, i: int):
     return build(op, i)
 
 
+def apply_releases(motion: Motion, releases) -> Motion:
+    """``motion`` on its scene with ``releases`` applied, as ``cardan sets --apply``
+    does: each a :class:`Release` or its command-line label (``"float:input.far"``: that
+    bearing floating, ``"slip:intermediate"``: a slip joint in that shaft). The motion
+    itself is unchanged (a release changes no kinematics); :func:`build_operator`,
+    :func:`named_modes` and :func:`advise` then answer for the released line.
+    ``SceneError`` for a release the scene does not have or one that leaves a mechanism.
+    """
+    chosen = [r if isinstance(r, Release) else parse_release(r, motion.scene)
+              for r in releases]
+    return dataclasses.replace(motion, scene=released_operator(motion, chosen).scene)
+
+
 __all__ = [
     "FORMULATIONS",
+    "Backend",
     "Determinacy",
+    "History",
+    "IntervalHistory",
     "Motion",
     "Operator",
+    "Outcome",
     "Record",
+    "Release",
     "Scene",
     "SceneError",
     "SolverNotFound",
     "advise",
+    "apply_releases",
     "available",
     "build_formulation",
     "build_operator",
     "determinacy",
+    "interval_history",
+    "intervals",
     "load_scene",
     "named_modes",
+    "register",
     "simulate",
     "solve",
+    "solve_over_time",
 ]

@@ -24,8 +24,11 @@ from dataclasses import dataclass
 from itertools import combinations
 from math import comb
 
+import numpy as np
+
 from .determinacy import Determinacy, determinacy, holding
 from .dynamics import Motion
+from .elements import check_elements
 from .equilibrium import Operator, build_operator
 from .modes import Mode, counts, name_modes
 from .scene import Scene, SceneError, SlipJoint
@@ -96,6 +99,19 @@ def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) 
     """``scene`` with ``releases`` applied, validated again (SceneError if a part of the
     line is left unheld).
     """
+    labels = ", ".join(r.label for r in releases) or "none"
+    variant = _variant(scene, releases)
+    try:
+        return scene.with_changes(shafts=variant.shafts, slip_joints=variant.slip_joints,
+                                  name=variant.name, description=variant.description)
+    except SceneError as err:
+        raise SceneError(f"releases {labels} leave a mechanism: {err}") from None
+
+
+def _variant(scene: Scene, releases) -> Scene:
+    """``scene`` with ``releases`` applied, not yet validated: what the search builds
+    its operators from (:func:`released_scene` validates it).
+    """
     shafts, slips = list(scene.shafts), list(scene.slip_joints)
     for r in releases:
         k = [s.name for s in shafts].index(r.shaft)
@@ -110,27 +126,45 @@ def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) 
     order = {s.name: k for k, s in enumerate(shafts)}
     slips.sort(key=lambda s: order[s.shaft])
     labels = ", ".join(r.label for r in releases) or "none"
-    try:
-        return scene.with_changes(shafts=tuple(shafts), slip_joints=tuple(slips),
-                                  name=f"{scene.name}+released",
-                                  description=f"{scene.name} with releases: {labels}")
-    except SceneError as err:
-        raise SceneError(f"releases {labels} leave a mechanism: {err}") from None
+    return dataclasses.replace(scene, shafts=tuple(shafts), slip_joints=tuple(slips),
+                               name=f"{scene.name}+released",
+                               description=f"{scene.name} with releases: {labels}")
 
 
 def released_operator(motion: Motion, releases) -> Operator:
     """The operator of the released scene on the same motion; SceneError when the
     releases leave a mechanism (more than the motion's one dependent row).
     """
-    scene = released_scene(motion.scene, releases)
-    op = build_operator(dataclasses.replace(motion, scene=scene))
+    op = build_operator(dataclasses.replace(motion, scene=released_scene(motion.scene,
+                                                                         releases)))
+    _refuse_mechanism(op, releases)
+    return op
+
+
+def _refuse_mechanism(op: Operator, releases) -> None:
+    """SceneError when ``op`` has more than one dependent row at some instant."""
     free = max(holding(A).free for A in op.A)
     if free > 1:
         labels = ", ".join(r.label for r in releases)
         raise SceneError(f"releases {labels} leave a mechanism: {free - 1} "
                          "direction(s) in which the released line moves without deforming "
                          "(besides its rotation)")
-    return op
+
+
+def at_instant(motion: Motion, i: int) -> Motion:
+    """``motion`` at its instant ``i`` alone (every time-indexed array keeps that one
+    instant: axis 0 of the 1-D arrays, axis 1 of the others): a question about one
+    instant builds operators and rank tests there, not over the whole grid.
+    """
+    def take(a: np.ndarray) -> np.ndarray:
+        return a[[i]] if a.ndim == 1 else a[:, [i]]
+
+    def cut(obj):
+        return dataclasses.replace(obj, **{f.name: take(getattr(obj, f.name))
+                                           for f in dataclasses.fields(obj)
+                                           if isinstance(getattr(obj, f.name), np.ndarray)})
+
+    return dataclasses.replace(cut(motion), kin=cut(motion.kin))
 
 
 MAX_RELEASES = 4
@@ -185,23 +219,27 @@ class Advice:
 
 
 def named_modes(motion: Motion, i: int, op: Operator | None = None) -> list[Mode]:
-    """The modes of ``motion``'s scene at instant ``i``, each closed loop with the single
-    releases that remove one loop (tried on the same motion).
+    """The modes of ``motion``'s scene at instant ``i`` (of ``op`` when given, built at
+    that instant otherwise), each closed loop with the single releases that remove one
+    loop (tried at the same instant; each such release validated as a scene).
     """
-    op = build_operator(motion) if op is None else op
-    det = determinacy(op, i)
-    modes = name_modes(op, i, det)
+    one = at_instant(motion, i)
+    here, k = (build_operator(one), 0) if op is None else (op, i)
+    modes = name_modes(here, k, determinacy(here, k))
     loops = counts(modes)["closed loop"]
     if not loops:
         return modes
-    helps = []
-    for r in candidates(motion.scene):
-        after = _try(motion, (r,), i)
-        if after is not None and counts(after[1])["closed loop"] < loops:
-            helps.append(r.words)
+    helps = [r.words for r in candidates(motion.scene)
+             if _fewer_loops(one, (r,), loops) and _validated(motion.scene, (r,))]
     text = "; or ".join(helps) or "no single release (combine several)"
-    return [dataclasses.replace(m, release=_friction_words(op, m) + text)
+    return [dataclasses.replace(m, release=_friction_words(here, m) + text)
             if m.kind == "closed loop" else m for m in modes]
+
+
+def _fewer_loops(one: Motion, releases, loops: int) -> bool:
+    """Whether ``releases`` leave fewer than ``loops`` closed loops on ``one``."""
+    after = _try(one, releases)
+    return after is not None and counts(after[1])["closed loop"] < loops
 
 
 def _friction_words(op: Operator, mode: Mode) -> str:
@@ -213,14 +251,30 @@ def _friction_words(op: Operator, mode: Mode) -> str:
                    "removes it; or " for s in slips)
 
 
-def _try(motion: Motion, releases, i: int):
-    """(operator, modes) of the released line at instant ``i``, None if a mechanism."""
+def _try(one: Motion, releases):
+    """(operator, modes, determinacy) of the released line on the one-instant motion
+    ``one``, None if the releases leave it a mechanism there. The variant is not
+    validated here (:func:`_validated` does that for the sets the search keeps): its
+    elements are checked and its rank tested, which refuse what validation would.
+    """
+    scene = _variant(one.scene, releases)
     try:
-        op = released_operator(motion, releases)
+        check_elements(scene)
+        op = build_operator(dataclasses.replace(one, scene=scene))
     except SceneError:
         return None
-    det = determinacy(op, i)
-    return op, name_modes(op, i, det), det
+    if holding(op.A[0]).free > 1:
+        return None
+    det = determinacy(op, 0)
+    return op, name_modes(op, 0, det), det
+
+
+def _validated(scene: Scene, releases) -> Scene | None:
+    """:func:`released_scene`, or None where validation refuses it."""
+    try:
+        return released_scene(scene, releases)
+    except SceneError:
+        return None
 
 
 def _preference(scene: Scene, releases) -> tuple[int, int, int]:
@@ -240,7 +294,10 @@ def advise(motion: Motion, i: int) -> Advice:
     """Try release sets of growing size (at most :data:`MAX_RELEASES`) until one leaves
     only end-face pair modes; among those of the smallest size prefer by
     :func:`_preference`, then the first in :func:`candidates` order. Each set is
-    verified by re-running determinacy on the released scene. SceneError when no set
+    verified by re-running determinacy on the released line at instant ``i`` (the
+    search builds every operator at that instant alone, :func:`at_instant`), and the
+    sets kept are validated as scenes (:func:`released_scene`); the advice's operator
+    is the released line's over all of ``motion``'s instants. SceneError when no set
     of up to :data:`MAX_RELEASES` works; :class:`ReleaseSearchTooLarge` (a SceneError),
     before any work, when the search could need more than :data:`MAX_RELEASE_SETS` sets.
     """
@@ -250,26 +307,29 @@ def advise(motion: Motion, i: int) -> Advice:
             f"scene {motion.scene.name!r}: the release search would try {size} release sets "
             f"(every set of up to {MAX_RELEASES} of {len(candidates(motion.scene))} "
             f"candidates); at most {MAX_RELEASE_SETS}: name the releases to apply instead")
-    op = build_operator(motion)
-    det = determinacy(op, i)
-    modes = named_modes(motion, i, op)
+    one = at_instant(motion, i)
+    op = build_operator(one)
+    det = determinacy(op, 0)
+    modes = named_modes(one, 0, op)
     pool, tried = candidates(motion.scene), 0
     for size in range(0, MAX_RELEASES + 1):
         found = []
         for combo in combinations(pool, size):
             tried += 1
-            result = _try(motion, combo, i)
+            result = _try(one, combo)
             if result is None:
                 continue
             c = counts(result[1])
             if c["axial split"] == 0 and c["closed loop"] == 0:
                 found.append((_preference(result[0].scene, combo), combo, result))
-        if found:
-            found.sort(key=lambda f: f[0])  # stable: candidates order breaks ties
-            _, combo, (rop, rmodes, rdet) = found[0]
-            return Advice(releases=combo, scene=rop.scene, modes=tuple(modes),
+        found.sort(key=lambda f: f[0])  # stable: candidates order breaks ties
+        kept = [(scene, f) for f in found
+                if (scene := _validated(motion.scene, f[1])) is not None]
+        if kept:
+            scene, (_, combo, (_, rmodes, rdet)) = kept[0]
+            return Advice(releases=combo, scene=scene, modes=tuple(modes),
                           released_modes=tuple(rmodes), determinacy=det, released=rdet,
-                          operator=rop, alternatives=tuple(f[1] for f in found[1:]),
-                          tried=tried)
+                          operator=build_operator(dataclasses.replace(motion, scene=scene)),
+                          alternatives=tuple(f[1] for _, f in kept[1:]), tried=tried)
     raise SceneError(f"scene {motion.scene.name!r}: no set of up to {MAX_RELEASES} releases "
                      "leaves only end-face pair modes")

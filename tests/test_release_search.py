@@ -1,0 +1,32 @@
+"""The release search at one instant: the operator of a motion cut to one instant is
+that instant's, and the advice on a whole motion is the advice on that instant alone
+(what ``cardan sets --release`` computes)."""
+
+import numpy as np
+import pytest
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.release import advise, at_instant, named_modes
+
+
+@pytest.mark.parametrize("name", ["paper", "propshaft"])
+def test_a_motion_cut_to_one_instant_builds_that_instants_operator(name):
+    motion = simulate(load_scene(name))
+    whole = build_operator(motion)
+    for i in (0, len(motion.t) // 3, len(motion.t) - 1):
+        one = build_operator(at_instant(motion, i))
+        assert one.t == pytest.approx([motion.t[i]])
+        assert np.array_equal(one.A[0], whole.A[i]) and np.array_equal(one.b[0], whole.b[i])
+
+
+def test_advice_on_a_whole_motion_is_the_advice_at_its_instant():
+    scene = load_scene("paper")
+    motion = simulate(scene, np.linspace(0.0, 0.4, 9))
+    whole = advise(motion, 4)
+    alone = advise(simulate(scene, [motion.t[4]]), 0)
+    assert whole.releases == alone.releases and whole.alternatives == alone.alternatives
+    assert whole.released.rank == alone.released.rank
+    assert len(whole.operator.t) == len(motion.t)  # the released line over every instant
+    assert [m.release for m in named_modes(motion, 4)] == \
+        [m.release for m in named_modes(simulate(scene, [motion.t[4]]), 0)]
