@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
@@ -201,7 +201,10 @@ def _failed(op: Operator, formulation: str, solver: str, exc: Exception) -> Reco
 
 def history_of(op: Operator, formulation: str, solver: str, instants: Sequence[int],
                records: Sequence[Record], walls: Sequence[float] = ()) -> History:
-    """The :class:`History` of ``records`` solved at ``instants`` of ``op``."""
+    """The :class:`History` of ``records`` solved at ``instants`` of ``op`` (each record
+    told its instant, ``Record.t``).
+    """
+    records = [replace(r, t=float(op.t[i])) for r, i in zip(records, instants)]
     n = len(op.names)
     forces = np.full((len(records), n), np.nan)
     for k, r in enumerate(records):

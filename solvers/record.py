@@ -237,6 +237,8 @@ class Record:
     solver_status: Status | None = None
     solver_optimality: Optimality | None = None
     wall_s: float = 0.0
+    t: float | None = None
+    """The instant (s) the record answers, where a solve over time set it (else None)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "status", Status(self.status))
