@@ -107,3 +107,54 @@ def test_missing_engine_says_how_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "mujoco", None)
     with pytest.raises(em.EngineUnsupported, match=r"\[mujoco\]"):
         em.mujoco_version()
+
+
+@pytest.fixture(scope="module")
+def repro_run(tmp_path_factory):
+    from cardan_forces.paper_repro import repro
+
+    out = tmp_path_factory.mktemp("repro_engine")
+    report = repro.run_repro(figs=(14,), out=out, quick=True, methods=("positive", "engine"),
+                             formats=("png", "svg"), workers=0, progress=lambda _: None)
+    return out, report.read_text()
+
+
+def test_repro_draws_the_engine_inside_the_rigid_band(repro_run):
+    """The figure's CSV holds the band and one curve per softness setting; every engine
+    load after the settling lies inside the band (the engine's forces are members of the
+    rigid set), and the settings put the indeterminate axial load at different members.
+    """
+    from cardan_forces.experiments.engine import FIGURE_SETTINGS
+    from cardan_forces.paper_repro.figures import read_csv
+
+    out, _ = repro_run
+    assert (out / "engine.png").exists() and (out / "engine.svg").exists()
+    cols = read_csv(out / "engine.csv")
+    curves = [k for k in cols if k.startswith("axial_engine")]
+    assert len(curves) == len(FIGURE_SETTINGS)
+    settled = cols["t"] >= 0.08
+    load = max(np.abs(cols[k]).max() for k in cols if "_engine" in k)
+    for q in ("near_radial", "far_radial", "axial"):
+        lo, hi = cols[f"{q}_set_min"], cols[f"{q}_set_max"]
+        checked = settled & ~np.isnan(lo)
+        assert checked.any()
+        for k in range(len(FIGURE_SETTINGS)):
+            v = cols[f"{q}_engine{k}"][checked]
+            assert np.all(v >= lo[checked] - RTOL * load)
+            assert np.all(v <= hi[checked] + RTOL * load)
+    axial = np.array([cols[k][settled] for k in curves])
+    assert np.ptp(axial, axis=0).min() > 0.05 * load
+
+
+def test_repro_report_says_where_the_engine_lies(repro_run):
+    _, report = repro_run
+    section = report.split("## MuJoCo beside the rigid set")[1]
+    assert "`engine.csv`, `engine.png`, `engine.svg`" in section
+    for words in ("inside the rigid band", "closest formulation", "per simulated second"):
+        assert words in section
+
+
+def test_repro_runs_the_engine_by_default_where_it_is_installed():
+    from cardan_forces.paper_repro import repro
+
+    assert "engine" in repro.default_methods()
