@@ -223,8 +223,18 @@ INTERVAL_SOLVER = "scipy-highs"
 
 
 def value_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLVER) -> dict:
-    """``{"min", "max", "status"}`` of ``c'x`` over the rigid set at instant ``i``, by two
-    cold LPs through the registry (:func:`joined_ends` says what the ends become).
+    """``{"min", "max", "status"}`` of ``c'x`` over the rigid set at instant ``i``
+    (:func:`joined_ends` says what the ends become): by the warm ranging as
+    :func:`intervals` does, else by :func:`cold_range`.
+    """
+    if solver == INTERVAL_SOLVER and HAVE_HIGHSPY:
+        return _warm_range(op, i, c, ranges(feasibility_problem(op, i), c[None]), 0, solver)
+    return cold_range(op, i, c, solver)
+
+
+def cold_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLVER) -> dict:
+    """:func:`value_range` by two cold LPs through the registry, one per end: the
+    reference the warm ranging falls back to.
     """
     ends, statuses = [], []
     for lp in range_problems(op, i, c):
@@ -262,7 +272,7 @@ def intervals(op: Operator, i: int, solver: str = INTERVAL_SOLVER) -> dict[str, 
     The others' ends come from :func:`~cardan_forces.solvers.ranging.ranges` (one warm
     HiGHS model per instant, only the objective changing) when ``solver`` is
     :data:`INTERVAL_SOLVER` and ``highspy`` is installed; an end it does not answer
-    (a failed or unverified solve) is solved again cold (:func:`value_range`), as is
+    (a failed or unverified solve) is solved again cold (:func:`cold_range`), as is
     every end with another ``solver``.
     """
     return _intervals_at(op, i, determinacy(op, i), solver)
@@ -292,13 +302,13 @@ def _intervals_at(op: Operator, i: int, det, solver: str) -> dict[str, dict]:
 
 def _warm_range(op: Operator, i: int, c: np.ndarray, found, k: int, solver: str) -> dict:
     """Row ``k`` of the warm ranging ``found`` as :func:`joined_ends` has it; solved
-    cold (:func:`value_range`) when that row is absent or an end was not answered.
+    cold (:func:`cold_range`) when that row is absent or an end was not answered.
     """
     if found is None or found.feasible is not Status.SOLVED:
-        return value_range(op, i, c, solver)
+        return cold_range(op, i, c, solver)
     statuses = found.statuses[k]
     if any(s not in (Status.SOLVED, Status.UNBOUNDED) for s in statuses):
-        return value_range(op, i, c, solver)
+        return cold_range(op, i, c, solver)
     ends = [None if s is not Status.SOLVED else float(v)
             for s, v in zip(statuses, (found.low[k], found.high[k]))]
     return joined_ends(op, i, c, ends, statuses)

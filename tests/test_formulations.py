@@ -121,10 +121,10 @@ def test_interval_ends_never_cross(paper_op, monkeypatch):
     c = np.eye(len(paper_op.names))[j]
     slack = interval_slack(paper_op, 0, c)
     _crossing_ends(monkeypatch, j, 250.0, 0.1 * slack)
-    near = study.value_range(paper_op, 0, c)
+    near = study.cold_range(paper_op, 0, c)
     assert near["min"] == near["max"] == pytest.approx(250.0, abs=slack)
     _crossing_ends(monkeypatch, j, 250.0, 10 * slack)
-    far = study.value_range(paper_op, 0, c)
+    far = study.cold_range(paper_op, 0, c)
     assert far["min"] is None and far["max"] is None and far["status"] == "inconsistent"
 
 

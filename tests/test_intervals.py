@@ -81,7 +81,7 @@ def test_warm_intervals_agree_with_cold_lps(name, times):
         assert not det.determinate.all()
         for j in np.flatnonzero(~det.determinate):
             c = np.eye(len(op.names))[j]
-            cold, got = study.value_range(op, i, c), warm[op.names[j]]
+            cold, got = study.cold_range(op, i, c), warm[op.names[j]]
             assert got["status"] == cold["status"] == "solved", (name, op.names[j])
             for side in ("min", "max"):
                 assert (got[side] is None) == (cold[side] is None), (name, op.names[j], side)
@@ -99,3 +99,21 @@ def test_a_history_is_the_intervals_of_its_instants():
         for j, entry in enumerate(study.intervals(op, k).values()):
             for side, got in (("min", history.min[k, j]), ("max", history.max[k, j])):
                 assert (entry[side] is None and np.isnan(got)) or got == entry[side]
+
+
+def test_the_range_of_a_combination_agrees_with_cold_lps():
+    """:func:`value_range` of a linear form over several components (as the figures'
+    summed axial loads are) equals the cold LPs' range."""
+    op = build_operator(simulate(load_scene("paper"), [0.3]))
+    det = determinacy(op, 0)
+    free = np.flatnonzero(~det.determinate)
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        c = np.zeros(len(op.names))
+        c[rng.choice(free, 3, replace=False)] = rng.normal(size=3)
+        got, cold = study.value_range(op, 0, c), study.cold_range(op, 0, c)
+        assert got["status"] == cold["status"]
+        for side in ("min", "max"):
+            assert (got[side] is None) == (cold[side] is None)
+            if cold[side] is not None:
+                assert got[side] == pytest.approx(cold[side], abs=interval_slack(op, 0, c))
