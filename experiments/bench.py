@@ -8,7 +8,8 @@ package's ``solve`` — conversion, the solver, the checks — split in every ro
   the formulation's own start), ``warm`` (the previous answer as start, for backends
   that declare a warm start) and ``batched`` (backends that solve a formulation's batch
   at once: NumPy for the least-norm family, moreau for the conic forms). A per-instant
-  run stops after ``--budget-s`` seconds (the paper's method, the baseline, never does).
+  run stops after ``--budget-s`` seconds (the paper's baseline, its default backend
+  warm-started, never does).
 - **Accuracy vs time** on evenly spaced instants over the tolerance ladder and each
   backend's defaults, accuracy measured by the package's relative optimality measures
   (:mod:`.bench_metrics`): success per level, Pareto fronts, Dolan-Moré performance
@@ -66,12 +67,13 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
         new, batched = runs.throughput(prepared, solvers, budget_s)
         rows += new
         stages.update({(name, solver): parts for solver, parts in batched.items()})
-        new, references[name] = runs.accuracy(prepared, solvers, samples, ladder, budget_s)
+        found = runs.references(prepared, samples)
+        new, references[name] = runs.accuracy(prepared, solvers, samples, ladder, budget_s,
+                                              found)
         acc_rows += new
         if isinstance(prepared.problems[0], (LS, QP, Conic)):
             problems |= {f"{name}_{int(i):04d}": prepared.problems[int(i)] for i in samples}
-            found = runs.references(prepared, samples)[0] or {}
-            forces |= {f"{name}_{i:04d}": x for i, (x, _) in found.items()}
+            forces |= {f"{name}_{i:04d}": x for i, (x, _) in (found[0] or {}).items()}
     return {"rows": rows, "acc_rows": acc_rows, "stages": stages, "references": references,
             "setup": setup, "conic": conic, "view_problems": problems,
             "view_references": forces}
