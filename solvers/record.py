@@ -5,6 +5,11 @@ An adapter reports an :class:`Outcome` in the solver's own variable ``z``;
 with ``problem.checks`` and decides the final :class:`Status`. The solver's word is only
 an upper bound: a reported success whose residuals exceed :data:`ACCEPT` becomes
 ``inaccurate``, and a success with NaN or inf output becomes ``failed``.
+
+:func:`finalize_all` judges the outcomes of many instants at once (one vectorized pass
+per problem structure: residuals, the package's optimality and the solver's); a
+per-instant loop calls it once at its end (``registry.solve_unchecked``, ``check``),
+and :func:`finalize` is its one-instant case, so every path follows one rule.
 """
 
 from __future__ import annotations
