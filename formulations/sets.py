@@ -2,7 +2,9 @@
 
 For every named component ``x_j`` at one instant, the interval ``[min x_j, max x_j]``
 over ``{A x = b, end faces >= 0}`` (and the slip joints' friction bounds): two LPs
-per component. An end is ``None`` where
+per component, all over one feasible set, so the study layer solves an instant's LPs
+as one warm model with only the objective changing
+(:mod:`cardan_forces.solvers.ranging`). An end is ``None`` where
 the LP is unbounded (the component can grow without limit along the null space).
 Together with the null-space dimension this is the rigid model's whole answer for an
 indeterminate force; any single number (least norm, the paper's fsolve, a compliance
