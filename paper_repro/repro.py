@@ -946,9 +946,11 @@ def _engine_cost_lines(work: dict, runs: _Runs) -> list[str]:
     runs_e = work["result"].runs
     span = max(work["result"].op.t[-1] - work["result"].op.t[0], 1e-12)
     per = ", ".join(f"`{k}` {r.wall_s / span:.2f}" for k, r in runs_e.items())
-    pen = [(name, r.wall_s / max(r.t[-1] - r.t[0], 1e-12)) for name, r in runs.penalties.items()]
-    beside = ("; the penalty simulation " + ", ".join(f"`{n}` {s:.2f}" for n, s in pen)
-              + " s per simulated second (it ran in worker processes at the same time)"
+    pen = [(name, r.wall_s / max(r.t[-1] - r.t[0], 1e-12), r.cpu_s / max(r.t[-1] - r.t[0], 1e-12))
+           for name, r in runs.penalties.items()]
+    beside = ("; the penalty simulation " + ", ".join(f"`{n}` {w:.2f} ({c:.2f} of CPU)"
+                                                      for n, w, c in pen)
+              + " s per simulated second (in worker processes, at the same time)"
               if pen else "; no penalty simulation in this run")
     return [f"- cost (this run): MuJoCo {per} s of wall time per simulated second "
             f"({next(iter(runs_e.values())).steps / span:.0f} RK4 steps per second){beside}; "
