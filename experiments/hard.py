@@ -24,7 +24,6 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -491,7 +490,7 @@ def run(args) -> int:
     instants = QUICK_INSTANTS if args.quick else INSTANTS
     runs, skipped = [], []
     for k, case in enumerate(progress.bar(cases, "hard", unit="case"), 1):
-        print(f"hard: case {k}/{len(cases)} {case.name}", file=sys.stderr, flush=True)
+        progress.line(f"hard: case {k}/{len(cases)} {case.name}")
         variant = applies(case, args.scene)
         if isinstance(variant, NotApplicable):
             skipped.append(variant)

@@ -60,3 +60,15 @@ def ticks(total: int, desc: str, unit: str = "it",
     with tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, leave=False,
               dynamic_ncols=True, mininterval=0.5) as counter:
         yield lambda _message: counter.update()
+
+
+def line(message: str) -> None:
+    """One progress line on stderr (none with ``--quiet``); above a bar being drawn,
+    written through tqdm so the bar is redrawn under it, not torn.
+    """
+    if quiet():
+        return
+    if shown():
+        tqdm.write(message, file=sys.stderr)
+    else:
+        print(message, file=sys.stderr, flush=True)

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import csv
 import math
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -263,8 +262,7 @@ def _count(text: str) -> int:
 
 def run(args) -> int:
     """Write the report; the paths written on stdout, progress on stderr."""
-    say = None if bars.quiet() else (lambda m: print(m, file=sys.stderr, flush=True))
-    for path in run_report(args.scene, Path(args.out), args.instants, progress=say,
+    for path in run_report(args.scene, Path(args.out), args.instants, progress=bars.line,
                            formats=args.format):
         print(path)
     return 0

@@ -415,7 +415,7 @@ def run(args) -> int:
         return 2
     try:
         result = sweep(study, Path(args.out), args.workers, client,
-                       progress=lambda m: print(m, file=sys.stderr, flush=True))
+                       progress=progress.line)
     except SweepError as err:
         print(f"cardan: error: {' '.join(str(err).split())}", file=sys.stderr)
         return 2

@@ -10,8 +10,6 @@ progress lines on stderr, the check of ``--t`` against a scene's span and JSON o
 
 from __future__ import annotations
 
-import sys
-
 from cardan_forces.experiments import progress as progress_bars
 from cardan_forces.experiments.environment import json_text
 
@@ -24,8 +22,7 @@ def progress(message: str) -> None:
     """One line of progress on stderr (stdout stays the command's answer; none with
     ``--quiet``).
     """
-    if not progress_bars.quiet():
-        print(message, file=sys.stderr, flush=True)
+    progress_bars.line(message)
 
 
 def print_json(value) -> None:
