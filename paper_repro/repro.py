@@ -34,7 +34,17 @@ from cardan_forces.driveline.kinematics import kinematics
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene
-from cardan_forces.experiments import engine as engine_study
+from cardan_forces.experiments.engine import (
+    FIGURE_SETTINGS,
+    SETTINGS,
+    agreement_lines,
+    compare,
+    engine_runs,
+    settle_s,
+)
+from cardan_forces.experiments.engine import (
+    spread as softness_spread,
+)
 from cardan_forces.experiments.environment import machine, number_text, versions
 from cardan_forces.experiments.progress import bar
 from cardan_forces.experiments.study import value_range
@@ -865,16 +875,16 @@ def _engine_work(scene: Scene, times: np.ndarray, progress) -> dict:
     draws: the study (every component against its interval and the formulations at
     :data:`ENGINE_INSTANTS` instants), the figure's rigid band, and the wall time of it.
     """
-    settings = [s for s in engine_study.SETTINGS if s.label in engine_study.FIGURE_SETTINGS]
+    settings = [s for s in SETTINGS if s.label in FIGURE_SETTINGS]
     window = times[times <= times[0] + ENGINE_S + 1e-12]
     progress(f"repro: MuJoCo on the first {window[-1] - window[0]:g} s, {len(settings)} "
              "softness settings ...")
     start = time.perf_counter()
     op = build_operator(simulate(scene, window))
-    runs = engine_study.engine_runs(op, settings)
-    settled = np.flatnonzero(op.t >= op.t[0] + engine_study.settle_s(runs))
+    runs = engine_runs(op, settings)
+    settled = np.flatnonzero(op.t >= op.t[0] + settle_s(runs))
     picks = np.linspace(0, len(settled) - 1, min(ENGINE_INSTANTS, len(settled)))
-    result = engine_study.compare(op, runs, settled[picks.round().astype(int)])
+    result = compare(op, runs, settled[picks.round().astype(int)])
     bounds = set_bounds(op, bearing_quantities(op), ENGINE_BOUND_INSTANTS)
     return {"result": result, "bounds": bounds, "wall_s": time.perf_counter() - start,
             "version": engine_mujoco.mujoco_version()}
@@ -889,7 +899,7 @@ def _engine_section(work: dict, runs: _Runs, out: Path, formats):
     op, runs_e = result.op, result.runs
     csv = figures.engine_figure(op, {k: r.forces for k, r in runs_e.items()}, bounds, out,
                                 formats)
-    settle = engine_study.settle_s(runs_e)
+    settle = settle_s(runs_e)
     lines = [
         f"MuJoCo {work['version']}, forward simulation of `{op.scene.name}` from its start "
         f"over {op.t[-1] - op.t[0]:g} s ({len(op.t)} instants), every bearing a soft "
@@ -901,7 +911,7 @@ def _engine_section(work: dict, runs: _Runs, out: Path, formats):
         "runs the full study (more settings, more instants).",
         *_engine_load_lines(op, result, bounds, settle), "",
         "Every component against its rigid interval and the formulations:", "",
-        *engine_study.agreement_lines(result)[2:], "",
+        *agreement_lines(result)[2:], "",
         *_engine_cost_lines(work, runs)]
     return ("MuJoCo beside the rigid set: input shaft bearing loads", csv, lines)
 
@@ -931,12 +941,12 @@ def _engine_load_lines(op: Operator, result, bounds, settle: float) -> list[str]
             f"{np.nanmax(loads[first][q][ok]):.1f} N; every setting inside the rigid band at "
             f"{inside.sum()} of {checked.sum()} instants checked; the settings move it by "
             f"up to {moved:.1f} N{share}")
-    spread = engine_study.spread(result)
+    moves = softness_spread(result)
     det = result.determinate
     lines.append(f"- all components: the settings move the determinate ones by up to "
-                 f"{number_text(np.nanmax(spread[det], initial=0.0), '.3g')}, the "
+                 f"{number_text(np.nanmax(moves[det], initial=0.0), '.3g')}, the "
                  f"indeterminate ones by up to "
-                 f"{number_text(np.nanmax(spread[~det], initial=0.0), '.3g')} (N, N m): "
+                 f"{number_text(np.nanmax(moves[~det], initial=0.0), '.3g')} (N, N m): "
                  "the engine's softness, not the machine, picks the member of the set")
     return lines
 

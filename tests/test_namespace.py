@@ -34,9 +34,10 @@ def test_layers_import_only_downwards():
             assert not above, f"{path.name} imports {above}"
 
 
-PAPER_REPRO_MAY_USE = {"study", "environment", "progress", "images"}
+PAPER_REPRO_MAY_USE = {"study", "environment", "progress", "images", "engine"}
 """What paper_repro takes from experiments: the study layer, the run's environment, the
-progress bars and the image files shared with ``cardan report``."""
+progress bars, the image files shared with ``cardan report`` and MuJoCo's comparison
+with the rigid set (``cardan engine``), which repro draws as a method."""
 
 
 def test_paper_repro_uses_experiments_one_way():
