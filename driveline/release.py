@@ -20,6 +20,7 @@ degree of freedom has exactly one dependent Newton-Euler row, the motion's).
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 from itertools import combinations
 from math import comb
@@ -32,6 +33,7 @@ from .elements import check_elements
 from .equilibrium import Operator, build_operator
 from .modes import Mode, counts, name_modes
 from .scene import Scene, SceneError, SlipJoint
+from .support import check_loads
 
 SLIP_PITCH_RADIUS_M = 0.02
 """Pitch radius of a spline a release adds (m; an assumption, see the module doc)."""
@@ -277,6 +279,32 @@ def _validated(scene: Scene, releases) -> Scene | None:
         return None
 
 
+@functools.lru_cache(maxsize=256)
+def _valid_release(scene: Scene, release: Release) -> bool:
+    """Whether ``scene`` with ``release`` alone passes validation (once per release)."""
+    return _validated(scene, (release,)) is not None
+
+
+def _valid_set(scene: Scene, releases) -> bool:
+    """Whether a release set that passed the search's checks (:func:`_try`: element
+    checks, rank at the instant) is valid as a scene, validating only what a set adds to
+    its releases. The fields a release writes are its own element's (a bearing's kind;
+    a slip joint inside its shaft, off its bearings, one per shaft), so they are valid
+    when each release alone validates (:func:`_valid_release`, cached); releases change
+    neither inertias nor torques, so the motion's bound stays the scene's; the support
+    check is implied by the rank test (a line held at one instant is held at the
+    generic configuration, where the rank is not lower); what remains is the loads a
+    line at rest can carry (:func:`check_loads`).
+    """
+    if not all(_valid_release(scene, r) for r in releases):
+        return False
+    try:
+        check_loads(_variant(scene, releases))
+    except SceneError:
+        return False
+    return True
+
+
 def _preference(scene: Scene, releases) -> tuple[int, int, int]:
     """Smaller is better: shafts with two or more bearings left without a locating one
     (a design keeps one per such shaft; a lone centre bearing may float), slip joints
@@ -295,9 +323,10 @@ def advise(motion: Motion, i: int) -> Advice:
     only end-face pair modes; among those of the smallest size prefer by
     :func:`_preference`, then the first in :func:`candidates` order. Each set is
     verified by re-running determinacy on the released line at instant ``i`` (the
-    search builds every operator at that instant alone, :func:`at_instant`), and the
-    sets kept are validated as scenes (:func:`released_scene`); the advice's operator
-    is the released line's over all of ``motion``'s instants. SceneError when no set
+    search builds every operator at that instant alone, :func:`at_instant`); the sets
+    kept are valid as scenes (:func:`_valid_set`), the one advised validated whole
+    (:func:`released_scene`), and its operator is the released line's over all of
+    ``motion``'s instants. SceneError when no set
     of up to :data:`MAX_RELEASES` works; :class:`ReleaseSearchTooLarge` (a SceneError),
     before any work, when the search could need more than :data:`MAX_RELEASE_SETS` sets.
     """
@@ -323,13 +352,15 @@ def advise(motion: Motion, i: int) -> Advice:
             if c["axial split"] == 0 and c["closed loop"] == 0:
                 found.append((_preference(result[0].scene, combo), combo, result))
         found.sort(key=lambda f: f[0])  # stable: candidates order breaks ties
-        kept = [(scene, f) for f in found
-                if (scene := _validated(motion.scene, f[1])) is not None]
-        if kept:
-            scene, (_, combo, (_, rmodes, rdet)) = kept[0]
+        kept = [f for f in found if _valid_set(motion.scene, f[1])]
+        for _, combo, (_, rmodes, rdet) in kept:
+            scene = _validated(motion.scene, combo)  # the advice's scene, validated whole
+            if scene is None:
+                continue
             return Advice(releases=combo, scene=scene, modes=tuple(modes),
                           released_modes=tuple(rmodes), determinacy=det, released=rdet,
                           operator=build_operator(dataclasses.replace(motion, scene=scene)),
-                          alternatives=tuple(f[1] for _, f in kept[1:]), tried=tried)
+                          alternatives=tuple(f[1] for f in kept if f[1] != combo),
+                          tried=tried)
     raise SceneError(f"scene {motion.scene.name!r}: no set of up to {MAX_RELEASES} releases "
                      "leaves only end-face pair modes")

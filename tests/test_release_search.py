@@ -30,3 +30,21 @@ def test_advice_on_a_whole_motion_is_the_advice_at_its_instant():
     assert len(whole.operator.t) == len(motion.t)  # the released line over every instant
     assert [m.release for m in named_modes(motion, 4)] == \
         [m.release for m in named_modes(simulate(scene, [motion.t[4]]), 0)]
+
+
+@pytest.mark.parametrize("name", ["paper", "paper-slip"])
+def test_the_sets_the_search_keeps_are_those_that_validate_whole(name):
+    """Every release set that passes the search's checks is kept exactly when the
+    released scene validates whole (the cheaper check validates each release once)."""
+    from itertools import combinations
+
+    from cardan_forces.driveline import release
+    scene = load_scene(name)
+    one = simulate(scene, [0.3])
+    passed = [combo for size in range(4) for combo in combinations(release.candidates(scene),
+                                                                      size)
+              if release._try(one, combo) is not None]
+    assert len(passed) > 5
+    for combo in passed:
+        assert release._valid_set(scene, combo) == (release._validated(scene, combo)
+                                                    is not None), combo
