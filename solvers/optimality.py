@@ -49,6 +49,9 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
+from cardan_forces.formulations.problems import LS, QP, Conic
+
+from .conversions import convert
 
 ACTIVE_RTOL = 1e-7
 """A constraint counts as active when its slack is below this, relative to
@@ -221,8 +224,6 @@ def unique_optimum(problem) -> bool:
     (positive weights) or a positive definite ``P`` (strictly convex objective).
     A distance to a reference point means something only then.
     """
-    from cardan_forces.formulations.problems import LS, QP, Conic
-
     if isinstance(problem, LS):
         return True
     if isinstance(problem, (QP, Conic)) and problem.P is not None:
@@ -238,10 +239,6 @@ def objective_value(problem, z) -> float | None:
     """The objective ``1/2 z'Pz + q'z`` of an LS, QP, LP or conic problem at ``z`` (in
     its conic form; the same value along every conversion), ``None`` for the others.
     """
-    from cardan_forces.formulations.problems import Conic
-
-    from .conversions import convert
-
     conic = convert(problem, (Conic,))
     if conic is None or z is None:
         return None
@@ -364,8 +361,6 @@ def conic_key(problem) -> tuple | None:
     """What T problems must share to be stacked by :func:`stack_conic` (``None``: no
     conic form).
     """
-    from cardan_forces.formulations.problems import LS, QP, Conic
-
     if isinstance(problem, QP):
         return (QP, problem.n, *(None if (v := getattr(problem, k)) is None else np.shape(v)
                                  for k in ("A", "G")),
@@ -374,8 +369,6 @@ def conic_key(problem) -> tuple | None:
         return LS, np.shape(problem.A), problem.weights is None
     if isinstance(problem, Conic):
         return Conic, np.shape(problem.A), tuple(problem.cones), problem.P is None
-    from .conversions import convert
-
     conic = convert(problem, (Conic,))
     return None if conic is None else (type(problem), *conic_key(conic)[1:])
 
@@ -386,10 +379,6 @@ def stack_conic(problems) -> Stacked:
     without building T problems where the problems' own data stack (least norms, QPs
     whose bounds are finite in the same places).
     """
-    from cardan_forces.formulations.problems import LS, QP, Conic
-
-    from .conversions import convert
-
     if isinstance(problems[0], LS):
         return _stack_ls(problems)
     stacked = _stack_qp(problems) if isinstance(problems[0], QP) else None
