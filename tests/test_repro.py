@@ -1,5 +1,7 @@
 """The repro report's verdicts and the figures' drawing rules."""
 
+import re
+
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
@@ -185,6 +187,24 @@ def test_one_penalty_simulation_per_scene_and_the_runs_listed(tmp_path, monkeypa
     report = repro.run_repro(figs=(11,), out=tmp_path, quick=True, methods=repro.METHODS,
                              progress=lambda s: None).read_text()
     assert made == [] and "penalty simulations: not made (`--no-penalty`" in report
+
+
+def test_the_runs_list_says_what_the_compiled_integrator_measured(paper):
+    """The compiled integrator does not time its right-hand sides one by one (``rhs_s``
+    NaN): the runs list gives the cost it did measure and no non-finite number."""
+    from cardan_forces.driveline.penalty import COMPILED, PenaltyResult
+
+    t = np.array([0.0, 0.5])
+    runs = repro._Runs(t, True, lambda _: None)
+    runs.penalties["paper-penalty"] = PenaltyResult(
+        paper, t, np.zeros((3, 2)), {}, np.zeros(2), wall_s=1.0, nfev=2000, njev=100,
+        nlu=300, nsteps=1000, method=COMPILED, status=0, message="ok", kernel="numba",
+        cpu_s=0.75)
+    runs.uses["paper-penalty"] = ["Fig. 11"]
+    text = "\n".join(runs.lines())
+    assert not re.search(r"(?<![\w-])(nan|inf)(?!\w)", text, re.IGNORECASE), text
+    assert "2.00 s per simulated second" in text  # 1 s of wall over 0.5 s simulated
+    assert "1000.0 us per step" in text
 
 
 def _hide(monkeypatch, *names):
