@@ -82,16 +82,16 @@ def _inf(v: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=64)
-def _layout(cones: tuple) -> tuple:
-    """Row indices of the cone kinds: nonneg rows, second-order blocks padded to the
-    longest (apex, members, mask), power blocks (k, 3) and their alphas.
+def cone_layout(cones: tuple) -> tuple:
+    """Row indices of the cone kinds: zero rows, nonneg rows, second-order blocks padded
+    to the longest (apex, members, mask), power blocks (k, 3) and their alphas. The one
+    reading of a cone list by index, shared by the force view and the solver view.
     """
-    nonneg, socs, pows, alphas = [], [], [], []
+    zero, nonneg, socs, pows, alphas = [], [], [], [], []
     for kind, size, rows in blocks(cones):
         idx = list(range(rows.start, rows.stop))
-        if kind == "nonneg":
-            nonneg += idx
-        elif kind == "soc":
+        {"zero": zero, "nonneg": nonneg}.get(kind, []).extend(idx)
+        if kind == "soc":
             socs.append(idx)
         elif kind == "pow":
             pows.append(idx)
@@ -102,9 +102,8 @@ def _layout(cones: tuple) -> tuple:
     for k, r in enumerate(socs):
         members[k, :len(r) - 1] = r[1:]
         mask[k, :len(r) - 1] = 1.0
-    apex = np.array([r[0] for r in socs], int)
-    return (np.array(nonneg, int), apex, members, mask, np.array(pows, int).reshape(-1, 3),
-            np.array(alphas))
+    return (np.array(zero, int), np.array(nonneg, int), np.array([r[0] for r in socs], int),
+            members, mask, np.array(pows, int).reshape(-1, 3), np.array(alphas))
 
 
 def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
@@ -113,7 +112,7 @@ def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
     K* of the zero cone is free; the nonnegative and second-order cones are self-dual;
     the dual power cone is ``(u/a)^a (v/(1-a))^(1-a) >= |w|, u, v >= 0``.
     """
-    nonneg, apex, members, mask, pows, alphas = _layout(tuple(cones))
+    _, nonneg, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
     worst = np.maximum(0.0, -y[:, nonneg]).max(axis=1, initial=0.0)
     if len(apex):
         spread = np.sqrt(np.einsum("tkj,tkj->tk", y[:, members] * mask, y[:, members] * mask))

@@ -34,12 +34,11 @@ instant.
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass
 
 import numpy as np
 
-from .optimality import blocks, dual_cone_violation
+from .optimality import cone_layout, dual_cone_violation
 
 
 @dataclass(frozen=True)
@@ -80,36 +79,12 @@ def _Pz(P, z: np.ndarray) -> np.ndarray:
     return z @ P.T if P.ndim == 2 else np.matmul(P, z[:, :, None])[:, :, 0]
 
 
-@functools.lru_cache(maxsize=64)
-def _primal_layout(cones: tuple) -> tuple:
-    """Row indices per cone kind: zero rows, nonneg rows, second-order blocks (apex,
-    members padded, mask) and power blocks (k, 3) with their alphas.
-    """
-    zero, nonneg, socs, pows, alphas = [], [], [], [], []
-    for kind, size, rows in blocks(cones):
-        idx = list(range(rows.start, rows.stop))
-        {"zero": zero, "nonneg": nonneg}.get(kind, []).extend(idx)
-        if kind == "soc":
-            socs.append(idx)
-        elif kind == "pow":
-            pows.append(idx)
-            alphas.append(float(size))
-    width = max((len(r) - 1 for r in socs), default=0)
-    members = np.zeros((len(socs), width), int)
-    mask = np.zeros((len(socs), width))
-    for k, r in enumerate(socs):
-        members[k, :len(r) - 1] = r[1:]
-        mask[k, :len(r) - 1] = 1.0
-    return (np.array(zero, int), np.array(nonneg, int), np.array([r[0] for r in socs], int),
-            members, mask, np.array(pows, int).reshape(-1, 3), np.array(alphas))
-
-
 def cone_violation(cones, s: np.ndarray) -> np.ndarray:
     """``s in K`` violated by how much, per instant ((T,), absolute, >= 0): ``|s_i|`` on
     zero rows, ``-s_i`` on nonnegative rows, ``||s_1:|| - s_0`` on a second-order block,
     ``|w| - u^a v^(1-a)`` (or a negative ``u, v``) on a power block.
     """
-    zero, nonneg, apex, members, mask, pows, alphas = _primal_layout(tuple(cones))
+    zero, nonneg, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
     worst = np.abs(s[:, zero]).max(axis=1, initial=0.0)
     worst = np.maximum(worst, (-s[:, nonneg]).max(axis=1, initial=0.0))
     if len(apex):
