@@ -11,8 +11,10 @@ record built per LP.
 Each answer is judged here, not trusted: an optimum whose primal residuals exceed
 :data:`~cardan_forces.solvers.record.ACCEPT` (relative to the problem's scale) is
 ``failed``, so that the caller solves that bound again cold through the registry
-(:func:`~cardan_forces.solvers.registry.solve`). Without the optional ``highspy``
-package :data:`HAVE_HIGHSPY` is False and callers solve every bound cold.
+(:func:`~cardan_forces.solvers.registry.solve`). ``highspy`` is a core dependency
+(SciPy's bundled HiGHS, presolving an LP with a zero objective, returned a point 4e4 N
+off ``A x = b`` on a frictionless slip joint line and called it optimal); an install
+without it has :data:`HAVE_HIGHSPY` False and solves every bound cold.
 """
 
 from __future__ import annotations
