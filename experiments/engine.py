@@ -143,13 +143,17 @@ def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray) -> EngineStudy:
         intervals[i], rigid[i] = _intervals(op, int(i)), det.min_norm
         forms[i] = _formulation_forces(op, int(i))
         for label, r in runs.items():
-            comparisons.append(_compare_one(op, int(i), label, r.forces[i], det,
-                                            intervals[i], forms[i]))
+            comparisons.append(compare_instant(op, int(i), label, r.forces[i], det,
+                                               intervals[i], forms[i]))
     return EngineStudy(op, runs, sampled, settled, intervals, det0.determinate, rigid,
                        tuple(comparisons), forms)
 
 
-def _compare_one(op, i, label, x, det, interval, forms) -> InstantComparison:
+def compare_instant(op, i, label, x, det, interval, forms) -> InstantComparison:
+    """The engine's forces ``x`` at instant ``i`` against the rigid model (module doc):
+    ``det`` its determinacy there, ``interval`` (n, 2) each component's rigid interval
+    (+-inf where unbounded), ``forms`` formulation forces by name (may be empty).
+    """
     b = op.b[i]
     residual = float(np.linalg.norm(op.A[i] @ x - b) / np.linalg.norm(b))
     d = det.determinate

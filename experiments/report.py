@@ -10,7 +10,9 @@ Written as ``report.csv`` (long format, with each component's unit), ``report.pn
 (and ``.svg``/``.pdf`` with ``--format``: one panel per contact and unit, a slip
 joint's forces in N apart from its moments in N m; each component's legend entry says
 whether it is determinate or which side of its set is open) and ``report.md`` (the
-determinacy table and the named modes).
+determinacy table and the named modes). With ``--engine``, MuJoCo's forces under its
+default softness (:mod:`cardan_forces.experiments.engine`) are drawn as open circles on
+every panel and ``report.md`` says how they sit in the rigid set (:class:`EngineOverlay`).
 """
 
 from __future__ import annotations
@@ -21,15 +23,18 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from cardan_forces.driveline import engine_mujoco
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Link, Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.release import named_modes
+from cardan_forces.experiments import engine
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import format_list, save
 from cardan_forces.experiments.study import interval_history, solve_over_time
+from cardan_forces.formulations.convex import NotApplicable
 
 INSTANTS = 41
 """Instants of the report by default (each costs two LPs per component)."""
@@ -51,21 +56,116 @@ def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:
             "determinate": sets.determinate}
 
 
-def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path) -> None:
+def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path,
+              overlay: EngineOverlay | None = None) -> None:
     """Long format, one row per component x instant; an empty cell where the answer
-    is missing (not solved) or an end of the interval is unbounded.
+    is missing (not solved) or an end of the interval is unbounded. With ``overlay``, a
+    column ``engine_N``: MuJoCo's value (empty before its settling).
     """
+    extra = ["engine_N"] if overlay is not None else []
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s", "component", "contact", "kind", f"{SELECTION}_N", "min_N", "max_N",
-                    "determinate", "unit"])
+                    "determinate", "unit", *extra])
         for c in op.contacts:
             for j, unit in zip(c.columns, c.units or ("N",) * len(c.columns)):
                 for i, t in enumerate(op.t):
                     w.writerow([f"{t:.6g}", op.names[j], c.name, c.kind,
                                 *(number_text(h[k][i, j], ".9g", "")
                                   for k in ("value", "min", "max")),
-                                bool(h["determinate"][i, j]), unit])
+                                bool(h["determinate"][i, j]), unit,
+                                *(number_text(overlay.forces[i, j], ".9g", "")
+                                  for _ in extra)])
+
+
+@dataclass(frozen=True)
+class EngineOverlay:
+    """MuJoCo's forces at the report's instants under its default softness, from a
+    forward simulation of the scene's window, and how they sit in the rigid set.
+
+    ``forces`` (T, n; N, N m) is NaN before the engine's settling (the line starts
+    unloaded and sags into its soft constraints: :func:`engine.settle_s`), where it is
+    not compared; ``comparisons`` one per settled instant (residual of ``A x = b``,
+    largest determinate error, the indeterminate components outside their interval,
+    the distance from the drawn ``positive`` answer).
+    """
+
+    version: str
+    forces: np.ndarray
+    settle_s: float
+    comparisons: tuple[engine.InstantComparison, ...]
+    indeterminate: int
+    steps: int
+    wall_s: float
+
+
+def check_engine(scene) -> str:
+    """MuJoCo's version, before any work; :class:`NotApplicable` (one line) where the
+    scene has an element the engine cannot express or MuJoCo is not installed.
+    """
+    try:
+        engine_mujoco.check_expressible(scene)
+        return engine_mujoco.mujoco_version()
+    except engine_mujoco.EngineUnsupported as err:
+        raise NotApplicable(str(err)) from None
+
+
+def engine_overlay(op: Operator, h: dict[str, np.ndarray], version: str) -> EngineOverlay:
+    """MuJoCo (the first of :data:`engine.SETTINGS`, its default softness) on ``op``,
+    compared at every settled instant with the report's intervals ``h``.
+    """
+    run = engine.engine_runs(op, engine.SETTINGS[:1])[engine.SETTINGS[0].label]
+    settle = engine.settle_s({"": run})
+    settled = op.t - op.t[0] >= settle
+    comparisons, indeterminate = [], 0
+    for i in np.flatnonzero(settled):
+        det = determinacy(op, int(i))
+        interval = np.stack([np.nan_to_num(h["min"][i], nan=-np.inf),
+                             np.nan_to_num(h["max"][i], nan=np.inf)], axis=1)
+        drawn = h["value"][i]
+        forms = {SELECTION: drawn} if np.all(np.isfinite(drawn)) else {}
+        comparisons.append(engine.compare_instant(op, int(i), "default", run.forces[i], det,
+                                                  interval, forms))
+        indeterminate += int(np.sum(~det.determinate))
+    forces = np.where(settled[:, None], run.forces, np.nan)
+    return EngineOverlay(version, forces, settle, tuple(comparisons), indeterminate,
+                         run.steps, run.wall_s)
+
+
+def engine_lines(op: Operator, overlay: EngineOverlay) -> list[str]:
+    """``report.md``'s MuJoCo section: what was run, and over the settled instants the
+    residual, the determinate agreement and the inside/outside counts.
+    """
+    rows, soft = overlay.comparisons, engine.SETTINGS[0]
+    outside = [n for c in rows for n in c.outside]
+    span = op.t[-1] - op.t[0]
+    lines = ["", "## MuJoCo beside the rigid set", "",
+             f"MuJoCo {overlay.version}, forward simulation of the scene from its start under "
+             f"its default softness (`solref=\"{soft.solref()}\"`, "
+             f"`solimp=\"{soft.solimp}\"`), every bearing a soft `connect` equality; its "
+             "forces are the open circles on each panel, in the component's colour. "
+             f"Compared at the {len(rows)} of {len(op.t)} instants "
+             f"after the engine's settling ({overlay.settle_s:g} s from the start: the line "
+             "starts unloaded and sags into its constraints; not drawn before it).", ""]
+    if not rows:
+        return lines + ["No instant after the settling: nothing compared."]
+    closest = [c.closest[1] for c in rows if c.closest[0] == SELECTION]
+    lines += [
+        f"- residual of A x = b (relative): at most {_g(max(c.residual for c in rows))}",
+        "- determinate components: MuJoCo against the rigid value, at most "
+        f"{_g(max(c.determinate_error_N for c in rows))} (N, N m)",
+        f"- indeterminate components inside their interval: {overlay.indeterminate - len(outside)}"
+        f" of {overlay.indeterminate} (component x instant); outside: "
+        + (", ".join(f"{n} ({outside.count(n)})" for n in dict.fromkeys(outside)) or "none"),
+        f"- distance from the `{SELECTION}` line, ||x_engine - x|| / ||x||: at most "
+        f"{_g(max(closest, default=np.nan))}: within the set, the engine's softness, not the "
+        "machine, picks which member (`cardan engine` varies it)",
+        f"- cost: {overlay.wall_s:.1f} s for {span:g} s simulated ({overlay.steps} RK4 steps)"]
+    return lines
+
+
+def _g(value: float) -> str:
+    return number_text(value, ".3g")
 
 
 UNIT_AXIS = {"N": "force [N]", "N m": "moment [N m]"}
@@ -127,10 +227,12 @@ def set_words(lo: np.ndarray, hi: np.ndarray, determinate: np.ndarray) -> str:
                                   if k)
 
 
-def _draw(ax, op: Operator, h: dict[str, np.ndarray], panel: Panel) -> None:
+def _draw(ax, op: Operator, h: dict[str, np.ndarray], panel: Panel,
+          engine_forces: np.ndarray | None = None) -> None:
     """One panel: each component's selected value as a line, its rigid set in the same
     colour: shaded where both ends are finite; where one side is open, the finite end
-    dashed and hatched from it to the axis edge on the open side. The y range holds the
+    dashed and hatched from it to the axis edge on the open side; ``engine_forces``
+    (T, n), where given, as open circles in the same colour. The y range holds the
     lines and every finite end.
     """
     parts = []
@@ -143,8 +245,15 @@ def _draw(ax, op: Operator, h: dict[str, np.ndarray], panel: Panel) -> None:
         ax.fill_between(op.t, np.where(both, lo, np.nan), np.where(both, hi, np.nan),
                         color=f"C{k}", alpha=0.2, lw=0, zorder=1)
         parts.append((f"C{k}", both, lo, hi, h["value"][:, j]))
+        if engine_forces is not None:
+            ax.plot(op.t, engine_forces[:, j], ls="none", marker="o", ms=4.5, mfc="none",
+                    mew=1.1, color=f"C{k}", zorder=4)
+            parts[-1] += (engine_forces[:, j],)
+    if engine_forces is not None:
+        ax.plot([], [], ls="none", marker="o", mfc="none", color="0.3",
+                label="MuJoCo, default softness")
     low, high = _limits([v for _, _, *curves in parts for v in curves])
-    for colour, both, lo, hi, _ in parts:
+    for colour, both, lo, hi, *_ in parts:
         for bound, edge in ((lo, high), (hi, low)):  # a finite lower end: open above
             one_sided = np.where(np.isfinite(bound) & ~both, bound, np.nan)
             if np.isfinite(one_sided).any():
@@ -174,8 +283,10 @@ def _limits(curves: list[np.ndarray]) -> tuple[float, float]:
 
 
 def write_figure(op: Operator, h: dict[str, np.ndarray], stem: Path,
-                 formats=("png",)) -> list[Path]:
-    """Every :func:`panels` panel in a grid, written as ``stem.<format>`` per format."""
+                 formats=("png",), overlay: EngineOverlay | None = None) -> list[Path]:
+    """Every :func:`panels` panel in a grid, written as ``stem.<format>`` per format
+    (with ``overlay``, MuJoCo's forces on each).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -187,20 +298,25 @@ def write_figure(op: Operator, h: dict[str, np.ndarray], stem: Path,
     fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.1 * rows + 0.8),
                              squeeze=False, layout="constrained")
     for ax, panel in zip(axes.ravel(), grid):
-        _draw(ax, op, h, panel)
+        _draw(ax, op, h, panel, None if overlay is None else overlay.forces)
     for ax in axes.ravel()[len(grid):]:
         ax.set_visible(False)
     fig.suptitle(f"{op.scene.name}: the {SELECTION} selection (lines) and the rigid solution "
                  "set of each component (same colour): shaded where both ends are finite,\n"
                  "the finite end dashed where one side is open; each legend says per "
-                 "component whether it is determinate or which side of its set is open",
+                 "component whether it is determinate or which side of its set is open"
+                 + ("; MuJoCo's forces as open circles (default softness, after its "
+                    "settling)"
+                    if overlay is not None else ""),
                  fontsize=10)
     paths = save(fig, stem, formats, dpi=100)
     plt.close(fig)
     return paths
 
 
-def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path) -> None:
+def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path,
+             overlay: EngineOverlay | None = None) -> None:
+    """The determinacy table, the named modes and, with ``overlay``, MuJoCo's section."""
     det = determinacy(op, 0)
     lines = [f"# Loads of scene {op.scene.name}", "", op.scene.description, "",
              f"{len(op.t)} instants from {op.t[0]:g} to {op.t[-1]:g} s; rank {det.rank}, "
@@ -215,23 +331,31 @@ def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path) -> None:
                      f"{number_text(width[j], '.3g', 'unbounded')} |")
     lines += ["", "## Modes (null-space directions)", ""]
     lines += [f"- **{m.kind}**: {m.description}; release: {m.release}" for m in modes]
+    lines += engine_lines(op, overlay) if overlay is not None else []
     path.write_text("\n".join(lines) + "\n")
 
 
 def run_report(scene_spec: str, out: Path, instants: int = INSTANTS,
-               progress=None, formats=("png",)) -> list[Path]:
+               progress=None, formats=("png",), with_engine: bool = False) -> list[Path]:
     """Write ``report.csv``, ``report.<format>`` for each of ``formats`` and
-    ``report.md`` for one scene into ``out``; their paths.
+    ``report.md`` for one scene into ``out``; their paths. ``with_engine``: MuJoCo
+    beside the rigid set (refused before any work where it does not apply).
     """
     scene = load_scene(scene_spec)
+    version = check_engine(scene) if with_engine else None
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
     motion = simulate(scene, t)
     op = build_operator(motion)
     h = histories(op, progress)
+    overlay = None
+    if version is not None:
+        if progress is not None:
+            progress(f"report: MuJoCo over {t[-1] - t[0]:g} s simulated ...")
+        overlay = engine_overlay(op, h, version)
     out.mkdir(parents=True, exist_ok=True)
-    write_csv(op, h, out / "report.csv")
-    images = write_figure(op, h, out / "report", formats)
-    write_md(op, h, named_modes(motion, 0, op), out / "report.md")
+    write_csv(op, h, out / "report.csv", overlay)
+    images = write_figure(op, h, out / "report", formats, overlay)
+    write_md(op, h, named_modes(motion, 0, op), out / "report.md", overlay)
     return [out / "report.csv", *images, out / "report.md"]
 
 
@@ -245,6 +369,14 @@ def add_parser(subparsers) -> None:
                    help=f"instants over the scene's window (default {INSTANTS})")
     p.add_argument("--format", type=format_list, default=("png",),
                    help="comma-separated image formats (default png; any of png,svg,pdf)")
+    p.add_argument("--engine", action="store_true",
+                   help="also MuJoCo's forces (extra mujoco; default softness, a forward "
+                   "simulation of the whole window), as open circles on each panel, with their "
+                   "residual, determinate agreement and inside/outside counts in report.md. "
+                   "Off by default: the report is the rigid set, and the engine's answer "
+                   "is one member of it, picked by its constraint softness, not the machine "
+                   "(cardan engine varies it). Refused for a scene MuJoCo cannot express "
+                   "(e.g. quasi-static)")
     p.set_defaults(func=run)
 
 
@@ -263,6 +395,6 @@ def _count(text: str) -> int:
 def run(args) -> int:
     """Write the report; the paths written on stdout, progress on stderr."""
     for path in run_report(args.scene, Path(args.out), args.instants, progress=bars.line,
-                           formats=args.format):
+                           formats=args.format, with_engine=args.engine):
         print(path)
     return 0
