@@ -20,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from cardan_forces.cli import main
@@ -156,9 +156,16 @@ def answers_or_refuses(text: str) -> None:
                 check(strict(out))
 
 
+SLIP_FIRST = (Path(__file__).parent / "data" / "slip_in_first_shaft.toml").read_text()
+"""A line the property test found: a frictionless slip joint in the first of two shafts,
+every bearing locating. SciPy's HiGHS presolve called an infeasible point the optimum
+of its feasibility LP, and ``sets --json`` showed determinate components with null ends."""
+
+
 @settings(max_examples=6, derandomize=True, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(lines(most_shafts=4))
+@example(SLIP_FIRST)
 def test_every_command_answers_or_refuses_on_generated_lines(text):
     answers_or_refuses(text)
 
