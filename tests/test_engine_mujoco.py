@@ -158,3 +158,34 @@ def test_repro_runs_the_engine_by_default_where_it_is_installed():
     from cardan_forces.paper_repro import repro
 
     assert "engine" in repro.default_methods()
+
+
+def test_report_with_the_engine_overlays_members_of_the_rigid_set(tmp_path, capsys):
+    """``cardan report --engine`` on ``paper`` over its first 0.1 s (3 instants): the
+    engine's column is empty before the settling and after it every value lies in its
+    component's interval (the determinate ones on the rigid value); the report's counts
+    are those of its own CSV."""
+    import csv
+    import re
+
+    from cardan_forces.cli import main
+
+    scene = tmp_path / "short.toml"
+    assert main(["scene", "dump", "paper"]) == 0
+    text = capsys.readouterr().out
+    scene.write_text(re.sub(r"stop_s = [0-9.]+", "stop_s = 0.1", text))
+    out = tmp_path / "report"
+    assert main(["report", str(scene), "--instants", "3", "--engine", "--out", str(out),
+                 "--quiet"]) == 0
+    rows = list(csv.DictReader((out / "report.csv").read_text().splitlines()))
+    load = max(abs(float(r["positive_N"])) for r in rows)
+    settled = [r for r in rows if float(r["t_s"]) > 0]
+    assert all(r["engine_N"] == "" for r in rows if float(r["t_s"]) == 0)
+    for r in settled:
+        v = float(r["engine_N"])
+        lo = float(r["min_N"]) if r["min_N"] else -np.inf
+        hi = float(r["max_N"]) if r["max_N"] else np.inf
+        assert lo - RTOL * load <= v <= hi + RTOL * load, r
+    free = sum(r["determinate"] == "False" for r in settled)
+    md = (out / "report.md").read_text().split("## MuJoCo beside the rigid set")[1]
+    assert f"inside their interval: {free} of {free}" in md and "outside: none" in md

@@ -123,3 +123,43 @@ def test_report_writes_every_format_asked(tmp_path, capsys):
     assert (tmp_path / "report.svg").read_text().lstrip().startswith("<?xml")
     assert main(["report", "propshaft", "--format", "gif", "--out", str(tmp_path)]) == 2
     assert "--format" in capsys.readouterr().err
+
+
+def test_engine_forces_are_drawn_in_each_component_s_colour_and_held_by_the_range(op):
+    """``--engine``'s overlay: one marker curve per component, in its colour, with the
+    engine's values (NaN before the settling is left undrawn), and the y range holds a
+    value far outside the band."""
+    panel = _panel(op, "bearing.gearbox.rear")
+    x, y, z = panel.columns
+    h = _histories(op, {x: (0.0, -50.0, 80.0)})
+    forces = np.zeros((len(op.t), len(op.names)))
+    forces[:, x] = [NAN, 10.0, 20.0, 500.0]
+    forces[:, y] = 3.0
+    fig, ax = plt.subplots()
+    report._draw(ax, op, h, panel, forces)
+    marked = [line for line in ax.get_lines() if line.get_marker() == "o" and len(line.get_xdata())]
+    assert len(marked) == 3
+    solid = {line.get_color() for line in ax.get_lines() if line.get_linestyle() == "-"}
+    for line, j in zip(marked, (x, y, z)):
+        assert np.array_equal(np.asarray(line.get_ydata(), float), forces[:, j], equal_nan=True)
+        assert line.get_color() in solid
+    assert ax.get_ylim()[1] > 500
+    assert "MuJoCo, default softness" in [t.get_text() for t in ax.get_legend().get_texts()]
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("hide_mujoco", [False, True])
+def test_engine_refused_in_one_line_before_any_work(tmp_path, capsys, monkeypatch, hide_mujoco):
+    """A quasi-static scene (propshaft) cannot be simulated by the engine; without MuJoCo
+    the refusal says how to install it. One line, exit 2, nothing written."""
+    import sys
+
+    if hide_mujoco:
+        monkeypatch.setitem(sys.modules, "mujoco", None)
+        scene, words = "paper", "pip install"
+    else:
+        scene, words = "propshaft", "quasi-static"
+    assert main(["report", scene, "--engine", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("cardan: error:") and words in err[0]
+    assert not (tmp_path / "out").exists()
