@@ -81,7 +81,10 @@ def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path,
 @dataclass(frozen=True)
 class EngineOverlay:
     """MuJoCo's forces at the report's instants under its default softness, from a
-    forward simulation of the scene's window, and how they sit in the rigid set.
+    forward simulation of the scene's window, and how they sit in the rigid set. Each
+    is read at the engine step nearest its instant (at most half a step away, 0.125 ms
+    on ``paper``: an instant off the scene's grid adds ~1e-5 of the load to the
+    determinate error).
 
     ``forces`` (T, n; N, N m) is NaN before the engine's settling (the line starts
     unloaded and sags into its soft constraints: :func:`engine.settle_s`), where it is
