@@ -28,6 +28,7 @@ import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -35,7 +36,9 @@ from . import settings
 from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
 from .conversions import convert, reachable
 from .record import Outcome, Record, Status, finalize_all
-from .settings_profiles import Profile
+
+if TYPE_CHECKING:  # settings_profiles looks backends up here: a type-only import
+    from .settings_profiles import Profile
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
             "numpy_batched_", "moreau_", "reduced_")

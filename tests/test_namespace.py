@@ -1,5 +1,7 @@
 """One import namespace: only ``cardan_forces`` is installed; the README example runs."""
 
+import ast
+import graphlib
 import re
 import subprocess
 import sys
@@ -63,3 +65,85 @@ def test_readme_python_example_runs(capsys):
     assert lines[:2] == ["29 7", "4"]
     assert lines[2].count("float:") == 2 and "slip:intermediate" in lines[2]
     assert lines[3] == "solved True"
+
+
+def _package_dirs() -> dict[str, Path]:
+    """Every package of the distribution (pyproject's list) and the folder it installs from."""
+    from importlib.util import find_spec
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+    packages = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
+        "packages"]
+    return {p: Path(find_spec(p).submodule_search_locations[0]) for p in packages}
+
+
+def _modules() -> dict[str, Path]:
+    """Every module of ``cardan_forces.*``, by dotted name (a package by its ``__init__``)."""
+    modules = {}
+    for package, folder in _package_dirs().items():
+        for path in folder.glob("*.py"):
+            name = package if path.stem == "__init__" else f"{package}.{path.stem}"
+            modules[name] = path
+    return modules
+
+
+def _type_checking_only(node: ast.AST) -> bool:
+    return isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+
+
+def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    """The package's modules that ``name`` imports, at its top or inside a function;
+    ``from pkg import x`` is an edge to ``pkg.x`` where that is a module, else to ``pkg``.
+    Imports under ``if TYPE_CHECKING:`` never run and are left out."""
+    package = name if path.stem == "__init__" else name.rpartition(".")[0]
+    tree = ast.parse(path.read_text())
+    skipped = {id(n) for top in ast.walk(tree) if _type_checking_only(top)
+               for n in ast.walk(top)}
+    targets = set()
+    for node in ast.walk(tree):
+        if id(node) in skipped:
+            continue
+        if isinstance(node, ast.Import):
+            targets |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join(parent + ([base] if base else []))
+            targets |= {f"{base}.{alias.name}" if f"{base}.{alias.name}" in modules else base
+                        for alias in node.names}
+    found = set()
+    for target in targets:
+        while target and target not in modules:
+            target = target.rpartition(".")[0]
+        if target and target != name:
+            found.add(target)
+    return found
+
+
+def test_import_graph_has_no_cycle():
+    """No module of ``cardan_forces.*`` (every layer, the CLI and its commands) imports,
+    directly or through others, a module that imports it back: lazy imports inside
+    functions included, since one that closes a cycle hides an order dependency."""
+    modules = _modules()
+    assert {"cardan_forces.cli", "cardan_forces.commands.sets",
+            "cardan_forces.driveline.scene", "cardan_forces.paper_repro.repro"} <= set(modules)
+    graph = {name: _imports(name, path, modules) for name, path in modules.items()}
+    try:
+        tuple(graphlib.TopologicalSorter(graph).static_order())
+    except graphlib.CycleError as err:
+        cycle = err.args[1][::-1]  # graphlib lists each module before its importer
+        raise AssertionError("import cycle: " + " imports ".join(cycle)) from None
+
+
+def test_the_cycle_check_sees_relative_and_lazy_imports(tmp_path):
+    """The graph reads ``from .x import`` and an import inside a function."""
+    path = tmp_path / "a.py"
+    path.write_text("from .b import f\n\ndef g():\n    from cardan_forces.p import c\n")
+    modules = {"cardan_forces.p.a": path, "cardan_forces.p.b": path,
+               "cardan_forces.p.c": path, "cardan_forces.p": path}
+    assert _imports("cardan_forces.p.a", path, modules) == {"cardan_forces.p.b",
+                                                           "cardan_forces.p.c"}
