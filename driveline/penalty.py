@@ -79,8 +79,9 @@ along the chain: 3 groups of 13 columns); the tests hold the two to each other. 
 NumPy right-hand side evaluates every contact's geometry and relative
 velocity with one sparse product, since all are linear in the bodies' centres,
 velocities, rotation matrices and their rates. LSODA runs through ``odeint`` (its
-stepping loop in Fortran); ``BDF`` and ``Radau`` are stepped here as ``solve_ivp``
-does. Either way progress is reported and a failure turned into a status.
+stepping loop in Fortran); ``BDF`` and ``Radau`` are stepped as ``solve_ivp`` does
+(:mod:`~cardan_forces.driveline.penalty_integrators`). Either way progress is reported
+and a failure turned into a status.
 
 **Cost.** The step count is set by the impacts (~10 us steps while a cross-pin
 rattles, about 94,000 steps per simulated second on ``paper-penalty`` with the
@@ -92,18 +93,22 @@ end faces of its cross-pins carry the axial load of the slip joint's segments, p
 by ~0.5 um, and eq. 75's ``f >= 0`` switches them on and off while still pressed
 (100 times in 20 ms), whenever the damping term outweighs the spring's ~16 N. Its
 Jacobian is exact (tested as ``paper``'s); the spline's contacts do not switch.
+
+**Why one module this long.** The NumPy model (bodies, contacts from the operator's
+links, right-hand side and Jacobian) is the oracle the compiled kernels are tested
+against, and it is read as one piece with this docstring's physics; the integrator
+drivers are apart (:mod:`~cardan_forces.driveline.penalty_integrators`).
 """
 
 from __future__ import annotations
 
 import time as _time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
-from scipy.integrate import BDF, LSODA, ODEintWarning, Radau, odeint
+from scipy.integrate import BDF, LSODA, Radau
 from scipy.spatial.transform import Rotation
 
 from . import penalty_kernels as kernels
@@ -112,6 +117,7 @@ from .contact import hertz_stiffness
 from .dynamics import simulate
 from .elements import shaft_segments
 from .equilibrium import build_operator
+from .penalty_integrators import RTOL, Marks, run_compiled, run_odeint, run_stepped, timed
 from .scene import Scene, SceneError
 
 COMPILED = "BDF-numba"
@@ -125,7 +131,6 @@ compiled end to end around the compiled kernels (:mod:`penalty_kernels`)."""
 KERNELS = ("numba", "numpy")
 """Right-hand sides: compiled (:mod:`penalty_kernels`) or the NumPy array model."""
 
-_RTOL = 1e-10
 _TAU_S = 1e-3
 """Time scale turning the position tolerance into velocity tolerances."""
 
@@ -706,13 +711,13 @@ def simulate_penalty(
     status, message, counts = 0, "no motion asked for", (0, 0, 0, 0)
     clock = {"rhs": np.nan, "jacobian": np.nan}
     if t.max() > t0:
-        marks = _Marks(progress, t0, float(t.max()), progress_every_s)
+        marks = Marks(progress, t0, float(t.max()), progress_every_s)
         if method == COMPILED:
-            status, message, counts = _compiled(model, t0, y0, t, atol, states, marks)
+            status, message, counts = run_compiled(model, t0, y0, t, atol, states, marks)
         else:
             clock = {"rhs": 0.0, "jacobian": 0.0}
-            fun, jac = _timed(model, kernel, step, clock)
-            integrate = _odeint if method == "LSODA" else _stepped
+            fun, jac = timed(model, kernel, step, clock)
+            integrate = run_odeint if method == "LSODA" else run_stepped
             status, message, counts = integrate(METHODS[method], fun, jac, t0, y0, t, atol,
                                                 states, marks)
             counts = (*counts, model.n_calls)
@@ -742,148 +747,14 @@ def _load_compiled(scene: Scene, kernel: str, method: str, damping_length_unit_m
     model.jacobian_compiled(t0, y0)
     if method == COMPILED:
         atol, _ = model.tolerances(1e-8)
-        run = kernels.start(t0, y0, t0 + 1e-6, atol, _RTOL, model.kernel_args)
-        kernels.advance(run, t0, t0 + 1e-6, atol, _RTOL, model.kernel_args, np.zeros(0),
+        run = kernels.start(t0, y0, t0 + 1e-6, atol, RTOL, model.kernel_args)
+        kernels.advance(run, t0, t0 + 1e-6, atol, RTOL, model.kernel_args, np.zeros(0),
                         np.zeros((0, len(y0))))
     _LOADED.add(key)
     return _time.perf_counter() - begin
 
 
 _LOADED: set[tuple[str, bool]] = set()
-
-
-class _Marks:
-    """Calls ``progress(mark)`` once the integration has reached each mark, every
-    ``every`` seconds of simulated time up to ``end``.
-    """
-
-    def __init__(self, progress, t0: float, end: float, every: float):
-        self.progress, self.end, self.every = progress, end, every
-        self.next = t0 + every
-
-    def reached(self, time: float) -> None:
-        while self.progress is not None and time >= self.next - 1e-12 \
-                and self.next <= self.end + 1e-12:
-            self.progress(self.next)
-            self.next += self.every
-
-
-_FAILURES = (ArithmeticError, ValueError, np.linalg.LinAlgError)
-
-
-def _odeint(_, fun, jac, t0, y0, t, atol, states, marks: _Marks):
-    """LSODA through ``odeint``, whose stepping loop is Fortran (SciPy's ``LSODA`` class
-    is the same ODEPACK code stepped from Python, ~8 us more a step); ``states`` rows
-    are filled at the instants ``t``. Returns status, message and (steps, Jacobians,
-    LU factorizations: one with each Jacobian in LSODA).
-    """
-    order = np.argsort(t)
-    later = order[t[order] > t0]
-    grid = np.concatenate([[t0], t[later]])
-
-    def watched(time, y):
-        marks.reached(time)
-        return fun(time, y)
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ODEintWarning)
-            ys, info = odeint(watched, y0, grid, Dfun=jac, tfirst=True, rtol=_RTOL, atol=atol,
-                              full_output=True, mxstep=2**31 - 1)
-    except _FAILURES as err:
-        return -1, f"{type(err).__name__}: {err}", (0, 0, 0)
-    ok = info["message"] == "Integration successful."
-    reached = np.r_[True, info["tcur"] >= grid[1:] - 1e-12 * max(abs(grid[-1]), 1.0)]
-    valid = np.cumprod(reached & np.all(np.isfinite(ys), axis=1)).astype(bool)
-    states[later] = np.where(valid[1:, None], ys[1:], np.nan)
-    steps = int(info["nst"][-1]) if len(info["nst"]) else 0
-    jacobians = int(info["nje"][-1]) if len(info["nje"]) else 0
-    return (0 if ok and valid.all() else -1, "finished" if ok else str(info["message"]),
-            (steps, jacobians, jacobians))
-
-
-def _compiled(model: _Model, t0, y0, t, atol, states, marks: _Marks):
-    """``BDF-numba``: the compiled integrator (:func:`penalty_kernels.advance`) run from
-    one progress mark to the next; ``states`` rows are filled at the instants ``t``
-    from its dense output. Returns status, message and (steps, Jacobians, LU
-    factorizations, right-hand sides).
-    """
-    order = np.argsort(t)
-    later = order[t[order] > t0]
-    end, args = float(t.max()), model.kernel_args
-    out = np.full((len(later), len(y0)), np.nan)
-    run = kernels.start(t0, y0, end, atol, _RTOL, args)
-    ints = run[1]
-    stops = np.append(np.arange(t0 + marks.every, end, marks.every), end)
-    for stop in stops:
-        kernels.advance(run, stop, end, atol, _RTOL, args, t[later], out)
-        if ints[kernels.I_STATUS] != kernels.RUNNING:
-            break
-        marks.reached(run[0][kernels.F_T])
-    marks.reached(run[0][kernels.F_T])
-    states[later] = out
-    ok = ints[kernels.I_STATUS] == kernels.FINISHED and np.all(np.isfinite(out))
-    message = kernels.MESSAGES.get(int(ints[kernels.I_STATUS]), "failed")
-    if not ok and message == "finished":
-        message = "the state is not finite"
-    counts = (ints[kernels.I_STEPS], ints[kernels.I_JEV], ints[kernels.I_NLU],
-              ints[kernels.I_FEV])
-    return (0 if ok else -1), (f"{message} at t = {run[0][kernels.F_T]:.6g} s" if not ok
-                               else message), tuple(int(c) for c in counts)
-
-
-def _stepped(solver_class, fun, jac, t0, y0, t, atol, states, marks: _Marks):
-    """SciPy's ``OdeSolver`` (``BDF``, ``Radau``) stepped here, as ``solve_ivp`` does;
-    ``states`` rows are filled at the instants ``t`` from its dense output.
-    """
-    solver = solver_class(fun, t0, y0, float(t.max()), rtol=_RTOL, atol=atol, jac=jac)
-    order, n_steps, message = np.argsort(t), 0, None
-    i = int(np.searchsorted(t[order], t0, side="right"))
-    try:
-        while solver.status == "running":
-            message = solver.step()
-            n_steps += 1
-            if solver.status == "failed":
-                break
-            if not np.all(np.isfinite(solver.y)):
-                solver.status, message = "failed", f"non-finite state at t = {solver.t} s"
-                break
-            stop = int(np.searchsorted(t[order], solver.t, side="right"))
-            if stop > i:
-                states[order[i:stop]] = solver.dense_output()(t[order[i:stop]]).T
-                i = stop
-            marks.reached(solver.t)
-    except _FAILURES as err:
-        solver.status, message = "failed", f"{type(err).__name__}: {err}"
-    status = 0 if solver.status == "finished" else -1
-    return (status, message or ("finished" if status == 0 else "failed"),
-            (n_steps, int(solver.njev), int(solver.nlu)))
-
-
-def _timed(model: _Model, kernel: str, step: np.ndarray, clock: dict):
-    """The right-hand side and Jacobian of ``kernel`` for the integrator, adding the wall
-    time spent in each to ``clock``.
-    """
-    if kernel == "numba":
-        rhs, jacobian = model.rhs_compiled, model.jacobian_compiled
-    else:
-        rhs = lambda time, y: model.rhs(time, y[:, None])[:, 0]  # noqa: E731
-        jacobian = lambda time, y: model.jacobian(time, y, step)  # noqa: E731
-    tick = _time.perf_counter
-
-    def fun(time, y):
-        begin = tick()
-        out = rhs(time, y)
-        clock["rhs"] += tick() - begin
-        return out
-
-    def jac(time, y):
-        begin = tick()
-        out = jacobian(time, y)
-        clock["jacobian"] += tick() - begin
-        return out
-
-    return fun, jac
 
 
 def _sample(model: _Model, states: np.ndarray):
