@@ -35,6 +35,10 @@ a constant, not ``mu |T| / r``), the ``friction`` effect (Coulomb cones in the j
 and a scene without the ``inertia`` effect (a quasi-static analysis: the engine always
 integrates dynamics). Effects that the rigid operator does not model either
 (``clearance``, ``compliance``, ``penalty_dynamics``) are ignored, as there.
+
+Why one module this long: the MJCF's bodies and equality rows (:func:`build_mjcf`) and
+the reading of their forces into the operator's names (:func:`run`) share one layout of
+bodies and rows, which a split would have to pass between two files.
 """
 
 from __future__ import annotations

@@ -40,6 +40,10 @@ change of variables); in this operator an end-face force acts on the trunnion ax
 off removes exactly its term: ``applied`` (drive and load torques, always),
 ``gravity`` (the shafts' weight, and the cross-pins' when ``crosspin_inertia`` gives
 them mass), ``inertia`` (shafts), ``crosspin_inertia`` (cross-pins).
+
+Why one module this long: it is the only place that names forces; the operator's
+structure (bodies, links, bearing loads) and the columns and terms it is built from are
+one piece of knowledge, read together with the list above.
 """
 
 from __future__ import annotations

@@ -22,6 +22,10 @@ called with no Python in between (why, and how it differs from SciPy's, above
 
 Without numba the functions below still run (as plain Python, slowly); the simulation
 then uses the NumPy model and SciPy's integrators instead (:data:`HAVE_NUMBA`).
+
+**Why one module this long.** numba's on-disk cache checks only the source file of the
+function it compiled: with the kernels in another file, an edit there would leave the
+cached integrator calling the old kernels. So the integrator sits beside them.
 """
 
 from __future__ import annotations

@@ -21,6 +21,9 @@ contact forces, N) or map back to them with ``to_forces``.
   push here (complementarity is not imposed).
 - ``lcp``: the KKT system of ``positive`` as an LCP in the end-face multipliers, on the
   null-space parametrization ``x = x0 + N y`` (``x0`` the least-norm point).
+
+Why one module this long: every recast is built from the same pieces (the equalities,
+the contacts and their cones, the checks), and :data:`FORMULATIONS` lists them together.
 """
 
 from __future__ import annotations

@@ -10,6 +10,10 @@ an upper bound: a reported success whose residuals exceed :data:`ACCEPT` becomes
 per problem structure: residuals, the package's optimality and the solver's); a
 per-instant loop calls it once at its end (``registry.solve_unchecked``, ``check``),
 and :func:`finalize` is its one-instant case, so every path follows one rule.
+
+Why one module this long: the record's types (:class:`Status`, :class:`Residuals`,
+:class:`Optimality`) and the rule that fills them are the package's one status rule,
+kept in one place so that no caller judges a solve another way.
 """
 
 from __future__ import annotations
