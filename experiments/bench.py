@@ -50,6 +50,7 @@ from . import bench_run as runs
 from . import export as exporting
 from . import progress
 from . import qpbench_harness as harness
+from .images import FORMATS, format_list
 
 
 def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float) -> dict:
@@ -149,7 +150,7 @@ def run(args) -> int:
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
         "budget_s": args.budget_s, "samples": len(samples), "ladder": ladder,
         "quick": args.quick, "simulate_s": simulated - started, "operator_s": operator_s,
-        "wall_s": time.perf_counter() - started})
+        "wall_s": time.perf_counter() - started}, args.format)
     runs.progress(f"bench: wrote {folder} in {time.perf_counter() - started:.0f} s")
     if args.json:
         print(json_text(out.json_object(results)))
@@ -160,14 +161,16 @@ def run(args) -> int:
     return 0
 
 
-def _write(folder: Path, results: dict, settings: dict) -> None:
+def _write(folder: Path, results: dict, settings: dict, formats=("png",)) -> None:
     out.write_csv(folder / "bench_throughput.csv", results["rows"], out.THROUGHPUT_COLUMNS)
     out.write_csv(folder / "bench_accuracy.csv", results["acc_rows"], out.ACCURACY_COLUMNS)
     out.write_csv(folder / "bench_profiles.csv", out.profile_rows(results["profiles"]),
                   out.PROFILE_COLUMNS)
     out.write_csv(folder / "bench_views.csv", results["view_rows"], out.VIEW_COLUMNS)
-    out.plot_pareto(results["points"], folder / "bench_pareto.png")
-    out.plot_profiles(results["profiles"], folder / "bench_profiles.png")
+    styles = out.backend_styles([p["solver"] for p in results["points"]]
+                                + [p["solver"] for p in results["profiles"]])
+    out.plot_pareto(results["points"], folder / "bench_pareto", formats, styles)
+    out.plot_profiles(results["profiles"], folder / "bench_profiles", formats, styles)
     (folder / "report.md").write_text(out.report(results, settings))
 
 
@@ -201,6 +204,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--budget-s", type=_seconds, default=runs.BUDGET_S,
                    help=f"seconds per per-instant run before it stops (default "
                         f"{runs.BUDGET_S:g})")
+    p.add_argument("--format", type=format_list, default=("png",), metavar="FORMATS",
+                   help="image formats of the figures, comma-separated among "
+                        f"{','.join(FORMATS)} (default png)")
     p.add_argument("--harness", type=_harness,
                    help="also run qpbenchmark itself on the bench's QPs (value: qpbenchmark; "
                         'needs pip install "cardan-forces[bench]")')

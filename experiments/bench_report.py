@@ -47,6 +47,26 @@ def profile_rows(profiles: list[dict]) -> list[dict]:
             for p in profiles for tau, frac in zip(TAUS, p["curve"])]
 
 
+MARKERS = "os^vD<>phX*P8"
+"""Markers of the backends' styles, cycled with the colours (:func:`backend_styles`)."""
+
+EMPTY_PARETO = "no solve of this formulation\ngave an answer"
+EMPTY_PROFILE = "no solve of this formulation\nreached this level"
+"""The words on a panel that has no curve to draw."""
+
+
+def backend_styles(solvers) -> dict[str, tuple]:
+    """One (colour, marker) per backend, fixed by the sorted names of every backend of
+    one bench, so a backend looks the same in every panel and figure of that bench.
+    """
+    import matplotlib
+
+    colours = matplotlib.colormaps["tab20"].colors
+    names = sorted(set(solvers))
+    return {name: (colours[2 * (k % 10) + k // 10 % 2], MARKERS[k % len(MARKERS)])  # dark, light
+            for k, name in enumerate(names)}
+
+
 def _figure(panels: int, cols: int = 3):
     import matplotlib
 
@@ -55,54 +75,136 @@ def _figure(panels: int, cols: int = 3):
 
     cols = max(1, min(cols, panels))
     rows = math.ceil(panels / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(5 * cols, 4 * rows), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(5 * cols, 4 * rows + 0.6), squeeze=False)
     for ax in axes.flat[panels:]:
         ax.set_visible(False)
     return plt, fig, axes
 
 
-def plot_pareto(points: list[dict], path: Path) -> None:
-    """Log-log time per instant vs worst optimality measure, one panel per formulation,
-    one marker per backend, the front as a step line; 0 is drawn at 1e-17.
+def _log_ticks(ax, axis: str) -> None:
+    """Labels on a log axis that never overlap: the 1-2-5 values over less than two
+    decades (the limits widened to the nearest of them), the decades otherwise; no labels
+    on the minor ticks.
     """
+    from matplotlib import ticker
+
+    which = ax.xaxis if axis == "x" else ax.yaxis
+    low, high = ax.get_xlim() if axis == "x" else ax.get_ylim()
+    if not (0 < low < high and math.isfinite(high)):
+        return
+    narrow = math.log10(high / low) < 2.0
+    subs = (1.0, 2.0, 5.0) if narrow else (1.0,)
+    if narrow:
+        steps = [m * 10.0 ** e for e in range(math.floor(math.log10(low)) - 1,
+                                               math.ceil(math.log10(high)) + 1) for m in subs]
+        low = max((v for v in steps if v <= low * (1 + 1e-9)), default=low)
+        high = min((v for v in steps if v >= high * (1 - 1e-9)), default=high)
+        (ax.set_xlim if axis == "x" else ax.set_ylim)(low, high)
+    which.set_major_locator(ticker.LogLocator(base=10.0, subs=subs, numticks=12))
+    which.set_major_formatter(ticker.LogFormatterSciNotation(labelOnlyBase=False))
+    which.set_minor_formatter(ticker.NullFormatter())
+
+
+def _empty(ax, words: str) -> None:
+    """A panel with nothing to draw says so in its middle."""
+    ax.text(0.5, 0.5, words, transform=ax.transAxes, ha="center", va="center",
+            fontsize=10, color="0.3")
+
+
+def _shared_legend(fig, styles: dict, shown, extra=()) -> None:
+    """One legend for the whole figure under its panels: each backend drawn in it, with
+    its colour and marker, then ``extra`` (label, line style) entries.
+    """
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=styles[s][0], marker=styles[s][1], ls="-", lw=1.0,
+                      label=s) for s in sorted(set(shown))]
+    handles += [Line2D([], [], color="k", ls=ls, lw=1.2, label=label) for label, ls in extra]
+    cols = min(6, max(1, len(handles)))
+    rows = math.ceil(len(handles) / cols)
+    height = fig.get_figheight()
+    fig.legend(handles=handles, loc="lower center", ncol=cols, fontsize=9, frameon=False)
+    fig.tight_layout(rect=(0, min(0.4, (0.3 * rows + 0.2) / height), 1, 1))
+
+
+def plot_pareto(points: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
+    """:func:`pareto_figure` written as ``path.<format>`` for each of ``formats``."""
+    from .images import save
+
+    plt, fig = pareto_figure(points, styles)
+    written = save(fig, path.with_suffix(""), formats, dpi=110)
+    plt.close(fig)
+    return written
+
+
+def pareto_figure(points: list[dict], styles=None):
+    """Log-log time per instant vs worst optimality measure, one panel per formulation,
+    each backend in its colour and marker (:func:`backend_styles`, one legend for all
+    panels; each line labelled with its backend), the front as a step line; 0 is drawn
+    at 1e-17; a panel without an answer says so. Returns pyplot and the figure.
+    """
+    styles = styles or backend_styles(p["solver"] for p in points)
     names = list(dict.fromkeys(p["formulation"] for p in points))
     plt, fig, axes = _figure(len(names))
-    markers = "os^vD<>phX*P8"
+    shown = set()
     for ax, name in zip(axes.flat, names):
         mine = [p for p in points if p["formulation"] == name and math.isfinite(p["error"])]
-        for k, solver in enumerate(dict.fromkeys(p["solver"] for p in mine)):
+        for solver in dict.fromkeys(p["solver"] for p in mine):
             pts = sorted((p for p in mine if p["solver"] == solver), key=lambda p: p["time_s"])
+            colour, marker = styles[solver]
             ax.plot([p["time_s"] for p in pts], [max(p["error"], 1e-17) for p in pts],
-                    markers[k % len(markers)], ls=":", lw=0.8, label=solver)
+                    marker=marker, color=colour, ls=":", lw=0.8, label=solver)
+            shown.add(solver)
         front = sorted((p for p in mine if p["front"]), key=lambda p: p["time_s"])
         if front:
             ax.step([p["time_s"] for p in front], [max(p["error"], 1e-17) for p in front],
-                    "k-", where="post", lw=1.2, label="front")
+                    "k-", where="post", lw=1.2)
         ax.set(xscale="log", yscale="log", title=name, xlabel="time per instant (s)",
                ylabel="worst optimality measure")
-        ax.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
+        if mine:
+            _log_ticks(ax, "x")
+            _log_ticks(ax, "y")
+        else:
+            _empty(ax, EMPTY_PARETO)
+    _shared_legend(fig, styles, shown, [("front", "-")])
+    return plt, fig
+
+
+def plot_profiles(profiles: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
+    """:func:`profiles_figure` written as ``path.<format>`` for each of ``formats``."""
+    from .images import save
+
+    plt, fig = profiles_figure(profiles, styles)
+    written = save(fig, path.with_suffix(""), formats, dpi=100)
     plt.close(fig)
+    return written
 
 
-def plot_profiles(profiles: list[dict], path: Path) -> None:
-    """Dolan-Moré curves on the solver's time, one panel per formulation x profile."""
+def profiles_figure(profiles: list[dict], styles=None):
+    """Dolan-Moré curves on the solver's time, one panel per formulation x profile,
+    each backend in its colour and marker (one legend for all panels; each line
+    labelled with its backend); a panel where no solve reached the level says so.
+    Returns pyplot and the figure.
+    """
     profiles = [p for p in profiles if p["clock"] == "solver"]
+    styles = styles or backend_styles(p["solver"] for p in profiles)
     panels = list(dict.fromkeys((p["formulation"], p["profile"]) for p in profiles))
     plt, fig, axes = _figure(len(panels), cols=4)
+    shown = set()
     for ax, (formulation, name) in zip(axes.flat, panels):
         curves = [p for p in profiles if (p["formulation"], p["profile"]) == (formulation, name)]
-        for k, p in enumerate(curves):  # past the 10 colours of the cycle, a new line style
-            ax.step(TAUS, p["curve"], where="post", lw=1.0, ls=("-", "--", ":")[k // 10 % 3],
-                    label=p["solver"])
+        for p in curves:
+            colour, marker = styles[p["solver"]]
+            ax.step(TAUS, p["curve"], where="post", lw=1.0, color=colour, marker=marker,
+                    markevery=10, ms=4, label=p["solver"])
+            shown.add(p["solver"])
         level = next(p["level"] for p in profiles if p["profile"] == name)
         ax.set(xscale="log", ylim=(-0.02, 1.02), title=f"{formulation}, {name} ({level:g})",
                xlabel="tau (solver time / fastest)", ylabel="share of instants")
-        ax.legend(fontsize=5)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+        if not any(max(p["curve"]) > 0 for p in curves):
+            _empty(ax, EMPTY_PROFILE)
+    _shared_legend(fig, styles, shown)
+    return plt, fig
 
 
 def _fmt(value: float | None, digits: int = 2) -> str:
