@@ -320,3 +320,39 @@ def test_engine_and_repro_without_mujoco_say_how_to_install(tmp_path, capsys, mo
     assert "[mujoco]" in _one_error_line(capsys)
     assert not (tmp_path / "e").exists() and not (tmp_path / "r").exists()
     assert "engine" not in repro.default_methods()
+
+
+def test_solve_says_why_a_record_is_not_solved():
+    """The table's reason: the checked residual above the acceptance level for an answer
+    the package judged inaccurate, the solver's own word for a failure, nothing for a
+    solved record (records built by hand, so the answer is known)."""
+    from cardan_forces.solvers.record import ACCEPT, Record, Status
+
+    from cardan_forces.commands.solve import reason
+
+    def record(status, message="", **residuals):
+        every = {"equilibrium": 1e-14, "sign": 0.0, "complementarity": 0.0, "cone": 0.0}
+        return Record("positive", "made-up", status, np.zeros(2), ("a", "b"), None, 0.0, 0.0,
+                      every | residuals, message=message)
+
+    assert reason(record(Status.SOLVED)) == ""
+    why = reason(record(Status.INACCURATE, sign=3e-4))
+    assert why.startswith("sign 3.0e-04") and f"> {ACCEPT:g}" in why
+    why = reason(record(Status.INACCURATE, complementarity=2e-3, message="ignored"))
+    assert why.startswith("complementarity")
+    inf = float("inf")
+    why = reason(record(Status.FAILED, "matrix\nnot positive definite", equilibrium=inf,
+                        sign=inf, complementarity=inf, cone=inf))
+    assert "failed" in why and "matrix not positive definite" in why
+    assert len(reason(record(Status.FAILED, "x" * 500))) <= 60
+
+
+def test_solve_lists_the_formulations_it_leaves_out(capsys):
+    """With every formulation asked for, the paper scene (no friction effect) leaves
+    friction out and says why; a formulation no asked-for solver takes is listed too."""
+    assert main(["solve", "--solver", "clarabel", "--quiet"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    left = [line for line in lines if line.startswith("left out:")]
+    assert any("friction" in line and "effects include 'friction'" in line for line in left)
+    assert any("paper" in line.split(":")[1] and "clarabel" in line for line in left)
+    assert not any(line.startswith("friction ") for line in lines)  # no record row

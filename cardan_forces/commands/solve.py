@@ -16,6 +16,7 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Residuals, backends_for
 from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.record import ACCEPT, Status
 
 from . import UsageError, check_time, print_json, progress
 
@@ -55,19 +56,65 @@ def run(args) -> int:
     if args.json:
         print_json([record_json(r) for r in records])
         return 0
-    print(f"scene {scene.name}, t = {args.t:g} s; residuals relative to ||b||; dual = "
+    print_table(scene.name, args.t, records)
+    grouped: dict[str, list[str]] = {}
+    for name, why in left_out(op, args.formulation, args.solver):
+        grouped.setdefault(why, []).append(name)
+    for why, names in grouped.items():
+        print(f"left out: {', '.join(names)}: {why}")
+    return 0
+
+
+def print_table(scene: str, t: float, records) -> None:
+    """One line per record: status, residuals, optimality, time and, where the status
+    is not ``solved``, why (:func:`reason`).
+    """
+    print(f"scene {scene}, t = {t:g} s; residuals relative to ||b||; dual = "
           "stationarity with the solver's (or recovered) multipliers; gap = duality or "
           "objective gap; dist = distance to the formulation's clarabel answer at tol 1e-10, "
-          "only where the optimum is unique; '-' = undefined")
+          f"only where the optimum is unique; '-' = undefined; why = what kept a record "
+          f"from 'solved' (a residual above {ACCEPT:g}, or the solver's own word)")
     print(f"{'formulation':16s} {'solver':22s} {'status':10s} {'equil':>8s} {'sign':>8s} "
-          f"{'compl':>8s} {'cone':>8s} {'dual':>8s} {'gap':>8s} {'dist':>8s} {'ms':>8s}")
+          f"{'compl':>8s} {'cone':>8s} {'dual':>8s} {'gap':>8s} {'dist':>8s} {'ms':>8s}  why")
     for r in records:
         res = [r.residuals.get(k, math.nan) for k in Residuals.KEYS]
         res += [r.optimality.get(k, math.nan) for k in OPTIMALITY]
         print(f"{r.formulation:16s} {r.solver:22s} {str(r.status):10s} "
               + " ".join(number_text(v, "8.1e") for v in res)
-              + f" {1e3 * (r.setup_s + r.solve_s):8.2f}")
-    return 0
+              + f" {1e3 * (r.setup_s + r.solve_s):8.2f}  {reason(r)}".rstrip())
+
+
+def reason(record, width: int = 60) -> str:
+    """Why a record is not ``solved``, in one short line ("" when it is): its first
+    checked residual above :data:`ACCEPT` (the package's rule that turns a solver's
+    "solved" into ``inaccurate``), else the solver's own status and message.
+    """
+    if record.status is Status.SOLVED:
+        return ""
+    failed = [k for k in Residuals.KEYS if record.residuals.get(k, math.nan) > ACCEPT]
+    if record.status.has_answer and failed:
+        value = record.residuals[failed[0]]
+        return f"{failed[0]} {value:.1e} > {ACCEPT:g}"
+    said = record.solver_status if record.solver_status is not None else record.status
+    words = " ".join(str(record.message).split())
+    text = f"solver: {said}" + (f": {words}" if words else "")
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def left_out(op, formulations, solvers) -> list[tuple[str, str]]:
+    """The formulations a run left out, each with why: one the scene does not call for
+    (its builder's :class:`NotApplicable` message) or one no solver asked for takes.
+    """
+    out = []
+    for name in formulations or FORMULATIONS:
+        try:
+            problem = FORMULATIONS[name](op, 0)
+        except NotApplicable as err:
+            out.append((name, " ".join(str(err).split())))
+            continue
+        if solvers and not set(solvers) & set(backends_for(problem)):
+            out.append((name, f"no solver asked for ({', '.join(solvers)}) takes it"))
+    return out
 
 
 def _not_engine(text: str) -> str:
