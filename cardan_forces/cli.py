@@ -27,6 +27,7 @@ import os
 import sys
 import threading
 import time
+from importlib import metadata
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -77,11 +78,20 @@ def _parser() -> argparse.ArgumentParser:
         prog="cardan",
         description="Reaction forces in drive shafts with two Cardan joints.",
     )
+    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
     for command in COMMANDS:
         command.add_parser(sub)
     _add_quiet(sub)
     return p
+
+
+def _version() -> str:
+    """The installed distribution's version (``unknown`` when it is not installed)."""
+    try:
+        return metadata.version("cardan-forces")
+    except metadata.PackageNotFoundError:
+        return "unknown (not installed)"
 
 
 def _add_quiet(sub) -> None:

@@ -356,3 +356,12 @@ def test_solve_lists_the_formulations_it_leaves_out(capsys):
     assert any("friction" in line and "effects include 'friction'" in line for line in left)
     assert any("paper" in line.split(":")[1] and "clarabel" in line for line in left)
     assert not any(line.startswith("friction ") for line in lines)  # no record row
+
+
+def test_version_is_the_installed_distributions(capsys):
+    from importlib import metadata
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.split() == ["cardan", metadata.version("cardan-forces")]
