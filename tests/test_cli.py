@@ -15,7 +15,7 @@ def test_sets_json_reports_every_component(capsys):
         components = report["components"]
         assert len(components) == 36
         assert set(components["bearing.input.near.x"]) == {"determinate", "min_norm", "min",
-                                                           "max"}
+                                                           "max", "positive"}
         near_y = components["bearing.input.near.y"]
         assert near_y["determinate"] is True
         assert near_y["min"] == near_y["max"] == pytest.approx(near_y["min_norm"], abs=1e-6)
@@ -365,3 +365,22 @@ def test_version_is_the_installed_distributions(capsys):
         main(["--version"])
     assert stop.value.code == 0
     assert capsys.readouterr().out.split() == ["cardan", metadata.version("cardan-forces")]
+
+
+@pytest.mark.parametrize("scene", ["paper", "paper-fig15"])
+def test_sets_positive_member_lies_in_every_interval(scene, capsys):
+    """The signed member 'sets' shows (the positive answer, a QP solver) lies inside the
+    interval of every component (LPs over the same set), where the least-norm answer
+    need not: it lets an end face pull."""
+    assert main(["sets", scene, "--t", "0.5", "--json", "--quiet"]) == 0
+    components = json.loads(capsys.readouterr().out)["components"]
+    scale = max(abs(c["min_norm"]) for c in components.values())
+    tol = 1e-6 * scale
+    for name, c in components.items():
+        assert c["positive"] is not None, name
+        assert c["min"] is None or c["positive"] >= c["min"] - tol, name
+        assert c["max"] is None or c["positive"] <= c["max"] + tol, name
+        if c["determinate"]:
+            assert c["positive"] == pytest.approx(c["min_norm"], abs=tol)
+    assert any(c["min"] is not None and c["min_norm"] < c["min"] - tol
+               for c in components.values())  # the column the table used to show

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
@@ -19,7 +21,9 @@ from cardan_forces.driveline.release import (
 )
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.paper_method import multistart
-from cardan_forces.experiments.study import intervals
+from cardan_forces.experiments.study import default_backend, intervals
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.solvers import solve
 
 from . import check_time, print_json
 
@@ -59,44 +63,65 @@ def run(args) -> int:
     modes = named_modes(motion, 0, op)
     starts = multistart(op, 0, n=args.multistart, rim=False)[:, : len(op.names)] \
         if args.multistart else None
+    member = signed_member(op)
     if args.json:
-        report = _with_intervals(result.to_json(), ranges)
+        report = _with_intervals(result.to_json(), ranges, member)
         if starts is not None:
             for j, entry in enumerate(report["components"].values()):
                 entry["paper_multistart"] = starts[:, j]
         report["modes"] = [m.to_json() for m in modes]
         print_json(report)
         return 0
-    print_table(op.scene.name, result, ranges, starts, args.multistart)
+    print_table(op.scene.name, result, ranges, member, starts, args.multistart)
     print_modes(modes)
     return 0
 
 
-def _with_intervals(report: dict, ranges: dict) -> dict:
-    """A determinacy report's components with their ``min``/``max`` (None: unbounded)."""
-    for name, entry in report["components"].items():
-        entry.update(min=ranges[name]["min"], max=ranges[name]["max"])
+SIGNED = "positive"
+"""The formulation whose answer ``sets`` shows as a member of the rigid set: the least
+norm with end faces >= 0, so it lies inside every interval the table prints."""
+
+
+def signed_member(op) -> tuple[np.ndarray, str]:
+    """The :data:`SIGNED` answer at the operator's first instant (N, N m; NaN where its
+    default backend, ``study.default_backend``, did not solve it) and that backend.
+    """
+    problem = FORMULATIONS[SIGNED](op, 0)
+    backend = default_backend(SIGNED, problem)
+    record = solve(problem, backend)
+    return (record.x if record.solved else np.full(len(op.names), np.nan)), backend
+
+
+def _with_intervals(report: dict, ranges: dict, member) -> dict:
+    """A determinacy report's components with their ``min``/``max`` (None: unbounded)
+    and their value in the signed member (``positive``, :func:`signed_member`).
+    """
+    values, _ = member
+    for j, (name, entry) in enumerate(report["components"].items()):
+        entry.update(min=ranges[name]["min"], max=ranges[name]["max"],
+                     positive=float(values[j]))
     return report
 
 
-def print_table(name, result, ranges, starts=None, n_starts=0) -> None:
-    """One line per component: determinate, least-norm value, interval (and the spread
-    of the paper method's multistart answers).
+def print_table(name, result, ranges, member, starts=None, n_starts=0) -> None:
+    """One line per component: determinate, its value in the signed member (the
+    ``positive`` answer, inside every interval), interval (and the spread of the paper
+    method's multistart answers).
     """
+    values, backend = member
     print(f"scene {name}, t = {result.t:g} s: rank {result.rank}, nullity "
           f"{result.nullity}, least-norm residual {result.residual:.1e}")
-    print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; least-norm values in N, "
-          "N m for a slip joint's bending and torque (one member of the solution set where "
-          "not determinate); interval over all solutions with end faces >= 0 (-inf/+inf: "
-          "unbounded)")
+    print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; 'positive': the least-"
+          f"norm solution with end faces >= 0 ({backend}), one member of the rigid set, in N "
+          "(N m for a slip joint's bending and torque); interval over all solutions with end "
+          "faces >= 0 (-inf/+inf: unbounded)")
     width = max(24, *(len(n) for n in result.names))
-    print(f"{'component':{width}s} {'determinate':>11s} {'least-norm N':>14s} {'min N':>12s} "
+    print(f"{'component':{width}s} {'determinate':>11s} {'positive N':>14s} {'min N':>12s} "
           f"{'max N':>12s}")
     if starts is not None:
         print(f"paper method (fsolve, end faces on the axis) from {n_starts} random "
               f"starts: {len(starts)} converged; their spread per component at the right")
-    for j, (name, det, value) in enumerate(zip(result.names, result.determinate,
-                                               result.min_norm)):
+    for j, (name, det, value) in enumerate(zip(result.names, result.determinate, values)):
         lo, hi = ranges[name]["min"], ranges[name]["max"]
         lo, hi = number_text(lo, ".4f", "-inf"), number_text(hi, ".4f", "+inf")
         spread = "" if starts is None or not len(starts) else \
@@ -121,11 +146,12 @@ def _advise(args, motion, applied) -> int:
     """
     advice = advise(motion, 0)
     ranges = intervals(advice.operator, 0)
+    member = signed_member(advice.operator)
     if args.json:
         report = advice.to_json()
         report["applied"] = [r.to_json() for r in applied]
         report["modes"] = [m.to_json() for m in advice.modes]
-        report["released"] = _with_intervals(advice.released.to_json(), ranges)
+        report["released"] = _with_intervals(advice.released.to_json(), ranges, member)
         report["released"]["modes"] = [m.to_json() for m in advice.released_modes]
         print_json(report)
         return 0
@@ -140,6 +166,6 @@ def _advise(args, motion, applied) -> int:
     if every:
         print(f"  as --apply: {' '.join('--apply ' + r.label for r in every)}")
     print()
-    print_table(advice.scene.name, advice.released, ranges)
+    print_table(advice.scene.name, advice.released, ranges, member)
     print_modes(advice.released_modes)
     return 0
