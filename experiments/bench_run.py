@@ -12,11 +12,11 @@ Rows are dicts, one per run and instant (a failed run is a row with ``inf`` meas
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from cardan_forces.experiments.progress import line
 from cardan_forces.experiments.study import DEFAULT_BACKENDS, solve_over_time
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
@@ -50,7 +50,8 @@ SPLIT = ("build_s", "convert_s", "solve_s", "checks_s")
 
 
 def progress(message: str) -> None:
-    print(message, file=sys.stderr, flush=True)
+    """A bench progress line on stderr (none with ``--quiet``): :func:`.progress.line`."""
+    line(message)
 
 
 @dataclass
