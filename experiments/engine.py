@@ -34,6 +34,7 @@ import numpy as np
 from cardan_forces.driveline import engine_mujoco
 from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
 from cardan_forces.experiments.environment import number_text
+from cardan_forces.experiments.images import format_list, save
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.sets import interval_problems
 
@@ -237,9 +238,10 @@ def _band(op, c: np.ndarray, sampled: np.ndarray) -> np.ndarray:
     return out
 
 
-def draw(result: EngineStudy, path: Path) -> None:
+def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
     """The engine's first-shaft bearing loads over time for :data:`FIGURE_SETTINGS`,
-    over the rigid band (shaded where both ends are finite; the title says otherwise).
+    over the rigid band (shaded where both ends are finite; the title says otherwise),
+    saved as ``stem`` in each of ``formats``.
     """
     import matplotlib
 
@@ -266,8 +268,9 @@ def draw(result: EngineStudy, path: Path) -> None:
     np.atleast_1d(axes)[0].legend(fontsize=7)
     np.atleast_1d(axes)[-1].set_xlabel("t (s)")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    paths = save(fig, stem, formats, dpi=120)
     plt.close(fig)
+    return paths
 
 
 def _g(value: float) -> str:
@@ -354,8 +357,11 @@ def _sensitivity_lines(result: EngineStudy) -> list[str]:
     return lines
 
 
-def write(result: EngineStudy, out: Path, mujoco_version: str) -> None:
-    """``engine.csv`` (every instant: each setting's forces), ``engine.md``, ``engine.png``."""
+def write(result: EngineStudy, out: Path, mujoco_version: str,
+          formats=("png",)) -> list[Path]:
+    """``engine.csv`` (every instant: each setting's forces), ``engine.md`` and the
+    figure ``engine.<format>`` for each of ``formats``.
+    """
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "engine.csv", "w", newline="") as handle:
         writer = csv.writer(handle)
@@ -364,7 +370,7 @@ def write(result: EngineStudy, out: Path, mujoco_version: str) -> None:
             for t, x in zip(r.t, r.forces):
                 writer.writerow([label, f"{t:.6g}", *(f"{v:.9g}" for v in x)])
     (out / "engine.md").write_text("\n".join(report_lines(result, mujoco_version)) + "\n")
-    draw(result, out / "engine.png")
+    return [out / "engine.csv", out / "engine.md", *draw(result, out / "engine", formats)]
 
 
 def add_parser(subparsers) -> None:
@@ -377,6 +383,8 @@ def add_parser(subparsers) -> None:
                    help="simulate up to this time (s; default the scene's stop)")
     p.add_argument("--instants", type=_instants, default=6,
                    help="instants compared with the rigid set (default 6)")
+    p.add_argument("--format", type=format_list, default=("png",), metavar="FORMATS",
+                   help="figure formats, comma-separated: png, svg, pdf (default png)")
     p.set_defaults(func=run)
 
 
@@ -416,9 +424,8 @@ def run(args) -> int:
         raise NotApplicable(str(err)) from None
     start = time.perf_counter()
     result = study(args.scene, args.stop, args.instants)
-    write(result, Path(args.out), version)
+    paths = write(result, Path(args.out), version, args.format)
     print("\n".join(agreement_lines(result)))
-    print(f"wrote {args.out}/engine.md, engine.csv, engine.png "
-          f"({time.perf_counter() - start:.1f} s)")
+    print(f"wrote {', '.join(str(p) for p in paths)} ({time.perf_counter() - start:.1f} s)")
     return 0
 

@@ -47,6 +47,7 @@ from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import LIMITS, Scene, SceneError, TimeGrid, TorqueLaw
 from cardan_forces.experiments.environment import number_text
+from cardan_forces.experiments.images import format_list, save
 
 STEPS = 72
 """Instants per revolution (5 deg apart)."""
@@ -123,8 +124,10 @@ def handbook(torque: float, b1_deg: float, b2_deg: float, arrangement: str, a: f
 
 
 def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
-          out: Path) -> list[Path]:
-    """``secondary.csv`` (long format) and ``secondary.png`` (one panel per case)."""
+          out: Path, formats=("png",)) -> list[Path]:
+    """``secondary.csv`` (long format) and the figure ``secondary.<format>`` (one panel
+    per case) for each of ``formats``.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -147,9 +150,9 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
         ax.set_ylabel("N")
         ax.legend(fontsize=6, ncols=2)
     fig.tight_layout()
-    fig.savefig(out / "secondary.png", dpi=110)
+    paths = save(fig, out / "secondary", formats, dpi=110)
     plt.close(fig)
-    return [out / "secondary.csv", out / "secondary.png"]
+    return [out / "secondary.csv", *paths]
 
 
 CASES = (("Z", (30.0, 30.0)), ("W", (30.0, 30.0)), ("Z", (10.0, 40.0)), ("W", (15.0, 25.0)))
@@ -157,9 +160,10 @@ CASES = (("Z", (30.0, 30.0)), ("W", (30.0, 30.0)), ("Z", (10.0, 40.0)), ("W", (1
 
 
 def revolutions(base: str = "paper-slip", torque: float = 100.0, out: Path | None = None,
-                cases=CASES) -> dict[str, dict[str, np.ndarray]]:
+                cases=CASES, formats=("png",)) -> dict[str, dict[str, np.ndarray]]:
     """Bearing loads over one revolution for each (arrangement, angles) case, by case
-    name (``"Z 30/30 deg"``); with ``out``, also ``secondary.csv`` and ``.png`` there.
+    name (``"Z 30/30 deg"``); with ``out``, also ``secondary.csv`` and the figure in
+    each of ``formats`` there.
     """
     results = {}
     for arrangement, angles in cases:
@@ -167,7 +171,7 @@ def revolutions(base: str = "paper-slip", torque: float = 100.0, out: Path | Non
         op = build_operator(simulate(scene))
         results[_case_name(arrangement, angles)] = bearing_loads(op)
     if out is not None:
-        write(results, np.degrees(scene.time.instants()), Path(out))
+        write(results, np.degrees(scene.time.instants()), Path(out), formats)
     return results
 
 
@@ -186,6 +190,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--torque", type=float, default=100.0,
                    help="constant input torque, N m (default 100)")
     p.add_argument("--out", default="results/secondary", help="output folder")
+    p.add_argument("--format", type=format_list, default=("png",), metavar="FORMATS",
+                   help="figure formats, comma-separated: png, svg, pdf (default png)")
     p.set_defaults(func=run)
 
 
@@ -203,7 +209,7 @@ def run(args) -> int:
     if not (math.isfinite(args.torque) and abs(args.torque) <= limit):
         raise SceneError(f"--torque {args.torque}: must be a finite number of at most "
                          f"{limit:g} N m in magnitude")
-    results = revolutions(args.scene, args.torque, Path(args.out))
+    results = revolutions(args.scene, args.torque, Path(args.out), formats=args.format)
     first = scene.shafts[0]
     near, far = sorted(first.bearings, key=lambda b: b.offset_m, reverse=True)
     a, c = near.offset_m - far.offset_m, first.length_m / 2 - near.offset_m
