@@ -25,6 +25,7 @@ from cardan_forces.formulations.problems import LCP, LS, NLS, QP
 from cardan_forces.solvers import Residuals, available, backends_for, solve
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.optimality import objective_value
+from cardan_forces.solvers.record import Stacks, stack_all
 from cardan_forces.solvers.registry import batch_backends, solve_batch
 
 LADDER = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
@@ -57,7 +58,10 @@ def progress(message: str) -> None:
 @dataclass
 class Prepared:
     """One formulation built once per operator: its problems at every instant, the
-    build time, and its batches (built on demand, with their build time).
+    build time, and its batches (built on demand, with their build time). ``stacks``:
+    the problems' check data stacked once (:func:`~cardan_forces.solvers.record.stack_all`,
+    part of the build), which every per-instant run's checks read instead of stacking
+    each instant's matrices again.
     """
 
     name: str
@@ -66,6 +70,7 @@ class Prepared:
     problems: list
     build_s: float
     batch_s: dict = field(default_factory=dict)
+    stacks: Stacks | None = None
 
     def batch(self, kind: str, instants=None):
         """The ``"least_norm"`` or ``"conic"`` batch at ``instants`` (default all)."""
@@ -83,7 +88,9 @@ def prepare(op, name: str, instants) -> Prepared:
     """Build the formulation's problem at every instant once (timed)."""
     began = time.perf_counter()
     problems = fbatch.build_problems(op, name, instants)
-    return Prepared(name, op, np.asarray(instants, int), problems, time.perf_counter() - began)
+    stacks = stack_all(problems)
+    return Prepared(name, op, np.asarray(instants, int), problems, time.perf_counter() - began,
+                    stacks=stacks)
 
 
 def batch_kind(solver: str, prepared: Prepared) -> str | None:
@@ -142,7 +149,8 @@ def run_instants(prepared: Prepared, solver: str, instants, *, mode="cold", tol=
     """
     history = solve_over_time(prepared.op, prepared.name, solver, instants=instants, tol=tol,
                               problem=prepared.problems.__getitem__, warm=mode == "warm",
-                              budget_s=budget_s, references=references)
+                              budget_s=budget_s, references=references,
+                              stacks=prepared.stacks)
     rows = []
     for i, t, wall, record in zip(history.instants, history.t, history.wall_s,
                                   history.records):

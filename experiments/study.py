@@ -30,6 +30,7 @@ from cardan_forces.formulations.sets import feasibility_problem, interval_slack,
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.ranging import HAVE_HIGHSPY, ranges
+from cardan_forces.solvers.record import Stacks
 from cardan_forces.solvers.registry import Pending, check, solve_unchecked
 
 # ---------------------------------------------------------------------------- backends
@@ -131,7 +132,8 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
                     problem: Callable[[int], object] | None = None, warm: bool = False,
                     restart: bool = False, budget_s: float = math.inf,
                     references: dict | None = None,
-                    progress: Callable[[str], None] | None = None) -> History:
+                    progress: Callable[[str], None] | None = None,
+                    stacks: Stacks | None = None) -> History:
     """``formulation`` solved with ``solver`` (default :func:`default_backend`) at
     ``instants`` of ``op`` (default all), in order.
 
@@ -140,7 +142,10 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     failed warm start is solved again cold (the paper's nonsmooth system can fall off a
     branch, its Sgn of eqs. 35-36); ``budget_s``: stop after this long (at least one
     instant); ``references``: ``{i: (forces, optimal value)}`` for the records'
-    distance and objective gap. An exception becomes a ``failed`` record, never a crash.
+    distance and objective gap; ``stacks``: ``problem(i)``'s check data stacked
+    beforehand at every instant ``i`` of ``op`` (:func:`~.record.stack_all`), so the
+    checks do not stack each instant's matrices. An exception becomes a ``failed``
+    record, never a crash.
     """
     picks = list(range(len(op.t)) if instants is None else instants)
     make = problem or (lambda i: FORMULATIONS[formulation](op, i))
@@ -161,16 +166,18 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
         previous = np.asarray(record.z, float) if answered else None
         if progress and (k + 1) % 200 == 0:
             progress(f"{formulation} ({solver}) {k + 1}/{len(picks)} instants")
-    records, walls = _checked(records, walls)
+    records, walls = _checked(records, walls, stacks, picks)
     return history_of(op, formulation, solver, picks[: len(records)], records, walls)
 
 
-def _checked(records: list, walls: list) -> tuple[list[Record], list[float]]:
+def _checked(records: list, walls: list, stacks, picks) -> tuple[list[Record], list[float]]:
     """The deferred solves among ``records`` checked at once (:func:`check`), each
-    instant's wall time with its share of the checks.
+    instant's wall time with its share of the checks (``stacks``: the problems' data
+    stacked beforehand, one row per instant, taken at the checked ones' ``picks``).
     """
     deferred = [k for k, r in enumerate(records) if isinstance(r, Pending)]
-    found = dict(zip(deferred, check([records[k] for k in deferred])))
+    rows = None if stacks is None else stacks.take([picks[k] for k in deferred])
+    found = dict(zip(deferred, check([records[k] for k in deferred], rows)))
     return ([found.get(k, r) for k, r in enumerate(records)],
             [w + (found[k].checks_s if k in found else 0.0) for k, w in enumerate(walls)])
 

@@ -29,6 +29,7 @@ import numpy as np
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP, RESIDUALS, residuals_batch
 
 from .optimality import (
+    Stacked,
     conic_key,
     recover,
     stack_conic,
@@ -387,8 +388,59 @@ def _checks_key(problem) -> tuple:
     return np.shape(c.A), np.asarray(c.unilateral, bool).tobytes(), c.pairs, c.cones
 
 
-def _residuals(problems, X: list[np.ndarray]) -> dict[str, np.ndarray]:
-    """``ForceChecks.residuals`` of every answer, one ``residuals_batch`` per structure."""
+@dataclass(frozen=True)
+class Stacks:
+    """The data the checks of T problems of one structure read, stacked once
+    (:func:`stack_all`): the force checks' ``A`` (T, m, n) and ``b`` (T, m), and the
+    problems' conic form (:class:`~.optimality.Stacked`, ``None`` for an LCP or a
+    nonlinear system). A caller that checks the same problems again (a bench running
+    several backends over one formulation's instants) hands them to
+    :func:`finalize_all` instead of having each pass stack every instant's matrices.
+    """
+
+    problems: tuple
+    A: np.ndarray
+    b: np.ndarray
+    conic: Stacked | None
+
+    def holds(self, problems) -> bool:
+        """Whether these are the stacks of exactly ``problems`` (the same objects)."""
+        return len(problems) == len(self.problems) and all(
+            p is q for p, q in zip(problems, self.problems))
+
+    def take(self, rows) -> Stacks:
+        """The stacks of the problems at positions ``rows``."""
+        rows = np.asarray(rows, int)
+        return Stacks(tuple(self.problems[k] for k in rows), self.A[rows], self.b[rows],
+                      None if self.conic is None else self.conic.take(rows))
+
+
+def stack_all(problems) -> Stacks | None:
+    """:class:`Stacks` of ``problems``, or ``None`` when their checks or their conic
+    forms differ in structure (then :func:`finalize_all` groups them itself).
+    """
+    problems = list(problems)
+    if not problems or len(_groups(problems, _checks_key)) != 1:
+        return None
+    kinds = _groups(problems, _kind_key)
+    if len(kinds) != 1:
+        return None
+    first = problems[0]
+    conic = None
+    if not isinstance(first, (LCP, NLS)) and conic_key(first) is not None:
+        conic = stack_conic(problems)
+    return Stacks(tuple(problems), np.array([p.checks.A for p in problems], float),
+                  np.array([p.checks.b for p in problems], float), conic)
+
+
+def _residuals(problems, X: list[np.ndarray], stacks: Stacks | None) -> dict[str, np.ndarray]:
+    """``ForceChecks.residuals`` of every answer, one ``residuals_batch`` per structure
+    (the one of ``stacks`` where given).
+    """
+    if stacks is not None:
+        c = problems[0].checks
+        return residuals_batch(stacks.A, stacks.b, np.array(X), c.unilateral, c.pairs,
+                               c.cones)
     out = {k: np.full(len(X), np.inf) for k in Residuals.KEYS}
     for idx in _groups(problems, _checks_key):
         c = problems[idx[0]].checks
@@ -415,7 +467,8 @@ class _Views:
 
 
 def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_values=None,
-                 extra_setup_s=None, received=None, elapsed_s=None) -> list[Record]:
+                 extra_setup_s=None, received=None, elapsed_s=None,
+                 stacks: Stacks | None = None) -> list[Record]:
     """Judge T outcomes at once: :func:`finalize` of each, with the residuals and the
     optimality measured by one vectorized pass per problem structure, so the checks
     cost microseconds per instant (``checks_s`` is the pass's time over T).
@@ -423,7 +476,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     ``received[k]``: the problem the backend received (after conversion; default the
     problem), for the solver-optimality view; ``elapsed_s[k]``: seconds spent before the
     checks (conversion and solver), giving ``wall_s``. The other lists are per instant
-    as :func:`finalize`'s arguments.
+    as :func:`finalize`'s arguments; ``stacks``: the problems' data stacked beforehand
+    (:func:`stack_all`; ignored unless it holds exactly ``problems``).
     """
     began, T = time.perf_counter(), len(problems)
     references = references if references is not None else [None] * T
@@ -431,7 +485,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     received = received if received is not None else problems
     started = [_start(p, o) for p, o in zip(problems, outcomes)]
     X = [x for _, x, _ in started]
-    found = _residuals(problems, X)
+    stacks = stacks if stacks is not None and stacks.holds(problems) else None
+    found = _residuals(problems, X, stacks)
     primal = np.max(np.array([found[k] for k in Residuals.KEYS]), axis=0)
     for k in np.flatnonzero(~np.isfinite(primal)):  # an answer with NaN or inf forces
         first, x, notes = started[k]
@@ -441,7 +496,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
             X[k] = started[k][1]
     status = judge([s for s, _, _ in started], primal)
     answered = np.array([s in _ANSWERED for s in status], bool)
-    views = _optimality_all(problems, outcomes, answered, primal, optimal_values, received)
+    views = _optimality_all(problems, outcomes, answered, primal, optimal_values, received,
+                            stacks)
     distance = [None if ref is None else _reference_distance(x, ref)
                 for x, ref in zip(X, references)]
     measured = zip(views.primal.tolist(), views.dual.tolist(), views.gap.tolist())
@@ -504,7 +560,8 @@ def finalize(
                         received=None if received is None else [received])[0]
 
 
-def _optimality_all(problems, outcomes, answered, primal, optimal_values, received) -> _Views:
+def _optimality_all(problems, outcomes, answered, primal, optimal_values, received,
+                    stacks: Stacks | None) -> _Views:
     """The package's optimality (relative) and the solver's (absolute, where the
     problem has a conic form) of T answers; NaN marks a measure a record has none of.
     """
@@ -515,6 +572,11 @@ def _optimality_all(problems, outcomes, answered, primal, optimal_values, receiv
     views.primal[~answered] = math.inf
     views.dual[~answered], views.gap[~answered] = math.inf, math.inf
     live = [k for k in range(T) if answered[k]]
+    if stacks is not None and stacks.conic is not None:
+        if live:
+            st = stacks.conic if len(live) == T else stacks.conic.take(live)
+            _conic(problems, outcomes, np.array(live), views, optimal_values, received, st)
+        return views
     for idx in _groups([problems[k] for k in live], _kind_key):
         idx = np.array(live)[idx]
         problem = problems[idx[0]]
@@ -548,13 +610,14 @@ def _lcp(problems, outcomes, idx, views: _Views) -> None:
         views.y[k] = w[j]
 
 
-def _conic(problems, outcomes, idx, views: _Views, optimal_values, received) -> None:
+def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
+           st: Stacked | None = None) -> None:
     """Optimality of answers to problems with one conic form (:func:`stack_conic`):
     the package's relative measures with the solver's multipliers (recovered where it
     gave none), and the solver's absolute ones (:func:`~.qp_measures.residuals_from`)
-    where it gave them.
+    where it gave them. ``st``: the problems at ``idx`` stacked beforehand.
     """
-    st = stack_conic([problems[k] for k in idx])
+    st = st if st is not None else stack_conic([problems[k] for k in idx])
     m = st.b.shape[1]
     z = np.array([outcomes[k].z for k in idx], float)
     given = np.array([outcomes[k].y is not None and len(outcomes[k].y) == m for k in idx])

@@ -35,7 +35,7 @@ import numpy as np
 from . import settings
 from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
 from .conversions import convert, reachable
-from .record import Outcome, Record, Status, finalize_all
+from .record import Outcome, Record, Stacks, Status, finalize_all
 
 if TYPE_CHECKING:  # settings_profiles looks backends up here: a type-only import
     from .settings_profiles import Profile
@@ -250,8 +250,10 @@ class Pending:
         return self.outcome.z
 
 
-def check(pending: list[Pending]) -> list[Record]:
-    """The package-judged records of deferred solves, as :func:`solve` returns them."""
+def check(pending: list[Pending], stacks: Stacks | None = None) -> list[Record]:
+    """The package-judged records of deferred solves, as :func:`solve` returns them
+    (``stacks``: their problems' data stacked beforehand, :func:`.record.stack_all`).
+    """
     if not pending:
         return []
     return finalize_all([p.problem for p in pending], pending[0].solver,
@@ -260,7 +262,7 @@ def check(pending: list[Pending]) -> list[Record]:
                         optimal_values=[p.optimal_value for p in pending],
                         extra_setup_s=[p.convert_s for p in pending],
                         received=[p.received for p in pending],
-                        elapsed_s=[p.elapsed_s for p in pending])
+                        elapsed_s=[p.elapsed_s for p in pending], stacks=stacks)
 
 
 def solve(

@@ -255,6 +255,44 @@ def test_checks_of_many_instants_at_once_equal_each_instant_alone():
     assert {r.duals for r in together} >= {"solver", "recovered", "none"}
 
 
+def test_checks_with_stacks_built_beforehand_equal_the_checks_without():
+    """finalize_all with the problems' data stacked once (stack_all, taken at some rows)
+    gives the records it gives stacking itself, answered or not (a NaN answer, a
+    recovered multiplier); stacks of other problems are ignored, not misread."""
+    from cardan_forces.solvers.record import finalize_all, stack_all
+
+    rng = np.random.default_rng(5)
+    for pick in (0, 1):
+        problems, outcomes = [], []
+        for k in range(5):
+            problem = _variants(k)[pick]
+            found = solve(problem, "clarabel", tol=1e-10)
+            z = found.z if isinstance(problem, Conic) else found.x
+            z = np.full_like(z, np.nan) if k == 3 else z
+            y = None if k == 1 else found.y + 1e-4 * rng.standard_normal(len(found.y))
+            problems.append(problem)
+            outcomes.append(Outcome("solved" if k != 2 else "inaccurate", z, y=y))
+        stacks = stack_all(problems)
+        assert stacks is not None and stacks.conic is not None
+        rows = [0, 2, 3, 4]
+        chosen, answers = [problems[k] for k in rows], [outcomes[k] for k in rows]
+        plain = finalize_all(chosen, "hand", answers)
+        for given in (stacks.take(rows), stacks.take([1, 2, 3, 4])):
+            for record, alone in zip(finalize_all(chosen, "hand", answers, stacks=given),
+                                     plain):
+                assert (record.status, record.duals, record.gap_kind) == (
+                    alone.status, alone.duals, alone.gap_kind)
+                assert dict(record.optimality) == pytest.approx(dict(alone.optimality),
+                                                                rel=1e-12)
+                assert dict(record.residuals) == pytest.approx(dict(alone.residuals),
+                                                               rel=1e-12)
+                assert (record.solver_optimality is None) == (alone.solver_optimality is None)
+                if record.solver_optimality is not None:
+                    assert dict(record.solver_optimality) == pytest.approx(
+                        dict(alone.solver_optimality), rel=1e-12)
+        assert any(r.status == "failed" for r in plain)
+
+
 def test_stacked_conic_form_equals_each_conversion():
     from cardan_forces.solvers.optimality import stack_conic
 
