@@ -310,12 +310,6 @@ class Stacked:
         return self.P if self.P is None or self.P.ndim == 2 else self.P[k]
 
 
-def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> dict[str, np.ndarray]:
-    """:func:`measures` of T answers to the stacked problems ``st``."""
-    return combine(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y), z, y,
-                   dual_cone_violation(st.cones, y))
-
-
 def _stack_qp(problems) -> Stacked | None:
     """:meth:`QP.as_conic` of T QPs of one structure at once (``None`` when their
     bounds are finite in different places, so their conic forms differ in rows).

@@ -22,7 +22,7 @@ import enum
 import math
 import time
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import ClassVar
 
 import numpy as np
@@ -30,10 +30,11 @@ from cardan_forces.formulations.problems import LCP, LS, NLS, QP, RESIDUALS, res
 
 from .optimality import (
     Stacked,
+    combine,
     conic_key,
+    dual_cone_violation,
     recover,
     stack_conic,
-    stacked_measures,
     times_P,
     unique_optimum,
 )
@@ -393,9 +394,10 @@ class Stacks:
     """The data the checks of T problems of one structure read, stacked once
     (:func:`stack_all`): the force checks' ``A`` (T, m, n) and ``b`` (T, m), and the
     problems' conic form (:class:`~.optimality.Stacked`, ``None`` for an LCP or a
-    nonlinear system). A caller that checks the same problems again (a bench running
-    several backends over one formulation's instants) hands them to
-    :func:`finalize_all` instead of having each pass stack every instant's matrices.
+    nonlinear system; its ``P`` (n, n) where the same at every instant). A caller that
+    checks the same problems again (a bench running several backends over one
+    formulation's instants) hands them to :func:`finalize_all` instead of having each
+    pass stack every instant's matrices.
     """
 
     problems: tuple
@@ -429,6 +431,9 @@ def stack_all(problems) -> Stacks | None:
     conic = None
     if not isinstance(first, (LCP, NLS)) and conic_key(first) is not None:
         conic = stack_conic(problems)
+        P = conic.P
+        if P is not None and P.ndim == 3 and np.all(P == P[0]):  # one P: one product
+            conic = replace(conic, P=P[0])
     return Stacks(tuple(problems), np.array([p.checks.A for p in problems], float),
                   np.array([p.checks.b for p in problems], float), conic)
 
@@ -624,7 +629,9 @@ def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
     y = np.array([outcomes[k].y if given[j] else
                   recover(st.Pk(j), st.q[j], st.A(j), st.b[j], st.cones, z[j])
                   for j, k in enumerate(idx)], float).reshape(len(idx), m)
-    found = stacked_measures(st, z, y)
+    Pz, Aty = times_P(st.P, z), st.Aty(y)  # shared by both views
+    found = combine(Pz, st.q, Aty, np.einsum("tm,tm->t", st.b, y), z, y,
+                    dual_cone_violation(st.cones, y))
     gap, kinds = found["gap"], np.full(len(idx), "duality", object)
     best = np.array([np.nan if optimal_values[k] is None else optimal_values[k] for k in idx])
     objective_gap = ~given & ~np.isnan(best)
@@ -639,8 +646,8 @@ def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
         as_qp = isinstance(received[idx[0]], (LS, QP))
         zs, ys = z[given], y[given]
         sub = st if given.all() else st.take(np.flatnonzero(given))
-        solver = residuals_from(times_P(sub.P, zs), sub.q, sub.Az(zs), sub.Aty(ys), sub.b,
-                                st.cones, zs, ys, check_dual_cone=not as_qp)
+        solver = residuals_from(Pz[given], sub.q, sub.Az(zs), Aty[given], sub.b, st.cones,
+                                zs, ys, check_dual_cone=not as_qp)
         for j, k in enumerate(idx[given]):
             views.solver[k] = Optimality(primal=float(solver["primal"][j]),
                                          dual=float(solver["dual"][j]),
