@@ -127,14 +127,19 @@ def _shared_legend(fig, styles: dict, shown, extra=()) -> None:
     fig.tight_layout(rect=(0, min(0.4, (0.3 * rows + 0.2) / height), 1, 1))
 
 
-def plot_pareto(points: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
-    """:func:`pareto_figure` written as ``path.<format>`` for each of ``formats``."""
+def _written(drawn, path: Path, formats, dpi: int) -> list[Path]:
+    """A drawn ``(plt, fig)`` saved as ``path.<format>`` for each of ``formats``."""
     from .images import save
 
-    plt, fig = pareto_figure(points, styles)
-    written = save(fig, path.with_suffix(""), formats, dpi=110)
+    plt, fig = drawn
+    written = save(fig, path.with_suffix(""), formats, dpi=dpi)
     plt.close(fig)
     return written
+
+
+def plot_pareto(points: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
+    """:func:`pareto_figure` written as ``path.<format>`` for each of ``formats``."""
+    return _written(pareto_figure(points, styles), path, formats, dpi=110)
 
 
 def pareto_figure(points: list[dict], styles=None):
@@ -172,12 +177,7 @@ def pareto_figure(points: list[dict], styles=None):
 
 def plot_profiles(profiles: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
     """:func:`profiles_figure` written as ``path.<format>`` for each of ``formats``."""
-    from .images import save
-
-    plt, fig = profiles_figure(profiles, styles)
-    written = save(fig, path.with_suffix(""), formats, dpi=100)
-    plt.close(fig)
-    return written
+    return _written(profiles_figure(profiles, styles), path, formats, dpi=100)
 
 
 def profiles_figure(profiles: list[dict], styles=None):
