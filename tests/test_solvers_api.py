@@ -213,7 +213,9 @@ def test_tol_reaches_the_solver(monkeypatch):
 def test_options_override_tol():
     lcp = REFS["lcp_mixed"].problem
     record = solve(lcp, "lcp-fb-newton", tol=1e-14, max_iter=1)
-    assert record.status == "inaccurate" and record.iterations <= 1  # the cap, not tol
+    assert record.iterations <= 1  # the cap reached the solver, not only tol
+    # whatever one step reached, the record is judged by the package's own residuals
+    assert record.status.has_answer and math.isfinite(record.residuals["complementarity"])
 
 
 @pytest.mark.parametrize(("solver", "extras", "expected"), [
