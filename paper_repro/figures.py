@@ -256,16 +256,21 @@ def fig14(op: Operator, histories: dict[str, np.ndarray],
             columns[f"{q}_{method}"] = values
     csv = write_csv(Path(out) / f"{stem or f'fig{number}'}.csv",
                     _with_smoothed(_set_columns(columns, bounds), t))
+    rigid = tuple(m for m in histories if m != PENALTY)
+    _plot_grid(csv, [Panel(title, q, "force [N]", rigid, sets=q in bounds)
+                     for q, title in _bearing_titles(op).items()],
+               f"Fig. {number}: input shaft bearing loads ({scene_name}{subtitle})", ncols=1,
+               formats=formats)
+    return csv
+
+
+def _bearing_titles(op: Operator) -> dict[str, str]:
+    """Panel titles of the first shaft's bearing loads (:func:`bearing_loads`' keys)."""
     labels = [c.label for c in op.bearings(0)]
     titles = {f"{b}_radial": f"({'abcdefgh'[k]}) bearing '{b}', radial"
               for k, b in enumerate(labels)}
     titles["axial"] = f"({'abcdefgh'[len(labels)]}) axial (sum of its bearings)"
-    rigid = tuple(m for m in histories if m != PENALTY)
-    _plot_grid(csv, [Panel(title, q, "force [N]", rigid, sets=q in bounds)
-                     for q, title in titles.items()],
-               f"Fig. {number}: input shaft bearing loads ({scene_name}{subtitle})", ncols=1,
-               formats=formats)
-    return csv
+    return titles
 
 
 def engine_figure(op: Operator, runs: dict[str, np.ndarray],
@@ -283,12 +288,8 @@ def engine_figure(op: Operator, runs: dict[str, np.ndarray],
             columns[f"{q}_{keys[label]}"] = values
     csv = write_csv(Path(out) / "engine.csv", _set_columns(columns, bounds))
     labels = tuple((key, f"MuJoCo, {label}") for label, key in keys.items())
-    names = [c.label for c in op.bearings(0)]
-    titles = {f"{b}_radial": f"({'abcdefgh'[k]}) bearing '{b}', radial"
-              for k, b in enumerate(names)}
-    titles["axial"] = f"({'abcdefgh'[len(names)]}) axial (sum of its bearings)"
     _plot_grid(csv, [Panel(title, q, "force [N]", tuple(keys.values()), sets=q in bounds,
-                           labels=labels) for q, title in titles.items()],
+                           labels=labels) for q, title in _bearing_titles(op).items()],
                f"MuJoCo's input shaft bearing loads over the rigid set ({op.scene.name})",
                ncols=1, formats=formats)
     return csv
