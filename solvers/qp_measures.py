@@ -37,8 +37,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from cardan_forces.formulations.problems import LS, QP, Conic
 
-from .optimality import cone_layout, dual_cone_violation
+from .conversions import convert
+from .optimality import cone_layout, dual_cone_violation, times_P
 
 
 @dataclass(frozen=True)
@@ -70,13 +72,6 @@ SETTINGS = {s.name: s for s in (
 ``define_tolerances``); ``default`` judges at 1, its other settings at their ``eps_abs``."""
 
 MEASURES = ("primal", "dual", "gap")
-
-
-def _Pz(P, z: np.ndarray) -> np.ndarray:
-    if P is None:
-        return np.zeros_like(z)
-    P = np.asarray(P, float)
-    return z @ P.T if P.ndim == 2 else np.matmul(P, z[:, :, None])[:, :, 0]
 
 
 def cone_violation(cones, s: np.ndarray) -> np.ndarray:
@@ -116,7 +111,7 @@ def conic_residuals(P, q, A, b, cones, z, y, *, check_dual_cone: bool) -> dict:
     z, y = np.where(bad[:, None], 0.0, z), np.where(bad[:, None], np.nan, y)
     Az = z @ A.T if A.ndim == 2 else np.matmul(A, z[:, :, None])[:, :, 0]
     Aty = y @ A if A.ndim == 2 else np.matmul(y[:, None, :], A)[:, 0]
-    return residuals_from(_Pz(P, z), q, Az, Aty, b, cones, z, y,
+    return residuals_from(times_P(P, z), q, Az, Aty, b, cones, z, y,
                           check_dual_cone=check_dual_cone)
 
 
@@ -198,24 +193,14 @@ def solver_optimality(received, z, y) -> dict[str, float]:
     conic KKT analogue for a conic problem. ``inf`` without an answer or multipliers
     (qpbenchmark's value for a missing dual).
     """
-    from cardan_forces.formulations.problems import Conic
-
-    from .conversions import convert
-
     conic = convert(received, (Conic,))
     if z is None or y is None or conic is None:
         return dict.fromkeys(MEASURES, np.inf)
     found = conic_residuals(conic.P, np.asarray(conic.q, float)[None], conic.A,
                             np.asarray(conic.b, float)[None], conic.cones,
                             np.asarray(z, float)[None], np.asarray(y, float)[None],
-                            check_dual_cone=not _is_qp(received))
+                            check_dual_cone=not isinstance(received, (LS, QP)))
     return {k: float(v[0]) for k, v in found.items()}
-
-
-def _is_qp(problem) -> bool:
-    from cardan_forces.formulations.problems import LS, QP
-
-    return isinstance(problem, (LS, QP))
 
 
 def succeeds(found, primal, dual, gap, setting: Setting):
