@@ -5,8 +5,8 @@ At sampled instants, for the engine's forces ``x_e`` under each softness setting
 
 - the residual of the package's equilibrium, ``||A x_e - b|| / ||b||``;
 - the determinate components: ``|x_e - x|`` against the rigid value (a point);
-- every indeterminate component inside or outside its rigid interval (two LPs each,
-  :func:`~cardan_forces.formulations.sets.interval_problems`), within a tolerance of
+- every indeterminate component inside or outside its rigid interval
+  (:func:`~cardan_forces.experiments.study.intervals`), within a tolerance of
   1e-6 of the largest load plus the equilibrium residual's size;
 - the formulation whose forces lie closest, ``||x_e - x_f|| / ||x_f||``;
 - the spread of each component over the softness settings: the determinate ones stay
@@ -35,8 +35,9 @@ from cardan_forces.driveline import engine_mujoco
 from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import format_list, save
+from cardan_forces.experiments.study import intervals as rigid_intervals
+from cardan_forces.experiments.study import value_range
 from cardan_forces.formulations.convex import NotApplicable
-from cardan_forces.formulations.sets import interval_problems
 
 import cardan_forces as cf
 
@@ -116,14 +117,15 @@ def _formulation_forces(op, i: int) -> dict[str, np.ndarray]:
     return out
 
 
+def _ends(found: dict) -> tuple[float, float]:
+    """An interval's ``min``, ``max`` as numbers, +-inf where a side is not bounded."""
+    return (-np.inf if found["min"] is None else found["min"],
+            np.inf if found["max"] is None else found["max"])
+
+
 def _intervals(op, i: int) -> np.ndarray:
     """(n, 2): each component's rigid interval at instant ``i``, +-inf where unbounded."""
-    out = np.empty((len(op.names), 2))
-    for j, (lo, hi) in enumerate(interval_problems(op, i).values()):
-        for side, (problem, sign) in enumerate(((lo, 1.0), (hi, -1.0))):
-            record = cf.solve(problem, "scipy-highs")
-            out[j, side] = record.x[j] if record.solved else sign * -np.inf
-    return out
+    return np.array([_ends(found) for found in rigid_intervals(op, i).values()])
 
 
 def settle_s(runs: dict[str, EngineRun]) -> float:
@@ -228,14 +230,7 @@ def _load_rows(op) -> dict[str, np.ndarray]:
 
 def _band(op, c: np.ndarray, sampled: np.ndarray) -> np.ndarray:
     """(k, 2): the rigid interval of ``c'x`` at the sampled instants (+-inf: unbounded)."""
-    from cardan_forces.formulations.sets import range_problems
-
-    out = np.empty((len(sampled), 2))
-    for k, i in enumerate(sampled):
-        for side, (problem, sign) in enumerate(zip(range_problems(op, int(i), c), (1, -1))):
-            record = cf.solve(problem, "scipy-highs")
-            out[k, side] = c @ record.x if record.solved else -sign * np.inf
-    return out
+    return np.array([_ends(value_range(op, int(i), c)) for i in sampled]).reshape(-1, 2)
 
 
 def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
