@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .elements import shaft_segments
-from .equilibrium import Operator
+from .equilibrium import Operator, body_references
 from .kinematics import kinematics, rest_geometry
 from .scene import Scene
 
@@ -179,10 +179,7 @@ def reference_points(op: Operator) -> np.ndarray:
     """Each operator body's moment reference (m, global): a shaft body's centre of mass,
     a cross-pin's centre (the points the operator's moment rows are taken about).
     """
-    geo = rest_geometry(op.scene)
-    segs = shaft_segments(op.scene)
-    shafts = [geo.centres[s.shaft] + s.middle_m * geo.axes[s.shaft] for s in segs]
-    return np.array(shafts + list(geo.joint_centres)).reshape(-1, 3)
+    return body_references(rest_geometry(op.scene), shaft_segments(op.scene))
 
 
 def _chain(op: Operator) -> list[_Body]:

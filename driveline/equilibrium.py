@@ -362,12 +362,19 @@ def _joint_columns(j, joint, pin, segments, geo, kin, add) -> None:
                          centre + sign * joint.ht_m * axis, -sign * axis, True)])
 
 
+def body_references(geo, segments) -> np.ndarray:
+    """(bodies, 3): each body's moment reference at rest (m, global), in the operator's
+    body order: a shaft segment's centre of mass, then each cross-pin's centre.
+    """
+    return np.concatenate([[geo.centres[s.shaft] + s.middle_m * geo.axes[s.shaft]
+                            for s in segments], geo.joint_centres]).reshape(-1, 3)
+
+
 def build_operator(motion: Motion) -> Operator:
     """Assemble ``A`` and ``b`` at every instant of ``motion`` (batched)."""
     scene, geo = motion.scene, motion.geometry
     segments, bodies, links, cols = _layout(motion)
-    refs = np.concatenate([[geo.centres[s.shaft] + s.middle_m * geo.axes[s.shaft]
-                            for s in segments], geo.joint_centres]).reshape(-1, 3)
+    refs = body_references(geo, segments)
     T = len(motion.t)
     A = np.zeros((T, 6 * len(bodies), len(cols)))
     points = np.full((T, len(cols), 3), np.nan)

@@ -116,7 +116,7 @@ from .compiled import harmonic_law
 from .contact import hertz_stiffness
 from .dynamics import simulate
 from .elements import shaft_segments
-from .equilibrium import build_operator
+from .equilibrium import body_references, build_operator
 from .penalty_integrators import RTOL, Marks, run_compiled, run_odeint, run_stepped, timed
 from .scene import Scene, SceneError
 
@@ -387,10 +387,7 @@ class _Model:
                              + [cp.mass_kg] * (nb - ns))
         self.inertia = np.array([g.fraction * np.array(scene.shafts[g.shaft].inertia_kg_m2)
                                  for g in segments] + [cp.inertia_kg_m2] * (nb - ns))
-        geo = motion.geometry
-        self.rest_centre = np.concatenate([
-            [geo.centres[g.shaft] + g.middle_m * geo.axes[g.shaft] for g in segments],
-            geo.joint_centres]).reshape(nb, 3)
+        self.rest_centre = body_references(motion.geometry, segments)
         self.gravity = np.array(scene.gravity_m_s2) if scene.has("gravity") else np.zeros(3)
         self.start_frames = self._start_frames()
         rows, self.parts = _contact_rows(self, damping_length_unit_m)
