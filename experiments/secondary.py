@@ -141,14 +141,14 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
             for name, values in loads.items():
                 w.writerows([case, name, f"{q:.6g}", number_text(v, ".9g", "")]
                             for q, v in zip(angle_deg, values))
-    fig, axes = plt.subplots(len(results), 1, figsize=(8, 3 * len(results)), squeeze=False)
+    fig, axes = plt.subplots(len(results), 1, figsize=(10, 3 * len(results)), squeeze=False)
     for ax, (case, loads) in zip(axes[:, 0], results.items()):
         for name, values in loads.items():
             ax.plot(angle_deg, values, label=name, ls="-" if "normal" in name else "--")
         ax.set_title(f"bearing loads over one revolution: {case}")
-        ax.set_xlabel("input angle (deg)")
-        ax.set_ylabel("N")
-        ax.legend(fontsize=6, ncols=2)
+        ax.set_xlabel("input angle [deg]")
+        ax.set_ylabel("force [N]")
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     fig.tight_layout()
     paths = save(fig, out / "secondary", formats, dpi=110)
     plt.close(fig)
