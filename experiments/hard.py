@@ -334,10 +334,6 @@ def uncovered(runs: list[Run], tol: float | None = TOL) -> list[str]:
     return [why for _, why in _misses(runs, tol)]
 
 
-def _uncovered_times(runs: list[Run], tol: float | None) -> list[float]:
-    return [round(t, 12) for t, _ in _misses(runs, tol)]
-
-
 def _misses(runs: list[Run], tol: float | None) -> list[tuple[float, str]]:
     limit, out = bar(tol), []
 
@@ -362,13 +358,13 @@ def summarize(runs: list[Run], tol: float | None = TOL) -> list[dict]:
     groups: dict[tuple[str, str], list[Run]] = {}
     for run in runs:
         groups.setdefault((run.case, run.formulation), []).append(run)
-    base = {f: set(_uncovered_times(group, tol)) for (c, f), group in groups.items()
-            if c == "base"}
+    misses = {key: _misses(group, tol) for key, group in groups.items()}
+    times = {key: {round(t, 12) for t, _ in found} for key, found in misses.items()}
+    base = {f: found for (c, f), found in times.items() if c == "base"}
     rows = []
     for (case, formulation), group in groups.items():
         best = min(group, key=lambda r: (-r.n_solved, max(r.worst().values())))
-        why = uncovered(group, tol)
-        times = set(_uncovered_times(group, tol))
+        why, missed = [w for _, w in misses[case, formulation]], times[case, formulation]
         rows.append({
             "case": case, "formulation": formulation, "best": best.solver,
             "solved": f"{best.n_solved}/{len(best.records)}",
@@ -376,7 +372,7 @@ def summarize(runs: list[Run], tol: float | None = TOL) -> list[dict]:
             "nan_free": all(r.nan_free for r in group),
             "failing": [f"{r.solver} ({r.status})" for r in group if r.status != "solved"],
             "covered": not why, "why": why, "known": KNOWN_FAILURES.get((case, formulation)),
-            "inherited": case != "base" and bool(times) and times <= base.get(formulation, set()),
+            "inherited": case != "base" and bool(missed) and missed <= base.get(formulation, set()),
         })
     return rows
 
