@@ -254,7 +254,7 @@ def _bearings(op: Operator):
     geo = rest_geometry(op.scene)
     points = [(geo.bearing_points[k][b], geo.axes[k])
               for k, shaft in enumerate(op.scene.shafts) for b in range(len(shaft.bearings))]
-    return list(zip(op.of_kind("bearing-locating", "bearing-floating"), points))
+    return list(zip(op.bearings(), points))
 
 
 def build_mjcf(op: Operator, softness: Softness = Softness()) -> str:
@@ -297,14 +297,14 @@ def _timestep(op: Operator, softness: Softness) -> float:
     return step / max(1, int(np.ceil(step / softness.timestep_s - 1e-9)))
 
 
-def _initial_velocity(mj, model, data, op: Operator, chain: list[_Body]) -> None:
+def _initial_velocity(model, data, op: Operator, chain: list[_Body]) -> None:
     """Joint speeds of the scene's initial state: the first shaft turning at the
     initial speed, each hinge at its kinematic rate, the slides still.
     """
     scene = op.scene
     qd0 = scene.initial_speed_rad_s
-    kin = kinematics(rest_geometry(scene), scene.initial_angle_rad)
-    axes = rest_geometry(scene).axes
+    geo = rest_geometry(scene)
+    kin, axes = kinematics(geo, scene.initial_angle_rad), geo.axes
     n_seg = len(shaft_segments(scene))
     for pos, body in enumerate(chain):
         dof = model.jnt_dofadr[model.body_jntadr[pos + 1]]
@@ -380,10 +380,11 @@ def run(op: Operator, softness: Softness = Softness()) -> EngineRun:
     model = mj.MjModel.from_xml_string(build_mjcf(op, softness))
     data = mj.MjData(model)
     chain = _chain(op)
-    _initial_velocity(mj, model, data, op, chain)
+    _initial_velocity(model, data, op, chain)
     groups, refs = _groups(op, chain), reference_points(op)
     axes = rest_geometry(scene).axes
-    last = 1 + max(p for p, b in enumerate(chain) if b.index < len(shaft_segments(scene)))
+    n_seg = len(shaft_segments(scene))
+    last = 1 + max(p for p, b in enumerate(chain) if b.index < n_seg)
     dt = model.opt.timestep
     targets = np.rint((op.t - scene.time.start_s) / dt).astype(int)
     if np.any(np.diff(targets) < 0) or targets[0] < 0:
