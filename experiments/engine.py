@@ -214,17 +214,11 @@ def _load_rows(op) -> dict[str, np.ndarray]:
     each bearing's in-plane radial component (``r1``, N) and the shaft's axial load
     (sum over its bearings, N).
     """
-    frame = op.shaft_frames[0]
-    rows, axial = {}, np.zeros(len(op.names))
-    for link in op.of_kind("bearing-locating", "bearing-floating"):
-        if link.shaft != 0:
-            continue
-        basis = np.eye(3) if link.frame == "global" else frame[:2]
-        c = np.zeros(len(op.names))
-        c[list(link.columns)] = basis @ frame[0]
-        rows[f"{link.element} in-plane"] = c
-        axial[list(link.columns)] += basis @ frame[2]
-    rows[f"{op.scene.shafts[0].name} axial (sum)"] = axial
+    bearings = op.bearings(0)
+    matrices = [op.bearing_matrix(link) for link in bearings]  # rows (r1, r2, axis)
+    rows = {f"{link.element} in-plane": m[0] for link, m in zip(bearings, matrices)}
+    rows[f"{op.scene.shafts[0].name} axial (sum)"] = sum((m[2] for m in matrices),
+                                                         np.zeros(len(op.names)))
     return rows
 
 
