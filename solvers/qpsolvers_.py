@@ -13,7 +13,7 @@ import time
 import numpy as np
 from cardan_forces.formulations.problems import QP
 
-from . import settings
+from . import clarabel_, settings
 from .record import Outcome
 from .registry import Backend
 from .settings_profiles import Profile
@@ -45,7 +45,7 @@ TOLERANCES: dict[str, tuple[str, ...]] = {
 """Each solver's own parameters a requested tolerance sets (quadprog: a direct method)."""
 
 PROFILES: dict[str, Profile] = {
-    "clarabel": Profile("clarabel", ("tol_feas", "tol_gap_abs"), ("tol_gap_rel",)),
+    "clarabel": clarabel_.PROFILE,
     "daqp": Profile("daqp", ("dual_tol", "primal_tol")),
     "ecos": Profile("ecos", ("feastol",)),
     "highs": Profile("highs", ("dual_feasibility_tolerance", "primal_feasibility_tolerance"),
