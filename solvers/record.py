@@ -492,7 +492,7 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     X = [x for _, x, _ in started]
     stacks = stacks if stacks is not None and stacks.holds(problems) else None
     found = _residuals(problems, X, stacks)
-    primal = np.max(np.array([found[k] for k in Residuals.KEYS]), axis=0)
+    primal = Residuals(**found).largest()
     for k in np.flatnonzero(~np.isfinite(primal)):  # an answer with NaN or inf forces
         first, x, notes = started[k]
         if first.has_answer and not np.all(np.isfinite(x)):
