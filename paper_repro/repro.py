@@ -277,12 +277,12 @@ def _both_faces_note(op: Operator, hist: dict[str, History]) -> list[str]:
     """Where a method lets both end faces of one trunnion pair push at once (the paper's
     complementarity, eqs. 39, 46, does not hold): a force no contact can make.
     """
-    lines = []
+    lines, clean = [], []
     for m, h in hist.items():
-        if m == PENALTY or not op.pairs:
+        if m == PENALTY:
             continue
         both = np.max([np.minimum(h.forces[:, a], h.forces[:, b]) for a, b in op.pairs],
-                      axis=0)
+                      axis=0) if op.pairs else np.zeros(len(op.t))
         hit = np.isfinite(both) & (both > 1e-3)
         if hit.any():
             k = int(np.nanargmax(both))
@@ -291,7 +291,8 @@ def _both_faces_note(op: Operator, hist: dict[str, History]) -> list[str]:
                          f"{op.t[k]:.3f} s): it does not impose the faces' complementarity "
                          "(eqs. 39, 46), so its curves are a comparison, not a physical "
                          "selection (the figures' legend says so)")
-    clean = [f"`{m}`" for m in hist if m != PENALTY and not any(f"`{m}`:" in s for s in lines)]
+        else:
+            clean.append(f"`{m}`")
     if clean:
         lines.append(f"- {', '.join(clean)}: no pair of end faces pushes at once (above 1 mN)")
     return lines
@@ -575,7 +576,7 @@ def _rigid_work(op: Operator, figs, rigid, progress) -> dict:
     """
     if not figs:
         return {"hist": {}}
-    work = {"hist": _histories(op, rigid, progress, None)}
+    work = {"hist": _histories(op, rigid, progress)}
     say = progress or (lambda _: None)
     if 13 in figs:
         say("repro: fig 13 solution-set intervals ...")
@@ -662,11 +663,8 @@ def _speed_notes(motion: Motion, pen, shafts) -> list[str]:
     return lines
 
 
-def _histories(op: Operator, rigid, progress, penalty: History | None) -> dict[str, History]:
-    hist = {m: history(op, m, progress=progress) for m in bar(rigid, "repro", unit="method")}
-    if penalty is not None:
-        hist[PENALTY] = penalty
-    return hist
+def _histories(op: Operator, rigid, progress) -> dict[str, History]:
+    return {m: history(op, m, progress=progress) for m in bar(rigid, "repro", unit="method")}
 
 
 def _contact_figures(op: Operator, figs, work, out: Path, formats, penalty) -> list:
@@ -742,8 +740,9 @@ def _compliance_histories(runs: _Runs, scene: Scene):
     op = build_operator(runs.motion(released(scene), "the compliance comparison"))
     hist, skipped = {}, []
     for method, solver in COMPLIANCE_VS_PENALTY.items():
-        if _refusal(op.scene, op, method):
-            skipped.append(f"`{method}` ({_refusal(op.scene, op, method)})")
+        why = _refusal(op.scene, op, method)  # builds the method's first problem
+        if why:
+            skipped.append(f"`{method}` ({why})")
         else:
             hist[method] = history(op, method, solver)
     return op, hist, skipped
