@@ -35,11 +35,11 @@ from cardan_forces.solvers import qp_measures as qm
 from cardan_forces.solvers.conversions import convert
 from cardan_forces.solvers.optimality import unique_optimum
 from cardan_forces.solvers.qpsolvers_ import conic_duals
-from cardan_forces.solvers.record import Outcome, Residuals, Status, finalize
+from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status, finalize
 
 from .export import as_qp, class_name
 
-FORCE_LEVEL = 1e-6
+FORCE_LEVEL = ACCEPT
 """Largest relative force residual of a force-accurate answer (the package's ``ACCEPT``)."""
 
 
