@@ -93,28 +93,24 @@ def left_null_space(A: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Hold:
-    """How contacts hold a line meant to turn with one degree of freedom: ``free``
-    motions (rows minus the rank of the equilibrated operator), ``null`` their basis
-    (rows x free, :func:`left_null_space`).
+    """How contacts hold a line meant to turn with one degree of freedom: ``null`` is the
+    basis of its free motions (rows x free, :func:`left_null_space`); one free motion
+    (the rotation) is held, more a mechanism, none locked.
     """
 
-    free: int
     null: np.ndarray
 
     @property
-    def state(self) -> str:
-        """``held`` (the rotation is the only free motion), ``mechanism`` (more) or
-        ``locked`` (none: the line cannot turn).
-        """
-        return "held" if self.free == 1 else "locked" if self.free == 0 else "mechanism"
+    def free(self) -> int:
+        """Free motions: rows minus the rank of the equilibrated operator."""
+        return self.null.shape[1]
 
 
 def holding(A: np.ndarray) -> Hold:
     """The free motions that the equilibrium operator ``A`` (rows x contact columns, six
     rows per body) leaves.
     """
-    null = left_null_space(A)
-    return Hold(free=null.shape[1], null=null)
+    return Hold(left_null_space(A))
 
 
 def determinacy(op: Operator, i: int) -> Determinacy:
