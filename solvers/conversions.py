@@ -70,7 +70,9 @@ class Reduced:
     reduced problem's; ``z0`` (T, n), ``N`` (T, n, k); ``L`` (T, r, n) the pseudo-inverse
     of ``A_eq'``, which gives the equality rows' multipliers;
     ``rows_eq`` / ``rows_in`` the full problem's row indices of each part; ``offset``
-    (T,) the objective at ``z0`` (the reduced objective plus it is the full one).
+    (T,) the objective at ``z0`` (the reduced objective plus it is the full one);
+    ``P_full`` (T, n, n), ``q_full`` (T, n) and ``A_in`` (T, m_in, n) the full problem's
+    data that :meth:`lift` reads.
     """
 
     P: np.ndarray
@@ -86,7 +88,7 @@ class Reduced:
     offset: np.ndarray
     P_full: np.ndarray
     q_full: np.ndarray
-    A_full: np.ndarray
+    A_in: np.ndarray
 
     def lift(self, y: np.ndarray, dual_in: np.ndarray | None):
         """The full problem's ``z`` (T, n) from the reduced answers ``y`` (T, k), and its
@@ -97,9 +99,8 @@ class Reduced:
         z = self.z0 + np.einsum("tnk,tk->tn", self.N, y)
         if dual_in is None:
             return z, None
-        A_in = self.A_full[:, self.rows_in]
         g = -(np.einsum("tij,tj->ti", self.P_full, z) + self.q_full
-              + np.einsum("tmn,tm->tn", A_in, dual_in))
+              + np.einsum("tmn,tm->tn", self.A_in, dual_in))
         lam = np.einsum("trn,tn->tr", self.L, g)
         duals = np.empty((len(z), len(self.rows_eq) + len(self.rows_in)))
         duals[:, self.rows_eq], duals[:, self.rows_in] = lam, dual_in
@@ -160,7 +161,7 @@ def eliminate_equalities(P, q, A, b, cones) -> Reduced:
         b=b[:, rest] - np.einsum("tmn,tn->tm", A_in, z0), cones=kept, z0=z0, N=N, L=L,
         rows_eq=eq, rows_in=rest,
         offset=0.5 * np.einsum("tn,tn->t", z0, Pz0) + np.einsum("tn,tn->t", q, z0),
-        P_full=P, q_full=q, A_full=A)
+        P_full=P, q_full=q, A_in=A_in)
 
 
 def reduced_conic(conic: Conic) -> tuple[Conic, Reduced]:
