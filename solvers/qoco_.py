@@ -23,6 +23,7 @@ from cardan_forces.formulations.problems import Conic
 
 from . import settings
 from .batch import BatchOutcome
+from .optimality import blocks
 from .record import Outcome, Status
 from .registry import Backend
 
@@ -59,13 +60,9 @@ def layout(cones) -> tuple[np.ndarray, np.ndarray, int, list[int]]:
     block (stable within a kind); ``(equality rows, cone rows, l, q)``.
     """
     rows = {"zero": [], "nonneg": [], "soc": []}
-    sizes, start = [], 0
-    for kind, size in cones:
-        block = list(range(start, start + int(size)))
-        rows[kind].extend(block)
-        if kind == "soc":
-            sizes.append(int(size))
-        start += int(size)
+    for kind, _, block in blocks(cones):
+        rows[kind].extend(range(block.start, block.stop))
+    sizes = [int(size) for kind, size in cones if kind == "soc"]
     return (np.array(rows["zero"], int), np.array(rows["nonneg"] + rows["soc"], int),
             len(rows["nonneg"]), sizes)
 
