@@ -232,7 +232,7 @@ def named_modes(motion: Motion, i: int, op: Operator | None = None) -> list[Mode
     if not loops:
         return modes
     helps = [r.words for r in candidates(motion.scene)
-             if _fewer_loops(one, (r,), loops) and _validated(motion.scene, (r,))]
+             if _fewer_loops(one, (r,), loops) and _valid_release(motion.scene, r)]
     text = "; or ".join(helps) or "no single release (combine several)"
     return [dataclasses.replace(m, release=_friction_words(here, m) + text)
             if m.kind == "closed loop" else m for m in modes]
