@@ -479,6 +479,14 @@ class _Runs:
         self.motions.append((scene.name, len(self.times), time.perf_counter() - start, purpose))
         return motion
 
+    def penalty_costs(self) -> dict[str, str]:
+        """Each penalty simulation's cost: wall (and CPU) seconds per simulated second."""
+        out = {}
+        for name, r in self.penalties.items():
+            span = max(r.t[-1] - r.t[0], 1e-12)
+            out[name] = f"{r.wall_s / span:.2f} ({r.cpu_s / span:.2f} of CPU)"
+        return out
+
     def penalty_result(self, scene: Scene, purpose: str) -> PenaltyResult | None:
         """The penalty simulation of ``released(scene)``: from its worker, or run here on
         first use; reused after.
@@ -810,8 +818,7 @@ def _status_lines(hist: dict[str, History]) -> list[str]:
 
 def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str], methods,
             formats, runs: _Runs, seconds: float) -> str:
-    penalty_s = [(r.wall_s / max(r.t[-1] - r.t[0], 1e-12), r.cpu_s / max(r.t[-1] - r.t[0], 1e-12))
-                 for r in runs.penalties.values()]
+    penalty_s = list(runs.penalty_costs().values())
     children = sum(os.times()[2:4]) - runs.children0
     cpu = time.process_time() - runs.cpu0 + children
     lines = [
@@ -834,7 +841,7 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str
         "for all figures with the penalty simulation); motion "
         + ", ".join(f"{1e3 * s:.0f} ms" for _, _, s, _ in runs.motions)
         + " (target <= 50 ms for 1001 instants); penalty simulation "
-        + (", ".join(f"{w:.2f} ({c:.2f} of CPU)" for w, c in penalty_s)
+        + (", ".join(penalty_s)
            + f" s per simulated second (target <= {PENALTY_TARGET_S:g})" if penalty_s
            else "not run")
         + f"; CPU time of the whole run {cpu:.1f} s ({children:.1f} s of it in the "
@@ -945,10 +952,8 @@ def _engine_cost_lines(work: dict, runs: _Runs) -> list[str]:
     runs_e = work["result"].runs
     span = max(work["result"].op.t[-1] - work["result"].op.t[0], 1e-12)
     per = ", ".join(f"`{k}` {r.wall_s / span:.2f}" for k, r in runs_e.items())
-    pen = [(name, r.wall_s / max(r.t[-1] - r.t[0], 1e-12), r.cpu_s / max(r.t[-1] - r.t[0], 1e-12))
-           for name, r in runs.penalties.items()]
-    beside = ("; the penalty simulation " + ", ".join(f"`{n}` {w:.2f} ({c:.2f} of CPU)"
-                                                      for n, w, c in pen)
+    pen = runs.penalty_costs()
+    beside = ("; the penalty simulation " + ", ".join(f"`{n}` {c}" for n, c in pen.items())
               + " s per simulated second (in worker processes, at the same time)"
               if pen else "; no penalty simulation in this run")
     return [f"- cost (this run): MuJoCo {per} s of wall time per simulated second "
