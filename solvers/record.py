@@ -488,6 +488,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     references = references if references is not None else [None] * T
     optimal_values = optimal_values if optimal_values is not None else [None] * T
     received = received if received is not None else problems
+    extra_setup_s = extra_setup_s if extra_setup_s is not None else [0.0] * T
+    elapsed_s = elapsed_s if elapsed_s is not None else [0.0] * T
     started = [_start(p, o) for p, o in zip(problems, outcomes)]
     X = [x for _, x, _ in started]
     stacks = stacks if stacks is not None and stacks.holds(problems) else None
@@ -516,8 +518,7 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     checks_s = (time.perf_counter() - began) / T if T else 0.0
     return [_record(problems[k], solver, outcomes[k], started[k], status[k], confirmed[k],
                     {key: float(found[key][k]) for key in Residuals.KEYS}, distance[k],
-                    optimality[k], views, k, checks_s,
-                    (extra_setup_s or [0.0] * T)[k], (elapsed_s or [0.0] * T)[k])
+                    optimality[k], views, k, checks_s, extra_setup_s[k], elapsed_s[k])
             for k in range(T)]
 
 
