@@ -181,9 +181,10 @@ def check_request(scene: Scene, op: Operator, methods, figs) -> None:
     (:func:`_refusal`), Fig. 12 without an intermediate shaft, Figs. 13-15 without joint
     1's contacts or the first shaft's bearings.
     """
-    why = {m: _refusal(scene, op, m) for m in ALL_METHODS}
+    why = {m: _refusal(scene, op, m) for m in methods}
     refused = [f"{m!r} ({why[m]})" for m in methods if why[m]]
-    if refused:
+    if refused:  # the others asked only to name what applies (MuJoCo's is an import)
+        why |= {m: _refusal(scene, op, m) for m in ALL_METHODS if m not in why}
         usable = ",".join(m for m in ALL_METHODS if not why[m]) or "none"
         raise NotApplicable(f"cardan repro {scene.name}: {'; '.join(refused)}; choose "
                             f"--methods among those that apply here: {usable}")
