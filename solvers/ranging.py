@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse
 from cardan_forces.formulations.problems import LP
 
 from .record import ACCEPT, Status
@@ -96,11 +97,11 @@ def _model(lp: LP):
     model.col_upper_ = _finite(np.full(n, np.inf) if lp.ub is None else lp.ub)
     model.row_lower_ = _finite(np.concatenate([b, np.full(len(g), -np.inf)]))
     model.row_upper_ = _finite(np.concatenate([b, g]))
-    cols = [np.flatnonzero(M[:, j]) for j in range(n)]
+    csc = scipy.sparse.csc_matrix(M)
     model.a_matrix_.format_ = highspy.MatrixFormat.kColwise
-    model.a_matrix_.start_ = np.cumsum([0] + [len(c) for c in cols]).astype(np.int32)
-    model.a_matrix_.index_ = np.concatenate([*cols, np.zeros(0, int)]).astype(np.int32)
-    model.a_matrix_.value_ = np.concatenate([M[c, j] for j, c in enumerate(cols)] + [[]])
+    model.a_matrix_.start_ = csc.indptr.astype(np.int32)
+    model.a_matrix_.index_ = csc.indices.astype(np.int32)
+    model.a_matrix_.value_ = csc.data.astype(float)
     h = highspy.Highs()
     for option, value in OPTIONS.items():
         h.setOptionValue(option, value)
