@@ -1,11 +1,17 @@
-"""Compiled Gram and block-tridiagonal solve for ``numpy-batched`` (numba, extra ``numba``).
+"""Compiled least norm of ``numpy-batched``, one instant after the other (numba, extra ``numba``).
 
-The same block elimination as ``numpy_batched_.chain_solve`` — ``D_k = K_kk - K_k,k-1
-D_k-1^{-1} K_k-1,k`` along the chain of 6 x 6 body blocks, here with a Cholesky factor
-of each ``D_k`` (positive definite for a positive definite ``K``) — written as loops over
-the instants that numba compiles: NumPy's batched 6 x 6 inverses and products pay a
-LAPACK or loop overhead per matrix that is larger than the arithmetic. Only the nonzero
-blocks of ``K = B B'`` are formed (a contact column loads at most two bodies).
+The same method as the NumPy path of :mod:`.numpy_batched_` — the Gram matrix ``K = B
+B' + delta I`` by block elimination along the chain of 6 x 6 body blocks (``D_k = K_kk
+- K_k,k-1 D_k-1^{-1} K_k-1,k``, here with a Cholesky factor of each ``D_k``), one step of
+iterative refinement where an instant's residual asks for it, the end faces' LCP by the
+primal-dual active set — fused into one loop over the instants: each instant's numbers
+stay in a few kilobytes of scratch from its scaled rows to its forces, no (T, ...)
+intermediate is allocated, and only the nonzero blocks of ``B`` are touched (a contact
+column loads at most two bodies). NumPy's batched 6 x 6 products and inverses pay a
+loop or LAPACK overhead per matrix larger than their arithmetic.
+
+Sums run in a fixed order (no reassociation), so an instant's answer is the same
+whatever else is in its batch.
 """
 
 from __future__ import annotations
@@ -16,142 +22,186 @@ from numba import njit
 B = 6
 """Rows per body block."""
 
+FAST = {"contract"}
+"""numba fastmath flags: fused multiply-add only (no reassociation, NaN stays NaN)."""
 
-@njit(cache=True)
-def _cholesky(D):
-    """Lower Cholesky factor of a 6 x 6 positive definite ``D`` (in place)."""
+
+@njit(cache=True, fastmath=FAST)
+def _cholesky(L, o):
+    """Lower Cholesky factor of the 6 x 6 positive definite block ``L[o:o+6]`` (in place)."""
     for j in range(B):
-        s = D[j, j]
+        s = L[o + j, j]
         for k in range(j):
-            s -= D[j, k] * D[j, k]
-        D[j, j] = np.sqrt(s)
+            s -= L[o + j, k] * L[o + j, k]
+        L[o + j, j] = np.sqrt(s)
         for i in range(j + 1, B):
-            s = D[i, j]
+            s = L[o + i, j]
             for k in range(j):
-                s -= D[i, k] * D[j, k]
-            D[i, j] = s / D[j, j]
+                s -= L[o + i, k] * L[o + j, k]
+            L[o + i, j] = s / L[o + j, j]
 
 
-@njit(cache=True)
-def _cho_solve(L, X):
-    """``X <- (L L')^-1 X`` for a 6 x r right-hand side."""
-    for c in range(X.shape[1]):
-        for i in range(B):
-            s = X[i, c]
-            for k in range(i):
-                s -= L[i, k] * X[k, c]
-            X[i, c] = s / L[i, i]
-        for i in range(B - 1, -1, -1):
-            s = X[i, c]
-            for k in range(i + 1, B):
-                s -= L[k, i] * X[k, c]
-            X[i, c] = s / L[i, i]
-
-
-@njit(cache=True, fastmath=True)
-def _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol, Kd, Ko):
-    """The nonzero blocks of ``K = B B' + delta I`` at instant ``t``, ``delta = rtol *
-    trace(K) / rows``: diagonal ``Kd[k]`` (symmetric) from the columns touching block
-    ``k``, off-diagonal ``Ko[k] = K[k, k+1]`` from the columns touching both (a contact
-    loads at most two bodies).
+@njit(cache=True, fastmath=FAST)
+def _cho_solve(L, o, X, s):
+    """``X[s:s+6] <- (L L')^-1 X[s:s+6]`` with ``L = L[o:o+6]``, all columns of ``X`` at
+    once (the innermost loop runs over independent columns).
     """
-    nb = len(starts)
+    r = X.shape[1]
+    for i in range(B):
+        for k in range(i):
+            f = L[o + i, k]
+            for c in range(r):
+                X[s + i, c] -= f * X[s + k, c]
+        d = L[o + i, i]
+        for c in range(r):
+            X[s + i, c] /= d
+    for i in range(B - 1, -1, -1):
+        for k in range(i + 1, B):
+            f = L[o + k, i]
+            for c in range(r):
+                X[s + i, c] -= f * X[s + k, c]
+        d = L[o + i, i]
+        for c in range(r):
+            X[s + i, c] /= d
+
+
+@njit(cache=True, fastmath=FAST)
+def _rows_product(X, xo, Y, yo, n, out, oo):
+    """``out[oo+i, j] = sum_p<n X[xo+i, p] Y[yo+j, p]`` for a 6 x 6 block: six running
+    sums per row, so that the multiply-adds overlap instead of waiting on each other.
+    """
+    for i in range(B):
+        a0 = a1 = a2 = a3 = a4 = a5 = 0.0
+        for p in range(n):
+            g = X[xo + i, p]
+            a0 += g * Y[yo, p]
+            a1 += g * Y[yo + 1, p]
+            a2 += g * Y[yo + 2, p]
+            a3 += g * Y[yo + 3, p]
+            a4 += g * Y[yo + 4, p]
+            a5 += g * Y[yo + 5, p]
+        out[oo + i, 0] = a0
+        out[oo + i, 1] = a1
+        out[oo + i, 2] = a2
+        out[oo + i, 3] = a3
+        out[oo + i, 4] = a4
+        out[oo + i, 5] = a5
+
+
+@njit(cache=True, fastmath=FAST)
+def _minus_tn(X, xo, Y, yo, out, oo):
+    """``out[oo:oo+6] -= X[xo:xo+6]' Y[yo:yo+6]``."""
+    for i in range(B):
+        for p in range(B):
+            f = X[xo + p, i]
+            for c in range(Y.shape[1]):
+                out[oo + i, c] -= f * Y[yo + p, c]
+
+
+@njit(cache=True, fastmath=FAST)
+def _minus_nn(X, xo, Y, yo, out, oo):
+    """``out[oo:oo+6] -= X[xo:xo+6] Y[yo:yo+6]``."""
+    for i in range(B):
+        for p in range(B):
+            f = X[xo + i, p]
+            for c in range(Y.shape[1]):
+                out[oo + i, c] -= f * Y[yo + p, c]
+
+
+@njit(cache=True, fastmath=FAST)
+def _factor(G, n_own, sh_a, sh_b, n_sh, rtol, L, Ko, Gm, Sa, Sb):
+    """Factor ``K = B B' + delta I`` of one instant, ``delta = rtol * trace(B B') / m``,
+    from its block rows ``G`` (row ``6k + i``: body ``k``'s row ``i`` on the columns
+    touching it): per body ``k`` in chain order the Cholesky factor ``L[6k:6k+6]`` of
+    the pivot ``D_k = K_kk - K_k,k-1 D_k-1^-1 K_k-1,k``, the coupling ``Ko[6k:6k+6] =
+    K_k,k+1`` (the columns touching both) and ``Gm[6k:6k+6] = D_k^-1 K_k,k+1``.
+    """
+    nb = len(n_own)
     trace = 0.0
     for k in range(nb):
-        s = starts[k]
+        _rows_product(G, B * k, G, B * k, n_own[k], L, B * k)
         for i in range(B):
-            for j in range(i, B):
-                acc = 0.0
-                for q in range(n_own[k]):
-                    c = own[k, q]
-                    acc += Bt[t, s + i, c] * Bt[t, s + j, c]
-                Kd[k, i, j] = acc
-                Kd[k, j, i] = acc
-            trace += Kd[k, i, i]
+            trace += L[B * k + i, i]
         if k < nb - 1:
-            n = starts[k + 1]
             for i in range(B):
-                for j in range(B):
-                    acc = 0.0
-                    for q in range(n_shared[k]):
-                        c = shared[k, q]
-                        acc += Bt[t, s + i, c] * Bt[t, n + j, c]
-                    Ko[k, i, j] = acc
+                for p in range(n_sh[k]):
+                    Sa[i, p] = G[B * k + i, sh_a[k, p]]
+                    Sb[i, p] = G[B * k + B + i, sh_b[k, p]]
+            _rows_product(Sa, 0, Sb, 0, n_sh[k], Ko, B * k)
     delta = rtol * trace / (nb * B)
     for k in range(nb):
+        o = B * k
         for i in range(B):
-            Kd[k, i, i] += delta
-
-
-@njit(cache=True, fastmath=True)
-def gram_chain_solve(Bt, R, starts, own, n_own, shared, n_shared, rtol):
-    """``(B B' + delta I)^{-1} R`` per instant without forming ``B B'``: its blocks from
-    the columns each body touches, then the block elimination of :func:`chain_solve`;
-    ``delta = rtol * trace(B B') / rows``.
-    """
-    T, r, nb = Bt.shape[0], R.shape[2], len(starts)
-    out = np.empty_like(R)
-    Kd = np.empty((nb, B, B))
-    Ko = np.empty((max(nb - 1, 1), B, B))
-    L = np.empty((B, B))
-    G = np.empty((nb, B, B))
-    Y = np.empty((nb, B, r))
-    for t in range(T):
-        _gram_blocks(Bt, t, starts, own, n_own, shared, n_shared, rtol, Kd, Ko)
-        for k in range(nb):
-            s = starts[k]
+            L[o + i, i] += delta
+        if k > 0:  # K_k,k-1 = Ko[k-1]'
+            _minus_tn(Ko, o - B, Gm, o - B, L, o)
+        _cholesky(L, o)
+        if k < nb - 1:
             for i in range(B):
                 for j in range(B):
-                    L[i, j] = Kd[k, i, j]
-                for c in range(r):
-                    Y[k, i, c] = R[t, s + i, c]
-            if k > 0:  # K[k, k-1] = Ko[k-1]'
-                for i in range(B):
-                    for j in range(B):
-                        acc = 0.0
-                        for q in range(B):
-                            acc += Ko[k - 1, q, i] * G[k - 1, q, j]
-                        L[i, j] -= acc
-                    for c in range(r):
-                        acc = 0.0
-                        for q in range(B):
-                            acc += Ko[k - 1, q, i] * Y[k - 1, q, c]
-                        Y[k, i, c] -= acc
-            _cholesky(L)
-            _cho_solve(L, Y[k])
-            if k < nb - 1:
-                for i in range(B):
-                    for j in range(B):
-                        G[k, i, j] = Ko[k, i, j]
-                _cho_solve(L, G[k])
-        for k in range(nb - 1, -1, -1):
-            s = starts[k]
+                    Gm[o + i, j] = Ko[o + i, j]
+            _cho_solve(L, o, Gm, o)
+
+
+@njit(cache=True, fastmath=FAST)
+def _solve(L, Ko, Gm, starts, Z):
+    """``Z <- K^-1 Z`` (m, r) by :func:`_factor`'s block elimination, in place."""
+    nb = len(starts)
+    for k in range(nb):
+        if k > 0:
+            _minus_tn(Ko, B * (k - 1), Z, starts[k - 1], Z, starts[k])
+        _cho_solve(L, B * k, Z, starts[k])
+    for k in range(nb - 2, -1, -1):
+        _minus_nn(Gm, B * k, Z, starts[k + 1], Z, starts[k])
+
+
+@njit(cache=True, fastmath=FAST)
+def _times_Bt(G, own, n_own, starts, v, out):
+    """``out = B' v`` (n) on the nonzero blocks of ``B``."""
+    out[:] = 0.0
+    for k in range(len(starts)):
+        s = starts[k]
+        for p in range(n_own[k]):
+            acc = 0.0
             for i in range(B):
-                for c in range(r):
-                    acc = Y[k, i, c]
-                    if k < nb - 1:
-                        n = starts[k + 1]
-                        for q in range(B):
-                            acc -= G[k, i, q] * out[t, n + q, c]
-                    out[t, s + i, c] = acc
-    return out
+                acc += G[B * k + i, p] * v[s + i]
+            out[own[k, p]] += acc
+
+
+@njit(cache=True, fastmath=FAST)
+def _times_B(G, own, n_own, starts, y, out):
+    """``out = B y`` (m) on the nonzero blocks of ``B``."""
+    for k in range(len(starts)):
+        s = starts[k]
+        for i in range(B):
+            out[s + i] = 0.0
+        for p in range(n_own[k]):
+            f = y[own[k, p]]
+            for i in range(B):
+                out[s + i] += G[B * k + i, p] * f
 
 
 @njit(cache=True)
-def _solve_pinned(M, q, pinned, lam, delta):
+def _solve_pinned(M, q, pinned, lam, delta, S, idx):
     """``lam_P = -(M_PP + delta I)^-1 q_P``, zero elsewhere (Gaussian elimination with
-    partial pivoting on the pinned block).
+    partial pivoting on the pinned block); ``S`` (k, k + 1) and ``idx`` (k) scratch.
     """
-    idx = np.flatnonzero(pinned)
-    p = len(idx)
-    S = np.empty((p, p + 1))
+    k = len(q)
+    p = 0
+    for i in range(k):
+        if pinned[i]:
+            idx[p] = i
+            p += 1
     for i in range(p):
         for j in range(p):
             S[i, j] = M[idx[i], idx[j]]
         S[i, i] += delta
         S[i, p] = -q[idx[i]]
     for c in range(p):
-        piv = c + np.argmax(np.abs(S[c:, c]))
+        piv = c
+        for r in range(c + 1, p):
+            if abs(S[r, c]) > abs(S[piv, c]):
+                piv = r
         if piv != c:
             for j in range(p + 1):
                 S[c, j], S[piv, j] = S[piv, j], S[c, j]
@@ -168,35 +218,169 @@ def _solve_pinned(M, q, pinned, lam, delta):
 
 
 @njit(cache=True)
+def _lcp(M, q, max_iter, rtol, delta, lam, pinned, nxt, S, idx):
+    """``0 <= lam ⟂ M lam + q >= 0`` of one instant by the primal-dual active set of
+    ``numpy_batched_._active_set``: ``(steps, settled)``.
+    """
+    k = len(q)
+    eps = rtol * max(1.0, np.abs(q).max()) if k else 0.0
+    for i in range(k):
+        pinned[i] = q[i] < 0
+    for step in range(1, max_iter + 1):
+        _solve_pinned(M, q, pinned, lam, delta, S, idx)
+        same = True
+        for i in range(k):
+            if pinned[i]:
+                nxt[i] = lam[i] > -eps
+            else:
+                w = q[i]
+                for j in range(k):
+                    w += M[i, j] * lam[j]
+                nxt[i] = w < -eps
+            same = same and nxt[i] == pinned[i]
+        pinned[:] = nxt
+        if same:
+            return step, True
+    return max_iter, False
+
+
+@njit(cache=True)
 def active_set(M, q, max_iter, rtol, delta):
-    """The primal-dual active-set method of ``numpy_batched_._active_set`` compiled, one
-    instant after the other: ``(lam, iterations, settled)``.
+    """:func:`_lcp` at every instant of a stack ``M`` (T, k, k), ``q`` (T, k):
+    ``(lam, iterations, settled)``.
     """
     T, k = q.shape
     lam = np.zeros((T, k))
     iterations = np.zeros(T, np.int64)
     settled = np.zeros(T, np.bool_)
-    pinned = np.empty(k, np.bool_)
-    nxt = np.empty(k, np.bool_)
+    pinned, nxt = np.empty(k, np.bool_), np.empty(k, np.bool_)
+    S, idx = np.empty((k, k + 1)), np.empty(k, np.int64)
     for t in range(T):
-        eps = rtol * max(1.0, np.abs(q[t]).max())
-        for i in range(k):
-            pinned[i] = q[t, i] < 0
-        for step in range(1, max_iter + 1):
-            _solve_pinned(M[t], q[t], pinned, lam[t], delta)
-            same = True
-            for i in range(k):
-                if pinned[i]:
-                    nxt[i] = lam[t, i] > -eps
-                else:
-                    w = q[t, i]
-                    for j in range(k):
-                        w += M[t, i, j] * lam[t, j]
-                    nxt[i] = w < -eps
-                same = same and nxt[i] == pinned[i]
-            iterations[t] = step
-            pinned[:] = nxt
-            if same:
-                settled[t] = True
-                break
+        iterations[t], settled[t] = _lcp(M[t], q[t], max_iter, rtol, delta, lam[t], pinned,
+                                         nxt, S, idx)
     return lam, iterations, settled
+
+
+
+
+@njit(cache=True, fastmath=FAST)
+def _rows(A, root, t, starts, own, n_own, G):
+    """Instant ``t``'s block rows of ``B = A W^-1/2``: ``G[6k + i, p] = A[t, s_k + i, c] /
+    sqrt(w_c)`` for the columns ``c = own[k, p]`` touching body ``k`` (``root`` with no
+    rows: ``W = I``).
+    """
+    for k in range(len(starts)):
+        s = starts[k]
+        for p in range(n_own[k]):
+            c = own[k, p]
+            for i in range(B):
+                G[B * k + i, p] = A[t, s + i, c] / root[t, c] if root.shape[0] else A[t, s + i, c]
+
+
+@njit(cache=True, fastmath=FAST)
+def _refine(G, own, n_own, starts, b, R, Z, dZ, L, Ko, Gm, v, w, z, rtol):
+    """One step of iterative refinement of ``K Z = R`` (with the exact ``B B'``) where the
+    first column's relative residual ``||b - B B' Z_0|| / ||b||`` exceeds ``rtol``
+    (``v``, ``w``, ``z`` scratch).
+    """
+    z[:] = Z[:, 0]
+    _times_Bt(G, own, n_own, starts, z, v)
+    _times_B(G, own, n_own, starts, v, w)
+    res, size = 0.0, 0.0
+    for i in range(len(b)):
+        res += (b[i] - w[i]) ** 2
+        size += b[i] ** 2
+    if np.sqrt(res) <= rtol * max(np.sqrt(size), np.finfo(np.float64).tiny):
+        return
+    for c in range(R.shape[1]):
+        z[:] = Z[:, c]
+        _times_Bt(G, own, n_own, starts, z, v)
+        _times_B(G, own, n_own, starts, v, w)
+        for i in range(len(b)):
+            dZ[i, c] = R[i, c] - w[i]
+    _solve(L, Ko, Gm, starts, dZ)
+    for i in range(len(b)):
+        for c in range(R.shape[1]):
+            Z[i, c] += dZ[i, c]
+
+
+@njit(cache=True, fastmath=FAST)
+def _faces(G, starts, upos, Z, M, q):
+    """The end faces' LCP of one instant: ``M = I - U' K^-1 U`` and ``q = U' mu`` with
+    ``U = B[:, u]`` (face ``j`` is column ``upos[k, j]`` of body ``k``'s block rows, or
+    absent there when negative), ``mu = Z[:, 0]`` and ``K^-1 U = Z[:, 1:]``.
+    """
+    nf = len(q)
+    for i in range(nf):
+        q[i] = 0.0
+        for j in range(nf):
+            M[i, j] = 0.0
+        for k in range(len(starts)):
+            p = upos[k, i]
+            if p < 0:
+                continue
+            s = starts[k]
+            for r in range(B):
+                g = G[B * k + r, p]
+                q[i] += g * Z[s + r, 0]
+                for j in range(nf):
+                    M[i, j] -= g * Z[s + r, 1 + j]
+        M[i, i] += 1.0
+
+
+@njit(cache=True, fastmath=FAST)
+def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, gram_rtol,
+               refine_rtol, max_iter, lcp_rtol, lcp_delta):
+    """Least ``1/2 x'Wx`` on ``A x = b`` (``x[u] >= 0``) at every instant, as
+    ``numpy_batched_.least_norm``: ``(x, mu, lam, iterations, settled)``, ``lam`` the
+    end faces' LCP solution (``nu_u = sqrt(w_u) lam``); ``root`` (T, n) is ``sqrt(w)``,
+    or has no rows for ``W = I``. Where ``settled`` is false the active set did not
+    settle in ``max_iter`` steps and ``lam`` is its last step.
+
+    The structure (``numpy_batched_._structure``): body blocks in chain order from row
+    ``starts[k]``, the columns ``own[k, :n_own[k]]`` touching body ``k``, the positions
+    ``sh_a[k]``, ``sh_b[k]`` (in ``own[k]``, ``own[k+1]``) of the ``n_sh[k]`` columns
+    touching bodies ``k`` and ``k+1``, and ``upos`` the faces' positions.
+    """
+    T, m, n = A.shape
+    nb, nf = len(starts), len(u)
+    r = 1 + nf
+    x, mu = np.empty((T, n)), np.empty((T, m))
+    lam = np.zeros((T, nf))
+    iterations = np.zeros(T, np.int64)
+    settled = np.ones(T, np.bool_)
+    G = np.zeros((B * nb, own.shape[1]))
+    L, Ko, Gm = np.empty((B * nb, B)), np.empty((B * nb, B)), np.empty((B * nb, B))
+    Sa, Sb = np.empty((B, sh_a.shape[1])), np.empty((B, sh_a.shape[1]))
+    R, Z, dZ = np.empty((m, r)), np.empty((m, r)), np.empty((m, r))
+    v, w, z = np.empty(n), np.empty(m), np.empty(m)
+    M, q = np.empty((nf, nf)), np.empty(nf)
+    pinned, nxt = np.empty(nf, np.bool_), np.empty(nf, np.bool_)
+    S, idx = np.empty((nf, nf + 1)), np.empty(nf, np.int64)
+    for t in range(T):
+        _rows(A, root, t, starts, own, n_own, G)
+        _factor(G, n_own, sh_a, sh_b, n_sh, gram_rtol, L, Ko, Gm, Sa, Sb)
+        for k in range(nb):
+            s = starts[k]
+            for i in range(B):
+                R[s + i, 0] = b[t, s + i]
+                for j in range(nf):
+                    R[s + i, 1 + j] = G[B * k + i, upos[k, j]] if upos[k, j] >= 0 else 0.0
+        Z[:, :] = R
+        _solve(L, Ko, Gm, starts, Z)
+        _refine(G, own, n_own, starts, b[t], R, Z, dZ, L, Ko, Gm, v, w, z, refine_rtol)
+        if nf:
+            _faces(G, starts, upos, Z, M, q)
+            iterations[t], settled[t] = _lcp(M, q, max_iter, lcp_rtol, lcp_delta, lam[t],
+                                             pinned, nxt, S, idx)
+        for i in range(m):
+            acc = Z[i, 0]
+            for j in range(nf):
+                acc -= Z[i, 1 + j] * lam[t, j]
+            mu[t, i] = z[i] = acc
+        _times_Bt(G, own, n_own, starts, z, v)
+        for j in range(nf):
+            v[u[j]] += lam[t, j]
+        for c in range(n):
+            x[t, c] = v[c] / root[t, c] if root.shape[0] else v[c]
+    return x, mu, lam, iterations, settled

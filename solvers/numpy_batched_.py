@@ -24,9 +24,11 @@ also keep the end faces ``x_u >= 0``. With ``y = W^{1/2} x`` and ``B = A W^{-1/2
 
 The multipliers come out of the same solve: ``W x = A' mu + E_u nu`` with
 ``mu = K^-1 (b - U lam)`` and ``nu_u = sqrt(w_u) lam``, so every record has the solver's
-duals. A direct method: ``tol`` is ignored. With numba installed the Gram blocks and
-the block elimination run compiled (:mod:`._batched_kernels`; NumPy pays a per-matrix
-overhead on 6 x 6 blocks larger than their arithmetic, and forms all of ``B B'``).
+duals. A direct method: ``tol`` is ignored. With numba installed the whole method runs
+compiled, one instant after the other from its rows to its forces
+(:mod:`._batched_kernels`): NumPy pays a per-matrix overhead on 6 x 6 blocks larger
+than their arithmetic, forms all of ``B B'`` and streams (T, ...) intermediates through
+memory between its steps.
 """
 
 from __future__ import annotations
@@ -78,18 +80,51 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
                signed: np.ndarray | None = None, max_iter: int = MAX_ITER):
     """Least ``1/2 x'Wx`` on ``A x = b`` (stacked, ``A`` (T, m, n)), optionally with
     ``x[signed] >= 0``: ``(x, mu, nu, iterations, fallback, stages)``.
+
+    Compiled by numba where installed (extra ``numba``, :func:`._batched_kernels.least_norm`:
+    one pass over the instants, each from its rows to its forces); else NumPy, all
+    instants per step. Instants whose active set does not settle are solved again with
+    Lemke's method.
     """
+    try:
+        from ._batched_kernels import least_norm as compiled
+    except ImportError:
+        return _least_norm_numpy(A, b, w, signed, max_iter)
+    clock = time.perf_counter()
+    T, m, n = A.shape
+    u = _signed(signed, n)
+    root = np.sqrt(w) if w is not None else np.zeros((0, n))
+    x, mu, lam, iterations, settled = compiled(
+        np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u,
+        *_layout(structure(A), u), GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA)
+    nu = np.zeros((T, n))
+    nu[:, u] = lam if w is None else lam * root[:, u]
+    stages = {"compiled": time.perf_counter() - clock}
+    fallback = ~settled
+    if fallback.any():  # Lemke's method (max_iter 0: no active-set step) at those instants
+        clock, i = time.perf_counter(), np.flatnonzero(fallback)
+        x[i], mu[i], nu[i] = _least_norm_numpy(A[i], b[i], None if w is None else w[i],
+                                               signed, 0)[:3]
+        stages["lemke"] = time.perf_counter() - clock
+    return x, mu, nu, iterations, fallback, stages
+
+
+def _least_norm_numpy(A, b, w=None, signed=None, max_iter: int = MAX_ITER):
+    """:func:`least_norm` in NumPy (without numba)."""
     stages = {}
     clock = time.perf_counter()
     T, m, n = A.shape
     root = None if w is None else np.sqrt(w)
     B = A if root is None else A / root[:, None, :]
-    u = np.flatnonzero(signed) if signed is not None else np.zeros(0, int)
+    u = _signed(signed, n)
     U = B[:, :, u]
     R = np.concatenate([b[:, :, None], U], axis=2)
     clock = _lap(stages, "scale", clock)
-    blocks = chain(A[0])
-    Z = _gram_solve(B, R, blocks)
+    blocks = chain(structure(A))
+    K = B @ B.transpose(0, 2, 1)
+    K[:, np.arange(m), np.arange(m)] += (GRAM_RTOL / m) * np.trace(K, axis1=1,
+                                                                 axis2=2)[:, None]
+    Z = chain_solve(K, R, blocks)
     # one step of iterative refinement on B B' Z = R removes the bias of delta whatever
     # the scene's scales (1e-7 relative on the propshaft, 1e-15 on paper). The bias is
     # K's (delta / sigma_min^2), the same for every column: the first column's residual
@@ -101,8 +136,8 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     refine = np.flatnonzero(np.linalg.norm(r0, axis=1) / scale > REFINE_RTOL)
     if refine.size:
         Bk = B[refine]
-        Z[refine] += _gram_solve(Bk, R[refine] - Bk @ (Bk.transpose(0, 2, 1) @ Z[refine]),
-                                 blocks)
+        Z[refine] += chain_solve(K[refine],
+                                 R[refine] - Bk @ (Bk.transpose(0, 2, 1) @ Z[refine]), blocks)
     clock = _lap(stages, "gram+factor+solve", clock)
     mu = Z[:, :, 0]
     iterations, fallback = np.zeros(T, int), np.zeros(T, bool)
@@ -110,7 +145,7 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     if u.size:
         M = np.eye(len(u)) - U.transpose(0, 2, 1) @ Z[:, :, 1:]
         q = np.einsum("tmk,tm->tk", U, mu)
-        lam, iterations, fallback = _active_set(M, q, max_iter)
+        lam, iterations, fallback = _active_set_numpy(M, q, max_iter)
         mu = mu - np.einsum("tmk,tk->tm", Z[:, :, 1:], lam)
         nu[:, u] = lam
         clock = _lap(stages, "lcp", clock)
@@ -120,6 +155,15 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     x = y if root is None else y / root
     _lap(stages, "forces", clock)
     return x, mu, nu, iterations, fallback, stages
+
+
+def _signed(signed, n: int) -> np.ndarray:
+    return np.flatnonzero(signed) if signed is not None else np.zeros(0, np.int64)
+
+
+def structure(A: np.ndarray) -> np.ndarray:
+    """Where ``A`` (T, m, n) is nonzero at some instant: (m, n) booleans."""
+    return np.abs(A).max(axis=0, initial=0.0) > 0
 
 
 def chain(A: np.ndarray) -> list[slice]:
@@ -164,40 +208,33 @@ def chain_solve(K: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray
     return out
 
 
-def _gram_solve(B: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray:
-    """``(B B' + delta I)^{-1} R``: compiled by numba where installed (extra ``numba``),
-    forming only the nonzero blocks of ``B B'``; else NumPy's Gram and :func:`chain_solve`.
+def _layout(pattern: np.ndarray, u: np.ndarray):
+    """The compiled kernel's view of the rows' nonzero ``pattern`` (m, n) (see
+    :func:`._batched_kernels.least_norm`): the bodies' first rows in chain order, per
+    body the columns touching it (padded, and counted), per neighbouring pair the
+    positions of the columns touching both in each body's list (padded, and counted),
+    and per body the position of each signed column ``u`` in its list (-1: absent).
     """
-    try:
-        from ._batched_kernels import gram_chain_solve
-    except ImportError:
-        m = B.shape[1]
-        K = B @ B.transpose(0, 2, 1)
-        K[:, np.arange(m), np.arange(m)] += (GRAM_RTOL / m) * np.trace(K, axis1=1,
-                                                                     axis2=2)[:, None]
-        return chain_solve(K, R, blocks)
-    own, n_own, shared, n_shared = _block_columns(B, blocks)
-    return gram_chain_solve(np.ascontiguousarray(B), np.ascontiguousarray(R),
-                            np.array([b.start for b in blocks]), own, n_own, shared, n_shared,
-                            GRAM_RTOL)
+    blocks = chain(pattern)
+    touch = np.any(pattern.reshape(-1, 6, pattern.shape[1]), axis=1)[
+        [k.start // 6 for k in blocks]]
+    own = [np.flatnonzero(row) for row in touch]
+    where = [{int(c): p for p, c in enumerate(cols)} for cols in own]
+    shared = [np.flatnonzero(a & c) for a, c in zip(touch, touch[1:])] or [[]]
+    sh_a = [[where[k][int(c)] for c in cols] for k, cols in enumerate(shared)]
+    sh_b = [[where[k + 1][int(c)] for c in cols] for k, cols in enumerate(shared)]
+    upos = np.array([[w.get(int(c), -1) for c in u] for w in where], np.int64).reshape(
+        len(own), len(u))
+    return (np.array([k.start for k in blocks], np.int64), *_padded(own), _padded(sh_a)[0],
+            *_padded(sh_b), upos)
 
 
-def _block_columns(B: np.ndarray, blocks: list[slice]):
-    """Per block in chain order the columns that touch it, and per neighbouring pair
-    the columns that touch both, padded (index arrays and counts).
-    """
-    touch = np.any(B.reshape(len(B), -1, 6, B.shape[2]) != 0, axis=(0, 2))
-    order = [b.start // 6 for b in blocks]
-    own = [np.flatnonzero(touch[k]) for k in order]
-    shared = [np.flatnonzero(touch[a] & touch[c]) for a, c in zip(order, order[1:])] or [[]]
-
-    def pad(lists):
-        out = np.zeros((len(lists), max(max(len(x) for x in lists), 1)), np.int64)
-        for i, x in enumerate(lists):
-            out[i, :len(x)] = x
-        return out, np.array([len(x) for x in lists], np.int64)
-
-    return (*pad(own), *pad(shared))
+def _padded(lists) -> tuple[np.ndarray, np.ndarray]:
+    """Integer lists as one zero-padded array (at least one column) and their lengths."""
+    out = np.zeros((len(lists), max(max(len(x) for x in lists), 1)), np.int64)
+    for i, x in enumerate(lists):
+        out[i, :len(x)] = x
+    return out, np.array([len(x) for x in lists], np.int64)
 
 
 def _lap(stages: dict[str, float], name: str, since: float) -> float:

@@ -132,22 +132,29 @@ def test_chain_solve_equals_a_dense_solve():
     assert np.allclose(nb.chain_solve(K, R, blocks), np.linalg.solve(K, R), atol=1e-12)
 
 
-def test_compiled_gram_solve_equals_the_numpy_path(op):
+@pytest.mark.parametrize("formulation", ["min_norm_scaled", "positive", "compliance"])
+def test_compiled_least_norm_equals_the_numpy_path(op, formulation):
+    """The compiled pass over the instants and NumPy's stacked steps: the same forces and
+    face multipliers; ``mu`` agrees up to the rows' dependency, which ``A'`` removes."""
     pytest.importorskip("numba")
-    from cardan_forces.solvers._batched_kernels import gram_chain_solve
+    batch = fbatch.least_norm_batch(op, formulation)
+    args = (batch.A, batch.b, batch.weights, batch.signed)
+    compiled, plain = nb.least_norm(*args), nb._least_norm_numpy(*args)
+    x, mu, nu = compiled[:3]
+    assert np.abs(x - plain[0]).max() <= 1e-12 * np.abs(plain[0]).max()
+    assert np.abs(nu - plain[2]).max() <= 1e-9 * max(np.abs(plain[2]).max(), 1.0)
+    At = batch.A.transpose(0, 2, 1)
+    Atmu = np.einsum("tnm,tm->tn", At, plain[1])
+    assert np.abs(np.einsum("tnm,tm->tn", At, mu) - Atmu).max() <= 1e-9 * np.abs(Atmu).max()
 
-    A = np.ascontiguousarray(op.A)
-    blocks = nb.chain(A[0])
-    R = np.ascontiguousarray(np.concatenate([op.b[:, :, None], A[:, :, op.unilateral]], 2))
-    m = A.shape[1]
-    K = A @ A.transpose(0, 2, 1)
-    K[:, np.arange(m), np.arange(m)] += nb.GRAM_RTOL / m * np.trace(K, axis1=1, axis2=2)[:, None]
-    compiled = gram_chain_solve(A, R, np.array([b.start for b in blocks]),
-                                *nb._block_columns(A, blocks), nb.GRAM_RTOL)
-    plain = nb.chain_solve(K, R, blocks)
-    # K is singular along the rows' dependency; B' removes that direction
-    At = A.transpose(0, 2, 1)
-    assert np.abs(At @ (compiled - plain)).max() <= 1e-9 * np.abs(At @ plain).max()
+
+def test_an_instant_answer_does_not_depend_on_its_batch(op):
+    """Each instant is solved from its own numbers: alone, in a subset or reversed."""
+    batch = fbatch.least_norm_batch(op, "positive")
+    full = nb.least_norm(batch.A, batch.b, None, batch.signed)[0]
+    for chosen in ([7], [40, 3, 17], list(range(40, -1, -1))):
+        part = nb.least_norm(batch.A[chosen], batch.b[chosen], None, batch.signed)[0]
+        assert np.array_equal(part, full[chosen])
 
 
 def test_compiled_active_set_equals_the_numpy_one():
