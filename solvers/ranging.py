@@ -6,7 +6,15 @@ only the objective changes between them. HiGHS's simplex kept warm does exactly
 that: the model is passed once, a feasible basis found once (the objective 0), and
 each bound is the previous optimal basis re-optimised for a new cost vector
 (``changeColsCost``, then ``run``): a few pivots instead of a cold solve, and no
-record built per LP.
+record built per LP. Over a sequence of LPs of one shape (the instants of a run) the
+feasible basis of the one before starts the next (``start``).
+
+Many ends need no LP at all, because an answer already found proves them
+(:class:`_Proofs`): a verified point with ``c'z`` at the least value the bounds
+``lb``/``ub`` allow is a minimum of ``c'x`` (an end face found at zero), and a
+verified ray ``d`` of the set (``A d = 0``, ``G d <= 0``, ``d`` inside the bounds' own
+directions) with ``c'd < 0`` makes ``c'x`` unbounded below (one pair mode opens both
+of its end faces). On ``propshaft`` that halves the LPs.
 
 Each answer is judged here, not trusted: an optimum whose primal residuals exceed
 :data:`~cardan_forces.solvers.record.ACCEPT` (relative to the problem's scale) is
@@ -19,7 +27,7 @@ without it has :data:`HAVE_HIGHSPY` False and solves every bound cold.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse
@@ -35,18 +43,27 @@ except ImportError:  # the optional extra ``highs``
 HAVE_HIGHSPY = highspy is not None
 """Whether the warm-started ranging is available (the ``highs`` extra)."""
 
+RAY_MARGIN = 1e3 * ACCEPT
+"""Least share ``-c'd / (|c|_1 |d|_inf)`` by which a verified ray must decrease ``c'x``
+to prove it unbounded without an LP: far above the ray's own residuals (``ACCEPT``), so
+that rounding cannot fake a direction."""
+
 
 @dataclass(frozen=True)
 class Ranges:
     """``feasible``: the status of the feasibility solve (objective 0); per objective
     row ``k``: ``low[k]``/``high[k]`` the least/greatest value (NaN where that side has
-    none) and ``statuses[k]`` = (status of the min, status of the max).
+    none) and ``statuses[k]`` = (status of the min, status of the max); ``lps``: the
+    simplex runs it took; ``basis``: the feasible basis found (HiGHS's, for the
+    ``start`` of the next LP of the same shape; ``None`` where the set is empty).
     """
 
     feasible: Status
     low: np.ndarray
     high: np.ndarray
     statuses: tuple[tuple[Status, Status], ...]
+    lps: int = 0
+    basis: object = field(default=None, repr=False, compare=False)
 
 
 _STATUS = {} if highspy is None else {
@@ -57,26 +74,92 @@ _STATUS = {} if highspy is None else {
 """HiGHS model statuses this module believes; any other is ``failed``."""
 
 
-def ranges(lp: LP, objectives: np.ndarray) -> Ranges:
+def ranges(lp: LP, objectives: np.ndarray, start: Ranges | None = None) -> Ranges:
     """Min and max of ``objectives[k] @ z`` over ``lp``'s feasible set (``lp.c`` unused).
 
     ``objectives``: ``(k, n)``. When the set is empty (or the feasibility solve
-    fails) every row is NaN with that status. Needs :data:`HAVE_HIGHSPY`.
+    fails) every row is NaN with that status. ``start``: the ranges of an LP of the
+    same shape (the instant before), whose feasible basis starts this one's
+    feasibility solve; the answers do not depend on it (each is verified, and an
+    LP's optimal value is unique). Needs :data:`HAVE_HIGHSPY`.
     """
     objectives = np.atleast_2d(np.asarray(objectives, float))
     k, n = objectives.shape
     h = _model(lp)
-    feasible = _run(h, lp, np.zeros(n))[0]
+    if start is not None and start.basis is not None:
+        h.setBasis(start.basis)
+    feasible, _, point = _run(h, lp, np.zeros(n))
     low, high = np.full(k, np.nan), np.full(k, np.nan)
     if feasible is not Status.SOLVED:
-        return Ranges(feasible, low, high, ((feasible, feasible),) * k)
+        return Ranges(feasible, low, high, ((feasible, feasible),) * k, 1)
+    basis, proofs, lps = h.getBasis(), _Proofs(lp, point), 1
     statuses = []
     for r, c in enumerate(objectives):
-        lo_status, low[r] = _run(h, lp, c)
-        hi_status, neg = _run(h, lp, -c)
-        high[r] = -neg
-        statuses.append((lo_status, hi_status))
-    return Ranges(feasible, low, high, tuple(statuses))
+        sides = []
+        for sign, ends in ((1.0, low), (-1.0, high)):
+            status, value = proofs.settle(sign * c)
+            if status is None:
+                status, value, found = _run(h, lp, sign * c)
+                proofs.add(status, found)
+                lps += 1
+            ends[r] = sign * value
+            sides.append(status)
+        statuses.append(tuple(sides))
+    return Ranges(feasible, low, high, tuple(statuses), lps, basis)
+
+
+class _Proofs:
+    """What the answers found so far prove about other objectives over one LP's set:
+    verified points (rows of ``points``) and verified rays (rows of ``rays``, scaled to
+    ``|d|_inf = 1``).
+    """
+
+    def __init__(self, lp: LP, point: np.ndarray):
+        n = lp.n
+        self.lp = lp
+        self.lb = np.full(n, -np.inf) if lp.lb is None else np.asarray(lp.lb, float)
+        self.ub = np.full(n, np.inf) if lp.ub is None else np.asarray(lp.ub, float)
+        self.points, self.rays = point[None], np.zeros((0, n))
+
+    def settle(self, c: np.ndarray) -> tuple[Status | None, float]:
+        """``min c'x`` where a point or a ray already proves it: ``(solved, the bounds'
+        least value of c'x)`` for a point at that value, ``(unbounded, NaN)`` for a ray
+        along which ``c'x`` falls; ``(None, NaN)``: an LP must tell.
+        """
+        scale = float(np.abs(c).sum())
+        if np.any(self.rays @ c < -RAY_MARGIN * scale):
+            return Status.UNBOUNDED, np.nan
+        used = c != 0
+        floor = float(np.where(c > 0, self.lb, self.ub)[used] @ c[used])
+        if np.isfinite(floor) and np.any(self.points @ c <= floor):
+            return Status.SOLVED, floor
+        return None, np.nan
+
+    def add(self, status: Status, found: np.ndarray | None) -> None:
+        """Keep a solved LP's (verified) point, or an unbounded one's ray once verified."""
+        if found is None:
+            return
+        if status is Status.SOLVED:
+            self.points = np.vstack([self.points, found])
+        elif status is Status.UNBOUNDED and _is_ray(self.lp, self.lb, self.ub, found):
+            self.rays = np.vstack([self.rays, found / np.abs(found).max()])
+
+
+def _is_ray(lp: LP, lb: np.ndarray, ub: np.ndarray, d: np.ndarray) -> bool:
+    """``d`` is a direction of ``lp``'s set within :data:`ACCEPT` of ``|d|_inf`` (times
+    each row's norm): ``A d = 0``, ``G d <= 0``, ``d >= 0`` where ``lb`` is finite and
+    ``d <= 0`` where ``ub`` is.
+    """
+    size = float(np.abs(d).max(initial=0.0))
+    if not np.isfinite(size) or size == 0.0:
+        return False
+    d = d / size
+    worst = [np.where(np.isfinite(lb), -d, -np.inf), np.where(np.isfinite(ub), d, -np.inf)]
+    if lp.A is not None and len(lp.A):
+        worst.append(np.abs(lp.A @ d) / np.maximum(np.abs(lp.A).sum(1), 1e-300))
+    if lp.G is not None and len(lp.G):
+        worst.append((lp.G @ d) / np.maximum(np.abs(lp.G).sum(1), 1e-300))
+    return all(float(np.max(w, initial=-np.inf)) <= ACCEPT for w in worst)
 
 
 def _model(lp: LP):
@@ -122,22 +205,26 @@ def _finite(v) -> np.ndarray:
     return np.clip(np.asarray(v, float), -highspy.kHighsInf, highspy.kHighsInf)
 
 
-def _run(h, lp: LP, c: np.ndarray) -> tuple[Status, float]:
+def _run(h, lp: LP, c: np.ndarray) -> tuple[Status, float, np.ndarray | None]:
     """Minimise ``c @ z`` from the basis ``h`` holds: (status, value; NaN unless
-    solved). An optimum that does not satisfy the constraints within :data:`ACCEPT`
-    of the problem's scale is ``failed``.
+    solved, and what it found: the point ``z`` of an optimum, HiGHS's ray of an
+    unbounded objective, else ``None``). An optimum that does not satisfy the
+    constraints within :data:`ACCEPT` of the problem's scale is ``failed``.
     """
     h.changeColsCost(len(c), np.arange(len(c), dtype=np.int32), c)
     if h.run() == highspy.HighsStatus.kError and h.getOptions().threads == 1:
         h.setOptionValue("threads", 0)  # HiGHS's threads already started, at its count
         h.run()
     status = _STATUS.get(h.getModelStatus(), Status.FAILED)
+    if status is Status.UNBOUNDED:
+        _, has_ray, ray = h.getPrimalRay()
+        return status, np.nan, np.asarray(ray, float) if has_ray else None
     if status is not Status.SOLVED:
-        return status, np.nan
+        return status, np.nan, None
     z = np.asarray(h.getSolution().col_value, float)
-    return (Status.SOLVED, float(c @ z)) if _feasible(lp, z) else (Status.FAILED, np.nan)
-
-
+    if not _feasible(lp, z):
+        return Status.FAILED, np.nan, None
+    return Status.SOLVED, float(c @ z), z
 def _feasible(lp: LP, z: np.ndarray) -> bool:
     """Every constraint of ``lp`` holds at ``z`` within :data:`ACCEPT` times the scale
     ``max(|b|_inf, |z|_inf)`` (times each row's norm).

@@ -66,6 +66,30 @@ def test_a_range_does_not_depend_on_the_objectives_before_it():
     assert np.allclose(ahead.high, behind.high[::-1], rtol=1e-9, atol=1e-9, equal_nan=True)
 
 
+def test_ends_proved_by_a_point_or_a_ray_need_no_lp():
+    """``x0 = x1 >= 0`` (a pair: one ray opens both tops) and ``x2 + x3 = 1``,
+    ``x2, x3 >= 0``: every end is known, the same whatever proves it, and the pair's
+    second top (or any end a point at its bound already shows) takes no LP of its own;
+    a ray that breaks a constraint proves nothing."""
+    from cardan_forces.solvers.ranging import _is_ray, _Proofs
+
+    lp = _lp([[1, -1, 0, 0], [0, 0, 1, 1]], [0, 1], np.zeros(4))
+    found = ranges(lp, np.eye(4))
+    assert np.allclose(found.low, [0, 0, 0, 0], atol=1e-12)
+    assert np.isnan(found.high[:2]).all() and np.allclose(found.high[2:], [1, 1], atol=1e-12)
+    assert found.statuses[:2] == ((Status.SOLVED, Status.UNBOUNDED),) * 2
+    assert found.lps < 1 + 2 * 4
+    proofs = _Proofs(lp, np.array([0.0, 0.0, 1.0, 0.0]))
+    assert proofs.settle(np.eye(4)[0]) == (Status.SOLVED, 0.0)  # x0 at its bound
+    assert proofs.settle(np.eye(4)[2])[0] is None  # x2 = 1 is not its least
+    assert proofs.settle(-np.eye(4)[1])[0] is None  # no ray yet
+    proofs.add(Status.UNBOUNDED, np.array([2.0, 2.0, 0.0, 0.0]))
+    assert proofs.settle(-np.eye(4)[1])[0] is Status.UNBOUNDED
+    assert proofs.settle(-np.eye(4)[3])[0] is None
+    assert not _is_ray(lp, np.zeros(4), np.full(4, np.inf), np.array([1.0, 0.9, 0, 0]))
+    assert not _is_ray(lp, np.zeros(4), np.full(4, np.inf), np.array([-1.0, -1.0, 0, 0]))
+
+
 @pytest.mark.parametrize("name, times", [("paper", (0.13, 0.5)), ("paper-slip", (0.2, 0.7)),
                                          ("propshaft", (0.05, 0.6))])
 def test_warm_intervals_agree_with_cold_lps(name, times):
@@ -90,15 +114,25 @@ def test_warm_intervals_agree_with_cold_lps(name, times):
                                                       abs=interval_slack(op, i, c))
 
 
-def test_a_history_is_the_intervals_of_its_instants():
+@pytest.mark.parametrize("name", ["paper", "propshaft"])
+def test_a_history_is_the_intervals_of_its_instants(name):
     """:func:`interval_history` holds, instant by instant, what :func:`intervals` says
-    (NaN where a side is unbounded)."""
-    op = build_operator(simulate(load_scene("paper"), [0.1, 0.4]))
-    history = study.interval_history(op)
-    for k in range(2):
+    alone (NaN where a side is unbounded; finite ends within the problem-scaled
+    tolerance): starting each instant from the basis of the one before, in either
+    order, changes no answer."""
+    scene = load_scene(name)
+    op = build_operator(simulate(scene, np.linspace(scene.time.start_s, scene.time.stop_s, 5)))
+    ahead, behind = study.interval_history(op), study.interval_history(op, [4, 3, 2, 1, 0])
+    eye = np.eye(len(op.names))
+    for k in range(5):
         for j, entry in enumerate(study.intervals(op, k).values()):
-            for side, got in (("min", history.min[k, j]), ("max", history.max[k, j])):
-                assert (entry[side] is None and np.isnan(got)) or got == entry[side]
+            for side in ("min", "max"):
+                for got in (getattr(ahead, side)[k, j], getattr(behind, side)[4 - k, j]):
+                    if entry[side] is None:
+                        assert np.isnan(got)
+                    else:
+                        assert got == pytest.approx(entry[side],
+                                                    abs=interval_slack(op, k, eye[j]))
 
 
 def test_the_range_of_a_combination_agrees_with_cold_lps():
