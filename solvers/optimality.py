@@ -71,8 +71,11 @@ def blocks(cones) -> list[tuple[str, float, slice]]:
 
 
 def times_P(P, z: np.ndarray) -> np.ndarray:
+    """``P z`` per instant (T, n): ``P`` ``None``, (n, n), (T, n, n) or a :class:`Pattern`."""
     if P is None:
         return np.zeros_like(z)
+    if isinstance(P, Pattern):
+        return P.times(z)
     P = np.asarray(P, float)
     return z @ P.T if P.ndim == 2 else np.einsum("tij,tj->ti", P, z)
 
@@ -249,24 +252,94 @@ def _stack(problems, name: str) -> np.ndarray:
     return np.array([getattr(p, name) for p in problems], float)
 
 
-def _shared_P(problems) -> np.ndarray:
-    """``P`` (n, n) when every problem holds the same matrix object, else (T, n, n)."""
+def _shared_P(problems) -> np.ndarray | Pattern:
+    """``P`` (n, n) when every problem holds the same matrix, else a :class:`Pattern`."""
     first = problems[0].P
     if all(p.P is first for p in problems):
         return np.asarray(first, float)
-    return _stack(problems, "P")
+    stacked = _stack(problems, "P")
+    return stacked[0] if np.all(stacked == stacked[0]) else Pattern.of(stacked)
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """T matrices of one shape with one sparsity pattern (the union of their nonzeros):
+    ``values`` (T, nnz) at ``rows``, ``cols`` of a ``shape`` matrix. A stacked problem's
+    ``A`` and ``P`` are mostly zeros (a cone block touches a few forces), so products
+    over the instants cost T x nnz instead of T x rows x columns.
+    """
+
+    values: np.ndarray
+    rows: np.ndarray
+    cols: np.ndarray
+    shape: tuple[int, int]
+
+    @classmethod
+    def of(cls, dense: np.ndarray) -> Pattern:
+        """The pattern of a (T, r, n) stack."""
+        rows, cols = np.nonzero(np.any(dense != 0, axis=0))
+        return cls(dense[:, rows, cols], rows, cols, dense.shape[1:])
+
+    @functools.cached_property
+    def _sums(self) -> tuple:
+        """Sparse 0/1 matrices summing the products into rows, and into columns."""
+        from scipy.sparse import csr_matrix
+
+        ones, k = np.ones(len(self.rows)), np.arange(len(self.rows))
+        return (csr_matrix((ones, (self.rows, k)), shape=(self.shape[0], len(k))),
+                csr_matrix((ones, (self.cols, k)), shape=(self.shape[1], len(k))))
+
+    def times(self, v: np.ndarray) -> np.ndarray:
+        """``M_t v_t`` per instant (T, r) for ``v`` (T, n)."""
+        return np.asarray((self._sums[0] @ (self.values * v[:, self.cols]).T).T)
+
+    def transposed_times(self, v: np.ndarray) -> np.ndarray:
+        """``M_t' v_t`` per instant (T, n) for ``v`` (T, r)."""
+        return np.asarray((self._sums[1] @ (self.values * v[:, self.rows]).T).T)
+
+    def dense(self, k: int) -> np.ndarray:
+        """Instant ``k``'s matrix."""
+        out = np.zeros(self.shape)
+        out[self.rows, self.cols] = self.values[k]
+        return out
+
+    def take(self, idx: np.ndarray) -> Pattern:
+        """The instants ``idx``."""
+        return Pattern(self.values[idx], self.rows, self.cols, self.shape)
+
+
+def _block(stack: np.ndarray) -> np.ndarray | Pattern:
+    """A (T, r, n) stack of constraint rows as the products over it run fastest: dense
+    where at least half its entries can be nonzero, else a :class:`Pattern`.
+    """
+    pattern = Pattern.of(stack)
+    return stack if 2 * len(pattern.rows) >= stack.shape[1] * stack.shape[2] else pattern
+
+
+def _times(blk, z: np.ndarray) -> np.ndarray:
+    """A block's rows times ``z`` per instant: a bound block, dense or a pattern."""
+    if isinstance(blk, tuple):
+        return blk[0] * z[:, blk[1]]
+    return blk.times(z) if isinstance(blk, Pattern) else np.einsum("trn,tn->tr", blk, z)
+
+
+def _at(blk, k):
+    """Instant(s) ``k`` of a dense stack or pattern: a matrix for one, a stack for many."""
+    if isinstance(blk, Pattern):
+        return blk.dense(k) if np.ndim(k) == 0 else blk.take(k)
+    return blk[k]
 
 
 @dataclass(frozen=True)
 class Stacked:
     """T problems of one structure in Clarabel's standard form, stacked: ``P`` (n, n)
-    when shared, (T, n, n) or ``None``; ``q`` (T, n), ``b`` (T, m), ``cones``; the rows
-    of ``A`` as ``blocks`` in row order, each a dense (T, r, n) array or a bound block
-    ``(sign, columns)`` (rows ``sign * e_j'``, a QP's finite bounds), so bounds are
-    never written out as identity rows.
+    when shared, a :class:`Pattern` or ``None``; ``q`` (T, n), ``b`` (T, m), ``cones``;
+    the rows of ``A`` as ``blocks`` in row order, each a dense (T, r, n) stack, a
+    :class:`Pattern` (:func:`_block`) or a bound block ``(sign, columns)`` (rows ``sign *
+    e_j'``, a QP's finite bounds), so bounds are never written out as identity rows.
     """
 
-    P: np.ndarray | None
+    P: np.ndarray | Pattern | None
     q: np.ndarray
     b: np.ndarray
     cones: tuple
@@ -274,17 +347,18 @@ class Stacked:
 
     def Az(self, z: np.ndarray) -> np.ndarray:
         """``A z`` per instant (T, m)."""
-        return np.concatenate([np.einsum("trn,tn->tr", blk, z) if isinstance(blk, np.ndarray)
-                               else blk[0] * z[:, blk[1]] for blk in self.blocks]
+        return np.concatenate([_times(blk, z) for blk in self.blocks]
                               + [np.zeros((len(z), 0))], axis=1)
 
     def Aty(self, y: np.ndarray) -> np.ndarray:
         """``A'y`` per instant (T, n)."""
         out, row = np.zeros_like(self.q), 0
         for blk in self.blocks:
-            rows = blk.shape[1] if isinstance(blk, np.ndarray) else len(blk[1])
+            rows = len(blk[1]) if isinstance(blk, tuple) else blk.shape[-2]
             part = y[:, row:row + rows]
-            if isinstance(blk, np.ndarray):
+            if isinstance(blk, Pattern):
+                out += blk.transposed_times(part)
+            elif isinstance(blk, np.ndarray):
                 out += np.einsum("trn,tr->tn", blk, part)
             else:
                 np.add.at(out, (slice(None), blk[1]), blk[0] * part)
@@ -295,19 +369,19 @@ class Stacked:
         """Instant ``k``'s ``A`` (m, n), dense."""
         n = self.q.shape[1]
         return np.vstack([np.zeros((0, n))] + [
-            blk[k] if isinstance(blk, np.ndarray) else blk[0] * np.eye(n)[blk[1]]
+            blk[0] * np.eye(n)[blk[1]] if isinstance(blk, tuple) else _at(blk, k)
             for blk in self.blocks])
 
     def take(self, rows: np.ndarray) -> Stacked:
         """The instants ``rows`` of the stack."""
-        P = self.P if self.P is None or self.P.ndim == 2 else self.P[rows]
+        P = self.P.take(rows) if isinstance(self.P, Pattern) else self.P
         return Stacked(P, self.q[rows], self.b[rows], self.cones,
-                       tuple(blk[rows] if isinstance(blk, np.ndarray) else blk
+                       tuple(blk if isinstance(blk, tuple) else _at(blk, rows)
                              for blk in self.blocks))
 
     def Pk(self, k: int) -> np.ndarray | None:
         """Instant ``k``'s ``P``."""
-        return self.P if self.P is None or self.P.ndim == 2 else self.P[k]
+        return self.P.dense(k) if isinstance(self.P, Pattern) else self.P
 
 
 def _stack_qp(problems) -> Stacked | None:
@@ -317,11 +391,11 @@ def _stack_qp(problems) -> Stacked | None:
     first = problems[0]
     blocks, rhs, cones, ineq = [], [], [], None
     if first.A is not None:
-        blocks.append(_stack(problems, "A"))
+        blocks.append(_block(_stack(problems, "A")))
         rhs.append(_stack(problems, "b"))
         cones.append(("zero", len(first.b)))
     if first.G is not None:
-        blocks.append(_stack(problems, "G"))
+        blocks.append(_block(_stack(problems, "G")))
         rhs.append(_stack(problems, "h"))
         ineq = len(first.h)
     for name, sign in (("lb", -1.0), ("ub", 1.0)):
@@ -344,10 +418,11 @@ def _stack_ls(problems) -> Stacked:
     T, (m, n) = len(problems), np.shape(problems[0].A)
     weights = (np.ones((T, n)) if problems[0].weights is None
                else _stack(problems, "weights"))
-    P = np.zeros((T, n, n))
-    P[:, np.arange(n), np.arange(n)] = weights
+    diagonal = np.arange(n)
+    P = (np.diag(weights[0]) if np.all(weights == weights[0])
+         else Pattern(weights, diagonal, diagonal, (n, n)))
     return Stacked(P, np.zeros((T, n)), _stack(problems, "b"), (("zero", m),),
-                   (_stack(problems, "A"),))
+                   (_block(_stack(problems, "A")),))
 
 
 def conic_key(problem) -> tuple | None:
@@ -380,4 +455,4 @@ def stack_conic(problems) -> Stacked:
     conics = [convert(p, (Conic,)) for p in problems]
     P = None if conics[0].P is None else _shared_P(conics)
     return Stacked(P, _stack(conics, "q"), _stack(conics, "b"), conics[0].cones,
-                   (_stack(conics, "A"),))
+                   (_block(_stack(conics, "A")),))

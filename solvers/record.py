@@ -22,7 +22,7 @@ import enum
 import math
 import time
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import MISSING, dataclass, field, fields
 from typing import ClassVar
 
 import numpy as np
@@ -360,22 +360,6 @@ def _forces(problem, outcome: Outcome, n: int) -> tuple[np.ndarray, str]:
     return x, ""
 
 
-def _start(problem, outcome: Outcome) -> tuple[Status, np.ndarray, list[str]]:
-    """Status, forces and notes of one outcome before the checks."""
-    n = len(problem.checks.names)
-    notes = [outcome.message] if outcome.message else []
-    try:
-        status = Status(outcome.status)
-    except ValueError:
-        status, notes = Status.FAILED, [*notes, f"unknown status {outcome.status!r}"]
-    x = np.full(n, np.nan)
-    if status.has_answer:
-        x, why = _forces(problem, outcome, n)
-        if why:
-            status, notes = Status.FAILED, [*notes, why]
-    return status, x, notes
-
-
 def _groups(items, key) -> list[np.ndarray]:
     """Indices of ``items`` grouped by ``key(item)``, groups in order of appearance."""
     out: dict = {}
@@ -431,9 +415,6 @@ def stack_all(problems) -> Stacks | None:
     conic = None
     if not isinstance(first, (LCP, NLS)) and conic_key(first) is not None:
         conic = stack_conic(problems)
-        P = conic.P
-        if P is not None and P.ndim == 3 and np.all(P == P[0]):  # one P: one product
-            conic = replace(conic, P=P[0])
     return Stacks(tuple(problems), np.array([p.checks.A for p in problems], float),
                   np.array([p.checks.b for p in problems], float), conic)
 
@@ -476,7 +457,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
                  stacks: Stacks | None = None) -> list[Record]:
     """Judge T outcomes at once: :func:`finalize` of each, with the residuals and the
     optimality measured by one vectorized pass per problem structure, so the checks
-    cost microseconds per instant (``checks_s`` is the pass's time over T).
+    cost microseconds per instant. ``checks_s`` is that pass's time over T; ``wall_s``
+    adds the records' assembly to it (the whole of this call over T).
 
     ``received[k]``: the problem the backend received (after conversion; default the
     problem), for the solver-optimality view; ``elapsed_s[k]``: seconds spent before the
@@ -486,64 +468,158 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     """
     began, T = time.perf_counter(), len(problems)
     references = references if references is not None else [None] * T
-    optimal_values = optimal_values if optimal_values is not None else [None] * T
     received = received if received is not None else problems
-    extra_setup_s = extra_setup_s if extra_setup_s is not None else [0.0] * T
-    elapsed_s = elapsed_s if elapsed_s is not None else [0.0] * T
-    started = [_start(p, o) for p, o in zip(problems, outcomes)]
-    X = [x for _, x, _ in started]
+    started = _start_all(problems, outcomes)
     stacks = stacks if stacks is not None and stacks.holds(problems) else None
-    found = _residuals(problems, X, stacks)
+    found = _residuals(problems, started.x, stacks)
     primal = Residuals(**found).largest()
-    for k in np.flatnonzero(~np.isfinite(primal)):  # an answer with NaN or inf forces
-        first, x, notes = started[k]
-        if first.has_answer and not np.all(np.isfinite(x)):
-            started[k] = (Status.FAILED, np.full(len(x), np.nan),
-                          [*notes, "ValueError: solver returned NaN or inf"])
-            X[k] = started[k][1]
-    status = judge([s for s, _, _ in started], primal)
+    started.fail_nonfinite(np.flatnonzero(~np.isfinite(primal)))
+    status = judge(started.status, primal)
     answered = np.array([s in _ANSWERED for s in status], bool)
-    views = _optimality_all(problems, outcomes, answered, primal, optimal_values, received,
-                            stacks)
-    distance = [None if ref is None else _reference_distance(x, ref)
-                for x, ref in zip(X, references)]
-    measured = zip(views.primal.tolist(), views.dual.tolist(), views.gap.tolist())
-    optimality = [Optimality(*(None if math.isnan(v) else v for v in values))
-                  for values in measured]
-    for k in range(T):
-        if distance[k] is not None and unique_optimum(problems[k]):
-            optimality[k] = Optimality(**optimality[k], distance=distance[k])
+    views = _optimality_all(problems, outcomes, answered, primal,
+                            optimal_values if optimal_values is not None else [None] * T,
+                            received, stacks)
+    distance = _distances(problems, started.x, references)
     confirmed = confirm(status, Optimality(primal=views.primal, dual=views.dual,
                                            gap=views.gap), views.duals)
     checks_s = (time.perf_counter() - began) / T if T else 0.0
-    return [_record(problems[k], solver, outcomes[k], started[k], status[k], confirmed[k],
-                    {key: float(found[key][k]) for key in Residuals.KEYS}, distance[k],
-                    optimality[k], views, k, checks_s, extra_setup_s[k], elapsed_s[k])
-            for k in range(T)]
+    records = _records(problems, solver, outcomes, started, status, confirmed, found,
+                       distance, views, checks_s, extra_setup_s)
+    share = (time.perf_counter() - began) / T if T else 0.0
+    for record, before in zip(records, elapsed_s if elapsed_s is not None else [0.0] * T):
+        object.__setattr__(record, "wall_s", before + share)  # known once all are built
+    return records
 
 
-def _record(problem, solver, outcome, started, judged, confirmed, found, distance,
-            optimality, views, k, checks_s, extra_setup_s, elapsed_s) -> Record:
-    """Instant ``k``'s record from the checks of :func:`finalize_all`."""
-    first, x, notes = started
+@dataclass
+class _Started:
+    """Status, forces and notes of T outcomes before the checks (:func:`_start_all`)."""
+
+    solver_status: list
+    status: list
+    x: list
+    notes: list
+
+    def fail_nonfinite(self, candidates) -> None:
+        """Mark ``failed`` the answers among ``candidates`` whose forces are NaN or inf."""
+        for k in candidates:
+            if self.status[k].has_answer and not np.all(np.isfinite(self.x[k])):
+                self.status[k] = Status.FAILED
+                self.x[k] = np.full(len(self.x[k]), np.nan)
+                self.notes[k] = [*self.notes[k], "ValueError: solver returned NaN or inf"]
+
+
+_STATUS_OF = {**{s.value: s for s in Status}, **{s: s for s in Status}}
+"""A status as an adapter gives it (the value or the member) -> :class:`Status`, one
+dict lookup (an enum call costs as much as the rest of an instant's start)."""
+
+
+def _start_all(problems, outcomes) -> _Started:
+    """:class:`_Started` of every outcome: its status (an unknown one is ``failed``)
+    and, where it has an answer, its forces by ``problem.to_forces``.
+    """
+    T = len(problems)
+    started = _Started([None] * T, [None] * T, [None] * T, [None] * T)
+    for k, (problem, outcome) in enumerate(zip(problems, outcomes)):
+        n = len(problem.checks.names)
+        notes = [outcome.message] if outcome.message else []
+        status = _STATUS_OF.get(outcome.status)
+        if status is None:
+            status, notes = Status.FAILED, [*notes, f"unknown status {outcome.status!r}"]
+        x = None
+        if status in _ANSWERED:
+            x, why = _forces(problem, outcome, n)
+            if why:
+                status, notes = Status.FAILED, [*notes, why]
+        started.solver_status[k], started.status[k], started.notes[k] = status, status, notes
+        started.x[k] = np.full(n, np.nan) if x is None else x
+    return started
+
+
+def _distances(problems, X, references) -> tuple[list, list]:
+    """``||x - x_ref|| / ||x_ref||`` where a reference is given (else ``None``), for the
+    residuals, and the same only where the optimum is one point, for the optimality
+    (:func:`~.optimality.unique_optimum`, decided once per distinct ``P``).
+    """
+    unique: dict = {}
+    distance, where_unique = [None] * len(problems), [None] * len(problems)
+    for k, ref in enumerate(references):
+        if ref is None:
+            continue
+        distance[k] = _reference_distance(X[k], ref)
+        P = getattr(problems[k], "P", None)
+        key = (type(problems[k]), None if P is None else np.asarray(P, float).tobytes())
+        if key not in unique:
+            unique[key] = unique_optimum(problems[k])
+        where_unique[k] = distance[k] if unique[key] else None
+    return distance, where_unique
+
+
+def _instances(cls, columns: dict, T: int) -> list:
+    """T instances of the frozen dataclass ``cls`` from ``columns`` (field -> T values;
+    fields not given take their defaults). Each instance's ``__dict__`` is filled at
+    once instead of through the frozen ``__init__``'s one ``object.__setattr__`` per
+    field: a record costs 1 us instead of 6, which was the largest part of the checks
+    of a run. The values must already be of the fields' types (no ``__post_init__``);
+    the instances compare, print and refuse assignment as any other.
+    """
+    for f in fields(cls):
+        if f.name not in columns:
+            default = f.default_factory() if f.default is MISSING else f.default
+            columns[f.name] = [default] * T
+    names, out, new = tuple(columns), [], object.__new__
+    for values in zip(*columns.values()):
+        item = new(cls)
+        item.__dict__.update(zip(names, values))
+        out.append(item)
+    return out
+
+
+def _records(problems, solver, outcomes, started: _Started, status, confirmed, found,
+             distance, views: _Views, checks_s, extra_setup_s) -> list[Record]:
+    """The T records of :func:`finalize_all`, assembled column by column (``distance``:
+    :func:`_distances`' pair).
+    """
+    T = len(problems)
+    residual = {key: found[key].tolist() for key in Residuals.KEYS}
+    notes = [_notes(started.notes[k], started.status[k], status[k], confirmed[k],
+                    {key: residual[key][k] for key in Residuals.KEYS})
+             if status[k] != started.status[k] or confirmed[k] != status[k]
+             else started.notes[k] for k in range(T)]
+    measured = zip(views.primal.tolist(), views.dual.tolist(), views.gap.tolist(),
+                   distance[1])
+    optimality = _instances(Optimality, dict(zip(
+        ("primal", "dual", "gap", "distance"),
+        map(list, zip(*[[None if v != v else v for v in values[:3]] + [values[3]]
+                        for values in measured])))), T) if T else []
+    residuals = _instances(Residuals, {**residual, "reference": distance[0]}, T)
+    answered = [s in _ANSWERED for s in confirmed]
+    extra = extra_setup_s if extra_setup_s is not None else [0.0] * T
+    return _instances(Record, {
+        "formulation": [p.formulation for p in problems], "solver": [solver] * T,
+        "status": [_STATUS_OF[s] for s in confirmed], "x": started.x,
+        "names": [tuple(p.checks.names) for p in problems],
+        "iterations": [None if o.iterations is None else int(o.iterations) for o in outcomes],
+        "setup_s": [o.setup_s + e for o, e in zip(outcomes, extra)],
+        "solve_s": [o.solve_s for o in outcomes], "residuals": residuals,
+        "message": ["; ".join(n) for n in notes],
+        "z": [None if o.z is None else np.asarray(o.z) for o in outcomes],
+        "objective": [float(o.objective) if a and o.objective is not None else None
+                      for o, a in zip(outcomes, answered)],
+        "optimality": optimality, "duals": [str(d) for d in views.duals],
+        "gap_kind": [str(g) for g in views.kinds], "checks_s": [checks_s] * T,
+        "y": views.y, "solver_status": started.solver_status,
+        "solver_optimality": views.solver, "wall_s": [checks_s] * T}, T)
+
+
+def _notes(notes, first, judged, confirmed, found) -> list[str]:
+    """An instant's notes with why the package changed the solver's status."""
     if judged != first:
         worst = max(Residuals.KEYS, key=found.get)
         notes = [*notes, f"{worst} residual {found[worst]:.1e} > {ACCEPT:.0e}"]
     if confirmed != judged:
         notes = [*notes, "confirmed by the package's primal, dual and gap measures"]
-    answered = Status(confirmed).has_answer
-    objective = outcome.objective if answered else None
-    return Record(
-        formulation=problem.formulation, solver=solver, status=confirmed, x=x,
-        names=tuple(problem.checks.names),
-        iterations=None if outcome.iterations is None else int(outcome.iterations),
-        setup_s=outcome.setup_s + extra_setup_s, solve_s=outcome.solve_s,
-        residuals=Residuals(**found, reference=distance), message="; ".join(notes),
-        z=None if outcome.z is None else np.asarray(outcome.z),
-        objective=None if objective is None else float(objective),
-        optimality=optimality, duals=str(views.duals[k]), gap_kind=str(views.kinds[k]),
-        checks_s=checks_s, y=views.y[k], solver_status=first,
-        solver_optimality=views.solver[k], wall_s=elapsed_s + checks_s)
+    return notes
 
 
 def finalize(
@@ -649,7 +725,7 @@ def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
         sub = st if given.all() else st.take(np.flatnonzero(given))
         solver = residuals_from(Pz[given], sub.q, sub.Az(zs), Aty[given], sub.b, st.cones,
                                 zs, ys, check_dual_cone=not as_qp)
-        for j, k in enumerate(idx[given]):
-            views.solver[k] = Optimality(primal=float(solver["primal"][j]),
-                                         dual=float(solver["dual"][j]),
-                                         gap=float(solver["gap"][j]))
+        found = _instances(Optimality, {key: solver[key].tolist()
+                                        for key in ("primal", "dual", "gap")}, len(zs))
+        for k, optimality in zip(idx[given], found):
+            views.solver[k] = optimality
