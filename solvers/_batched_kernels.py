@@ -28,41 +28,42 @@ FAST = {"contract"}
 
 @njit(cache=True, fastmath=FAST)
 def _cholesky(L, o):
-    """Lower Cholesky factor of the 6 x 6 positive definite block ``L[o:o+6]`` (in place)."""
+    """Lower Cholesky factor of the 6 x 6 positive definite block ``L[o:o+6]`` in place,
+    with the reciprocals of its diagonal on the diagonal (one division per row).
+    """
     for j in range(B):
         s = L[o + j, j]
         for k in range(j):
             s -= L[o + j, k] * L[o + j, k]
-        L[o + j, j] = np.sqrt(s)
+        d = 1.0 / np.sqrt(s)
+        L[o + j, j] = d
         for i in range(j + 1, B):
             s = L[o + i, j]
             for k in range(j):
                 s -= L[o + i, k] * L[o + j, k]
-            L[o + i, j] = s / L[o + j, j]
+            L[o + i, j] = s * d
 
 
 @njit(cache=True, fastmath=FAST)
-def _cho_solve(L, o, X, s):
-    """``X[s:s+6] <- (L L')^-1 X[s:s+6]`` with ``L = L[o:o+6]``, all columns of ``X`` at
-    once (the innermost loop runs over independent columns).
-    """
-    r = X.shape[1]
-    for i in range(B):
-        for k in range(i):
-            f = L[o + i, k]
-            for c in range(r):
-                X[s + i, c] -= f * X[s + k, c]
-        d = L[o + i, i]
-        for c in range(r):
-            X[s + i, c] /= d
-    for i in range(B - 1, -1, -1):
-        for k in range(i + 1, B):
-            f = L[o + k, i]
-            for c in range(r):
-                X[s + i, c] -= f * X[s + k, c]
-        d = L[o + i, i]
-        for c in range(r):
-            X[s + i, c] /= d
+def _forward(L, o, X, s):
+    """``X[s:s+6] <- L^-1 X[s:s+6]``, ``L = L[o:o+6]`` from :func:`_cholesky`."""
+    for c in range(X.shape[1]):
+        for i in range(B):
+            acc = X[s + i, c]
+            for k in range(i):
+                acc -= L[o + i, k] * X[s + k, c]
+            X[s + i, c] = acc * L[o + i, i]
+
+
+@njit(cache=True, fastmath=FAST)
+def _backward(L, o, X, s):
+    """``X[s:s+6] <- L^-T X[s:s+6]``, ``L = L[o:o+6]`` from :func:`_cholesky`."""
+    for c in range(X.shape[1]):
+        for i in range(B - 1, -1, -1):
+            acc = X[s + i, c]
+            for k in range(i + 1, B):
+                acc -= L[o + k, i] * X[s + k, c]
+            X[s + i, c] = acc * L[o + i, i]
 
 
 @njit(cache=True, fastmath=FAST)
@@ -92,29 +93,32 @@ def _rows_product(X, xo, Y, yo, n, out, oo):
 def _minus_tn(X, xo, Y, yo, out, oo):
     """``out[oo:oo+6] -= X[xo:xo+6]' Y[yo:yo+6]``."""
     for i in range(B):
-        for p in range(B):
-            f = X[xo + p, i]
-            for c in range(Y.shape[1]):
-                out[oo + i, c] -= f * Y[yo + p, c]
+        for c in range(Y.shape[1]):
+            acc = out[oo + i, c]
+            for p in range(B):
+                acc -= X[xo + p, i] * Y[yo + p, c]
+            out[oo + i, c] = acc
 
 
 @njit(cache=True, fastmath=FAST)
 def _minus_nn(X, xo, Y, yo, out, oo):
     """``out[oo:oo+6] -= X[xo:xo+6] Y[yo:yo+6]``."""
     for i in range(B):
-        for p in range(B):
-            f = X[xo + i, p]
-            for c in range(Y.shape[1]):
-                out[oo + i, c] -= f * Y[yo + p, c]
+        for c in range(Y.shape[1]):
+            acc = out[oo + i, c]
+            for p in range(B):
+                acc -= X[xo + i, p] * Y[yo + p, c]
+            out[oo + i, c] = acc
 
 
 @njit(cache=True, fastmath=FAST)
-def _factor(G, n_own, sh_a, sh_b, n_sh, rtol, L, Ko, Gm, Sa, Sb):
-    """Factor ``K = B B' + delta I`` of one instant, ``delta = rtol * trace(B B') / m``,
-    from its block rows ``G`` (row ``6k + i``: body ``k``'s row ``i`` on the columns
-    touching it): per body ``k`` in chain order the Cholesky factor ``L[6k:6k+6]`` of
-    the pivot ``D_k = K_kk - K_k,k-1 D_k-1^-1 K_k-1,k``, the coupling ``Ko[6k:6k+6] =
-    K_k,k+1`` (the columns touching both) and ``Gm[6k:6k+6] = D_k^-1 K_k,k+1``.
+def _factor(G, n_own, sh_a, sh_b, n_sh, rtol, L, H, Sa, Sb):
+    """Factor ``K = B B' + delta I = C C'`` of one instant, ``delta = rtol * trace(B B') /
+    m``, from its block rows ``G`` (row ``6k + i``: body ``k``'s row ``i`` on the columns
+    touching it). ``C`` is block lower bidiagonal along the chain: diagonal blocks
+    ``L[6k:6k+6]``, the Cholesky factors of the pivots ``D_k = K_kk - H_k-1' H_k-1``,
+    and below them ``H[6k:6k+6]' `` with ``H_k = L_k^-1 K_k,k+1`` (``K_k,k+1`` from the
+    columns touching both bodies).
     """
     nb = len(n_own)
     trace = 0.0
@@ -127,32 +131,36 @@ def _factor(G, n_own, sh_a, sh_b, n_sh, rtol, L, Ko, Gm, Sa, Sb):
                 for p in range(n_sh[k]):
                     Sa[i, p] = G[B * k + i, sh_a[k, p]]
                     Sb[i, p] = G[B * k + B + i, sh_b[k, p]]
-            _rows_product(Sa, 0, Sb, 0, n_sh[k], Ko, B * k)
+            _rows_product(Sa, 0, Sb, 0, n_sh[k], H, B * k)
     delta = rtol * trace / (nb * B)
     for k in range(nb):
         o = B * k
         for i in range(B):
             L[o + i, i] += delta
-        if k > 0:  # K_k,k-1 = Ko[k-1]'
-            _minus_tn(Ko, o - B, Gm, o - B, L, o)
+        if k > 0:
+            _minus_tn(H, o - B, H, o - B, L, o)
         _cholesky(L, o)
         if k < nb - 1:
-            for i in range(B):
-                for j in range(B):
-                    Gm[o + i, j] = Ko[o + i, j]
-            _cho_solve(L, o, Gm, o)
+            _forward(L, o, H, o)
 
 
 @njit(cache=True, fastmath=FAST)
-def _solve(L, Ko, Gm, starts, Z):
-    """``Z <- K^-1 Z`` (m, r) by :func:`_factor`'s block elimination, in place."""
-    nb = len(starts)
-    for k in range(nb):
+def _down(L, H, starts, Z):
+    """``Z <- C^-1 Z`` (m, r) with :func:`_factor`'s ``K = C C'``, in place."""
+    for k in range(len(starts)):
         if k > 0:
-            _minus_tn(Ko, B * (k - 1), Z, starts[k - 1], Z, starts[k])
-        _cho_solve(L, B * k, Z, starts[k])
-    for k in range(nb - 2, -1, -1):
-        _minus_nn(Gm, B * k, Z, starts[k + 1], Z, starts[k])
+            _minus_tn(H, B * (k - 1), Z, starts[k - 1], Z, starts[k])
+        _forward(L, B * k, Z, starts[k])
+
+
+@njit(cache=True, fastmath=FAST)
+def _up(L, H, starts, Z):
+    """``Z <- C^-T Z`` (m, r), in place."""
+    nb = len(starts)
+    for k in range(nb - 1, -1, -1):
+        if k < nb - 1:
+            _minus_nn(H, B * k, Z, starts[k + 1], Z, starts[k])
+        _backward(L, B * k, Z, starts[k])
 
 
 @njit(cache=True, fastmath=FAST)
@@ -278,30 +286,57 @@ def _rows(A, root, t, starts, own, n_own, G):
 
 
 @njit(cache=True, fastmath=FAST)
-def _refine(G, own, n_own, starts, b, R, Z, dZ, L, Ko, Gm, v, w, z, rtol):
-    """One step of iterative refinement of ``K Z = R`` (with the exact ``B B'``) where the
-    first column's relative residual ``||b - B B' Z_0|| / ||b||`` exceeds ``rtol``
-    (``v``, ``w``, ``z`` scratch).
+def _inexact(G, own, n_own, starts, b, mu, v, w, rtol):
+    """Whether ``K mu = b`` leaves ``||b - B B' mu|| > rtol ||b||``: the bias of ``delta``
+    calls for a step of iterative refinement (``mu`` (m, 1); ``v``, ``w`` scratch).
     """
-    z[:] = Z[:, 0]
-    _times_Bt(G, own, n_own, starts, z, v)
+    _times_Bt(G, own, n_own, starts, mu[:, 0], v)
     _times_B(G, own, n_own, starts, v, w)
     res, size = 0.0, 0.0
     for i in range(len(b)):
         res += (b[i] - w[i]) ** 2
         size += b[i] ** 2
-    if np.sqrt(res) <= rtol * max(np.sqrt(size), np.finfo(np.float64).tiny):
-        return
-    for c in range(R.shape[1]):
+    return np.sqrt(res) > rtol * max(np.sqrt(size), np.finfo(np.float64).tiny)
+
+
+@njit(cache=True, fastmath=FAST)
+def _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z):
+    """One step of iterative refinement of ``K Z = R`` with the exact ``B B'``:
+    ``Z += K^-1 (R - B B' Z)`` (``v``, ``w``, ``z`` scratch).
+    """
+    m, r = R.shape
+    for c in range(r):
         z[:] = Z[:, c]
         _times_Bt(G, own, n_own, starts, z, v)
         _times_B(G, own, n_own, starts, v, w)
-        for i in range(len(b)):
+        for i in range(m):
             dZ[i, c] = R[i, c] - w[i]
-    _solve(L, Ko, Gm, starts, dZ)
-    for i in range(len(b)):
-        for c in range(R.shape[1]):
+    _down(L, H, starts, dZ)
+    _up(L, H, starts, dZ)
+    for i in range(m):
+        for c in range(r):
             Z[i, c] += dZ[i, c]
+
+
+@njit(cache=True, fastmath=FAST)
+def _faces_reduced(Y, M, q):
+    """The end faces' LCP of one instant from ``Y = C^-1 [b, U]`` (m, 1 + k): ``M = I -
+    V'V`` and ``q = V' Y_0`` with ``V = Y[:, 1:]`` (``U' K^-1 U = V'V``, ``U' K^-1 b =
+    V' Y_0``), without solving back up for each face.
+    """
+    m, nf = Y.shape[0], len(q)
+    for i in range(nf):
+        acc = 0.0
+        for row in range(m):
+            acc += Y[row, 1 + i] * Y[row, 0]
+        q[i] = acc
+        for j in range(nf):
+            M[i, j] = 0.0
+        for row in range(m):
+            g = Y[row, 1 + i]
+            for j in range(nf):
+                M[i, j] -= g * Y[row, 1 + j]
+        M[i, i] += 1.0
 
 
 @njit(cache=True, fastmath=FAST)
@@ -350,16 +385,17 @@ def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, gram_r
     iterations = np.zeros(T, np.int64)
     settled = np.ones(T, np.bool_)
     G = np.zeros((B * nb, own.shape[1]))
-    L, Ko, Gm = np.empty((B * nb, B)), np.empty((B * nb, B)), np.empty((B * nb, B))
+    L, H = np.empty((B * nb, B)), np.empty((B * nb, B))
     Sa, Sb = np.empty((B, sh_a.shape[1])), np.empty((B, sh_a.shape[1]))
     R, Z, dZ = np.empty((m, r)), np.empty((m, r)), np.empty((m, r))
     v, w, z = np.empty(n), np.empty(m), np.empty(m)
+    y, y1 = np.empty((m, 1)), np.empty((m, 1))
     M, q = np.empty((nf, nf)), np.empty(nf)
     pinned, nxt = np.empty(nf, np.bool_), np.empty(nf, np.bool_)
     S, idx = np.empty((nf, nf + 1)), np.empty(nf, np.int64)
     for t in range(T):
         _rows(A, root, t, starts, own, n_own, G)
-        _factor(G, n_own, sh_a, sh_b, n_sh, gram_rtol, L, Ko, Gm, Sa, Sb)
+        _factor(G, n_own, sh_a, sh_b, n_sh, gram_rtol, L, H, Sa, Sb)
         for k in range(nb):
             s = starts[k]
             for i in range(B):
@@ -367,18 +403,35 @@ def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, gram_r
                 for j in range(nf):
                     R[s + i, 1 + j] = G[B * k + i, upos[k, j]] if upos[k, j] >= 0 else 0.0
         Z[:, :] = R
-        _solve(L, Ko, Gm, starts, Z)
-        _refine(G, own, n_own, starts, b[t], R, Z, dZ, L, Ko, Gm, v, w, z, refine_rtol)
-        if nf:
-            _faces(G, starts, upos, Z, M, q)
-            iterations[t], settled[t] = _lcp(M, q, max_iter, lcp_rtol, lcp_delta, lam[t],
-                                             pinned, nxt, S, idx)
-        for i in range(m):
-            acc = Z[i, 0]
-            for j in range(nf):
-                acc -= Z[i, 1 + j] * lam[t, j]
-            mu[t, i] = z[i] = acc
-        _times_Bt(G, own, n_own, starts, z, v)
+        _down(L, H, starts, Z)
+        y[:, 0] = Z[:, 0]
+        _up(L, H, starts, y)
+        if _inexact(G, own, n_own, starts, b[t], y, v, w, refine_rtol):
+            _up(L, H, starts, Z)
+            _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z)
+            if nf:
+                _faces(G, starts, upos, Z, M, q)
+                iterations[t], settled[t] = _lcp(M, q, max_iter, lcp_rtol, lcp_delta,
+                                                 lam[t], pinned, nxt, S, idx)
+            for i in range(m):
+                acc = Z[i, 0]
+                for j in range(nf):
+                    acc -= Z[i, 1 + j] * lam[t, j]
+                mu[t, i] = acc
+        else:
+            if nf:
+                _faces_reduced(Z, M, q)
+                iterations[t], settled[t] = _lcp(M, q, max_iter, lcp_rtol, lcp_delta,
+                                                 lam[t], pinned, nxt, S, idx)
+                for i in range(m):
+                    acc = 0.0
+                    for j in range(nf):
+                        acc += Z[i, 1 + j] * lam[t, j]
+                    y1[i, 0] = acc
+                _up(L, H, starts, y1)
+            for i in range(m):
+                mu[t, i] = y[i, 0] - y1[i, 0] if nf else y[i, 0]
+        _times_Bt(G, own, n_own, starts, mu[t], v)
         for j in range(nf):
             v[u[j]] += lam[t, j]
         for c in range(n):
