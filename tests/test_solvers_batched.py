@@ -132,16 +132,25 @@ def test_chain_solve_equals_a_dense_solve():
     assert np.allclose(nb.chain_solve(K, R, blocks), np.linalg.solve(K, R), atol=1e-12)
 
 
+@pytest.fixture(scope="module")
+def propshaft_op():
+    from cardan_forces.driveline.loading import load_scene
+
+    scene = load_scene("propshaft")  # scales differ: every instant takes a refinement step
+    return build_operator(simulate(scene, scene.time.instants()[:21]))
+
+
+@pytest.mark.parametrize("scene", ["paper", "propshaft"])
 @pytest.mark.parametrize("formulation", ["min_norm_scaled", "positive", "compliance"])
-def test_compiled_least_norm_equals_the_numpy_path(op, formulation):
+def test_compiled_least_norm_equals_the_numpy_path(op, propshaft_op, scene, formulation):
     """The compiled pass over the instants and NumPy's stacked steps: the same forces and
     face multipliers; ``mu`` agrees up to the rows' dependency, which ``A'`` removes."""
     pytest.importorskip("numba")
-    batch = fbatch.least_norm_batch(op, formulation)
+    batch = fbatch.least_norm_batch(op if scene == "paper" else propshaft_op, formulation)
     args = (batch.A, batch.b, batch.weights, batch.signed)
     compiled, plain = nb.least_norm(*args), nb._least_norm_numpy(*args)
     x, mu, nu = compiled[:3]
-    assert np.abs(x - plain[0]).max() <= 1e-12 * np.abs(plain[0]).max()
+    assert np.abs(x - plain[0]).max() <= 1e-11 * np.abs(plain[0]).max()
     assert np.abs(nu - plain[2]).max() <= 1e-9 * max(np.abs(plain[2]).max(), 1.0)
     At = batch.A.transpose(0, 2, 1)
     Atmu = np.einsum("tnm,tm->tn", At, plain[1])
