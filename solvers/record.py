@@ -457,8 +457,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
                  stacks: Stacks | None = None) -> list[Record]:
     """Judge T outcomes at once: :func:`finalize` of each, with the residuals and the
     optimality measured by one vectorized pass per problem structure, so the checks
-    cost microseconds per instant. ``checks_s`` is that pass's time over T; ``wall_s``
-    adds the records' assembly to it (the whole of this call over T).
+    cost microseconds per instant; ``checks_s`` is this call's time over T (the
+    measures and the records' assembly).
 
     ``received[k]``: the problem the backend received (after conversion; default the
     problem), for the solver-optimality view; ``elapsed_s[k]``: seconds spent before the
@@ -475,19 +475,19 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     primal = Residuals(**found).largest()
     started.fail_nonfinite(np.flatnonzero(~np.isfinite(primal)))
     status = judge(started.status, primal)
-    answered = np.array([s in _ANSWERED for s in status], bool)
+    answered = (status == Status.SOLVED) | (status == Status.INACCURATE)
     views = _optimality_all(problems, outcomes, answered, primal,
                             optimal_values if optimal_values is not None else [None] * T,
                             received, stacks)
     distance = _distances(problems, started.x, references)
     confirmed = confirm(status, Optimality(primal=views.primal, dual=views.dual,
                                            gap=views.gap), views.duals)
-    checks_s = (time.perf_counter() - began) / T if T else 0.0
     records = _records(problems, solver, outcomes, started, status, confirmed, found,
-                       distance, views, checks_s, extra_setup_s)
-    share = (time.perf_counter() - began) / T if T else 0.0
+                       distance, views, extra_setup_s)
+    checks_s = (time.perf_counter() - began) / T if T else 0.0
     for record, before in zip(records, elapsed_s if elapsed_s is not None else [0.0] * T):
-        object.__setattr__(record, "wall_s", before + share)  # known once all are built
+        object.__setattr__(record, "checks_s", checks_s)  # known once all are built
+        object.__setattr__(record, "wall_s", before + checks_s)
     return records
 
 
@@ -576,7 +576,7 @@ def _instances(cls, columns: dict, T: int) -> list:
 
 
 def _records(problems, solver, outcomes, started: _Started, status, confirmed, found,
-             distance, views: _Views, checks_s, extra_setup_s) -> list[Record]:
+             distance, views: _Views, extra_setup_s) -> list[Record]:
     """The T records of :func:`finalize_all`, assembled column by column (``distance``:
     :func:`_distances`' pair).
     """
@@ -607,9 +607,8 @@ def _records(problems, solver, outcomes, started: _Started, status, confirmed, f
         "objective": [float(o.objective) if a and o.objective is not None else None
                       for o, a in zip(outcomes, answered)],
         "optimality": optimality, "duals": [str(d) for d in views.duals],
-        "gap_kind": [str(g) for g in views.kinds], "checks_s": [checks_s] * T,
-        "y": views.y, "solver_status": started.solver_status,
-        "solver_optimality": views.solver, "wall_s": [checks_s] * T}, T)
+        "gap_kind": [str(g) for g in views.kinds], "y": views.y,
+        "solver_status": started.solver_status, "solver_optimality": views.solver}, T)
 
 
 def _notes(notes, first, judged, confirmed, found) -> list[str]:
