@@ -140,7 +140,7 @@ def residuals_batch(A: np.ndarray, b: np.ndarray, X: np.ndarray, unilateral, pai
         apex, members, mask = _cone_arrays(tuple(cones), X.shape[1])
         spread = np.sqrt(np.einsum("tkj,tkj->tk", X[:, members] * mask, X[:, members] * mask))
         cone = np.maximum(0.0, (spread - X @ apex.T).max(axis=1))
-    AX = X @ A.T if np.ndim(A) == 2 else np.einsum("tmn,tn->tm", A, X)
+    AX = X @ A.T if np.ndim(A) == 2 else (A @ X[:, :, None])[:, :, 0]
     out = {
         "equilibrium": np.linalg.norm(AX - b, axis=1) / scale,
         "sign": sign / scale,

@@ -103,7 +103,7 @@ def _least_norm_measures(batch: LeastNormBatch, x: np.ndarray, y: np.ndarray):
     m = batch.A.shape[1]
     signed = np.flatnonzero(batch.signed)
     Wx = x if batch.weights is None else batch.weights * x
-    Aty = np.einsum("tmn,tm->tn", batch.A, y[:, :m])
+    Aty = (y[:, None, :m] @ batch.A)[:, 0]
     Aty[:, signed] -= y[:, m:]
     bty = np.einsum("tm,tm->t", batch.b, y[:, :m])
     cone = np.maximum(0.0, -y[:, m:]).max(axis=1, initial=0.0)

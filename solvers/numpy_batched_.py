@@ -163,7 +163,7 @@ def _signed(signed, n: int) -> np.ndarray:
 
 def structure(A: np.ndarray) -> np.ndarray:
     """Where ``A`` (T, m, n) is nonzero at some instant: (m, n) booleans."""
-    return np.abs(A).max(axis=0, initial=0.0) > 0
+    return np.any(A, axis=0)
 
 
 def chain(A: np.ndarray) -> list[slice]:
