@@ -67,8 +67,10 @@ class Reduced:
     fixed per formulation while ``z0`` and ``N`` change per instant.
 
     ``P`` (T, k, k), ``q`` (T, k), ``A`` (T, m_in, k), ``b`` (T, m_in), ``cones`` the
-    reduced problem's; ``z0`` (T, n), ``N`` (T, n, k); ``L`` (T, r, n) the pseudo-inverse
-    of ``A_eq'``, which gives the equality rows' multipliers;
+    reduced problem's; ``z0`` (T, n), ``N`` (T, n, k); ``factors`` ``(Q, R, U)`` with
+    ``A_eq' = Q R U'`` (``Q`` (T, n, s) orthonormal, ``R`` (T, s, s) invertible, ``U``
+    (T, r, s) orthonormal or None for the identity; ``s`` the rank), which give the
+    pseudo-inverse of ``A_eq'`` and so the equality rows' multipliers;
     ``rows_eq`` / ``rows_in`` the full problem's row indices of each part; ``offset``
     (T,) the objective at ``z0`` (the reduced objective plus it is the full one);
     ``P_full`` (T, n, n), ``q_full`` (T, n) and ``A_in`` (T, m_in, n) the full problem's
@@ -82,7 +84,7 @@ class Reduced:
     cones: tuple
     z0: np.ndarray
     N: np.ndarray
-    L: np.ndarray
+    factors: tuple
     rows_eq: np.ndarray
     rows_in: np.ndarray
     offset: np.ndarray
@@ -96,15 +98,24 @@ class Reduced:
         rows' by least squares on stationarity ``P z + q + A_eq' l + A_in' u = 0``
         (exact at an optimum; the least-norm ``l`` where the rows are dependent).
         """
-        z = self.z0 + np.einsum("tnk,tk->tn", self.N, y)
+        z = self.z0 + _mv(self.N, y)
         if dual_in is None:
             return z, None
-        g = -(np.einsum("tij,tj->ti", self.P_full, z) + self.q_full
-              + np.einsum("tmn,tm->tn", self.A_in, dual_in))
-        lam = np.einsum("trn,tn->tr", self.L, g)
+        g = -(_mv(self.P_full, z) + self.q_full
+              + _mv(np.transpose(self.A_in, (0, 2, 1)), dual_in))
+        Q, R, U = self.factors
+        lam = np.linalg.solve(R, _mv(np.transpose(Q, (0, 2, 1)), g)[..., None])[..., 0]
+        lam = lam if U is None else _mv(U, lam)
         duals = np.empty((len(z), len(self.rows_eq) + len(self.rows_in)))
         duals[:, self.rows_eq], duals[:, self.rows_in] = lam, dual_in
         return z, duals
+
+
+def _mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Stacked matrix-vector products ``M[t] @ v[t]`` (matmul: einsum is 5-10 times
+    slower on these shapes).
+    """
+    return (M @ v[..., None])[..., 0]
 
 
 def _zero_rows(cones) -> tuple[np.ndarray, np.ndarray, tuple]:
@@ -120,27 +131,29 @@ def _zero_rows(cones) -> tuple[np.ndarray, np.ndarray, tuple]:
 
 
 def _null_space(A_eq: np.ndarray, b_eq: np.ndarray):
-    """``(z0, N, L)`` per instant: the least-norm solution of ``A_eq z = b_eq``, an
-    orthonormal basis of the null space of ``A_eq`` and ``L = pinv(A_eq')`` (multipliers
-    from stationarity). From one complete QR of the stacked ``A_eq'``; where the rows
-    are dependent (the QR's diagonal says so), from the SVD at the rank every instant
-    shares (``ValueError`` if the rank changes: the reduced structure would).
+    """``(z0, N, factors)`` per instant: the least-norm solution of ``A_eq z = b_eq``,
+    an orthonormal basis of the null space of ``A_eq`` and ``(Q, R, U)`` with ``A_eq' =
+    Q R U'`` (see :class:`Reduced`). From one complete QR of the stacked ``A_eq'``;
+    where the rows are dependent (the QR's diagonal says so), from the SVD at the rank
+    every instant shares (``ValueError`` if the rank changes: the reduced structure
+    would).
     """
     r = A_eq.shape[1]
     At = np.transpose(A_eq, (0, 2, 1))
     Q, R = np.linalg.qr(At, mode="complete")
     diag = np.abs(np.diagonal(R[:, :r], axis1=1, axis2=2))
     if not r or np.all(diag.min(axis=1) > RANK_RTOL * diag.max(axis=1)):
-        L = np.linalg.solve(R[:, :r], np.transpose(Q[:, :, :r], (0, 2, 1)))
-        return np.einsum("trn,tr->tn", L, b_eq), Q[:, :, r:], L
+        factors = (Q[:, :, :r], R[:, :r], None)
+        w = np.linalg.solve(np.transpose(R[:, :r], (0, 2, 1)), b_eq[..., None])[..., 0]
+        return _mv(Q[:, :, :r], w), Q[:, :, r:], factors
     V, s, Ut = np.linalg.svd(At)
     ranks = np.sum(s > RANK_RTOL * s[:, :1], axis=1)
     if np.any(ranks != ranks[0]):
         raise ValueError("the zero-cone rows change rank between instants: no reduced form")
     k = int(ranks[0])
-    L = np.transpose(Ut[:, :k], (0, 2, 1)) @ (np.transpose(V[:, :, :k], (0, 2, 1)) /
-                                              s[:, :k, None])
-    return np.einsum("trn,tr->tn", L, b_eq), V[:, :, k:], L
+    U = np.transpose(Ut[:, :k], (0, 2, 1))
+    z0 = _mv(V[:, :, :k], _mv(Ut[:, :k], b_eq) / s[:, :k])
+    return z0, V[:, :, k:], (V[:, :, :k], s[:, :k, None] * np.eye(k), U)
 
 
 def eliminate_equalities(P, q, A, b, cones) -> Reduced:
@@ -153,15 +166,13 @@ def eliminate_equalities(P, q, A, b, cones) -> Reduced:
     P = np.broadcast_to(P, (T, n, n))
     eq, rest, kept = _zero_rows(cones)
     A_in = A[:, rest]
-    z0, N, L = _null_space(A[:, eq], b[:, eq])
-    Pz0 = np.einsum("tij,tj->ti", P, z0)
+    z0, N, factors = _null_space(A[:, eq], b[:, eq])
+    Pz0 = _mv(P, z0)
     Nt = np.transpose(N, (0, 2, 1))
     return Reduced(
-        P=Nt @ P @ N, q=np.einsum("tkn,tn->tk", Nt, Pz0 + q), A=A_in @ N,
-        b=b[:, rest] - np.einsum("tmn,tn->tm", A_in, z0), cones=kept, z0=z0, N=N, L=L,
-        rows_eq=eq, rows_in=rest,
-        offset=0.5 * np.einsum("tn,tn->t", z0, Pz0) + np.einsum("tn,tn->t", q, z0),
-        P_full=P, q_full=q, A_in=A_in)
+        P=Nt @ P @ N, q=_mv(Nt, Pz0 + q), A=A_in @ N, b=b[:, rest] - _mv(A_in, z0),
+        cones=kept, z0=z0, N=N, factors=factors, rows_eq=eq, rows_in=rest,
+        offset=np.einsum("tn,tn->t", z0, 0.5 * Pz0 + q), P_full=P, q_full=q, A_in=A_in)
 
 
 def reduced_conic(conic: Conic) -> tuple[Conic, Reduced]:

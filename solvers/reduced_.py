@@ -20,15 +20,16 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
-from . import clarabel_, moreau_, qoco_
+from . import clarabel_, moreau_, qoco_, qocogen_
 from .batch import BatchOutcome
 from .conversions import eliminate_equalities, reduced_conic
 from .record import Outcome
 from .registry import Backend
 
 WRAPPED = {"clarabel": clarabel_, "qoco": qoco_, "qoco-batched": qoco_, "moreau": moreau_,
-           "moreau-warm": moreau_}
-"""Backend name -> its adapter module; each gets a ``<name>-reduced`` variant."""
+           "moreau-warm": moreau_, "qocogen": qocogen_}
+"""Backend name -> its adapter module; each gets a ``<name>-reduced`` variant (``qocogen``
+only this one: its module is no adapter of the registry's own)."""
 
 EXTRAS: dict[str, str | None] = {f"{name}-reduced": module.EXTRAS[name]
                                  for name, module in WRAPPED.items()}

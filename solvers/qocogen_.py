@@ -1,0 +1,287 @@
+"""Backend ``qocogen``: a QOCO solver generated in C for one batch structure (qocogen).
+
+qocogen writes a custom interior-point solver (QOCO's algorithm) for one sparsity of
+``P``, ``A``, ``G`` and one cone layout: the KKT factorization is unrolled for that
+pattern, so a solve has no symbolic work and no Python between iterations. This module
+generates it once per structure, compiles it with a small driver that solves every
+instant of a batch in one C call (each instant's numbers replace the last), and keeps
+the shared library in a user cache directory named by a hash of the structure: a later
+process loads it (milliseconds) instead of compiling (seconds to minutes, reported in
+the ``compile`` stage and by :func:`compile_seconds`, never in a solve's time).
+
+It is registered only as ``qocogen-reduced`` (:data:`.reduced_.WRAPPED`): on the full
+form the equality rows are dense, so the unrolled factor is large (10-20 times the
+code, minutes to compile) and a solve about 4 times slower than on the reduced form
+(the propshaft's ``min_max``, one run).
+
+The answer does not depend on the order of the instants: the generated solver starts
+every solve from its own initial point and does no equilibration (``ruiz_iters`` 0), and
+the driver clears the status and iteration count before each. Like ``qoco`` it has no
+certificate of infeasibility, so a "solved" whose own dual residual or gap exceeds
+:data:`.qoco_.CLAIM_TOL` is reported inaccurate. Optional extra ``qocogen``; absent
+without qocogen or a C compiler.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import functools
+import hashlib
+import io
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from cardan_forces.formulations.batch import ConicBatch
+
+from . import settings
+from .batch import BatchOutcome
+from .qoco_ import CLAIM_TOL, layout, supports
+from .registry import Backend, dist_version
+
+EXTRAS: dict[str, str | None] = {"qocogen": "qocogen"}
+
+TOLERANCES = ("abstol", "reltol")
+"""The generated solver's settings a requested tolerance sets."""
+
+SETTINGS = ("max_iters", "bisect_iters", "iter_ref_iters", "kkt_static_reg",
+            "kkt_dynamic_reg", "abstol", "reltol", "abstol_inacc", "reltol_inacc")
+"""Settings of the generated solver an option may set (the others keep its defaults)."""
+
+STATUS = {1: "solved", 2: "inaccurate", 4: "inaccurate"}
+"""Generated solver status (solved, solved inaccurate, numerical error, max iterations)
+-> ours; anything else is failed."""
+
+CFLAGS = ("-O3", "-fPIC", "-shared")
+"""Portable flags (no ``-march=native``: the cache may be shared between machines)."""
+
+DRIVER = r"""
+#include <stdlib.h>
+#include <string.h>
+#include "qoco_custom.h"
+
+/* Every instant of a batch with one workspace: its numbers replace the last ones. */
+int cardan_solve_batch(int T, int nP, int nA, int nG, const double* P, const double* c,
+                       const double* A, const double* b, const double* G, const double* h,
+                       const double* opts, double* x, double* y, double* z, int* iters,
+                       int* status, double* info) {
+   Workspace* w = calloc(1, sizeof(Workspace));
+   if (!w) return 1;
+   set_default_settings(w);
+   load_data(w);
+   Settings* s = &w->settings;
+   int* ints[] = {&s->max_iters, &s->bisect_iters, &s->iter_ref_iters};
+   double* reals[] = {&s->kkt_static_reg, &s->kkt_dynamic_reg, &s->abstol, &s->reltol,
+                      &s->abstol_inacc, &s->reltol_inacc};
+   for (int i = 0; i < 3; ++i) if (opts[i] == opts[i]) *ints[i] = (int)opts[i];
+   for (int i = 0; i < 6; ++i) if (opts[3 + i] == opts[3 + i]) *reals[i] = opts[3 + i];
+   s->verbose = 0;
+   int n = w->n, p = w->p, m = w->m;
+   for (long t = 0; t < T; ++t) {
+      if (nP) update_P(w, (double*)P + t * nP);
+      if (nA) update_A(w, (double*)A + t * nA);
+      if (nG) update_G(w, (double*)G + t * nG);
+      update_c(w, (double*)c + t * n);
+      if (p) update_b(w, (double*)b + t * p);
+      if (m) update_h(w, (double*)h + t * m);
+      w->sol.iters = 0;
+      w->sol.status = QOCO_CUSTOM_UNSOLVED;
+      qoco_custom_solve(w);
+      memcpy(x + t * n, w->x, sizeof(double) * n);
+      if (p) memcpy(y + t * p, w->y, sizeof(double) * p);
+      if (m) memcpy(z + t * m, w->z, sizeof(double) * m);
+      iters[t] = w->sol.iters;
+      status[t] = w->sol.status;
+      info[3 * t] = w->sol.obj; info[3 * t + 1] = w->sol.dres; info[3 * t + 2] = w->sol.gap;
+   }
+   free(w);
+   return 0;
+}
+"""
+"""The batch driver compiled with the generated sources (the current iterate is read
+from the workspace, so an instant that stops early never shows an earlier answer)."""
+
+SOURCES = ("qoco_custom.c", "cone.c", "utils.c", "ldl.c", "kkt.c", "driver.c")
+
+
+def cache_dir() -> Path:
+    """Where compiled solvers are kept: ``$CARDAN_FORCES_CACHE`` or the user's cache
+    directory (``$XDG_CACHE_HOME``, else ``~/.cache``), under ``cardan-forces/qocogen``.
+    """
+    root = os.environ.get("CARDAN_FORCES_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "cardan-forces")
+    return Path(root) / "qocogen"
+
+
+def compiler() -> str | None:
+    """The C compiler (``$CC``, else ``cc`` or ``gcc`` on the path), or None."""
+    return shutil.which(os.environ.get("CC", "")) or shutil.which("cc") or shutil.which("gcc")
+
+
+_LOADED: dict[str, ctypes.CDLL] = {}
+_COMPILE_S: dict[str, float] = {}
+
+
+def compile_seconds() -> dict[str, float]:
+    """Seconds spent generating and compiling each structure in this process (by hash)."""
+    return dict(_COMPILE_S)
+
+
+@functools.cache
+def _version() -> str:
+    return dist_version("qocogen")
+
+
+def _key(dims, patterns) -> str:
+    """The structure's name in the cache: a hash of everything the library depends on."""
+    digest = hashlib.sha256(repr((dims, CFLAGS, DRIVER, _version())).encode())
+    for pattern in patterns:
+        if pattern is not None:
+            digest.update(pattern.indptr.tobytes() + b"|" + pattern.indices.tobytes())
+    return digest.hexdigest()[:24]
+
+
+def _build(target: Path, dims, patterns) -> None:
+    """Generate the solver for ``dims`` and ``patterns`` and compile it into ``target``
+    (built in a temporary folder, then moved into place in one step).
+    """
+    import qocogen
+
+    n, m, p, nonneg, sizes = dims
+    P, A, G = patterns
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=target.parent) as folder:
+        with contextlib.redirect_stdout(io.StringIO()):  # qocogen reports on stdout
+            qocogen.generate_solver(n, m, p, P, np.ones(n), A, np.ones(p) if p else None,
+                                    G, np.ones(m), nonneg, len(sizes),
+                                    np.array(sizes, np.int32), output_dir=folder,
+                                    name="solver")
+        source = Path(folder) / "solver"
+        (source / "driver.c").write_text(DRIVER)
+        built = source / "solver.so"
+        subprocess.run([compiler(), *CFLAGS, "-o", str(built), *SOURCES, "-lm"],
+                       cwd=source, check=True, capture_output=True)
+        os.replace(built, target)
+
+
+def _library(dims, patterns) -> tuple[ctypes.CDLL, float]:
+    """The compiled solver of this structure (loaded, from the cache, or built) and the
+    seconds spent building and loading it now (0 when this process had it already).
+    """
+    key = _key(dims, patterns)
+    target = cache_dir() / f"{key}.so"
+    if str(target) in _LOADED:
+        return _LOADED[str(target)], 0.0
+    start = time.perf_counter()
+    if not target.exists():
+        _build(target, dims, patterns)
+        _COMPILE_S[key] = time.perf_counter() - start
+    library = ctypes.CDLL(str(target))
+    library.cardan_solve_batch.restype = ctypes.c_int
+    _LOADED[str(target)] = library
+    return library, time.perf_counter() - start
+
+
+def _options(tol, options: dict) -> np.ndarray:
+    """The driver's settings array in :data:`SETTINGS` order (NaN: the default)."""
+    unknown = set(options) - set(SETTINGS)
+    if unknown:
+        raise TypeError(f"qocogen takes no option {', '.join(sorted(unknown))}")
+    chosen = settings.options_for(TOLERANCES, tol) | options
+    return np.array([float(chosen.get(name, np.nan)) for name in SETTINGS])
+
+
+def _pointer(array: np.ndarray):
+    return None if array.size == 0 else array.ctypes.data_as(ctypes.c_void_p)
+
+
+def _pattern(mask: np.ndarray):
+    """CSC matrix of ones on ``mask`` (None if empty) and the (row, col) of its entries
+    in CSC order, the order the generated solver's updates take the values in.
+    """
+    import scipy.sparse as spa
+
+    if not mask.any():
+        return None, np.zeros(0, int), np.zeros(0, int)
+    cols, rows = np.nonzero(mask.T)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=mask.shape[1]))])
+    return spa.csc_matrix((np.ones(len(rows)), rows, indptr), shape=mask.shape), rows, cols
+
+
+def _data(batch: ConicBatch):
+    """The batch in the generated solver's terms: ``(dims, patterns, values, rows)``;
+    values ``P, c, A, b, G, h`` per instant (matrices as their entries in CSC order of
+    the union of their nonzeros over the instants, ``P`` its upper triangle), rows those
+    of the equality and cone parts.
+    """
+    T, _, n = batch.A.shape
+    eq, cone, nonneg, sizes = layout(batch.cones)
+    P = np.zeros((1, n, n)) if batch.P is None else np.asarray(batch.P, float)
+    P = P if P.ndim == 3 else P[None]
+    A = np.asarray(batch.A, float)
+    patterns, entries = [], []
+    for M, mask in ((P, np.triu(np.any(P != 0, axis=0))), (A[:, eq], None),
+                    (A[:, cone], None)):
+        pattern, rows, cols = _pattern(np.any(M != 0, axis=0) if mask is None else mask)
+        patterns.append(pattern)
+        entries.append(np.ascontiguousarray(np.broadcast_to(M[:, rows, cols],
+                                                            (T, len(rows)))))
+    b = np.asarray(batch.b, float)
+    values = (entries[0], np.ascontiguousarray(batch.q, float), entries[1],
+              np.ascontiguousarray(b[:, eq]), entries[2], np.ascontiguousarray(b[:, cone]))
+    return (n, len(cone), len(eq), nonneg, tuple(sizes)), patterns, values, (eq, cone)
+
+
+def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
+    """Every instant of the batch in one call of the structure's generated solver.
+
+    ``stages``: ``layout`` (the package's side: rows, patterns, entries), ``compile``
+    (generation, compilation and loading when this process meets the structure first;
+    0 after) and ``solve`` (the C call over all instants).
+    """
+    start = time.perf_counter()
+    chosen = _options(tol, options)
+    dims, patterns, values, (eq, cone) = _data(batch)
+    laid_out = time.perf_counter()
+    library, compile_s = _library(dims, patterns)
+    loaded = time.perf_counter()
+    T, n, m, p = len(batch.q), dims[0], dims[1], dims[2]
+    x, y, z = np.zeros((T, n)), np.zeros((T, p)), np.zeros((T, m))
+    iterations, codes, info = np.zeros(T, np.int32), np.zeros(T, np.int32), np.zeros((T, 3))
+    sizes = [ctypes.c_int(v.shape[1]) for v in values[::2]]
+    library.cardan_solve_batch(ctypes.c_int(T), *sizes, *map(_pointer, values),
+                               _pointer(chosen), _pointer(x), _pointer(y), _pointer(z),
+                               _pointer(iterations), _pointer(codes), _pointer(info))
+    solved = time.perf_counter()
+    duals = np.empty((T, len(eq) + len(cone)))
+    duals[:, eq], duals[:, cone] = y, z
+    claimed = (codes == 1) & (np.max(info[:, 1:], axis=1) > CLAIM_TOL)
+    status = np.array(["inaccurate" if c else STATUS.get(int(k), "failed")
+                       for k, c in zip(codes, claimed)], object)
+    messages = tuple("" if s == "solved" else
+                     f"qocogen status {int(k)} (dual residual {d:.1e}, gap {g:.1e})"
+                     for s, k, (_, d, g) in zip(status, codes, info))
+    return BatchOutcome(status=status, z=x, y=duals, iterations=iterations.astype(int),
+                        setup_s=laid_out - start, solve_s=solved - loaded, messages=messages,
+                        stages={"layout": laid_out - start, "compile": compile_s,
+                                "solve": solved - loaded})
+
+
+def backends() -> list[Backend]:
+    """The generated-QOCO backend, if qocogen and a C compiler are installed (registered
+    through :data:`.reduced_.WRAPPED` as ``qocogen-reduced`` only).
+    """
+    try:
+        import qocogen  # noqa: F401
+    except ImportError:
+        return []
+    if compiler() is None:
+        return []
+    return [Backend(name="qocogen", family="qoco", distributions=("qocogen",),
+                    extra="qocogen", supports=supports, tolerances=TOLERANCES,
+                    batch=solve_batch, batch_accepts=(ConicBatch,))]

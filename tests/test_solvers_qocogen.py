@@ -1,0 +1,103 @@
+"""The generated-QOCO backend (``qocogen-reduced``): a C solver compiled per structure.
+
+Checked on a problem whose answer is known by hand (the point of a line nearest to a
+point, an SOCP with one equality row), on the package's ``min_max`` against Clarabel by
+objective and optimality measures, for answers that do not depend on the order of the
+instants, and for its cache (a structure is compiled once). Skipped without qocogen or
+a C compiler.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.formulations.problems import Conic, ForceChecks
+from cardan_forces.solvers import ACCEPT, available, solve
+from cardan_forces.solvers.optimality import objective_value
+from cardan_forces.solvers.registry import solve_batch
+
+SOLVER = "qocogen-reduced"
+TOL = 1e-8
+AGREE = 100 * TOL
+INSTANTS = (0, 7, 15)
+
+pytestmark = pytest.mark.skipif(SOLVER not in available(),
+                                reason="qocogen or a C compiler is not installed")
+
+
+def _nearest(level: float) -> Conic:
+    """min t s.t. x1 + x2 = level, ||(x1 - 3, x2)|| <= t over z = (x1, x2, t)."""
+    checks = ForceChecks(A=np.array([[1.0, 1.0, 0.0]]), b=np.array([level]),
+                         names=("x1", "x2", "t"), unilateral=np.zeros(3, bool))
+    A = np.array([[1.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    return Conic(checks=checks, formulation="ref", P=None, q=np.array([0.0, 0.0, 1.0]),
+                 A=A, b=np.array([level, 0.0, -3.0, 0.0]),
+                 cones=(("zero", 1), ("soc", 3)))
+
+
+@pytest.fixture
+def fresh_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("CARDAN_FORCES_CACHE", str(tmp_path))
+    return tmp_path
+
+
+def test_nearest_point_of_a_line(fresh_cache):
+    # the point of x1 + x2 = c nearest to (3, 0) is (3, 0) - (3 - c)/2 (1, 1), at
+    # distance (3 - c)/sqrt(2)
+    levels = (2.0, 1.0)
+    batch = fbatch.conic_batch([_nearest(c) for c in levels], [0, 1])
+    result = solve_batch(batch, SOLVER, tol=TOL)
+    assert set(result.status) == {"solved"}, result.messages
+    for k, c in enumerate(levels):
+        expected = [3 - (3 - c) / 2, -(3 - c) / 2, (3 - c) / np.sqrt(2)]
+        assert result.z[k] == pytest.approx(expected, abs=1e-6)
+    assert np.all(result.optimality.within(ACCEPT))
+
+
+def test_a_structure_is_compiled_once(fresh_cache):
+    from cardan_forces.solvers import qocogen_
+
+    batch = fbatch.conic_batch([_nearest(2.0)], [0])
+    first = qocogen_.solve_batch(batch)
+    assert len(list(fresh_cache.glob("qocogen/*.so"))) == 1
+    again = qocogen_.solve_batch(batch)
+    assert first.stages["compile"] > 0.0 and again.stages["compile"] == 0.0
+    assert np.array_equal(first.z, again.z)
+
+
+def test_unknown_option_is_a_failed_batch():
+    batch = fbatch.conic_batch([_nearest(2.0)], [0])
+    result = solve_batch(batch, SOLVER, not_a_setting=1)
+    assert set(result.status) == {"failed"} and "not_a_setting" in result.messages[0]
+
+
+@pytest.fixture(scope="module")
+def min_max():
+    scene = load_scene("paper")
+    op = build_operator(simulate(scene, scene.time.instants()[:16]))
+    return fbatch.build_problems(op, "min_max", INSTANTS)
+
+
+def test_min_max_agrees_with_clarabel(min_max):
+    result = solve_batch(fbatch.conic_batch(min_max, INSTANTS), SOLVER, tol=TOL)
+    for k, problem in enumerate(min_max):
+        fresh = solve(problem, "clarabel", tol=TOL)
+        record = result.record(k)
+        assert record.status == "solved", record.message
+        assert max(record.residuals[key] for key in ("equilibrium", "sign", "cone")) <= ACCEPT
+        ours, theirs = objective_value(problem, record.z), objective_value(problem, fresh.z)
+        assert ours == pytest.approx(theirs, rel=AGREE, abs=AGREE * 1e-6)
+        for key in ("dual", "gap"):
+            assert record.optimality[key] <= max(AGREE, 10 * fresh.optimality[key])
+
+
+def test_answers_do_not_depend_on_the_order(min_max):
+    """One workspace per batch, its numbers replaced instant by instant: in either order
+    each instant gets the same answer, to the last digit."""
+    forward = solve_batch(fbatch.conic_batch(min_max, INSTANTS), SOLVER, tol=TOL)
+    backward = solve_batch(fbatch.conic_batch(min_max[::-1], INSTANTS[::-1]), SOLVER, tol=TOL)
+    assert np.array_equal(forward.z, backward.z[::-1])
