@@ -21,24 +21,26 @@ def solve_all(
     solvers: Iterable[str] | None = None,
     tol: float | None = None,
     progress: Callable[[str], None] | None = None,
+    built: dict | None = None,
 ) -> list[Record]:
     """Every requested formulation with every requested backend that accepts it.
 
     The reference of each record is the ``clarabel`` answer of the same formulation at
-    tolerance 1e-10 where that backend takes it.
+    tolerance 1e-10 where that backend takes it. ``built``: the problems at instant
+    ``i`` already built (:func:`build_all`), so none is built twice.
     """
     names = list(formulations or FORMULATIONS)
     unknown = [f for f in names if f not in FORMULATIONS]
     if unknown:
         raise KeyError(f"unknown formulation(s) {', '.join(unknown)}; known: "
                        f"{', '.join(FORMULATIONS)}")
+    built = built if built is not None else build_all(op, i, names)
     records = []
     for formulation in names:
-        try:
-            problem = FORMULATIONS[formulation](op, i)
-        except NotApplicable:
+        problem = built[formulation]
+        if isinstance(problem, NotApplicable):
             if formulations is not None:
-                raise
+                raise problem
             continue  # not called for by this scene (e.g. friction without friction)
         usable = backends_for(problem)
         chosen = usable if solvers is None else [s for s in solvers if s in usable]
@@ -51,6 +53,19 @@ def solve_all(
                 progress(f"solve: {formulation} with {solver}")
             records.append(solve(problem, solver, tol=tol, reference=reference))
     return records
+
+
+def build_all(op: Operator, i: int, names: Iterable[str]) -> dict:
+    """Each formulation's problem at instant ``i``, or the :class:`NotApplicable` that
+    says why the scene does not call for it.
+    """
+    built = {}
+    for name in names:
+        try:
+            built[name] = FORMULATIONS[name](op, i)
+        except NotApplicable as err:
+            built[name] = err
+    return built
 
 
 def median_times(records: list[Record]) -> dict[str, float]:

@@ -10,7 +10,7 @@ import math
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
-from cardan_forces.experiments.analysis import solve_all
+from cardan_forces.experiments.analysis import build_all, solve_all
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
@@ -50,15 +50,19 @@ def run(args) -> int:
     for name in args.solver or ():
         get_backend(name)  # unknown or absent backend: a clear error before any work
     op = build_operator(simulate(scene, [args.t]))
-    _check_pairs(op, args.formulation, args.solver)
+    built = build_all(op, 0, args.formulation or FORMULATIONS)
+    refused = [p for p in built.values() if isinstance(p, NotApplicable)]
+    if args.formulation and refused:
+        raise refused[0]  # one the scene does not call for: said before any work
+    _check_pairs(built, args.formulation, args.solver)
     records = solve_all(op, 0, args.formulation, args.solver, tol=args.tol,
-                        progress=None if args.json else progress)
+                        progress=None if args.json else progress, built=built)
     if args.json:
         print_json([record_json(r) for r in records])
         return 0
     print_table(scene.name, args.t, records)
     grouped: dict[str, list[str]] = {}
-    for name, why in left_out(op, args.formulation, args.solver):
+    for name, why in left_out(built, args.solver):
         grouped.setdefault(why, []).append(name)
     for why, names in grouped.items():
         print(f"left out: {', '.join(names)}: {why}")
@@ -101,16 +105,15 @@ def reason(record, width: int = 60) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
-def left_out(op, formulations, solvers) -> list[tuple[str, str]]:
+def left_out(built: dict, solvers) -> list[tuple[str, str]]:
     """The formulations a run left out, each with why: one the scene does not call for
-    (its builder's :class:`NotApplicable` message) or one no solver asked for takes.
+    (its builder's :class:`NotApplicable` message) or one no solver asked for takes
+    (``built``: :func:`~.analysis.build_all` of the formulations asked for).
     """
     out = []
-    for name in formulations or FORMULATIONS:
-        try:
-            problem = FORMULATIONS[name](op, 0)
-        except NotApplicable as err:
-            out.append((name, " ".join(str(err).split())))
+    for name, problem in built.items():
+        if isinstance(problem, NotApplicable):
+            out.append((name, " ".join(str(problem).split())))
             continue
         if solvers and not set(solvers) & set(backends_for(problem)):
             out.append((name, f"no solver asked for ({', '.join(solvers)}) takes it"))
@@ -124,20 +127,21 @@ def _not_engine(text: str) -> str:
     return text
 
 
-def _check_pairs(op, formulations, solvers) -> None:
+def _check_pairs(built: dict, formulations, solvers) -> None:
     """Every solver asked for takes every formulation asked for (else a
     :class:`UsageError` naming the solvers that can); with no formulation named, the
-    solvers must take at least one of the scene's.
+    solvers must take at least one of the scene's (``built``: the problems,
+    :func:`~.analysis.build_all`).
     """
     if not solvers:
         return
     usable = {}
-    for name in formulations or FORMULATIONS:
-        try:
-            usable[name] = backends_for(FORMULATIONS[name](op, 0))
-        except NotApplicable:
+    for name, problem in built.items():
+        if isinstance(problem, NotApplicable):
             if formulations:
-                raise
+                raise problem
+            continue
+        usable[name] = backends_for(problem)
     if formulations:
         bad = [f"{f} with {', '.join(s for s in solvers if s not in usable[f])} (solvers "
                f"that take it: {', '.join(usable[f]) or 'none installed'})"
