@@ -15,6 +15,7 @@ from cardan_forces.driveline.equilibrium import build_operator  # noqa: E402
 from cardan_forces.driveline.loading import load_scene  # noqa: E402
 from cardan_forces.experiments import report  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
+from matplotlib.text import Text  # noqa: E402
 
 from cardan_forces.cli import main  # noqa: E402
 
@@ -100,6 +101,27 @@ def test_a_determinate_component_is_not_called_unbounded(op):
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert labels == ["x: open below and above", "y: determinate", "z: determinate"]
     assert "unbounded" not in ax.get_title() and "open" not in ax.get_title()
+    plt.close(fig)
+
+
+def test_the_fixed_layout_holds_every_panel_s_text(op):
+    """The grid's fixed margins (no layout engine): with the widest tick labels the
+    loads give (five digits and a sign, as a trunnion's -20000 N), no panel's labels,
+    title or legend reach into another's or out of the figure, nor into the suptitle."""
+    h = _histories(op, {j: (-20000.0 + 4000.0 * k, NAN, NAN)
+                        for k, j in enumerate(range(0, len(op.names), 3))})
+    with plt.rc_context(report.STYLE):
+        fig = report.figure(op, h)
+        fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    boxes = [ax.get_tightbbox(renderer) for ax in fig.axes if ax.get_visible()]
+    title = next(c for c in fig.get_children() if isinstance(c, Text)
+                 and c.get_text() == fig.get_suptitle()).get_window_extent(renderer)
+    for k, box in enumerate(boxes):
+        assert fig.bbox.x0 <= box.x0 and box.x1 <= fig.bbox.x1
+        assert fig.bbox.y0 <= box.y0 and box.y1 <= title.y0
+        assert not any(box.overlaps(other) for other in boxes[k + 1:])
+    assert title.y1 <= fig.bbox.y1
     plt.close(fig)
 
 
