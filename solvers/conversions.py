@@ -104,7 +104,7 @@ class Reduced:
         g = -(_mv(self.P_full, z) + self.q_full
               + _mv(np.transpose(self.A_in, (0, 2, 1)), dual_in))
         Q, R, U = self.factors
-        lam = np.linalg.solve(R, _mv(np.transpose(Q, (0, 2, 1)), g)[..., None])[..., 0]
+        lam = _triangular(R, _mv(np.transpose(Q, (0, 2, 1)), g))
         lam = lam if U is None else _mv(U, lam)
         duals = np.empty((len(z), len(self.rows_eq) + len(self.rows_in)))
         duals[:, self.rows_eq], duals[:, self.rows_in] = lam, dual_in
@@ -116,6 +116,18 @@ def _mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:
     slower on these shapes).
     """
     return (M @ v[..., None])[..., 0]
+
+
+def _triangular(R: np.ndarray, v: np.ndarray, transposed: bool = False) -> np.ndarray:
+    """``w`` with ``R w = v`` (``R' w = v`` if ``transposed``) for upper-triangular ``R``
+    (T, s, s) and ``v`` (T, s): substitution one row at a time over all instants at
+    once (for s ~ 30, 3 times faster than ``np.linalg.solve``'s LU of every instant).
+    """
+    w = np.zeros_like(v)
+    for i in range(R.shape[-1]) if transposed else reversed(range(R.shape[-1])):
+        known = (R[:, :i, i], w[:, :i]) if transposed else (R[:, i, i + 1:], w[:, i + 1:])
+        w[:, i] = (v[:, i] - np.einsum("tj,tj->t", *known)) / R[:, i, i]
+    return w
 
 
 def _zero_rows(cones) -> tuple[np.ndarray, np.ndarray, tuple]:
@@ -144,7 +156,7 @@ def _null_space(A_eq: np.ndarray, b_eq: np.ndarray):
     diag = np.abs(np.diagonal(R[:, :r], axis1=1, axis2=2))
     if not r or np.all(diag.min(axis=1) > RANK_RTOL * diag.max(axis=1)):
         factors = (Q[:, :, :r], R[:, :r], None)
-        w = np.linalg.solve(np.transpose(R[:, :r], (0, 2, 1)), b_eq[..., None])[..., 0]
+        w = _triangular(R[:, :r], b_eq, transposed=True)
         return _mv(Q[:, :, :r], w), Q[:, :, r:], factors
     V, s, Ut = np.linalg.svd(At)
     ranks = np.sum(s > RANK_RTOL * s[:, :1], axis=1)
