@@ -31,7 +31,7 @@ from cardan_forces.solvers import Record, Residuals, Status, backends_for, faile
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.ranging import HAVE_HIGHSPY, Ranges, ranges
 from cardan_forces.solvers.record import Stacks
-from cardan_forces.solvers.registry import Pending, check, solve_unchecked
+from cardan_forces.solvers.registry import Pending, check, solve_unchecked, takes
 
 # ---------------------------------------------------------------------------- backends
 
@@ -61,11 +61,12 @@ def default_backend(formulation: str, problem, wanted: Sequence[str] | None = No
     (default :data:`DEFAULT_BACKENDS`, then :data:`FALLBACK`, then any) that is installed
     and takes it; :class:`NoBackend` if none does.
     """
-    usable = backends_for(problem)
-    order = list(wanted) if wanted else [*DEFAULT_BACKENDS.get(formulation, ()), FALLBACK,
-                                         *usable]
-    chosen = next((s for s in order if s in usable), None)
+    order = list(wanted) if wanted else [*DEFAULT_BACKENDS.get(formulation, ()), FALLBACK]
+    chosen = next((s for s in order if takes(s, problem)), None)  # loads only these
+    if chosen is None and not wanted:
+        chosen = next(iter(backends_for(problem)), None)
     if chosen is None:
+        usable = backends_for(problem)
         raise NoBackend(f"formulation {formulation}: no backend of {', '.join(order)} takes "
                         f"it; backends that do: {', '.join(usable) or 'none installed'}")
     return chosen

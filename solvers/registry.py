@@ -122,12 +122,38 @@ def _load() -> None:
         return
     known, found = {}, {}
     for module_name in ADAPTERS:
-        module = importlib.import_module(f"{__package__}.{module_name}")
-        known.update(module.EXTRAS)
-        found.update((backend.name, backend) for backend in module.backends())
+        known.update(_adapter(module_name).EXTRAS)
+        found.update((backend.name, backend) for backend in _adapter_backends(module_name))
     _KNOWN.update(known | {name: backend.extra for name, backend in found.items()})
     _CACHE.update(found)
     _load_plugins()
+
+
+_BY_ADAPTER: dict[str, list[Backend]] = {}
+
+
+def _adapter(module_name: str):
+    return importlib.import_module(f"{__package__}.{module_name}")
+
+
+def _adapter_backends(module_name: str) -> list[Backend]:
+    """One adapter's backends, its package imported on first use (once)."""
+    if module_name not in _BY_ADAPTER:
+        _BY_ADAPTER[module_name] = _adapter(module_name).backends()
+    return _BY_ADAPTER[module_name]
+
+
+def _one(name: str) -> Backend | None:
+    """``name``'s backend before the whole registry is loaded: from the one adapter that
+    declares it, without importing the others' packages (a command that solves with one
+    backend does not pay for cvxpy); ``None`` where that does not settle it.
+    """
+    if _CACHE:
+        return None
+    owners = [m for m in ADAPTERS if name in _adapter(m).EXTRAS]
+    if len(owners) != 1:
+        return None
+    return next((b for b in _adapter_backends(owners[0]) if b.name == name), None)
 
 
 def register(backend: Backend) -> Backend:
@@ -186,6 +212,9 @@ def known_backends() -> dict[str, str | None]:
 
 def get(name: str) -> Backend:
     """The backend called ``name``; :class:`SolverNotFound` with an install hint if absent."""
+    found = _one(name)
+    if found is not None:
+        return found
     _load()
     if name in _CACHE:
         return _CACHE[name]
@@ -199,19 +228,33 @@ def get(name: str) -> Backend:
 
 def backends_for(problem) -> list[str]:
     """Names of the backends that can solve ``problem`` (directly or after conversion)."""
-    names, converted = [], {}
-    for backend in available().values():
-        if backend.solve is None or not reachable(type(problem), backend.accepts):
-            continue
-        key = backend.accepts
-        if key not in converted:
-            try:
-                converted[key] = convert(problem, key)
-            except Exception:  # a conversion that fails rules the backend out
-                converted[key] = None
-        if converted[key] is not None and backend.supports(converted[key]):
-            names.append(backend.name)
-    return names
+    converted = {}
+    return [b.name for b in available().values() if _takes(b, problem, converted)]
+
+
+def takes(name: str, problem) -> bool:
+    """Whether backend ``name`` is installed and can solve ``problem`` (as
+    :func:`backends_for` would list it), loading only what that asks.
+    """
+    try:
+        return _takes(get(name), problem, {})
+    except SolverNotFound:
+        return False
+
+
+def _takes(backend: Backend, problem, converted: dict) -> bool:
+    """``backend`` solves ``problem``; ``converted``: the conversions made so far, by
+    the classes they were made for (shared between backends that accept the same).
+    """
+    if backend.solve is None or not reachable(type(problem), backend.accepts):
+        return False
+    key = backend.accepts
+    if key not in converted:
+        try:
+            converted[key] = convert(problem, key)
+        except Exception:  # a conversion that fails rules the backend out
+            converted[key] = None
+    return converted[key] is not None and bool(backend.supports(converted[key]))
 
 
 @dataclass(frozen=True)

@@ -41,3 +41,37 @@ def test_a_problem_that_cannot_be_built_is_a_failed_instant(op):
 def test_an_unknown_backend_is_an_error_not_failed_records(op):
     with pytest.raises(SolverNotFound):
         study.solve_over_time(op, "positive", "no-such-backend")
+
+
+@pytest.mark.parametrize("formulation", ["positive", "min_norm", "socp_face", "lcp"])
+def test_the_default_backend_is_the_first_of_its_list_that_takes_the_problem(op, formulation):
+    """Asking the preferred backends one by one picks what the whole registry's list
+    would: the first of the formulation's own list, then the fallback, then any."""
+    from cardan_forces.formulations import FORMULATIONS
+    from cardan_forces.solvers import backends_for
+
+    problem = FORMULATIONS[formulation](op, 1)
+    usable = backends_for(problem)
+    order = [*study.DEFAULT_BACKENDS[formulation], study.FALLBACK, *usable]
+    assert study.default_backend(formulation, problem) == next(s for s in order if s in usable)
+    with pytest.raises(study.NoBackend):
+        study.default_backend(formulation, problem, wanted=["no-such-backend"])
+
+
+def test_one_backend_loads_one_adapter_s_package():
+    """Choosing and running the default ``positive`` backend imports neither cvxpy nor
+    the other optional solvers' packages (a fresh interpreter: nothing loaded before)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np\n"
+            "from cardan_forces.driveline.loading import load_scene\n"
+            "from cardan_forces.driveline.dynamics import simulate\n"
+            "from cardan_forces.driveline.equilibrium import build_operator\n"
+            "from cardan_forces.experiments import study\n"
+            "op = build_operator(simulate(load_scene('paper'), [0.1]))\n"
+            "assert study.solve_over_time(op, 'positive').solved == 1\n"
+            "print(sorted(m for m in ('cvxpy', 'qoco', 'moreau') if m in sys.modules))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip().splitlines()[-1] == "[]"
