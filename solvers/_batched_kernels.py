@@ -45,9 +45,9 @@ def _cholesky(L, o):
 
 
 @njit(cache=True, fastmath=FAST)
-def _forward(L, o, X, s):
-    """``X[s:s+6] <- L^-1 X[s:s+6]``, ``L = L[o:o+6]`` from :func:`_cholesky`."""
-    for c in range(X.shape[1]):
+def _forward(L, o, X, s, nc):
+    """``X[s:s+6, :nc] <- L^-1 X[s:s+6, :nc]``, ``L = L[o:o+6]`` from :func:`_cholesky`."""
+    for c in range(nc):
         for i in range(B):
             acc = X[s + i, c]
             for k in range(i):
@@ -90,10 +90,10 @@ def _rows_product(X, xo, Y, yo, n, out, oo):
 
 
 @njit(cache=True, fastmath=FAST)
-def _minus_tn(X, xo, Y, yo, out, oo):
-    """``out[oo:oo+6] -= X[xo:xo+6]' Y[yo:yo+6]``."""
+def _minus_tn(X, xo, Y, yo, out, oo, nc):
+    """``out[oo:oo+6, :nc] -= X[xo:xo+6]' Y[yo:yo+6, :nc]``."""
     for i in range(B):
-        for c in range(Y.shape[1]):
+        for c in range(nc):
             acc = out[oo + i, c]
             for p in range(B):
                 acc -= X[xo + p, i] * Y[yo + p, c]
@@ -138,19 +138,21 @@ def _factor(G, n_own, sh_a, sh_b, n_sh, rtol, L, H, Sa, Sb):
         for i in range(B):
             L[o + i, i] += delta
         if k > 0:
-            _minus_tn(H, o - B, H, o - B, L, o)
+            _minus_tn(H, o - B, H, o - B, L, o, B)
         _cholesky(L, o)
         if k < nb - 1:
-            _forward(L, o, H, o)
+            _forward(L, o, H, o, B)
 
 
 @njit(cache=True, fastmath=FAST)
-def _down(L, H, starts, Z):
-    """``Z <- C^-1 Z`` (m, r) with :func:`_factor`'s ``K = C C'``, in place."""
+def _down(L, H, starts, Z, ncols):
+    """``Z <- C^-1 Z`` (m, r) with :func:`_factor`'s ``K = C C'``, in place, where the
+    columns from ``ncols[k]`` on are zero down to body ``k`` (and stay zero).
+    """
     for k in range(len(starts)):
         if k > 0:
-            _minus_tn(H, B * (k - 1), Z, starts[k - 1], Z, starts[k])
-        _forward(L, B * k, Z, starts[k])
+            _minus_tn(H, B * (k - 1), Z, starts[k - 1], Z, starts[k], ncols[k - 1])
+        _forward(L, B * k, Z, starts[k], ncols[k])
 
 
 @njit(cache=True, fastmath=FAST)
@@ -178,15 +180,25 @@ def _times_Bt(G, own, n_own, starts, v, out):
 
 @njit(cache=True, fastmath=FAST)
 def _times_B(G, own, n_own, starts, y, out):
-    """``out = B y`` (m) on the nonzero blocks of ``B``."""
+    """``out = B y`` (m) on the nonzero blocks of ``B`` (six running sums per block)."""
     for k in range(len(starts)):
-        s = starts[k]
-        for i in range(B):
-            out[s + i] = 0.0
+        a0 = a1 = a2 = a3 = a4 = a5 = 0.0
+        o = B * k
         for p in range(n_own[k]):
             f = y[own[k, p]]
-            for i in range(B):
-                out[s + i] += G[B * k + i, p] * f
+            a0 += G[o, p] * f
+            a1 += G[o + 1, p] * f
+            a2 += G[o + 2, p] * f
+            a3 += G[o + 3, p] * f
+            a4 += G[o + 4, p] * f
+            a5 += G[o + 5, p] * f
+        s = starts[k]
+        out[s] = a0
+        out[s + 1] = a1
+        out[s + 2] = a2
+        out[s + 3] = a3
+        out[s + 4] = a4
+        out[s + 5] = a5
 
 
 @njit(cache=True)
@@ -311,7 +323,7 @@ def _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z):
         _times_B(G, own, n_own, starts, v, w)
         for i in range(m):
             dZ[i, c] = R[i, c] - w[i]
-    _down(L, H, starts, dZ)
+    _down(L, H, starts, dZ, np.full(len(starts), r))
     _up(L, H, starts, dZ)
     for i in range(m):
         for c in range(r):
@@ -319,23 +331,25 @@ def _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z):
 
 
 @njit(cache=True, fastmath=FAST)
-def _faces_reduced(Y, M, q):
+def _faces_reduced(Y, starts, first, M, q):
     """The end faces' LCP of one instant from ``Y = C^-1 [b, U]`` (m, 1 + k): ``M = I -
     V'V`` and ``q = V' Y_0`` with ``V = Y[:, 1:]`` (``U' K^-1 U = V'V``, ``U' K^-1 b =
-    V' Y_0``), without solving back up for each face.
+    V' Y_0``), without solving back up for each face. Face ``i``'s column is zero above
+    body ``first[i]`` in chain order (the faces sorted by it).
     """
-    m, nf = Y.shape[0], len(q)
+    nf = len(q)
     for i in range(nf):
-        acc = 0.0
-        for row in range(m):
-            acc += Y[row, 1 + i] * Y[row, 0]
-        q[i] = acc
-        for j in range(nf):
+        q[i] = 0.0
+        for j in range(i + 1):
             M[i, j] = 0.0
-        for row in range(m):
-            g = Y[row, 1 + i]
-            for j in range(nf):
-                M[i, j] -= g * Y[row, 1 + j]
+        for k in range(first[i], len(starts)):
+            for row in range(starts[k], starts[k] + B):
+                g = Y[row, 1 + i]
+                q[i] += g * Y[row, 0]
+                for j in range(i + 1):
+                    M[i, j] -= g * Y[row, 1 + j]
+        for j in range(i):
+            M[j, i] = M[i, j]
         M[i, i] += 1.0
 
 
@@ -364,18 +378,21 @@ def _faces(G, starts, upos, Z, M, q):
 
 
 @njit(cache=True, fastmath=FAST)
-def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, gram_rtol,
-               refine_rtol, max_iter, lcp_rtol, lcp_delta):
+def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, first, ncols,
+               gram_rtol, refine_rtol, max_iter, lcp_rtol, lcp_delta):
     """Least ``1/2 x'Wx`` on ``A x = b`` (``x[u] >= 0``) at every instant, as
     ``numpy_batched_.least_norm``: ``(x, mu, lam, iterations, settled)``, ``lam`` the
     end faces' LCP solution (``nu_u = sqrt(w_u) lam``); ``root`` (T, n) is ``sqrt(w)``,
     or has no rows for ``W = I``. Where ``settled`` is false the active set did not
     settle in ``max_iter`` steps and ``lam`` is its last step.
 
-    The structure (``numpy_batched_._structure``): body blocks in chain order from row
+    The structure (``numpy_batched_._layout``): body blocks in chain order from row
     ``starts[k]``, the columns ``own[k, :n_own[k]]`` touching body ``k``, the positions
     ``sh_a[k]``, ``sh_b[k]`` (in ``own[k]``, ``own[k+1]``) of the ``n_sh[k]`` columns
-    touching bodies ``k`` and ``k+1``, and ``upos`` the faces' positions.
+    touching bodies ``k`` and ``k+1``, ``upos[k, j]`` the position of face ``u[j]`` in
+    ``own[k]`` (-1: absent), ``first[j]`` the first body face ``j`` touches (the faces
+    sorted by it) and ``ncols[k]`` one plus the number of faces touching bodies up to
+    ``k``.
     """
     T, m, n = A.shape
     nb, nf = len(starts), len(u)
@@ -403,7 +420,7 @@ def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, gram_r
                 for j in range(nf):
                     R[s + i, 1 + j] = G[B * k + i, upos[k, j]] if upos[k, j] >= 0 else 0.0
         Z[:, :] = R
-        _down(L, H, starts, Z)
+        _down(L, H, starts, Z, ncols)
         y[:, 0] = Z[:, 0]
         _up(L, H, starts, y)
         if _inexact(G, own, n_own, starts, b[t], y, v, w, refine_rtol):
@@ -420,7 +437,7 @@ def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, gram_r
                 mu[t, i] = acc
         else:
             if nf:
-                _faces_reduced(Z, M, q)
+                _faces_reduced(Z, starts, first, M, q)
                 iterations[t], settled[t] = _lcp(M, q, max_iter, lcp_rtol, lcp_delta,
                                                  lam[t], pinned, nxt, S, idx)
                 for i in range(m):

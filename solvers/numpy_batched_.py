@@ -94,9 +94,10 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     T, m, n = A.shape
     u = _signed(signed, n)
     root = np.sqrt(w) if w is not None else np.zeros((0, n))
+    u, *layout = _layout(structure(A), u)
     x, mu, lam, iterations, settled = compiled(
-        np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u,
-        *_layout(structure(A), u), GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA)
+        np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u, *layout,
+        GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA)
     nu = np.zeros((T, n))
     nu[:, u] = lam if w is None else lam * root[:, u]
     stages = {"compiled": time.perf_counter() - clock}
@@ -210,14 +211,18 @@ def chain_solve(K: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray
 
 def _layout(pattern: np.ndarray, u: np.ndarray):
     """The compiled kernel's view of the rows' nonzero ``pattern`` (m, n) (see
-    :func:`._batched_kernels.least_norm`): the bodies' first rows in chain order, per
-    body the columns touching it (padded, and counted), per neighbouring pair the
-    positions of the columns touching both in each body's list (padded, and counted),
-    and per body the position of each signed column ``u`` in its list (-1: absent).
+    :func:`._batched_kernels.least_norm`): the signed columns ``u`` sorted by the first
+    body they touch along the chain, the bodies' first rows in chain order, per body the
+    columns touching it (padded, and counted), per neighbouring pair the positions of
+    the columns touching both in each body's list (padded, and counted), per body the
+    position of each signed column in its list (-1: absent), each signed column's first
+    body and per body one plus the number of signed columns touching it or an earlier one.
     """
     blocks = chain(pattern)
     touch = np.any(pattern.reshape(-1, 6, pattern.shape[1]), axis=1)[
         [k.start // 6 for k in blocks]]
+    first = np.argmax(touch[:, u], axis=0) + len(blocks) * ~touch[:, u].any(axis=0)
+    u, first = u[np.argsort(first, kind="stable")], np.sort(first)
     own = [np.flatnonzero(row) for row in touch]
     where = [{int(c): p for p, c in enumerate(cols)} for cols in own]
     shared = [np.flatnonzero(a & c) for a, c in zip(touch, touch[1:])] or [[]]
@@ -225,8 +230,10 @@ def _layout(pattern: np.ndarray, u: np.ndarray):
     sh_b = [[where[k + 1][int(c)] for c in cols] for k, cols in enumerate(shared)]
     upos = np.array([[w.get(int(c), -1) for c in u] for w in where], np.int64).reshape(
         len(own), len(u))
-    return (np.array([k.start for k in blocks], np.int64), *_padded(own), _padded(sh_a)[0],
-            *_padded(sh_b), upos)
+    ncols = 1 + np.searchsorted(first, np.arange(len(blocks)), side="right")
+    return (u, np.array([k.start for k in blocks], np.int64), *_padded(own),
+            _padded(sh_a)[0], *_padded(sh_b), upos, first.astype(np.int64),
+            ncols.astype(np.int64))
 
 
 def _padded(lists) -> tuple[np.ndarray, np.ndarray]:
