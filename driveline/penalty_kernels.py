@@ -7,13 +7,12 @@ microseconds instead of the ~0.2 ms that array calls on 5 bodies and 28 contacts
 in the interpreter.
 
 **Jacobian by the chain rule.** Per contact in touch, the force law's derivative with
-respect to the contact's local kinematics (offset, axes, relative velocity) by complex
-steps: every operation there is analytic except the on/off switches, which test the
-real part only, so ``f(x + i h e_k)`` has imaginary part ``h df/dx_k`` to round-off;
-times the derivatives of those kinematics with respect to the 13 states of each of the
-contact's two bodies, by hand; then the Newton-Euler equations differentiated by hand.
-About ten right-hand sides' worth of work, exact where a forward difference loses half
-the digits (the tests hold it to the NumPy model's complex-step Jacobian).
+respect to the contact's local kinematics (offset, axes, relative velocity), by hand
+(:func:`_push_rates`: the law's rates in ``d`` and ``d'`` times theirs in the
+kinematics); times the derivatives of those kinematics with respect to the 13 states
+of each of the contact's two bodies, by hand; then the Newton-Euler equations
+differentiated by hand. Exact where a forward difference loses half the digits (the
+tests hold it to the NumPy model's complex-step Jacobian).
 
 **Integrator.** At the end, SciPy's variable-order BDF written as numba loops
 (:func:`start`, :func:`advance`): the whole integration runs compiled, the kernels
@@ -37,8 +36,8 @@ from .compiled import HAVE_NUMBA, harmonic, njit
 __all__ = ["HAVE_NUMBA", "advance", "contact_forces", "jacobian", "rhs", "start"]
 
 COMPLEX_STEP = 1e-30
-"""Imaginary step (per unit of a quantity's scale); far below round-off, so the
-derivative is exact to the precision of the function."""
+"""Imaginary step (per unit of a quantity's scale) of the NumPy model's Jacobian; far
+below round-off, so the derivative is exact to the precision of the function."""
 
 
 @njit(cache=True)
@@ -193,15 +192,33 @@ def contact_forces(y, bodies, topology, geometry, laws, d_max):
     ``s``, ``e`` (on ``a``), ``j``, ``u`` (on ``b``), body coordinates. ``laws`` (m, 4):
     offset (clearance), stiffness, exponent, ``c_max``.
     """
-    nb, m = bodies.shape[0], topology.shape[0]
-    frames = _new_frames(y, nb)
+    scratch = _scratch(y, bodies.shape[0], topology.shape[0])
+    _contacts_into(y, bodies, topology, geometry, laws, d_max, scratch)
+    pushes, loads, on_a, frames = scratch[0], scratch[1], scratch[2], scratch[4]
+    return pushes[0], pushes[1], on_a, loads[0], loads[1], frames
+
+
+@njit(cache=True)
+def _scratch(y, nb, m):
+    """The arrays one evaluation of the contacts fills (of ``y``'s type): pushes (2, m:
+    penetration, push), loads (2, nb + 1, 3: net force, moment), forces on ``a`` (m, 3),
+    a (9, 3) scratch (rows 0-6 :func:`_contacts`', 7-8 :func:`_bodies`'), the frames
+    (:func:`_new_frames`). Made once per run by the integrator: its right-hand sides
+    then allocate nothing.
+    """
+    return (np.zeros((2, m), dtype=y.dtype), np.zeros((2, nb + 1, 3), dtype=y.dtype),
+            np.zeros((m, 3), dtype=y.dtype), np.zeros((9, 3), dtype=y.dtype),
+            _new_frames(y, nb))
+
+
+@njit(cache=True)
+def _contacts_into(y, bodies, topology, geometry, laws, d_max, scratch):
+    """:func:`contact_forces` into ``scratch`` (:func:`_scratch`)."""
+    pushes, loads, on_a, work, frames = scratch
+    loads[:] = 0.0
     _frames(y, bodies[:, 4:], *frames)
-    pushes, loads = np.zeros((2, m), dtype=y.dtype), np.zeros((2, nb + 1, 3), dtype=y.dtype)
-    depth, push, force, moment = pushes[0], pushes[1], loads[0], loads[1]
-    on_a = np.zeros((m, 3), dtype=y.dtype)
-    _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force, moment,
-              np.zeros((7, 3), dtype=y.dtype))
-    return depth, push, on_a, force, moment, frames
+    _contacts(frames, topology, geometry, laws, d_max, pushes[0], pushes[1], on_a, loads[0],
+              loads[1], work)
 
 
 @njit(cache=True)
@@ -241,12 +258,22 @@ def rhs(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     frequency, phase) about the first shaft's axis, the load torque law (4) against the
     last shaft's, ``d_max``.
     """
-    _, _, _, force, moment, frames = contact_forces(y, bodies, topology, geometry, laws,
-                                                    loads[11])
     dy = np.empty_like(y)
-    _bodies(t, y, frames[2], force, moment, n_shafts, bodies, loads, dy,
-            np.zeros((2, 3), dtype=y.dtype))
+    _rhs_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads),
+              _scratch(y, bodies.shape[0], topology.shape[0]), dy)
     return dy
+
+
+@njit(cache=True)
+def _rhs_into(t, y, args, scratch, dy):
+    """:func:`rhs` into ``dy``, with ``args`` its model arguments and the scratch
+    arrays of :func:`_scratch`.
+    """
+    n_shafts, bodies, loads = args[0], args[1], args[5]
+    _contacts_into(y, bodies, args[2], args[3], args[4], loads[11], scratch)
+    load = scratch[1]
+    _bodies(t, y, scratch[4][2], load[0], load[1], n_shafts, bodies, loads, dy,
+            scratch[3][7:9])
 
 
 @njit(cache=True)
@@ -287,7 +314,7 @@ def _cross_columns(a, m, scale, out):
 def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     """``df/dy`` (exact to round-off) by the chain rule: per contact in touch, the
     derivative of its force on ``a`` with respect to its local kinematics (``p, ea, ub,
-    rel``: 12 complex steps of :func:`_push`), times their derivatives with respect to
+    rel``: :func:`_push_rates`), times their derivatives with respect to
     the 13 states of each of its two bodies (:func:`_local_rates`); then the bodies'
     Newton-Euler equations differentiated by hand (:func:`_body_rates`). Arguments as
     :func:`rhs`.
@@ -302,9 +329,7 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     jac = np.zeros((n, n))
     dmoment = np.zeros((nb, 3, n))  # d(net moment on body k)/dy, global
     work = np.zeros((7, 3))
-    local = np.zeros(12, dtype=np.complex128)
-    out = np.zeros(3, dtype=np.complex128)
-    grad = np.zeros((3, 12))
+    grad, rates = np.zeros((3, 12)), np.zeros((9, 12))
     dloc = np.zeros((18, 26))  # d(p, ea, ub, rel, arm, arm_b)/d(states of a, then b)
     dforce, dmom_a, dmom_b = np.zeros((3, 26)), np.zeros((3, 26)), np.zeros((3, 26))
     dpoint = np.zeros((3, 26))  # d(p + arm_b)
@@ -312,18 +337,12 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     for c in range(m):
         ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
         _local(frames, ka, kb, geometry[c], work)
-        if _push(work[0], work[1], work[2], work[3], radial, laws[c], loads[11],
-                 work[6])[1] <= 0.0:
+        depth, push = _push(work[0], work[1], work[2], work[3], radial, laws[c], loads[11],
+                            work[6])
+        if push <= 0.0:
             continue  # out of touch (or pulled off by the damping): no force, no rate
-        for k in range(12):
-            local[k] = work[k // 3, k % 3]
-        for k in range(12):  # dF/d(p, ea, ub, rel) by complex steps
-            local[k] += 1j * COMPLEX_STEP
-            _push(local[0:3], local[3:6], local[6:9], local[9:12], radial, laws[c], loads[11],
-                  out)
-            for i in range(3):
-                grad[i, k] = out[i].imag / COMPLEX_STEP
-            local[k] = local[k].real
+        _push_rates(work[0], work[1], work[2], work[3], radial, laws[c], loads[11], depth,
+                    push, grad, rates)
         _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work[0], dloc, cols)
         dforce[:] = 0.0
         for i in range(3):  # loops, not row operations: no temporaries
@@ -354,6 +373,65 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
                     dmoment[kb, i, col] += dmom_b[i, k]
     _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac)
     return jac
+
+
+@njit(cache=True)
+def _push_rates(p, ea, ub, rel, radial, law, d_max, d, f, grad, rates):
+    """``d(force on a)/d(p, ea, ub, rel)`` of one contact in touch (:func:`_push` gave
+    its penetration ``d`` and push ``f > 0``) into ``grad`` (3, 12), by hand: the law's
+    rates in ``d`` and ``d'`` (eqs. 75, 78) times those of ``d`` and ``d'`` in the local
+    kinematics. ``rates``: (9, 12) scratch (rows 0-2 ``dr``, 3-5 ``dn``, 6 ``dd``,
+    7 ``dd'``, 8 the normal ``n``).
+    """
+    stiffness, exponent, c_max = law[1], law[2], law[3]
+    dr, dn, dd, drate, n = rates[0:3], rates[3:6], rates[6], rates[7], rates[8]
+    rates[:] = 0.0
+    if radial:  # r = p - (p.ea / ub.ea) ub, n = r / |r|, d = |r| - clearance
+        s = p[0] * ea[0] + p[1] * ea[1] + p[2] * ea[2]
+        t = ub[0] * ea[0] + ub[1] * ea[1] + ub[2] * ea[2]
+        ratio = s / t
+        for i in range(3):
+            n[i] = p[i] - ratio * ub[i]
+        rho = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+        for i in range(3):
+            n[i] /= rho
+            for j in range(3):
+                dr[i, j] = (1.0 if i == j else 0.0) - ub[i] * ea[j] / t
+                dr[i, 3 + j] = -ub[i] * (p[j] / t - s * ub[j] / (t * t))
+                dr[i, 6 + j] = (-ratio if i == j else 0.0) + ub[i] * s * ea[j] / (t * t)
+        for k in range(9):  # dn = (I - n n^T) dr / rho; dd = n^T dr
+            dd[k] = n[0] * dr[0, k] + n[1] * dr[1, k] + n[2] * dr[2, k]
+            for i in range(3):
+                dn[i, k] = (dr[i, k] - n[i] * dd[k]) / rho
+            drate[k] = rel[0] * dn[0, k] + rel[1] * dn[1, k] + rel[2] * dn[2, k]
+        for i in range(3):
+            drate[9 + i] = n[i]
+    else:  # n = ub, d = p.ub - offset, d' = ub.rel
+        for i in range(3):
+            n[i] = ub[i]
+            dd[i], dd[6 + i] = ub[i], p[i]
+            drate[6 + i], drate[9 + i] = rel[i], ub[i]
+    rate = n[0] * rel[0] + n[1] * rel[1] + n[2] * rel[2]
+    x = d / d_max
+    if x > 1.0:
+        damping, slope = c_max, 0.0
+    else:
+        damping, slope = c_max * x * x * (3.0 - 2.0 * x), c_max * 6.0 * x * (1.0 - x) / d_max
+    if exponent == 1.0:
+        spring = stiffness
+    elif exponent == 1.5:
+        spring = 1.5 * stiffness * np.sqrt(d)
+    else:
+        spring = exponent * stiffness * d ** (exponent - 1.0)
+    along_d, along_rate = spring + slope * rate, damping
+    axis = n if radial else ea
+    for k in range(12):
+        df = along_d * dd[k] + along_rate * drate[k]
+        for i in range(3):
+            grad[i, k] = -axis[i] * df - (f * dn[i, k] if radial else 0.0)
+    if not radial:
+        for i in range(3):
+            grad[i, 3 + i] -= f  # force = -f ea
 
 
 @njit(cache=True)
@@ -486,6 +564,10 @@ def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, j
 # penalty model's absolute control uses); a converged Newton iterate within 3 % of the
 # error tolerance does not move the accepted solution beyond that tolerance, and the
 # tighter rule costs a Jacobian every two steps.
+#
+# A step allocates nothing: its vectors, the rescaling's matrices and the right-hand
+# side's frames and contact arrays are made once by :func:`start` (``work``), since on
+# 65 states a NumPy temporary costs as much as the arithmetic it holds.
 
 MAX_ORDER = 5
 NEWTON_MAXITER = 4
@@ -562,17 +644,18 @@ def _factor(jac, c, lu, pivots, blocks):
 
 
 @njit(cache=True)
-def _solve(jac, c, lu, pivots, blocks, b):
-    """``b <- (I - c J)^-1 b`` from :func:`_factor`'s elimination and factors."""
+def _solve(jac, c, lu, pivots, blocks, b, work):
+    """``b <- (I - c J)^-1 b`` from :func:`_factor`'s elimination and factors;
+    ``work``: two rows of scratch as long as ``b``.
+    """
     nb = blocks.shape[0]
     r0, m = 7 * nb, 6 * nb
-    xq = np.empty(4 * nb)
+    xq, r = work[0], work[1]
     for k in range(nb):  # A^-1 b_q
         q = 3 * nb + 4 * k
         for i in range(4):
             xq[4 * k + i] = (blocks[k, i, 0] * b[q] + blocks[k, i, 1] * b[q + 1]
                              + blocks[k, i, 2] * b[q + 2] + blocks[k, i, 3] * b[q + 3])
-    r = b[r0:].copy()
     for i in range(m):
         row = r0 + i
         total = 0.0
@@ -580,9 +663,10 @@ def _solve(jac, c, lu, pivots, blocks, b):
             total += jac[row, j] * b[j]
         for j in range(4 * nb):
             total += jac[row, 3 * nb + j] * xq[j]
-        r[i] += c * total  # b_r - M_ru b_u - M_rq A^-1 b_q, with M = -c J off the diagonal
-    _lu_solve(lu, pivots, r)
-    b[r0:] = r
+        r[i] = b[row] + c * total  # b_r - M_ru b_u - M_rq A^-1 b_q, M = -c J off the diagonal
+    _lu_solve(lu, pivots, r[:m])
+    for i in range(m):
+        b[r0 + i] = r[i]
     for j in range(3 * nb):
         b[j] += c * r[j]  # x_u = b_u + c x_v
     for k in range(nb):
@@ -629,54 +713,76 @@ def _norm(x, scale):
 
 
 @njit(cache=True)
-def _r_matrix(order, factor):
-    """SciPy's ``compute_R``: the map of backward differences for a step times ``factor``."""
-    m = np.zeros((order + 1, order + 1))
-    m[0, :] = 1.0
+def _scaled_norm(factor, x, scale):
+    """RMS norm of ``factor x / scale`` (no temporary for ``factor x``)."""
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += (factor * x[i] / scale[i]) ** 2
+    return np.sqrt(s / x.shape[0])
+
+
+@njit(cache=True)
+def _r_matrix(order, factor, m):
+    """SciPy's ``compute_R`` into ``m``: the map of backward differences for a step
+    times ``factor``.
+    """
+    m[0, :order + 1] = 1.0
     for i in range(1, order + 1):
+        m[i, 0] = 0.0
         for j in range(1, order + 1):
             m[i, j] = (i - 1 - factor * j) / i
     for i in range(1, order + 1):
         for j in range(order + 1):
             m[i, j] *= m[i - 1, j]
-    return m
 
 
 @njit(cache=True)
-def _change_d(d, order, factor):
+def _change_d(d, order, factor, work):
     """Rescale the differences ``d`` for a step size times ``factor`` (in place):
-    ``D <- (R U)^T D`` over the first ``order + 1`` rows, as SciPy's ``change_D``.
+    ``D <- (R U)^T D`` over the first ``order + 1`` rows, as SciPy's ``change_D``;
+    ``work``: :func:`start`'s scratch (matrices, the old differences).
     """
-    ru = _r_matrix(order, factor) @ _r_matrix(order, 1.0)
-    old = d[:order + 1].copy()
+    r, u, ru, old = work[1][0], work[1][1], work[1][2], work[2]
+    _r_matrix(order, factor, r)
+    _r_matrix(order, 1.0, u)
+    for i in range(order + 1):
+        for j in range(order + 1):
+            total = 0.0
+            for k in range(order + 1):
+                total += r[i, k] * u[k, j]
+            ru[i, j] = total
+    n = d.shape[1]
+    for i in range(order + 1):
+        for k in range(n):
+            old[i, k] = d[i, k]
     for i in range(order + 1):
         row = d[i]
         row[:] = 0.0
         for j in range(order + 1):
             weight = ru[j, i]
             if weight != 0.0:
-                for k in range(row.shape[0]):
+                for k in range(n):
                     row[k] += weight * old[j, k]
 
 
 @njit(cache=True)
-def _rhs(t, y, ints, args):
-    """The compiled right-hand side, counted."""
+def _rhs(t, y, ints, args, work, out):
+    """The compiled right-hand side into ``out``, counted."""
     ints[I_FEV] += 1
-    return rhs(t, y, args[0], args[1], args[2], args[3], args[4], args[5])
+    _rhs_into(t, y, args, work[3], out)
 
 
 @njit(cache=True)
-def initial_step(t0, y0, t_bound, atol, rtol, ints, args):
+def initial_step(t0, y0, t_bound, atol, rtol, ints, args, work):
     """SciPy's ``select_initial_step`` for a first-order estimate (Hairer, Norsett and
-    Wanner, Solving ODEs I, sec. II.4).
+    Wanner, Solving ODEs I, sec. II.4); returns it and ``f(t0, y0)``.
     """
-    f0 = _rhs(t0, y0, ints, args)
-    scale = atol + rtol * np.abs(y0)
+    f0, f1, scale = np.empty_like(y0), np.empty_like(y0), atol + rtol * np.abs(y0)
+    _rhs(t0, y0, ints, args, work, f0)
     d0, d1 = _norm(y0, scale), _norm(f0, scale)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, t_bound - t0)
-    f1 = _rhs(t0 + h0, y0 + h0 * f0, ints, args)
+    _rhs(t0 + h0, y0 + h0 * f0, ints, args, work, f1)
     d2 = _norm(f1 - f0, scale) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -685,45 +791,58 @@ def initial_step(t0, y0, t_bound, atol, rtol, ints, args):
     return min(100.0 * h0, h1, t_bound - t0), f0
 
 
+# rows of the integrator's vector scratch (``work[0]``)
+W_PREDICT, W_SCALE, W_PSI, W_Y, W_D, W_DY, W_F, W_SOLVE = range(8)
+
+
 @njit(cache=True)
 def start(t0, y0, t_bound, atol, rtol, args):
     """A run's state at ``t0``: (floats, ints, differences ``D``, Jacobian, LU factors,
-    pivots, quaternion blocks: :func:`_factor`), for :func:`advance`.
+    pivots, quaternion blocks: :func:`_factor`, scratch), for :func:`advance`. The
+    scratch (vectors by the ``W_`` rows, :func:`_change_d`'s matrices and rows, the
+    right-hand side's :func:`_scratch`) is made here once: a step allocates nothing.
     """
-    n = y0.shape[0]
+    n, nb = y0.shape[0], args[1].shape[0]
+    work = (np.zeros((W_SOLVE + 2, n)), np.zeros((3, MAX_ORDER + 1, MAX_ORDER + 1)),
+            np.zeros((MAX_ORDER + 1, n)), _scratch(y0, nb, args[2].shape[0]))
     ints = np.zeros(10, dtype=np.int64)
     ints[I_ORDER] = 1
-    h, f0 = initial_step(t0, y0, t_bound, atol, rtol, ints, args)
+    h, f0 = initial_step(t0, y0, t_bound, atol, rtol, ints, args, work)
     d = np.zeros((MAX_ORDER + 3, n))
     d[0], d[1] = y0, f0 * h
     ints[I_JEV] += 1
     jac = jacobian(t0, y0, args[0], args[1], args[2], args[3], args[4], args[5])
     ints[I_JAC_CURRENT] = 1
     floats = np.array([t0, h, h, 1.0])
-    m = 6 * (n // 13)
+    m = 6 * nb
     return (floats, ints, d, jac, np.zeros((m, m)), np.zeros(m, dtype=F_INT_nptype),
-            np.zeros((n // 13, 4, 4)))
+            np.zeros((nb, 4, 4)), work)
 
 
 @njit(cache=True)
-def _newton(t_new, y_predict, c, psi, jac, lu, pivots, blocks, scale, floats, ints, args):
-    """SciPy's ``solve_bdf_system``: the simplified Newton iteration of one step;
-    (converged, iterations, y, d = y - y_predict). As CVODE (and unlike SciPy), a first
-    correction already below the tolerance times the last rate seen with this LU is
-    accepted without a second evaluation.
+def _newton(t_new, c, jac, lu, pivots, blocks, floats, ints, args, work):
+    """SciPy's ``solve_bdf_system``: the simplified Newton iteration of one step from
+    the prediction (``work`` rows ``W_PREDICT``, ``W_PSI``, ``W_SCALE``) into ``y``
+    (``W_Y``) and ``d = y - y_predict`` (``W_D``); (converged, iterations). As CVODE
+    (and unlike SciPy), a first correction already below the tolerance times the last
+    rate seen with this LU is accepted without a second evaluation.
     """
-    n = y_predict.shape[0]
-    y, d, dy = y_predict.copy(), np.zeros(n), np.empty(n)
+    vec = work[0]
+    y_predict, scale, psi = vec[W_PREDICT], vec[W_SCALE], vec[W_PSI]
+    y, d, dy, f = vec[W_Y], vec[W_D], vec[W_DY], vec[W_F]
+    n = y.shape[0]
+    for i in range(n):
+        y[i], d[i] = y_predict[i], 0.0
     dy_norm_old, converged, k = -1.0, False, 0
     for k in range(NEWTON_MAXITER):
-        f = _rhs(t_new, y, ints, args)
+        _rhs(t_new, y, ints, args, work, f)
         finite = True
         for i in range(n):
             finite &= np.isfinite(f[i])
             dy[i] = c * f[i] - psi[i] - d[i]
         if not finite:
             break
-        _solve(jac, c, lu, pivots, blocks, dy)
+        _solve(jac, c, lu, pivots, blocks, dy, vec[W_SOLVE:])
         dy_norm = _norm(dy, scale)
         rate = dy_norm / dy_norm_old if dy_norm_old > 0.0 else -1.0
         if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - k) / (1.0 - rate)
@@ -739,106 +858,121 @@ def _newton(t_new, y_predict, c, psi, jac, lu, pivots, blocks, scale, floats, in
             converged = True
             break
         dy_norm_old = dy_norm
-    return converged, k + 1, y, d
+    return converged, k + 1
 
 
 @njit(cache=True)
-def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args):
+def _predict(d, order, alpha, gamma, atol, rtol, vec):
+    """The prediction ``y_predict`` of the next step, its error scale and ``psi`` (the
+    differences' share of the BDF equation) into ``vec``'s rows.
+    """
+    y_predict, scale, psi = vec[W_PREDICT], vec[W_SCALE], vec[W_PSI]
+    for i in range(d.shape[1]):
+        y_predict[i], psi[i] = d[0, i], 0.0
+        for j in range(1, order + 1):
+            y_predict[i] += d[j, i]
+            psi[i] += d[j, i] * (gamma[j] / alpha[order])
+        scale[i] = atol[i] + rtol * abs(y_predict[i])
+
+
+@njit(cache=True)
+def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args, work):
     """SciPy's ``BDF._step_impl`` up to the accepted step: shrink the step until Newton
     converges (with a fresh Jacobian once per step) and the error test passes; returns
-    (t_new, y_new, d, error scale, Newton iterations), or ``t_new = nan`` with the
-    status set when the step would fall below the spacing of floats at ``t``.
+    (t_new, Newton iterations) with the new state, its difference from the prediction
+    and its error scale in ``work[0]``'s rows ``W_Y``, ``W_D``, ``W_SCALE``; or
+    ``t_new = nan`` with the status set when the step would fall below the spacing of
+    floats at ``t``.
     """
     t, h_abs, order = floats[F_T], floats[F_H], ints[I_ORDER]
     gamma, alpha, error_const = _COEFFS[0], _COEFFS[1], _COEFFS[2]
+    vec = work[0]
     min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
     if h_abs < min_step:
-        _change_d(d, order, min_step / h_abs)
+        _change_d(d, order, min_step / h_abs, work)
         h_abs, ints[I_EQUAL] = min_step, 0
     while True:
         if h_abs < min_step:
             ints[I_STATUS] = STEP_TOO_SMALL
-            return np.nan, d[0], d[0], d[0], 0
+            return np.nan, 0
         t_new = t + h_abs
         if t_new > t_bound:
             t_new = t_bound
-            _change_d(d, order, (t_new - t) / h_abs)
+            _change_d(d, order, (t_new - t) / h_abs, work)
             ints[I_EQUAL] = 0
         h_abs = t_new - t
-        n = d.shape[1]
-        y_predict, scale, psi = np.empty(n), np.empty(n), np.zeros(n)
-        for i in range(n):  # loops, not array expressions: no temporaries
-            y_predict[i] = d[0, i]
-            for j in range(1, order + 1):
-                y_predict[i] += d[j, i]
-                psi[i] += d[j, i] * (gamma[j] / alpha[order])
-            scale[i] = atol[i] + rtol * abs(y_predict[i])
+        _predict(d, order, alpha, gamma, atol, rtol, vec)
         c = h_abs / alpha[order]
         while True:
             if ints[I_LU] == 0 or abs(c / floats[F_C] - 1.0) > LU_KEEP:
                 _factor(jac, c, lu, pivots, blocks)
                 ints[I_NLU] += 1
                 ints[I_LU], floats[F_C], floats[F_RATE] = 1, c, 1.0
-            converged, n_iter, y_new, dd = _newton(t_new, y_predict, c, psi, jac, lu, pivots,
-                                                   blocks, scale, floats, ints, args)
+            converged, n_iter = _newton(t_new, c, jac, lu, pivots, blocks, floats, ints,
+                                        args, work)
             if converged or ints[I_JAC_CURRENT] == 1:
                 break
-            jac[:] = jacobian(t_new, y_predict, args[0], args[1], args[2], args[3], args[4],
-                              args[5])
+            jac[:] = jacobian(t_new, vec[W_PREDICT], args[0], args[1], args[2], args[3],
+                              args[4], args[5])
             ints[I_JEV] += 1
             ints[I_LU], ints[I_JAC_CURRENT] = 0, 1
         if not converged:
             h_abs *= 0.5
-            _change_d(d, order, 0.5)
+            _change_d(d, order, 0.5, work)
             ints[I_EQUAL], ints[I_LU] = 0, 0
             continue
         safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
-        scale = atol + rtol * np.abs(y_new)
-        error_norm = _norm(error_const[order] * dd, scale)
+        y_new, scale = vec[W_Y], vec[W_SCALE]
+        for i in range(y_new.shape[0]):
+            scale[i] = atol[i] + rtol * abs(y_new[i])
+        error_norm = _scaled_norm(error_const[order], vec[W_D], scale)
         if error_norm <= 1.0:
             floats[F_H] = h_abs
-            return t_new, y_new, dd, scale, n_iter
+            return t_new, n_iter
         factor = max(MIN_FACTOR, safety * error_norm ** (-1.0 / (order + 1)))
         h_abs *= factor
-        _change_d(d, order, factor)  # the LU stays: Newton converged with it
+        _change_d(d, order, factor, work)  # the LU stays: Newton converged with it
         ints[I_EQUAL] = 0
 
 
 @njit(cache=True)
-def _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args):
+def _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args, work):
     """One accepted step of SciPy's ``BDF``: :func:`_attempt`, then the differences
     updated and, after ``order + 1`` steps of one size, the order and step chosen
     from the error estimates of the orders either side.
     """
     ints[I_JAC_CURRENT] = 0
-    t_new, _, dd, scale, n_iter = _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound,
-                                           atol, rtol, args)
+    t_new, n_iter = _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol,
+                             args, work)
     if np.isnan(t_new):
         return
     order, error_const = ints[I_ORDER], _COEFFS[2]
+    dd, scale = work[0][W_D], work[0][W_SCALE]
     ints[I_STEPS] += 1
     ints[I_EQUAL] += 1
     floats[F_T] = t_new
-    d[order + 2] = dd - d[order + 1]
-    d[order + 1] = dd
+    for k in range(dd.shape[0]):
+        d[order + 2, k] = dd[k] - d[order + 1, k]
+        d[order + 1, k] = dd[k]
     for i in range(order, -1, -1):
-        d[i] += d[i + 1]
+        for k in range(dd.shape[0]):
+            d[i, k] += d[i + 1, k]
     if ints[I_EQUAL] < order + 1:
         return
     safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
-    norms = np.array([np.inf, _norm(error_const[order] * dd, scale), np.inf])
-    if order > 1:
-        norms[0] = _norm(error_const[order - 1] * d[order], scale)
-    if order < MAX_ORDER:
-        norms[2] = _norm(error_const[order + 1] * d[order + 2], scale)
-    factors = np.empty(3)
-    for k in range(3):
-        factors[k] = np.inf if norms[k] == 0.0 else norms[k] ** (-1.0 / (order + k))
-    delta = int(np.argmax(factors)) - 1
+    norm = _scaled_norm(error_const[order], dd, scale)
+    down = _scaled_norm(error_const[order - 1], d[order], scale) if order > 1 else np.inf
+    up = _scaled_norm(error_const[order + 1], d[order + 2], scale) \
+        if order < MAX_ORDER else np.inf
+    best, delta = -1.0, 0
+    for k, value in enumerate((down, norm, up)):  # the first largest, as argmax
+        factor = np.inf if value == 0.0 else value ** (-1.0 / (order + k))
+        if factor > best:
+            best, delta = factor, k - 1
     ints[I_ORDER] = order + delta
-    factor = min(MAX_FACTOR, safety * factors.max())
+    factor = min(MAX_FACTOR, safety * best)
     floats[F_H] *= factor
-    _change_d(d, order + delta, factor)
+    _change_d(d, order + delta, factor, work)
     ints[I_EQUAL] = 0
 
 
@@ -860,9 +994,9 @@ def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
     end, where the status becomes finished), filling the rows of ``out`` at the sorted
     instants ``t_out`` as they are passed; the status and counters are in ``run[1]``.
     """
-    floats, ints, d, jac, lu, pivots, blocks = run
+    floats, ints, d, jac, lu, pivots, blocks, work = run
     while ints[I_STATUS] == RUNNING and floats[F_T] < t_stop:
-        _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args)
+        _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args, work)
         if ints[I_STATUS] != RUNNING:
             break
         t = floats[F_T]

@@ -242,7 +242,7 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c):
     assert kernels._factor(jac, c, lu, pivots, blocks) == 0
     b = np.random.default_rng(2).standard_normal(n)
     x = b.copy()
-    kernels._solve(jac, c, lu, pivots, blocks, x)
+    kernels._solve(jac, c, lu, pivots, blocks, x, np.zeros((2, n)))
     matrix = np.eye(n) - c * jac
     dense = np.linalg.solve(matrix, b)
     assert np.abs(matrix @ x - b).max() <= 1e-13 * np.abs(matrix).max() * np.abs(x).max()
