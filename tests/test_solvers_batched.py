@@ -157,6 +157,18 @@ def test_compiled_least_norm_equals_the_numpy_path(op, propshaft_op, scene, form
     assert np.abs(np.einsum("tnm,tm->tn", At, mu) - Atmu).max() <= 1e-9 * np.abs(Atmu).max()
 
 
+def test_instants_whose_active_set_does_not_settle_are_solved_by_lemke(op):
+    """No active-set step allowed: every instant goes to Lemke's method, same answer."""
+    batch = fbatch.least_norm_batch(op, "compliance")
+    args = (batch.A, batch.b, batch.weights, batch.signed)
+    settled, forced = nb.least_norm(*args), nb.least_norm(*args, max_iter=0)
+    assert not settled[4].any() and forced[4].all()
+    for got, expected in zip(forced[:3:2], settled[:3:2]):  # forces, face multipliers
+        assert np.abs(got - expected).max() <= 1e-9 * np.abs(expected).max()
+    record = solve_batch(batch, "numpy-batched", max_iter=0)
+    assert record.within(1e-9).all() and set(record.messages) == {"Lemke fallback"}
+
+
 def test_an_instant_answer_does_not_depend_on_its_batch(op):
     """Each instant is solved from its own numbers: alone, in a subset or reversed."""
     batch = fbatch.least_norm_batch(op, "positive")
