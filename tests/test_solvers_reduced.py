@@ -58,6 +58,10 @@ def test_dependent_rows_reduce_at_their_rank():
     _, red = reduced_conic(twice)
     assert red.N.shape == (1, 3, 2)
     assert red.z0[0] == pytest.approx([1.0, 1.0, 1.0])
+    # stationarity z + A_eq' l = 0 at z = (1, 1, 1) holds for l1 + l2 = -1; the lifted
+    # multipliers are the least-norm ones, split evenly
+    _, y = red.lift(np.zeros((1, 2)), np.zeros((1, 3)))
+    assert y[0] == pytest.approx([-0.5, -0.5, 0.0, 0.0, 0.0])
 
 
 def test_rank_changing_between_instants_is_refused():
