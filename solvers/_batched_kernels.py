@@ -297,6 +297,17 @@ def _rows(A, root, t, starts, own, n_own, G):
                 G[B * k + i, p] = A[t, s + i, c] / root[t, c] if root.shape[0] else A[t, s + i, c]
 
 
+@njit(cache=True)
+def _rhs(G, b, starts, upos, R):
+    """The right-hand sides ``R = [b, U]`` (m, 1 + k) of one instant, ``U = B[:, u]``."""
+    for k in range(len(starts)):
+        s = starts[k]
+        for i in range(B):
+            R[s + i, 0] = b[s + i]
+            for j in range(upos.shape[1]):
+                R[s + i, 1 + j] = G[B * k + i, upos[k, j]] if upos[k, j] >= 0 else 0.0
+
+
 @njit(cache=True, fastmath=FAST)
 def _inexact(G, own, n_own, starts, b, mu, v, w, rtol):
     """Whether ``K mu = b`` leaves ``||b - B B' mu|| > rtol ||b||``: the bias of ``delta``
@@ -413,17 +424,12 @@ def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, first,
     for t in range(T):
         _rows(A, root, t, starts, own, n_own, G)
         _factor(G, n_own, sh_a, sh_b, n_sh, gram_rtol, L, H, Sa, Sb)
-        for k in range(nb):
-            s = starts[k]
-            for i in range(B):
-                R[s + i, 0] = b[t, s + i]
-                for j in range(nf):
-                    R[s + i, 1 + j] = G[B * k + i, upos[k, j]] if upos[k, j] >= 0 else 0.0
-        Z[:, :] = R
+        _rhs(G, b[t], starts, upos, Z)
         _down(L, H, starts, Z, ncols)
         y[:, 0] = Z[:, 0]
         _up(L, H, starts, y)
         if _inexact(G, own, n_own, starts, b[t], y, v, w, refine_rtol):
+            _rhs(G, b[t], starts, upos, R)
             _up(L, H, starts, Z)
             _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z)
             if nf:
