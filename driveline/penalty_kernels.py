@@ -118,14 +118,29 @@ def _local(frames, ka, kb, g, work):
     ``ea`` (on a) and ``ub`` (on b), the relative velocity ``rel`` of a's material point
     at ``p`` against b's, and the arms of the points from a's and b's centres.
     """
-    centre, vel, rot, rate, omega = frames
-    p, ea, ub, rel, arm, arm_b = work[0], work[1], work[2], work[3], work[4], work[5]
+    _offset(frames, ka, kb, g, work)
+    _relative(frames, ka, kb, g, work)
+
+
+@njit(cache=True, inline="always")
+def _offset(frames, ka, kb, g, work):
+    """:func:`_local`'s geometry: ``p``, ``ea``, ``ub`` and the arms (not ``rel``)."""
+    centre, rot = frames[0], frames[2]
+    p, ea, ub, arm, arm_b = work[0], work[1], work[2], work[4], work[5]
     for i in range(3):
         arm[i] = rot[ka, i, 0] * g[0] + rot[ka, i, 1] * g[1] + rot[ka, i, 2] * g[2]
         ea[i] = rot[ka, i, 0] * g[3] + rot[ka, i, 1] * g[4] + rot[ka, i, 2] * g[5]
         arm_b[i] = rot[kb, i, 0] * g[6] + rot[kb, i, 1] * g[7] + rot[kb, i, 2] * g[8]
         ub[i] = rot[kb, i, 0] * g[9] + rot[kb, i, 1] * g[10] + rot[kb, i, 2] * g[11]
         p[i] = centre[ka, i] + arm[i] - centre[kb, i] - arm_b[i]
+
+
+@njit(cache=True, inline="always")
+def _relative(frames, ka, kb, g, work):
+    """:func:`_local`'s relative velocity ``rel``, after :func:`_offset`."""
+    vel, rate, omega = frames[1], frames[3], frames[4]
+    p, rel = work[0], work[3]
+    for i in range(3):
         rel[i] = (vel[ka, i] - vel[kb, i]
                   + rate[ka, i, 0] * g[0] + rate[ka, i, 1] * g[1] + rate[ka, i, 2] * g[2]
                   - rate[kb, i, 0] * g[6] - rate[kb, i, 1] * g[7] - rate[kb, i, 2] * g[8])
@@ -133,27 +148,35 @@ def _local(frames, ka, kb, g, work):
 
 
 @njit(cache=True, inline="always")
-def _push(p, ea, ub, rel, radial, law, d_max, force):
-    """Penetration ``d`` and push ``f`` of one contact (eqs. 75-78), and its force on
-    body ``a`` into ``force``: radial contacts along the offset of the bore axis from the
-    trunnion point in the trunnion's cross-section, faces along ``-ea``.
+def _depth(p, ea, ub, radial, clearance, normal):
+    """Penetration ``d`` of one contact, its normal into ``normal``: radial contacts
+    along the offset of the bore axis from the trunnion point in the trunnion's
+    cross-section, faces along ``ub``.
     """
     if radial:
         # the bore axis meets the trunnion's cross-section plane at p - r
         ratio = (p[0] * ea[0] + p[1] * ea[1] + p[2] * ea[2]) / (
             ub[0] * ea[0] + ub[1] * ea[1] + ub[2] * ea[2])
         for i in range(3):
-            force[i] = p[i] - ratio * ub[i]
-        rho = np.sqrt(force[0] * force[0] + force[1] * force[1] + force[2] * force[2])
+            normal[i] = p[i] - ratio * ub[i]
+        rho = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
         if rho.real < 1e-300:
             rho = 1e-300 + 0.0 * rho
         for i in range(3):
-            force[i] = force[i] / rho  # the normal, for now
-        d = rho - law[0]
-    else:
-        for i in range(3):
-            force[i] = ub[i]
-        d = p[0] * ub[0] + p[1] * ub[1] + p[2] * ub[2] - law[0]
+            normal[i] = normal[i] / rho
+        return rho - clearance
+    for i in range(3):
+        normal[i] = ub[i]
+    return p[0] * ub[0] + p[1] * ub[1] + p[2] * ub[2] - clearance
+
+
+@njit(cache=True, inline="always")
+def _push(p, ea, ub, rel, radial, law, d_max, force):
+    """Penetration ``d`` and push ``f`` of one contact (eqs. 75-78), and its force on
+    body ``a`` into ``force``: radial contacts along their normal (:func:`_depth`),
+    faces along ``-ea``.
+    """
+    d = _depth(p, ea, ub, radial, law[0], force)  # the normal, for now
     f = _law(d, force[0] * rel[0] + force[1] * rel[1] + force[2] * rel[2], law[1], law[2],
              law[3], d_max)
     for i in range(3):
@@ -165,13 +188,19 @@ def _push(p, ea, ub, rel, radial, law, d_max, force):
 def _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force, moment, work):
     """Add every contact to the bodies' net ``force`` and ``moment``
     (global, about their centres) and write its penetration, push and force on ``a``.
-    The geometry of :meth:`penalty._Model.contacts`, one contact at a time; ``work``:
-    a (7, 3) scratch array.
+    The geometry of :meth:`penalty._Model.contacts`, one contact at a time, the relative
+    velocity and the law only for those that touch; ``work``: a (7, 3) scratch array.
     """
     for c in range(topology.shape[0]):
         ka, kb = topology[c, 0], topology[c, 1]
-        _local(frames, ka, kb, geometry[c], work)
+        _offset(frames, ka, kb, geometry[c], work)
         p, ea, ub, rel, arm, arm_b = work[0], work[1], work[2], work[3], work[4], work[5]
+        depth[c] = _depth(p, ea, ub, topology[c, 2] == 1, laws[c, 0], work[6])
+        if depth[c].real <= 0.0:  # out of touch: no force (eq. 75)
+            push[c] = 0.0
+            on_a[c] = 0.0
+            continue
+        _relative(frames, ka, kb, geometry[c], work)
         depth[c], push[c] = _push(p, ea, ub, rel, topology[c, 2] == 1, laws[c], d_max, on_a[c])
         for i in range(3):
             force[ka, i] += on_a[c, i]
