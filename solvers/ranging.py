@@ -7,7 +7,9 @@ that: the model is passed once, a feasible basis found once (the objective 0), a
 each bound is the previous optimal basis re-optimised for a new cost vector
 (``changeColsCost``, then ``run``): a few pivots instead of a cold solve, and no
 record built per LP. Over a sequence of LPs of one shape (the instants of a run) the
-feasible basis of the one before starts the next (``start``).
+feasible basis of the one before starts the next (``start``), and its rays are tried
+as rays of the next (an end-face pair's ray, ``e_F3 + e_F4``, is one at every
+instant).
 
 Many ends need no LP at all, because an answer already found proves them
 (:class:`_Proofs`): a verified point with ``c'z`` at the least value the bounds
@@ -55,7 +57,8 @@ class Ranges:
     row ``k``: ``low[k]``/``high[k]`` the least/greatest value (NaN where that side has
     none) and ``statuses[k]`` = (status of the min, status of the max); ``lps``: the
     simplex runs it took; ``basis``: the feasible basis found (HiGHS's, for the
-    ``start`` of the next LP of the same shape; ``None`` where the set is empty).
+    ``start`` of the next LP of the same shape; ``None`` where the set is empty);
+    ``rays``: the verified rays of the set it used (rows, ``|d|_inf = 1``).
     """
 
     feasible: Status
@@ -64,6 +67,8 @@ class Ranges:
     statuses: tuple[tuple[Status, Status], ...]
     lps: int = 0
     basis: object = field(default=None, repr=False, compare=False)
+    rays: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False,
+                             compare=False)
 
 
 _STATUS = {} if highspy is None else {
@@ -80,19 +85,24 @@ def ranges(lp: LP, objectives: np.ndarray, start: Ranges | None = None) -> Range
     ``objectives``: ``(k, n)``. When the set is empty (or the feasibility solve
     fails) every row is NaN with that status. ``start``: the ranges of an LP of the
     same shape (the instant before), whose feasible basis starts this one's
-    feasibility solve; the answers do not depend on it (each is verified, and an
-    LP's optimal value is unique). Needs :data:`HAVE_HIGHSPY`.
+    feasibility solve and whose rays, where they are rays of this set too, prove
+    ends; the answers do not depend on it (each is verified, and an LP's optimal
+    value is unique). Needs :data:`HAVE_HIGHSPY`.
     """
     objectives = np.atleast_2d(np.asarray(objectives, float))
     k, n = objectives.shape
     h = _model(lp)
+    start = start if start is not None and start.rays.shape[1:] == (n,) else None
     if start is not None and start.basis is not None:
         h.setBasis(start.basis)
     feasible, _, point = _run(h, lp, np.zeros(n))
     low, high = np.full(k, np.nan), np.full(k, np.nan)
     if feasible is not Status.SOLVED:
-        return Ranges(feasible, low, high, ((feasible, feasible),) * k, 1)
+        return Ranges(feasible, low, high, ((feasible, feasible),) * k, 1,
+                      rays=np.zeros((0, n)))
     basis, proofs, lps = h.getBasis(), _Proofs(lp, point), 1
+    for ray in () if start is None else start.rays:
+        proofs.add(Status.UNBOUNDED, ray)
     statuses = []
     for r, c in enumerate(objectives):
         sides = []
@@ -105,7 +115,7 @@ def ranges(lp: LP, objectives: np.ndarray, start: Ranges | None = None) -> Range
             ends[r] = sign * value
             sides.append(status)
         statuses.append(tuple(sides))
-    return Ranges(feasible, low, high, tuple(statuses), lps, basis)
+    return Ranges(feasible, low, high, tuple(statuses), lps, basis, proofs.rays)
 
 
 class _Proofs:

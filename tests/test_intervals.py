@@ -90,6 +90,23 @@ def test_ends_proved_by_a_point_or_a_ray_need_no_lp():
     assert not _is_ray(lp, np.zeros(4), np.full(4, np.inf), np.array([-1.0, -1.0, 0, 0]))
 
 
+def test_a_start_from_another_set_changes_no_answer():
+    """The rays and basis of the LP before (``start``) prove ends only where they hold
+    for this LP's set: ``x0 = x1`` hands on its ray ``(1, 1)``, which is not a ray of
+    ``x0 = 2 x1`` (there x0 still has no top, by that set's own ray), and is one of
+    ``x0 = x1 + 1``, where it proves the tops without an LP of their own."""
+    rows = np.eye(2)
+    before = ranges(_lp([[1, -1]], [0], [0, 0]), rows)
+    assert before.rays.shape == (1, 2)
+    for A, b, low in (([[1, -2]], [0], [0, 0]), ([[1, -1]], [1], [1, 0])):
+        lp = _lp(A, b, [0, 0])
+        warm, cold = ranges(lp, rows, start=before), ranges(lp, rows)
+        assert np.allclose(warm.low, low, atol=1e-12) and np.allclose(cold.low, low, atol=1e-12)
+        assert np.isnan(warm.high).all() and np.isnan(cold.high).all()
+        assert warm.statuses == cold.statuses
+    assert warm.lps < cold.lps  # x0 = x1 + 1: both tops proved by the ray handed on
+
+
 @pytest.mark.parametrize("name, times", [("paper", (0.13, 0.5)), ("paper-slip", (0.2, 0.7)),
                                          ("propshaft", (0.05, 0.6))])
 def test_warm_intervals_agree_with_cold_lps(name, times):
