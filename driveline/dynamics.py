@@ -21,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .compiled import HAVE_NUMBA, harmonic, harmonic_law, njit
 from .kinematics import Geometry, Kinematics, kinematics, reduced_terms, rest_geometry
@@ -127,6 +126,8 @@ def simulate(scene: Scene, times=None, rtol: float = 1e-11, atol: float = 1e-12)
         raise DynamicsError(f"instants before the scene's start {scene.time.start_s} s")
     q0, w0 = scene.initial_angle_rad, scene.initial_speed_rad_s
     if scene.has("inertia"):
+        from scipy.integrate import solve_ivp  # 0.3 s to import; quasi-static lines skip it
+
         order = np.argsort(t)
 
         rhs = _right_hand_side(scene, geometry)
