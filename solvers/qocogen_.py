@@ -10,9 +10,9 @@ process loads it (milliseconds) instead of compiling (seconds to minutes, report
 the ``compile`` stage and by :func:`compile_seconds`, never in a solve's time).
 
 It is registered only as ``qocogen-reduced`` (:data:`.reduced_.WRAPPED`): on the full
-form the equality rows are dense, so the unrolled factor is large (10-20 times the
-code, minutes to compile) and a solve about 4 times slower than on the reduced form
-(the propshaft's ``min_max``, one run).
+form the equality rows are dense, so the unrolled factor is large (2-7 times the code,
+2-4 minutes to compile against 10-40 s) and a solve 3.6-4.5 times slower than on the
+reduced form (the propshaft's ``min_max`` and ``socp_face``, one run).
 
 The answer does not depend on the order of the instants: the generated solver starts
 every solve from its own initial point and does no equilibration (``ruiz_iters`` 0), and
@@ -54,8 +54,10 @@ SETTINGS = ("max_iters", "bisect_iters", "iter_ref_iters", "kkt_static_reg",
 """Settings of the generated solver an option may set (the others keep its defaults)."""
 
 STATUS = {1: "solved", 2: "inaccurate", 4: "inaccurate"}
-"""Generated solver status (solved, solved inaccurate, numerical error, max iterations)
--> ours; anything else is failed."""
+"""Generated solver status -> ours; anything else is failed."""
+
+NAMES = ("unsolved", "solved", "solved inaccurate", "numerical error", "max iterations")
+"""The generated solver's status codes, by value."""
 
 CFLAGS = ("-O3", "-fPIC", "-shared")
 """Portable flags (no ``-march=native``: the cache may be shared between machines)."""
@@ -264,7 +266,8 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     status = np.array(["inaccurate" if c else STATUS.get(int(k), "failed")
                        for k, c in zip(codes, claimed)], object)
     messages = tuple("" if s == "solved" else
-                     f"qocogen status {int(k)} (dual residual {d:.1e}, gap {g:.1e})"
+                     f"qocogen: {NAMES[k] if 0 <= k < len(NAMES) else k} (dual residual "
+                     f"{d:.1e}, gap {g:.1e})"
                      for s, k, (_, d, g) in zip(status, codes, info))
     return BatchOutcome(status=status, z=x, y=duals, iterations=iterations.astype(int),
                         setup_s=laid_out - start, solve_s=solved - loaded, messages=messages,
