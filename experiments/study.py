@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
@@ -30,7 +30,7 @@ from cardan_forces.formulations.sets import feasibility_problem, interval_slack,
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.ranging import HAVE_HIGHSPY, Ranges, ranges
-from cardan_forces.solvers.record import Stacks
+from cardan_forces.solvers.record import Stacks, at_instants
 from cardan_forces.solvers.registry import Pending, check, solve_unchecked, takes
 
 # ---------------------------------------------------------------------------- backends
@@ -212,7 +212,7 @@ def history_of(op: Operator, formulation: str, solver: str, instants: Sequence[i
     """The :class:`History` of ``records`` solved at ``instants`` of ``op`` (each record
     told its instant, ``Record.t``).
     """
-    records = [replace(r, t=float(op.t[i])) for r, i in zip(records, instants)]
+    records = at_instants(records, np.asarray(op.t)[list(instants)])
     n = len(op.names)
     forces = np.full((len(records), n), np.nan)
     for k, r in enumerate(records):

@@ -575,6 +575,19 @@ def _instances(cls, columns: dict, T: int) -> list:
     return out
 
 
+def at_instants(records, t) -> list[Record]:
+    """Copies of ``records`` told the instants ``t`` (s) they answer (``Record.t``), each
+    made as :func:`_instances` makes them (``dataclasses.replace`` re-runs the frozen
+    ``__init__``: 6 us a record).
+    """
+    out, new = [], object.__new__
+    for record, instant in zip(records, t):
+        item = new(Record)
+        item.__dict__.update(record.__dict__, t=float(instant))
+        out.append(item)
+    return out
+
+
 def _records(problems, solver, outcomes, started: _Started, status, confirmed, found,
              distance, views: _Views, extra_setup_s) -> list[Record]:
     """The T records of :func:`finalize_all`, assembled column by column (``distance``:
