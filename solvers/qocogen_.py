@@ -39,9 +39,9 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
-from . import settings
+from . import qoco_, settings
 from .batch import BatchOutcome
-from .qoco_ import CLAIM_TOL, layout, supports
+from .qoco_ import CLAIM_TOL, layout
 from .registry import Backend, dist_version
 
 EXTRAS: dict[str, str | None] = {"qocogen": "qocogen"}
@@ -109,6 +109,14 @@ int cardan_solve_batch(int T, int nP, int nA, int nG, const double* P, const dou
 from the workspace, so an instant that stops early never shows an earlier answer)."""
 
 SOURCES = ("qoco_custom.c", "cone.c", "utils.c", "ldl.c", "kkt.c", "driver.c")
+
+
+def supports(problem) -> bool:
+    """Second-order cone programs without power cones: QOCO takes no power cone, and on
+    the least-norm family (LS, QP) ``numpy-batched`` is an order of magnitude faster than
+    any interior point, so compiling a solver for them would buy nothing.
+    """
+    return qoco_.supports(problem) and any(kind == "soc" for kind, _ in problem.cones)
 
 
 def cache_dir() -> Path:
