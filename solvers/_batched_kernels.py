@@ -238,10 +238,13 @@ def _solve_pinned(M, q, pinned, lam, delta, S, idx):
 
 
 @njit(cache=True)
-def _lcp(M, q, max_iter, rtol, delta, lam, pinned, nxt, S, idx):
+def _lcp(M, q, params, lam, scratch):
     """``0 <= lam ⟂ M lam + q >= 0`` of one instant by the primal-dual active set of
-    ``numpy_batched_._active_set``: ``(steps, settled)``.
+    ``numpy_batched_._active_set``: ``(steps, settled)``; ``params`` as
+    :func:`least_norm`'s (``max_iter``, ``lcp_rtol``, ``lcp_delta`` from the third on).
     """
+    max_iter, rtol, delta = params[2], params[3], params[4]
+    pinned, nxt, S, idx = scratch
     k = len(q)
     eps = rtol * max(1.0, np.abs(q).max()) if k else 0.0
     for i in range(k):
@@ -274,10 +277,10 @@ def active_set(M, q, max_iter, rtol, delta):
     iterations = np.zeros(T, np.int64)
     settled = np.zeros(T, np.bool_)
     pinned, nxt = np.empty(k, np.bool_), np.empty(k, np.bool_)
-    S, idx = np.empty((k, k + 1)), np.empty(k, np.int64)
+    scratch = (pinned, nxt, np.empty((k, k + 1)), np.empty(k, np.int64))
     for t in range(T):
-        iterations[t], settled[t] = _lcp(M[t], q[t], max_iter, rtol, delta, lam[t], pinned,
-                                         nxt, S, idx)
+        iterations[t], settled[t] = _lcp(M[t], q[t], (0.0, 0.0, max_iter, rtol, delta),
+                                         lam[t], scratch)
     return lam, iterations, settled
 
 
@@ -388,16 +391,16 @@ def _faces(G, starts, upos, Z, M, q):
         M[i, i] += 1.0
 
 
-@njit(cache=True, fastmath=FAST)
-def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, first, ncols,
-               gram_rtol, refine_rtol, max_iter, lcp_rtol, lcp_delta):
+@njit(cache=True)
+def least_norm(A, b, root, u, layout, params):
     """Least ``1/2 x'Wx`` on ``A x = b`` (``x[u] >= 0``) at every instant, as
     ``numpy_batched_.least_norm``: ``(x, mu, lam, iterations, settled)``, ``lam`` the
     end faces' LCP solution (``nu_u = sqrt(w_u) lam``); ``root`` (T, n) is ``sqrt(w)``,
     or has no rows for ``W = I``. Where ``settled`` is false the active set did not
-    settle in ``max_iter`` steps and ``lam`` is its last step.
+    settle in ``max_iter`` steps and ``lam`` is its last step. ``params``: ``(gram_rtol,
+    refine_rtol, max_iter, lcp_rtol, lcp_delta)``.
 
-    The structure (``numpy_batched_._layout``): body blocks in chain order from row
+    ``layout`` (``numpy_batched_._layout``): body blocks in chain order from row
     ``starts[k]``, the columns ``own[k, :n_own[k]]`` touching body ``k``, the positions
     ``sh_a[k]``, ``sh_b[k]`` (in ``own[k]``, ``own[k+1]``) of the ``n_sh[k]`` columns
     touching bodies ``k`` and ``k+1``, ``upos[k, j]`` the position of face ``u[j]`` in
@@ -406,22 +409,30 @@ def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, first,
     ``k``.
     """
     T, m, n = A.shape
-    nb, nf = len(starts), len(u)
-    r = 1 + nf
     x, mu = np.empty((T, n)), np.empty((T, m))
-    lam = np.zeros((T, nf))
+    lam = np.zeros((T, len(u)))
     iterations = np.zeros(T, np.int64)
     settled = np.ones(T, np.bool_)
+    _span(0, T, A, b, root, u, layout, params, x, mu, lam, iterations, settled)
+    return x, mu, lam, iterations, settled
+
+
+@njit(cache=True)
+def _span(lo, hi, A, b, root, u, layout, params, x, mu, lam, iterations, settled):
+    """Instants ``lo`` to ``hi - 1`` of :func:`least_norm`, with their own scratch."""
+    starts, own, n_own, sh_a, sh_b, n_sh, upos, first, ncols = layout
+    gram_rtol, refine_rtol = params[0], params[1]
+    m, n, nb, nf = A.shape[1], A.shape[2], len(starts), len(u)
     G = np.zeros((B * nb, own.shape[1]))
     L, H = np.empty((B * nb, B)), np.empty((B * nb, B))
     Sa, Sb = np.empty((B, sh_a.shape[1])), np.empty((B, sh_a.shape[1]))
-    R, Z, dZ = np.empty((m, r)), np.empty((m, r)), np.empty((m, r))
+    R, Z, dZ = np.empty((m, 1 + nf)), np.empty((m, 1 + nf)), np.empty((m, 1 + nf))
     v, w, z = np.empty(n), np.empty(m), np.empty(m)
-    y, y1 = np.empty((m, 1)), np.empty((m, 1))
+    y, y1 = np.empty((m, 1)), np.zeros((m, 1))
     M, q = np.empty((nf, nf)), np.empty(nf)
-    pinned, nxt = np.empty(nf, np.bool_), np.empty(nf, np.bool_)
-    S, idx = np.empty((nf, nf + 1)), np.empty(nf, np.int64)
-    for t in range(T):
+    lcp = (np.empty(nf, np.bool_), np.empty(nf, np.bool_), np.empty((nf, nf + 1)),
+           np.empty(nf, np.int64))
+    for t in range(lo, hi):
         _rows(A, root, t, starts, own, n_own, G)
         _factor(G, n_own, sh_a, sh_b, n_sh, gram_rtol, L, H, Sa, Sb)
         _rhs(G, b[t], starts, upos, Z)
@@ -434,29 +445,28 @@ def least_norm(A, b, root, u, starts, own, n_own, sh_a, sh_b, n_sh, upos, first,
             _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z)
             if nf:
                 _faces(G, starts, upos, Z, M, q)
-                iterations[t], settled[t] = _lcp(M, q, max_iter, lcp_rtol, lcp_delta,
-                                                 lam[t], pinned, nxt, S, idx)
-            for i in range(m):
-                acc = Z[i, 0]
-                for j in range(nf):
-                    acc -= Z[i, 1 + j] * lam[t, j]
-                mu[t, i] = acc
-        else:
-            if nf:
-                _faces_reduced(Z, starts, first, M, q)
-                iterations[t], settled[t] = _lcp(M, q, max_iter, lcp_rtol, lcp_delta,
-                                                 lam[t], pinned, nxt, S, idx)
-                for i in range(m):
-                    acc = 0.0
-                    for j in range(nf):
-                        acc += Z[i, 1 + j] * lam[t, j]
-                    y1[i, 0] = acc
-                _up(L, H, starts, y1)
-            for i in range(m):
-                mu[t, i] = y[i, 0] - y1[i, 0] if nf else y[i, 0]
+                iterations[t], settled[t] = _lcp(M, q, params, lam[t], lcp)
+            y[:, 0] = Z[:, 0]
+            _times_Z1(Z, lam[t], y1)
+        elif nf:
+            _faces_reduced(Z, starts, first, M, q)
+            iterations[t], settled[t] = _lcp(M, q, params, lam[t], lcp)
+            _times_Z1(Z, lam[t], y1)
+            _up(L, H, starts, y1)
+        for i in range(m):
+            mu[t, i] = y[i, 0] - y1[i, 0]
         _times_Bt(G, own, n_own, starts, mu[t], v)
         for j in range(nf):
             v[u[j]] += lam[t, j]
         for c in range(n):
             x[t, c] = v[c] / root[t, c] if root.shape[0] else v[c]
-    return x, mu, lam, iterations, settled
+
+
+@njit(cache=True, fastmath=FAST)
+def _times_Z1(Z, lam, out):
+    """``out[:, 0] = Z[:, 1:] lam``."""
+    for i in range(Z.shape[0]):
+        acc = 0.0
+        for j in range(len(lam)):
+            acc += Z[i, 1 + j] * lam[j]
+        out[i, 0] = acc

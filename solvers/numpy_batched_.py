@@ -96,8 +96,8 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     root = np.sqrt(w) if w is not None else np.zeros((0, n))
     u, *layout = _layout(structure(A), u)
     x, mu, lam, iterations, settled = compiled(
-        np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u, *layout,
-        GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA)
+        np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u,
+        tuple(layout), (GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA))
     nu = np.zeros((T, n))
     nu[:, u] = lam if w is None else lam * root[:, u]
     stages = {"compiled": time.perf_counter() - clock}
