@@ -142,8 +142,8 @@ def test_a_determinate_component_is_its_value_whatever_its_lps_say(paper_op, mon
     failure."""
     real, warm = study.solve, study.ranges
 
-    def warm_failing(lp, objectives):
-        found = warm(lp, objectives)
+    def warm_failing(lp, objectives, start=None):
+        found = warm(lp, objectives, start)
         return dataclasses.replace(found, statuses=((Status.FAILED,) * 2,) * len(objectives))
 
     def failing(problem, solver, **kwargs):
