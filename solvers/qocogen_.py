@@ -174,8 +174,12 @@ def _build(target: Path, dims, patterns) -> None:
         source = Path(folder) / "solver"
         (source / "driver.c").write_text(DRIVER)
         built = source / "solver.so"
-        subprocess.run([compiler(), *CFLAGS, "-o", str(built), *SOURCES, "-lm"],
-                       cwd=source, check=True, capture_output=True)
+        done = subprocess.run([compiler(), *CFLAGS, "-o", str(built), *SOURCES, "-lm"],
+                              cwd=source, capture_output=True, text=True)
+        if done.returncode:
+            errors = [line for line in done.stderr.splitlines() if "error" in line]
+            raise RuntimeError("compiling the generated solver failed: "
+                               + (errors or done.stderr.splitlines() or ["no output"])[0])
         os.replace(built, target)
 
 
