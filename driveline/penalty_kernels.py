@@ -633,7 +633,7 @@ else:  # pragma: no cover - the caller uses SciPy's integrators instead
 
 
 @njit(cache=True)
-def _factor(jac, c, lu, pivots, blocks):
+def _factor(jac, c, lu, pivots, blocks, coupling):
     """Factor ``M = I - c J`` for :func:`_solve`, eliminating first what the equations'
     structure gives (state layout of :class:`penalty._Model`): the displacement rows
     read ``x_u - c x_v = b_u`` and each body's quaternion rows involve only its own
@@ -641,7 +641,8 @@ def _factor(jac, c, lu, pivots, blocks):
     What is left is the ``6 nb`` rows of the velocities and rates,
     ``M_rr + c M_ru E_v + c M_rq A^-1 J_qw``, factored by LAPACK's ``getrf`` into ``lu``
     (held transposed: LAPACK's column-major view of it is the matrix); ``blocks`` gets
-    the ``A_k^-1``. A 30 x 30 factorization on ``paper`` instead of 65 x 65.
+    the ``A_k^-1``, ``coupling`` (nb, 4, 3) the ``A_k^-1 J_qw``. A 30 x 30 factorization
+    on ``paper`` instead of 65 x 65.
     """
     nb = blocks.shape[0]
     r0, m = 7 * nb, 6 * nb
@@ -652,6 +653,14 @@ def _factor(jac, c, lu, pivots, blocks):
         for i in range(4):
             for j in range(4):
                 blocks[k, i, j] = scale * ((1.0 if i == j else 0.0) + c * jac[q + i, q + j])
+    for k in range(nb):  # A^-1 J_qw, for every row below
+        q, w = 3 * nb + 4 * k, 3 * nb + 3 * k
+        for i4 in range(4):
+            for e in range(3):
+                g = 0.0
+                for j4 in range(4):
+                    g += blocks[k, i4, j4] * jac[q + j4, r0 + w + e]
+                coupling[k, i4, e] = g
     for i in range(m):
         row = r0 + i
         for j in range(m):
@@ -664,10 +673,7 @@ def _factor(jac, c, lu, pivots, blocks):
             for e in range(3):  # x_q = A^-1 (b_q + c J_qw x_w)
                 total = 0.0
                 for i4 in range(4):
-                    g = 0.0
-                    for j4 in range(4):
-                        g += blocks[k, i4, j4] * jac[q + j4, r0 + w + e]
-                    total += -c * jac[row, q + i4] * g
+                    total += -c * jac[row, q + i4] * coupling[k, i4, e]
                 lu[w + e, i] += total * c
     return _getrf(ord("d"), m, m, lu.ctypes, m, pivots.ctypes)
 
@@ -829,11 +835,13 @@ def start(t0, y0, t_bound, atol, rtol, args):
     """A run's state at ``t0``: (floats, ints, differences ``D``, Jacobian, LU factors,
     pivots, quaternion blocks: :func:`_factor`, scratch), for :func:`advance`. The
     scratch (vectors by the ``W_`` rows, :func:`_change_d`'s matrices and rows, the
-    right-hand side's :func:`_scratch`) is made here once: a step allocates nothing.
+    right-hand side's :func:`_scratch`, :func:`_factor`'s coupling) is made here once: a
+    step allocates nothing.
     """
     n, nb = y0.shape[0], args[1].shape[0]
     work = (np.zeros((W_SOLVE + 2, n)), np.zeros((3, MAX_ORDER + 1, MAX_ORDER + 1)),
-            np.zeros((MAX_ORDER + 1, n)), _scratch(y0, nb, args[2].shape[0]))
+            np.zeros((MAX_ORDER + 1, n)), _scratch(y0, nb, args[2].shape[0]),
+            np.zeros((nb, 4, 3)))
     ints = np.zeros(10, dtype=np.int64)
     ints[I_ORDER] = 1
     h, f0 = initial_step(t0, y0, t_bound, atol, rtol, ints, args, work)
@@ -934,7 +942,7 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
         c = h_abs / alpha[order]
         while True:
             if ints[I_LU] == 0 or abs(c / floats[F_C] - 1.0) > LU_KEEP:
-                _factor(jac, c, lu, pivots, blocks)
+                _factor(jac, c, lu, pivots, blocks, work[4])
                 ints[I_NLU] += 1
                 ints[I_LU], floats[F_C], floats[F_RATE] = 1, c, 1.0
             converged, n_iter = _newton(t_new, c, jac, lu, pivots, blocks, floats, ints,

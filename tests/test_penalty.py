@@ -239,7 +239,7 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c):
     n, nb = len(y), model.n_bodies
     lu, pivots = np.zeros((6 * nb, 6 * nb)), np.zeros(6 * nb, kernels.F_INT_nptype)
     blocks = np.zeros((nb, 4, 4))
-    assert kernels._factor(jac, c, lu, pivots, blocks) == 0
+    assert kernels._factor(jac, c, lu, pivots, blocks, np.zeros((nb, 4, 3))) == 0
     b = np.random.default_rng(2).standard_normal(n)
     x = b.copy()
     kernels._solve(jac, c, lu, pivots, blocks, x, np.zeros((2, n)))
