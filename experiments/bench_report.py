@@ -440,7 +440,8 @@ def _stages(stages) -> list[str]:
     lines = ["", "## Batched runs: where the time goes (us per instant)", ""]
     for (formulation, solver), parts in stages.items():
         lines.append(f"- `{formulation}` {solver}: "
-                     + ", ".join(f"{k} {_us(v)}" for k, v in parts.items()))
+                     + ", ".join(f"{k} {v:.1f} s" if k.endswith(", once") else
+                                 f"{k} {_us(v)}" for k, v in parts.items()))
     return lines
 
 

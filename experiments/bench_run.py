@@ -162,17 +162,24 @@ def run_instants(prepared: Prepared, solver: str, instants, *, mode="cold", tol=
     return rows
 
 
+ONCE_STAGES = ("compile",)
+"""Stages a batched backend pays once per structure (a generated solver compiled, then
+cached): their time in the untimed warm-up run is reported apart, in seconds, as
+``"<stage>, once"``."""
+
+
 def run_batched(prepared: Prepared, solver: str, instants=None, tol=None,
                 references=None, repeats: int = REPEATS) -> tuple[list[dict], dict[str, float]]:
     """A batched backend on the formulation's batch: rows (the median wall time of up
     to ``repeats`` runs within :data:`BATCH_BUDGET_S` after a warm-up run, spread evenly
-    over the instants) and its stage times per instant.
+    over the instants) and its stage times per instant (with the one-time stages of
+    :data:`ONCE_STAGES`, in s).
     """
     batch = prepared.batch(batch_kind(solver, prepared), instants)
     ref = None
     if references is not None:
         ref = np.array([references[int(i)][0] for i in batch.instants])
-    solve_batch(batch, solver, tol=tol, reference=ref)  # warm-up, not timed
+    warm_up = solve_batch(batch, solver, tol=tol, reference=ref)  # not timed
     runs, spent = [], 0.0
     while len(runs) < repeats and (spent < BATCH_BUDGET_S or len(runs) < 1):
         began = time.perf_counter()
@@ -190,7 +197,9 @@ def run_batched(prepared: Prepared, solver: str, instants=None, tol=None,
                  int(result.iterations[k]), result.messages[k] if result.messages else "")
             for k, i in enumerate(batch.instants)]
     stages = {stage: seconds / T for stage, seconds in result.stages.items()}
-    return rows, stages | {"checks": result.checks_s / T}
+    once = {f"{stage}, once": seconds for stage, seconds in warm_up.stages.items()
+            if stage in ONCE_STAGES and seconds > 0}
+    return rows, stages | {"checks": result.checks_s / T} | once
 
 
 def _is_batched(solver: str) -> bool:
