@@ -289,8 +289,8 @@ def intervals(op: Operator, i: int, solver: str = INTERVAL_SOLVER) -> dict[str, 
 def _intervals_at(op: Operator, i: int, det, solver: str,
                   start: Ranges | None = None) -> tuple[dict[str, dict], Ranges | None]:
     """:func:`intervals` with instant ``i``'s determinacy ``det`` already known, and the
-    warm ranging behind it (``None`` without one), whose basis ``start``s the next
-    instant's (:func:`~cardan_forces.solvers.ranging.ranges`).
+    warm ranging behind it (``None`` without one), whose basis and rays ``start`` the
+    next instant's (:func:`~cardan_forces.solvers.ranging.ranges`).
     """
     free = np.flatnonzero(~det.determinate)
     eye = np.eye(len(op.names))
@@ -341,8 +341,8 @@ class IntervalHistory:
 def interval_history(op: Operator, instants: Sequence[int] | None = None,
                      progress: Callable[[str], None] | None = None) -> IntervalHistory:
     """:func:`intervals` at ``instants`` of ``op`` (default all), each instant's warm
-    ranging started from the feasible basis of the one before (the same answers,
-    verified, in fewer pivots).
+    ranging started from the feasible basis and the rays of the one before (the same
+    answers, verified, in fewer LPs and pivots).
     """
     picks = list(range(len(op.t)) if instants is None else instants)
     shape = (len(picks), len(op.names))
