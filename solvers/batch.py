@@ -15,7 +15,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 
-from .optimality import combine, measures, recover, unique_optimum
+from .optimality import (
+    combine,
+    dual_cone_violation,
+    multipliers,
+    stacked_batch,
+    times_P,
+    unique_optimum,
+)
 from .record import Optimality, Record, Residuals, Status, confirm, judge
 
 
@@ -121,11 +128,13 @@ def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
         source = "solver"
     else:
         source = "solver" if outcome.y is not None else "recovered"
-        y = outcome.y if outcome.y is not None else np.array(
-            [recover(batch.P if np.ndim(batch.P) != 3 else batch.P[k], batch.q[k],
-                     batch.A[k], batch.b[k], batch.cones, z[k]) if answered[k] else
-             np.zeros(batch.A.shape[1]) for k in range(len(z))])
-        found = measures(batch.P, batch.q, batch.A, batch.b, batch.cones, z, y)
+        st = stacked_batch(batch.P, batch.q, batch.A, batch.b, batch.cones)
+        given = [None] * len(z) if outcome.y is None else list(outcome.y)
+        for k in np.flatnonzero(~answered):  # nothing to recover: the measures are inf
+            given[k] = np.zeros(st.b.shape[1])
+        y = multipliers(st, z, given)[0]
+        found = combine(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y),
+                        z, y, dual_cone_violation(st.cones, y))
     for value in (primal, found["dual"], found["gap"]):
         value[~answered] = np.inf
     return (Optimality(primal=primal, dual=found["dual"], gap=found["gap"]), source,

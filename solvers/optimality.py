@@ -221,6 +221,30 @@ def recover(P, q, A, b, cones, z) -> np.ndarray:
     return y
 
 
+def multipliers(st: Stacked, z: np.ndarray, given: list) -> tuple[np.ndarray, np.ndarray]:
+    """``y`` (T, m) of answers ``z`` (T, n) to the stacked problems ``st``: the solver's
+    ``given[k]`` where it has one of length m, else recovered (:func:`recover`); and the
+    mask of the instants whose multipliers the solver gave. The one place both the
+    per-instant checks and a batch's find their multipliers.
+    """
+    m = st.b.shape[1]
+    mask = np.array([g is not None and len(g) == m for g in given], bool)
+    y = np.array([given[k] if mask[k] else
+                  recover(st.Pk(k), st.q[k], st.A(k), st.b[k], st.cones, z[k])
+                  for k in range(len(z))], float).reshape(len(z), m)
+    return y, mask
+
+
+def stacked_batch(P, q, A, b, cones) -> Stacked:
+    """A batch's stacked arrays (``P`` (n, n), (T, n, n) or ``None``; ``A`` (T, m, n)) as
+    a :class:`Stacked`, its products run as the checks run them (:func:`_block`).
+    """
+    if P is not None and np.ndim(P) == 3:
+        P = P[0] if np.all(P == P[0]) else Pattern.of(np.asarray(P, float))
+    return Stacked(P, np.asarray(q, float), np.asarray(b, float), tuple(cones),
+                   (_block(np.asarray(A, float)),))
+
+
 def unique_optimum(problem) -> bool:
     """Whether the problem's optimum is one point, known from its data: a least norm
     (positive weights) or a positive definite ``P`` (strictly convex objective).

@@ -33,7 +33,7 @@ from .optimality import (
     combine,
     conic_key,
     dual_cone_violation,
-    recover,
+    multipliers,
     stack_conic,
     times_P,
     unique_optimum,
@@ -712,12 +712,8 @@ def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
     where it gave them. ``st``: the problems at ``idx`` stacked beforehand.
     """
     st = st if st is not None else stack_conic([problems[k] for k in idx])
-    m = st.b.shape[1]
     z = np.array([outcomes[k].z for k in idx], float)
-    given = np.array([outcomes[k].y is not None and len(outcomes[k].y) == m for k in idx])
-    y = np.array([outcomes[k].y if given[j] else
-                  recover(st.Pk(j), st.q[j], st.A(j), st.b[j], st.cones, z[j])
-                  for j, k in enumerate(idx)], float).reshape(len(idx), m)
+    y, given = multipliers(st, z, [outcomes[k].y for k in idx])
     Pz, Aty = times_P(st.P, z), st.Aty(y)  # shared by both views
     found = combine(Pz, st.q, Aty, np.einsum("tm,tm->t", st.b, y), z, y,
                     dual_cone_violation(st.cones, y))
