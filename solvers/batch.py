@@ -129,10 +129,10 @@ def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
     else:
         source = "solver" if outcome.y is not None else "recovered"
         st = stacked_batch(batch.P, batch.q, batch.A, batch.b, batch.cones)
-        given = [None] * len(z) if outcome.y is None else list(outcome.y)
-        for k in np.flatnonzero(~answered):  # nothing to recover: the measures are inf
-            given[k] = np.zeros(st.b.shape[1])
-        y = multipliers(st, z, given)[0]
+        y = outcome.y
+        if y is None:
+            given = [None if a else np.zeros(st.b.shape[1]) for a in answered]
+            y = multipliers(st, z, given)[0]  # an unanswered instant's measures are inf
         found = combine(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y),
                         z, y, dual_cone_violation(st.cones, y))
     for value in (primal, found["dual"], found["gap"]):

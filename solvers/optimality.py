@@ -237,12 +237,11 @@ def multipliers(st: Stacked, z: np.ndarray, given: list) -> tuple[np.ndarray, np
 
 def stacked_batch(P, q, A, b, cones) -> Stacked:
     """A batch's stacked arrays (``P`` (n, n), (T, n, n) or ``None``; ``A`` (T, m, n)) as
-    a :class:`Stacked`, its products run as the checks run them (:func:`_block`).
+    a :class:`Stacked`, as they are (finding their patterns would cost more than the
+    products it saves in one pass).
     """
-    if P is not None and np.ndim(P) == 3:
-        P = P[0] if np.all(P == P[0]) else Pattern.of(np.asarray(P, float))
     return Stacked(P, np.asarray(q, float), np.asarray(b, float), tuple(cones),
-                   (_block(np.asarray(A, float)),))
+                   (np.asarray(A, float),))
 
 
 def unique_optimum(problem) -> bool:
@@ -357,10 +356,11 @@ def _at(blk, k):
 @dataclass(frozen=True)
 class Stacked:
     """T problems of one structure in Clarabel's standard form, stacked: ``P`` (n, n)
-    when shared, a :class:`Pattern` or ``None``; ``q`` (T, n), ``b`` (T, m), ``cones``;
-    the rows of ``A`` as ``blocks`` in row order, each a dense (T, r, n) stack, a
-    :class:`Pattern` (:func:`_block`) or a bound block ``(sign, columns)`` (rows ``sign *
-    e_j'``, a QP's finite bounds), so bounds are never written out as identity rows.
+    when shared, a :class:`Pattern`, (T, n, n) (a batch's) or ``None``; ``q`` (T, n),
+    ``b`` (T, m), ``cones``; the rows of ``A`` as ``blocks`` in row order, each a dense
+    (T, r, n) stack, a :class:`Pattern` (:func:`_block`) or a bound block ``(sign,
+    columns)`` (rows ``sign * e_j'``, a QP's finite bounds), so bounds are never written
+    out as identity rows.
     """
 
     P: np.ndarray | Pattern | None
@@ -398,14 +398,16 @@ class Stacked:
 
     def take(self, rows: np.ndarray) -> Stacked:
         """The instants ``rows`` of the stack."""
-        P = self.P.take(rows) if isinstance(self.P, Pattern) else self.P
+        P = self.P if self.P is None or np.ndim(self.P) == 2 else _at(self.P, rows)
         return Stacked(P, self.q[rows], self.b[rows], self.cones,
                        tuple(blk if isinstance(blk, tuple) else _at(blk, rows)
                              for blk in self.blocks))
 
     def Pk(self, k: int) -> np.ndarray | None:
         """Instant ``k``'s ``P``."""
-        return self.P.dense(k) if isinstance(self.P, Pattern) else self.P
+        if isinstance(self.P, Pattern):
+            return self.P.dense(k)
+        return self.P[k] if self.P is not None and self.P.ndim == 3 else self.P
 
 
 def _stack_qp(problems) -> Stacked | None:
