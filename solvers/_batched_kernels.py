@@ -22,6 +22,9 @@ from numba import njit
 B = 6
 """Rows per body block."""
 
+TINY = float(np.finfo(float).tiny)
+"""Smallest normal double: the floor of ``||b||`` in the refinement test."""
+
 FAST = {"contract"}
 """numba fastmath flags: fused multiply-add only (no reassociation, NaN stays NaN)."""
 
@@ -168,7 +171,8 @@ def _up(L, H, starts, Z):
 @njit(cache=True, fastmath=FAST)
 def _times_Bt(G, own, n_own, starts, v, out):
     """``out = B' v`` (n) on the nonzero blocks of ``B``."""
-    out[:] = 0.0
+    for c in range(len(out)):
+        out[c] = 0.0
     for k in range(len(starts)):
         s = starts[k]
         for p in range(n_own[k]):
@@ -229,7 +233,8 @@ def _solve_pinned(M, q, pinned, lam, delta, S, idx):
             f = S[r, c] / S[c, c]
             for j in range(c, p + 1):
                 S[r, j] -= f * S[c, j]
-    lam[:] = 0.0
+    for i in range(k):
+        lam[i] = 0.0
     for i in range(p - 1, -1, -1):
         acc = S[i, p]
         for j in range(i + 1, p):
@@ -261,7 +266,8 @@ def _lcp(M, q, params, lam, scratch):
                     w += M[i, j] * lam[j]
                 nxt[i] = w < -eps
             same = same and nxt[i] == pinned[i]
-        pinned[:] = nxt
+        for i in range(k):
+            pinned[i] = nxt[i]
         if same:
             return step, True
     return max_iter, False
@@ -314,30 +320,32 @@ def _rhs(G, b, starts, upos, R):
 @njit(cache=True, fastmath=FAST)
 def _inexact(G, own, n_own, starts, b, mu, v, w, rtol):
     """Whether ``K mu = b`` leaves ``||b - B B' mu|| > rtol ||b||``: the bias of ``delta``
-    calls for a step of iterative refinement (``mu`` (m, 1); ``v``, ``w`` scratch).
+    calls for a step of iterative refinement (``v``, ``w`` scratch).
     """
-    _times_Bt(G, own, n_own, starts, mu[:, 0], v)
+    _times_Bt(G, own, n_own, starts, mu, v)
     _times_B(G, own, n_own, starts, v, w)
     res, size = 0.0, 0.0
     for i in range(len(b)):
         res += (b[i] - w[i]) ** 2
         size += b[i] ** 2
-    return np.sqrt(res) > rtol * max(np.sqrt(size), np.finfo(np.float64).tiny)
+    return np.sqrt(res) > rtol * max(np.sqrt(size), TINY)
 
 
 @njit(cache=True, fastmath=FAST)
-def _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z):
+def _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z, every):
     """One step of iterative refinement of ``K Z = R`` with the exact ``B B'``:
-    ``Z += K^-1 (R - B B' Z)`` (``v``, ``w``, ``z`` scratch).
+    ``Z += K^-1 (R - B B' Z)`` (``v``, ``w``, ``z`` scratch; ``every`` (nb) the column
+    count ``r`` per body).
     """
     m, r = R.shape
     for c in range(r):
-        z[:] = Z[:, c]
+        for i in range(m):
+            z[i] = Z[i, c]
         _times_Bt(G, own, n_own, starts, z, v)
         _times_B(G, own, n_own, starts, v, w)
         for i in range(m):
             dZ[i, c] = R[i, c] - w[i]
-    _down(L, H, starts, dZ, np.full(len(starts), r))
+    _down(L, H, starts, dZ, every)
     _up(L, H, starts, dZ)
     for i in range(m):
         for c in range(r):
@@ -442,21 +450,26 @@ def _span(lo, hi, A, b, root, u, layout, params, x, mu, lam, iterations, settled
     M, q = np.empty((nf, nf)), np.empty(nf)
     lcp = (np.empty(nf, np.bool_), np.empty(nf, np.bool_), np.empty((nf, nf + 1)),
            np.empty(nf, np.int64))
+    every = np.empty(nb, np.int64)
+    for k in range(nb):
+        every[k] = 1 + nf
     for t in range(lo, hi):
         _rows(A, root, t, starts, own, n_own, G)
         _factor(G, n_own, sh_a, sh_b, n_sh, gram_rtol, L, H, Sa, Sb)
         _rhs(G, b[t], starts, upos, Z)
         _down(L, H, starts, Z, ncols)
-        y[:, 0] = Z[:, 0]
+        _column(Z, 0, y)
         _up(L, H, starts, y)
-        if _inexact(G, own, n_own, starts, b[t], y, v, w, refine_rtol):
+        for i in range(m):
+            z[i] = y[i, 0]
+        if _inexact(G, own, n_own, starts, b[t], z, v, w, refine_rtol):
             _rhs(G, b[t], starts, upos, R)
             _up(L, H, starts, Z)
-            _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z)
+            _refine(G, own, n_own, starts, R, Z, dZ, L, H, v, w, z, every)
             if nf:
                 _faces(G, starts, upos, Z, M, q)
                 iterations[t], settled[t] = _lcp(M, q, params, lam[t], lcp)
-            y[:, 0] = Z[:, 0]
+            _column(Z, 0, y)
             _times_Z1(Z, lam[t], y1)
         elif nf:
             _faces_reduced(Z, starts, first, M, q)
@@ -470,6 +483,13 @@ def _span(lo, hi, A, b, root, u, layout, params, x, mu, lam, iterations, settled
             v[u[j]] += lam[t, j]
         for c in range(n):
             x[t, c] = v[c] / root[t, c] if root.shape[0] else v[c]
+
+
+@njit(cache=True)
+def _column(Z, c, out):
+    """``out[:, 0] = Z[:, c]``."""
+    for i in range(Z.shape[0]):
+        out[i, 0] = Z[i, c]
 
 
 @njit(cache=True, fastmath=FAST)
