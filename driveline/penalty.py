@@ -72,8 +72,8 @@ SciPy's LSODA (ODEPACK's, stepped in Fortran) on the NumPy model here
 (``kernel="numpy"``). LSODA, SciPy's ``BDF`` and ``Radau`` take either kernel on
 request, calling it back through Python. Both Jacobians are exact to
 round-off, where a forward difference loses half the digits: the compiled one by the
-chain rule (each contact's force law differentiated by complex steps, the geometry and
-the Newton-Euler equations by hand), the NumPy one by complex steps with the columns
+chain rule (each contact's force law, the geometry and the Newton-Euler equations
+differentiated by hand), the NumPy one by complex steps with the columns
 of bodies that share no contact neighbour stepped together (shaft, pin, shaft, ...
 along the chain: 3 groups of 13 columns); the tests hold the two to each other. The
 NumPy right-hand side evaluates every contact's geometry and relative
@@ -84,11 +84,13 @@ stepping loop in Fortran); ``BDF`` and ``Radau`` are stepped as ``solve_ivp`` do
 and a failure turned into a status.
 
 **Cost.** The step count is set by the impacts (~10 us steps while a cross-pin
-rattles, about 94,000 steps per simulated second on ``paper-penalty`` with the
+rattles, about 85,000 steps per simulated second on ``paper-penalty`` with the
 compiled BDF, 136,000 with LSODA); per step about two right-hand sides, a Jacobian
 every 7 steps (after a Newton iteration fails, mostly when a contact opens or closes)
-and a factorization every 2-3 (after a Jacobian or a change of step by more than
-30 %). ``propshaft`` (8 bodies, 104 states) takes twice the steps (mean 4.5 us): the
+and a factorization every 3 (after a Jacobian or a change of step by more than
+30 %). Nearly every step's error test is a cross-pin's angular velocity; where the
+pins slide on eq. 75's ``f = 0`` while pressed, the clamp's kink makes steps fail.
+``propshaft`` (8 bodies, 104 states) takes twice the steps (mean 4.5 us): the
 end faces of its cross-pins carry the axial load of the slip joint's segments, pressed
 by ~0.5 um, and eq. 75's ``f >= 0`` switches them on and off while still pressed
 (100 times in 20 ms), whenever the damping term outweighs the spring's ~16 N. Its
