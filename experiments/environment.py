@@ -16,7 +16,9 @@ from cardan_forces.solvers import available
 
 
 def machine() -> str:
-    """CPU model, logical CPUs, platform and Python version, in one line."""
+    """CPU model, logical CPUs, the load average (1, 5, 15 min: other processes' share
+    of the CPUs during a timed run), platform and Python version, in one line.
+    """
     cpu = platform.processor() or platform.machine()
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -25,7 +27,11 @@ def machine() -> str:
                 break
     except OSError:
         pass
-    return (f"{cpu}, {os.cpu_count()} logical CPUs, {platform.platform()}, "
+    try:
+        load = ", load average {:.1f} {:.1f} {:.1f}".format(*os.getloadavg())
+    except (AttributeError, OSError):  # not on this platform
+        load = ""
+    return (f"{cpu}, {os.cpu_count()} logical CPUs{load}, {platform.platform()}, "
             f"Python {platform.python_version()}")
 
 
