@@ -30,6 +30,10 @@ without it has :data:`HAVE_HIGHSPY` False and solves every bound cold.
 
 from __future__ import annotations
 
+import ctypes
+import functools
+import os
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,6 +49,26 @@ except ImportError:  # the optional extra ``highs``
 
 HAVE_HIGHSPY = highspy is not None
 """Whether the warm-started ranging is available (the ``highs`` extra)."""
+
+
+@functools.cache
+def _without_banner() -> None:
+    """Make the process's first HiGHS solver with its file descriptor 1 on /dev/null:
+    highspy prints its banner on stdout then (once per process), which the Python API
+    would show and ``--json`` output must not hold.
+    """
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+            highspy.Highs()
+            ctypes.CDLL(None).fflush(None)  # the banner leaves C's buffer while 1 is null
+    except (OSError, AttributeError, TypeError):  # no C library to flush: it may show
+        pass
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
 
 RAY_MARGIN = 1e3 * ACCEPT
 """Least share ``-c'd / (|c|_1 |d|_inf)`` by which a verified ray must decrease ``c'x``
@@ -196,6 +220,7 @@ def _model(lp: LP):
     model.a_matrix_.start_ = csc.indptr.astype(np.int32)
     model.a_matrix_.index_ = csc.indices.astype(np.int32)
     model.a_matrix_.value_ = csc.data.astype(float)
+    _without_banner()
     h = highspy.Highs()
     for option, value in OPTIONS.items():
         h.setOptionValue(option, value)
