@@ -210,8 +210,10 @@ def test_compiled_integration_follows_the_numpy_reference(scene):
 def test_compiled_jacobian_is_exact_on_slip_joints_and_floating_bearings(name):
     """On the lines with a spline and floating bearings, at a state 20 ms into a run
     (shafts settled in their bearings, the spline and pins loaded): the compiled
-    Jacobian equals the NumPy model's complex-step Jacobian to 1e-9 of each entry's
-    row and column scale; nothing is missing, whatever contacts are in touch.
+    Jacobian equals the NumPy model's complex-step Jacobian to 1e-7 of each entry's
+    row and column scale; nothing is missing, whatever contacts are in touch. A missing
+    or wrong term is of order one there; round-off reaches 1e-9 where a contact sits
+    within femtometres of touching (the state depends on the integration before it).
     """
     model = penalty._Model(_released(name), penalty.DAMPING_LENGTH_UNIT_M)
     kernels, args = penalty.kernels, model.kernel_args
@@ -221,7 +223,7 @@ def test_compiled_jacobian_is_exact_on_slip_joints_and_floating_bearings(name):
     kernels.advance(run, 0.02, 0.02, atol, 1e-10, args, np.array([0.02]), out)
     y = out[0]
     assert np.sum(model.contacts(model.bodies(y[:, None]))[1] > 0) >= 8
-    assert _close(model.jacobian_compiled(0.02, y), model.jacobian(0.02, y, step), 1e-9)
+    assert _close(model.jacobian_compiled(0.02, y), model.jacobian(0.02, y, step), 1e-7)
 
 
 @pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
