@@ -65,7 +65,8 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
         setup[name] = prepared.build_s
         if isinstance(prepared.problems[0], Conic):
             conic.add(name)
-        new, batched = runs.throughput(prepared, solvers, budget_s)
+        with runs.frozen():
+            new, batched = runs.throughput(prepared, solvers, budget_s)
         rows += new
         stages.update({(name, solver): parts for solver, parts in batched.items()})
         found = runs.references(prepared, samples)

@@ -11,6 +11,8 @@ Rows are dicts, one per run and instant (a failed run is a row with ``inf`` meas
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import math
 import time
 from dataclasses import dataclass, field
@@ -83,6 +85,21 @@ class Prepared:
             out = fbatch.conic_batch([self.problems[int(i)] for i in chosen], chosen)
         self.batch_s.setdefault(kind, time.perf_counter() - began)
         return out
+
+
+@contextlib.contextmanager
+def frozen():
+    """The objects alive now (the bench's prebuilt problems and stacks) left out of the
+    garbage collector's scans while the timed runs go (``gc.freeze``): a full
+    collection scanning them fell inside whichever instant allocated at the time,
+    up to eight times the checks' time of a run (one run each, socp_face with
+    clarabel). Garbage is still collected; they are put back after.
+    """
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
 
 
 def prepare(op, name: str, instants) -> Prepared:
