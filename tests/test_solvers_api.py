@@ -281,3 +281,26 @@ def test_typed_measures_read_like_the_dicts_they_replace():
     rebuilt = dataclasses.replace(record, status="failed",
                                   residuals=dict.fromkeys(record.residuals, math.inf))
     assert rebuilt.status is Status.FAILED and rebuilt.residuals.worst()[1] == math.inf
+
+
+def test_lsq_linear_multipliers_are_its_penalty_problems():
+    """``scipy-lsq_linear`` solves a quadratic penalty of the QP; its multipliers
+    ``y = (A z - b) / mu`` and the gradient on the active bounds are that problem's own.
+    On ``min 1/2 |x|^2 - x_3, x_1 + x_2 = 1, 0 <= x, x_3 <= 1/2`` (optimum ``(1/2, 1/2,
+    1/2)``, equality multiplier ``-1/2`` in the sign of ``P z + q + A'y = 0``, upper
+    bound multiplier ``1/2``) they agree with the exact ones to the penalty's bias,
+    and with them stationarity holds to the rounding of ``A z - b`` over ``mu``
+    (``eps / mu``: 1e-10 at tolerance 1e-6, where ``mu`` is about 1e-6).
+    """
+    qp = QP(checks=REFS["qp_active_inequality"].problem.checks, formulation="test",
+            P=np.eye(3), q=np.array([0.0, 0.0, -1.0]), A=np.array([[1.0, 1.0, 0.0]]),
+            b=np.array([1.0]), lb=np.zeros(3), ub=np.array([np.inf, np.inf, 0.5]))
+    record = solve(qp, "scipy-lsq_linear", tol=1e-6)
+    assert record.duals == "solver"
+    z, y = record.z, record.y  # rows: A, then -x >= 0 (3), then x_3 <= 1/2
+    assert np.allclose(z, [0.5, 0.5, 0.5], atol=1e-4)
+    assert abs(y[0] + 0.5) < 1e-4 and abs(y[-1] - 0.5) < 1e-4
+    assert np.allclose(y[1:4], 0.0, atol=1e-4)
+    conic = qp.as_conic()
+    stationarity = conic.P @ z + conic.q + conic.A.T @ y
+    assert np.abs(stationarity).max() < 1e-8
