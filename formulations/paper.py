@@ -39,6 +39,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.kinematics import rest_geometry
 from cardan_forces.driveline.scene import Scene
@@ -212,16 +213,23 @@ def _dx_dz(lay: _Layout, z: np.ndarray) -> np.ndarray:
     return J
 
 
-def _rim(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rim moments of the end faces (eqs. 35-36, 42-43 in eqs. 50-58) and their
-    Jacobian; ``Sgn`` is piecewise constant, so it has no derivative.
+def _rim_moments(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Rim moments of the end faces (eqs. 35-36, 42-43 in eqs. 50-58), with the parts
+    their Jacobian reuses: ``(R, dirs, k, fsum, m)``.
     """
     ta, tb = z[lay.rim_t[:, 0]], z[lay.rim_t[:, 1]]
     fsum = z[lay.rim_f[:, 0]] + z[lay.rim_f[:, 1]]
     m = 0.5 * (ta + tb)
     k = -lay.rim_r * np.sign(np.sin(0.5 * (tb - ta)))
     dirs = lay.rim_U * np.cos(m) + lay.rim_V * np.sin(m)  # (rows, sides)
-    R = dirs @ (k * fsum)
+    return dirs @ (k * fsum), dirs, k, fsum, m
+
+
+def _rim(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rim moments of the end faces and their Jacobian; ``Sgn`` is piecewise constant,
+    so it has no derivative.
+    """
+    R, dirs, k, fsum, m = _rim_moments(lay, z)
     J = np.zeros((len(R), len(z)))
     d_m = (lay.rim_V * np.cos(m) - lay.rim_U * np.sin(m)) * (0.5 * k * fsum)
     for col in (0, 1):
@@ -280,7 +288,7 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
         z = np.asarray(z, float)
         eq = A @ _to_forces(lay, z) - b
         if rim:
-            eq = eq + _rim(lay, z)[0]
+            eq = eq + _rim_moments(lay, z)[0]
         return np.concatenate([eq, _fb(lay, z)[0]])
 
     def jac(z):
@@ -321,7 +329,9 @@ def _with_face_moments(lay: _Layout, face, op: Operator):
         z = np.asarray(z, float)
         x = _to_forces(lay, z)
         weight = np.sqrt(np.maximum(x[owner], 0.0))
-        m = weight * (np.linalg.pinv(M * weight) @ _rim(lay, z)[0])
+        found = scipy.linalg.lstsq(M * weight, _rim_moments(lay, z)[0],
+                                   lapack_driver="gelsy", check_finite=False)[0]
+        m = weight * found  # the least-norm answer, as pinv's (a QR with pivoting: 2x)
         return np.concatenate([x, m])
 
     return to_forces
