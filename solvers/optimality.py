@@ -46,7 +46,7 @@ All functions take a batch: ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m), ``z`` (
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
@@ -296,6 +296,18 @@ class Pattern:
     rows: np.ndarray
     cols: np.ndarray
     shape: tuple[int, int]
+    sums: tuple = field(default=(), repr=False, compare=False)
+    """Sparse 0/1 matrices summing the products into rows, and into columns (made
+    once per pattern, shared by the patterns :meth:`take` makes)."""
+
+    def __post_init__(self) -> None:
+        if not self.sums:
+            from scipy.sparse import csr_matrix
+
+            ones, k = np.ones(len(self.rows)), np.arange(len(self.rows))
+            object.__setattr__(self, "sums", (
+                csr_matrix((ones, (self.rows, k)), shape=(self.shape[0], len(k))),
+                csr_matrix((ones, (self.cols, k)), shape=(self.shape[1], len(k)))))
 
     @classmethod
     def of(cls, dense: np.ndarray) -> Pattern:
@@ -303,22 +315,13 @@ class Pattern:
         rows, cols = np.nonzero(np.any(dense != 0, axis=0))
         return cls(dense[:, rows, cols], rows, cols, dense.shape[1:])
 
-    @functools.cached_property
-    def _sums(self) -> tuple:
-        """Sparse 0/1 matrices summing the products into rows, and into columns."""
-        from scipy.sparse import csr_matrix
-
-        ones, k = np.ones(len(self.rows)), np.arange(len(self.rows))
-        return (csr_matrix((ones, (self.rows, k)), shape=(self.shape[0], len(k))),
-                csr_matrix((ones, (self.cols, k)), shape=(self.shape[1], len(k))))
-
     def times(self, v: np.ndarray) -> np.ndarray:
         """``M_t v_t`` per instant (T, r) for ``v`` (T, n)."""
-        return np.asarray((self._sums[0] @ (self.values * v[:, self.cols]).T).T)
+        return np.asarray((self.sums[0] @ (self.values * v[:, self.cols]).T).T)
 
     def transposed_times(self, v: np.ndarray) -> np.ndarray:
         """``M_t' v_t`` per instant (T, n) for ``v`` (T, r)."""
-        return np.asarray((self._sums[1] @ (self.values * v[:, self.rows]).T).T)
+        return np.asarray((self.sums[1] @ (self.values * v[:, self.rows]).T).T)
 
     def dense(self, k: int) -> np.ndarray:
         """Instant ``k``'s matrix."""
@@ -328,15 +331,16 @@ class Pattern:
 
     def take(self, idx: np.ndarray) -> Pattern:
         """The instants ``idx``."""
-        return Pattern(self.values[idx], self.rows, self.cols, self.shape)
+        return Pattern(self.values[idx], self.rows, self.cols, self.shape, self.sums)
 
 
 def _block(stack: np.ndarray) -> np.ndarray | Pattern:
     """A (T, r, n) stack of constraint rows as the products over it run fastest: dense
-    where at least half its entries can be nonzero, else a :class:`Pattern`.
+    where at least a quarter of its entries can be nonzero (``socp_face``: 46%, 1.3x
+    faster dense), else a :class:`Pattern` (``compliance_hertz``: 15%, 4x faster).
     """
     pattern = Pattern.of(stack)
-    return stack if 2 * len(pattern.rows) >= stack.shape[1] * stack.shape[2] else pattern
+    return stack if 4 * len(pattern.rows) >= stack.shape[1] * stack.shape[2] else pattern
 
 
 def _times(blk, z: np.ndarray) -> np.ndarray:

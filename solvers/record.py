@@ -19,6 +19,7 @@ kept in one place so that no caller judges a solve another way.
 from __future__ import annotations
 
 import enum
+import functools
 import math
 import time
 from collections.abc import Iterator, Mapping
@@ -555,6 +556,15 @@ def _distances(problems, X, references) -> tuple[list, list]:
     return distance, where_unique
 
 
+@functools.cache
+def _defaults(cls) -> tuple:
+    """``(name, make)`` of the fields of dataclass ``cls``: ``make()`` gives the
+    field's default (its factory's product, or its value).
+    """
+    return tuple((f.name, f.default_factory if f.default is MISSING else
+                  functools.partial(lambda value: value, f.default)) for f in fields(cls))
+
+
 def _instances(cls, columns: dict, T: int) -> list:
     """T instances of the frozen dataclass ``cls`` from ``columns`` (field -> T values;
     fields not given take their defaults). Each instance's ``__dict__`` is filled at
@@ -563,10 +573,9 @@ def _instances(cls, columns: dict, T: int) -> list:
     of a run. The values must already be of the fields' types (no ``__post_init__``);
     the instances compare, print and refuse assignment as any other.
     """
-    for f in fields(cls):
-        if f.name not in columns:
-            default = f.default_factory() if f.default is MISSING else f.default
-            columns[f.name] = [default] * T
+    for name, make in _defaults(cls):
+        if name not in columns:
+            columns[name] = [make()] * T
     names, out, new = tuple(columns), [], object.__new__
     for values in zip(*columns.values()):
         item = new(cls)
