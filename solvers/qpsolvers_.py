@@ -14,6 +14,7 @@ import numpy as np
 from cardan_forces.formulations.problems import QP
 
 from . import clarabel_, settings
+from .ranging import HAVE_HIGHSPY, without_banner
 from .record import Outcome
 from .registry import Backend
 from .settings_profiles import Profile
@@ -153,6 +154,8 @@ def _solve_with(solver: str):
         import qpsolvers
         import scipy.sparse as spa
 
+        if solver == "highs" and HAVE_HIGHSPY:
+            without_banner()  # qpsolvers makes highspy solvers: the banner's first one
         start = time.perf_counter()
         if solver in BOUNDS_AS_ROWS:
             problem = bounds_as_rows(problem)

@@ -52,7 +52,7 @@ HAVE_HIGHSPY = highspy is not None
 
 
 @functools.cache
-def _without_banner() -> None:
+def without_banner() -> None:
     """Make the process's first HiGHS solver with its file descriptor 1 on /dev/null:
     highspy prints its banner on stdout then (once per process), which the Python API
     would show and ``--json`` output must not hold.
@@ -220,7 +220,7 @@ def _model(lp: LP):
     model.a_matrix_.start_ = csc.indptr.astype(np.int32)
     model.a_matrix_.index_ = csc.indices.astype(np.int32)
     model.a_matrix_.value_ = csc.data.astype(float)
-    _without_banner()
+    without_banner()
     h = highspy.Highs()
     for option, value in OPTIONS.items():
         h.setOptionValue(option, value)
