@@ -238,6 +238,12 @@ def _rim(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return R, J
 
 
+def _fb_rows(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """Fischer-Burmeister rows (eqs. 59-62): ``sqrt(a^2 + b^2) - a - b`` per pair."""
+    a, b = z[lay.fb[:, 0]], z[lay.fb[:, 1]]
+    return np.hypot(a, b) - a - b
+
+
 def _fb(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Fischer-Burmeister rows (eqs. 59-62) and their (generalized) Jacobian."""
     a, b = z[lay.fb[:, 0]], z[lay.fb[:, 1]]
@@ -289,7 +295,7 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
         eq = A @ _to_forces(lay, z) - b
         if rim:
             eq = eq + _rim_moments(lay, z)[0]
-        return np.concatenate([eq, _fb(lay, z)[0]])
+        return np.concatenate([eq, _fb_rows(lay, z)])
 
     def jac(z):
         z = np.asarray(z, float)
