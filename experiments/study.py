@@ -235,9 +235,19 @@ def value_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLV
     (:func:`joined_ends` says what the ends become): by the warm ranging as
     :func:`intervals` does, else by :func:`cold_range`.
     """
+    return value_ranges(op, i, np.asarray(c, float)[None], solver)[0]
+
+
+def value_ranges(op: Operator, i: int, C: np.ndarray, solver: str = INTERVAL_SOLVER
+                 ) -> list[dict]:
+    """:func:`value_range` of each row of ``C`` at instant ``i``, from one warm ranging
+    (one model and one feasibility solve for them all).
+    """
+    C = np.atleast_2d(np.asarray(C, float))
     if solver == INTERVAL_SOLVER and HAVE_HIGHSPY:
-        return _warm_range(op, i, c, ranges(feasibility_problem(op, i), c[None]), 0, solver)
-    return cold_range(op, i, c, solver)
+        found = ranges(feasibility_problem(op, i), C)
+        return [_warm_range(op, i, c, found, k, solver) for k, c in enumerate(C)]
+    return [cold_range(op, i, c, solver) for c in C]
 
 
 def cold_range(op: Operator, i: int, c: np.ndarray, solver: str = INTERVAL_SOLVER) -> dict:

@@ -47,7 +47,7 @@ from cardan_forces.experiments.engine import (
 )
 from cardan_forces.experiments.environment import machine, number_text, versions
 from cardan_forces.experiments.progress import bar
-from cardan_forces.experiments.study import value_range
+from cardan_forces.experiments.study import value_ranges
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from scipy.stats import binomtest
@@ -127,24 +127,26 @@ def set_bounds(op: Operator, quantities: dict[str, np.ndarray], instants: int = 
                ) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """The interval of each quantity over the rigid set at ``instants`` instants
     (NaN elsewhere, and where an LP failed; +-inf where unbounded). A quantity of one row
-    ``c``: the exact range of ``c x`` (:func:`value_range`). Of two rows: the range of
-    the length of ``(c1 x, c2 x)`` allowed by the two components' intervals (their box
-    hull: it contains the exact range).
+    ``c``: the exact range of ``c x`` (:func:`value_ranges`, one warm ranging for every
+    quantity at an instant). Of two rows: the range of the length of ``(c1 x, c2 x)``
+    allowed by the two components' intervals (their box hull: it contains the exact
+    range).
     """
     T = len(op.t)
     picks = np.unique(np.linspace(0, T - 1, min(instants, T)).round().astype(int))
     out = {q: (np.full(T, np.nan), np.full(T, np.nan)) for q in quantities}
 
-    def span(i, c):  # None: unbounded on that side; a failed LP is not computed (NaN)
-        r = value_range(op, i, c)
+    def span(r):  # None: unbounded on that side; a failed LP is not computed (NaN)
         if r["status"] != "solved":
             return np.nan, np.nan
         return (-np.inf if r["min"] is None else r["min"],
                 np.inf if r["max"] is None else r["max"])
 
+    starts = np.cumsum([0] + [len(rows) for rows in quantities.values()])
     for i in picks:
-        for q, rows in quantities.items():
-            ranges = [span(i, c) for c in rows]
+        found = value_ranges(op, i, np.vstack(list(quantities.values())))
+        for (q, rows), start in zip(quantities.items(), starts):
+            ranges = [span(r) for r in found[start:start + len(rows)]]
             if len(ranges) == 1:
                 out[q][0][i], out[q][1][i] = ranges[0]
                 continue
