@@ -36,6 +36,8 @@ bearing's radial magnitude and angle, then the shaft's axial sum; per joint:
 
 from __future__ import annotations
 
+import dataclasses
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -97,9 +99,36 @@ class _Layout:
     names: tuple[str, ...]
 
 
+_STRUCTURES: dict = {}
+"""The last operator's layout at rest (:func:`_structure`), by ``id``, with a weak
+reference that tells a new operator at the same address apart."""
+
+
 def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
-    """Map the polar unknowns onto the operator's columns and rows at instant ``i``."""
-    names, A = op.names, op.A[i]
+    """Map the polar unknowns onto the operator's columns and rows at instant ``i``: the
+    structure (the same at every instant, made once per operator and scene) with the
+    rim moments' directions of the cross-pin frames at ``i``.
+    """
+    hit = _STRUCTURES.get(id(op))
+    if hit is None or hit[0]() is not op or hit[1] is not scene:
+        _STRUCTURES.clear()
+        hit = _STRUCTURES[id(op)] = (weakref.ref(op), scene, _structure(op, scene))
+    lay, (sides, joint, cos_at, sin_at) = hit[2]
+    frames = op.pin_frames[joint, i]  # (sides, 3 axes, 3)
+    rows = np.arange(len(joint))
+    return dataclasses.replace(
+        lay, rim_U=np.einsum("srk,sk->rs", sides, frames[rows, cos_at]),
+        rim_V=np.einsum("srk,sk->rs", sides, frames[rows, sin_at]))
+
+
+def _structure(op: Operator, scene: Scene) -> tuple[_Layout, tuple]:
+    """The polar unknowns on the operator's columns and rows, with the rim moments'
+    directions left out (``rim_U``, ``rim_V`` empty) and what gives them at an
+    instant: per side, the signed selection of its pin's and yoke's force rows
+    (sides, rows, 3), its joint, and which pin-frame axes are its cosine and sine
+    directions.
+    """
+    names, A = op.names, op.A[0]
     geo = rest_geometry(scene)
     towards = np.array(scene.frame.articulation_towards, float)
     z_names: list[str] = []
@@ -132,10 +161,9 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
         lin.append((add(f"{shaft.name}.axial_sum"), axial))
 
     n_rows = A.shape[0]
-    rim_U, rim_V, rim_t, rim_f, rim_r, fb = [], [], [], [], [], []
+    sides, joint_of, cos_at, sin_at, rim_t, rim_f, rim_r, fb = [], [], [], [], [], [], [], []
     yokes = {(c.joint, c.trunnion): (c.body, c.other) for c in op.of_kind("end-face")}
     for j, joint in enumerate(scene.joints):
-        e1, e2, e3 = op.pin_frames[j, i]
         contact = op.joint_contacts(j)  # by the paper's labels F1 ... F8
         theta = {t: add(f"{joint.name}.theta{t}") for t in (1, 2, 5, 6)}
         f = {n: add(f"{joint.name}.f{n}") for n in range(1, 9)}
@@ -147,17 +175,19 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
             ang.append(theta[n])
         for n in (3, 4, 7, 8):
             lin.append((f[n], unit(contact[f"F{n}"].columns[0])))
-        for trunnion, (ta, tb), (fa, fb_), (cos_dir, sin_dir) in (
-            ("e1", (1, 2), (3, 4), (e2, e3)),
-            ("e2", (5, 6), (7, 8), (e3, e1)),
+        for trunnion, (ta, tb), (fa, fb_), (cos_axis, sin_axis) in (
+            ("e1", (1, 2), (3, 4), (1, 2)),  # cos along e2, sin along e3
+            ("e2", (5, 6), (7, 8), (2, 0)),  # cos along e3, sin along e1
         ):
-            U, V = np.zeros(n_rows), np.zeros(n_rows)
+            side = np.zeros((n_rows, 3))
             pin, yoke = yokes[(j, trunnion)]
             for body, sign in ((pin, 1.0), (yoke, -1.0)):
-                U[op.body_rows(body)] += sign * cos_dir
-                V[op.body_rows(body)] += sign * sin_dir
-            rim_U.append(U)
-            rim_V.append(V)
+                moment = op.body_rows(body)
+                side[np.arange(moment.start, moment.stop), np.arange(3)] += sign
+            sides.append(side)
+            joint_of.append(j)
+            cos_at.append(cos_axis)
+            sin_at.append(sin_axis)
             rim_t.append((theta[ta], theta[tb]))
             rim_f.append((f[fa], f[fb_]))
             rim_r.append(joint.rt_m)
@@ -166,12 +196,15 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
     L = np.zeros((len(names), len(z_names)))
     for idx, col in lin:
         L[:, idx] = col
-    return _Layout(
+    empty = np.zeros((n_rows, 0))
+    lay = _Layout(
         P=np.array(P_cols).T, Q=np.array(Q_cols).T, mag=np.array(mag), ang=np.array(ang), L=L,
-        rim_U=np.array(rim_U).T.reshape(n_rows, -1), rim_V=np.array(rim_V).T.reshape(n_rows, -1),
+        rim_U=empty, rim_V=empty,
         rim_t=np.array(rim_t, int).reshape(-1, 2), rim_f=np.array(rim_f, int).reshape(-1, 2),
         rim_r=np.array(rim_r, float), fb=np.array(fb, int).reshape(-1, 2), names=tuple(z_names),
     )
+    return lay, (np.array(sides).reshape(-1, n_rows, 3), np.array(joint_of, int),
+                 np.array(cos_at, int), np.array(sin_at, int))
 
 
 def applies(op: Operator) -> None:
