@@ -150,10 +150,15 @@ def _one(name: str) -> Backend | None:
     """
     if _CACHE:
         return None
-    owners = [m for m in ADAPTERS if name in _adapter(m).EXTRAS]
-    if len(owners) != 1:
-        return None
-    return next((b for b in _adapter_backends(owners[0]) if b.name == name), None)
+    if name not in _ONE:  # asked once per name: a solve asks at every instant
+        owners = [m for m in ADAPTERS if name in _adapter(m).EXTRAS]
+        _ONE[name] = None if len(owners) != 1 else next(
+            (b for b in _adapter_backends(owners[0]) if b.name == name), None)
+    return _ONE[name]
+
+
+_ONE: dict[str, Backend | None] = {}
+""":func:`_one`'s answers by name."""
 
 
 def register(backend: Backend) -> Backend:
