@@ -237,11 +237,13 @@ def multipliers(st: Stacked, z: np.ndarray, given: list) -> tuple[np.ndarray, np
 
 def stacked_batch(P, q, A, b, cones) -> Stacked:
     """A batch's stacked arrays (``P`` (n, n), (T, n, n) or ``None``; ``A`` (T, m, n)) as
-    a :class:`Stacked`, as they are (finding their patterns would cost more than the
-    products it saves in one pass).
+    a :class:`Stacked`, its products run as the per-instant checks run them
+    (:func:`_block`; a per-instant ``P`` as its :class:`Pattern`).
     """
+    if P is not None and np.ndim(P) == 3:
+        P = P[0] if np.all(P == P[0]) else Pattern.of(np.asarray(P, float))
     return Stacked(P, np.asarray(q, float), np.asarray(b, float), tuple(cones),
-                   (np.asarray(A, float),))
+                   (_block(np.asarray(A, float)),))
 
 
 def unique_optimum(problem) -> bool:
