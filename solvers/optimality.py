@@ -77,7 +77,7 @@ def times_P(P, z: np.ndarray) -> np.ndarray:
     if isinstance(P, Pattern):
         return P.times(z)
     P = np.asarray(P, float)
-    return z @ P.T if P.ndim == 2 else np.einsum("tij,tj->ti", P, z)
+    return z @ P.T if P.ndim == 2 else (P @ z[:, :, None])[:, :, 0]
 
 
 def _inf(v: np.ndarray) -> np.ndarray:
@@ -349,7 +349,7 @@ def _times(blk, z: np.ndarray) -> np.ndarray:
     """A block's rows times ``z`` per instant: a bound block, dense or a pattern."""
     if isinstance(blk, tuple):
         return blk[0] * z[:, blk[1]]
-    return blk.times(z) if isinstance(blk, Pattern) else np.einsum("trn,tn->tr", blk, z)
+    return blk.times(z) if isinstance(blk, Pattern) else (blk @ z[:, :, None])[:, :, 0]
 
 
 def _at(blk, k):
@@ -389,7 +389,7 @@ class Stacked:
             if isinstance(blk, Pattern):
                 out += blk.transposed_times(part)
             elif isinstance(blk, np.ndarray):
-                out += np.einsum("trn,tr->tn", blk, part)
+                out += (part[:, None, :] @ blk)[:, 0]  # stacked products: 2x einsum's
             else:
                 np.add.at(out, (slice(None), blk[1]), blk[0] * part)
             row += rows
