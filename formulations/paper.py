@@ -37,7 +37,6 @@ bearing's radial magnitude and angle, then the shaft's axial sum; per joint:
 from __future__ import annotations
 
 import dataclasses
-import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -47,7 +46,7 @@ from cardan_forces.driveline.kinematics import rest_geometry
 from cardan_forces.driveline.scene import Scene
 
 from .convex import NotApplicable, socp_face
-from .problems import NLS, ForceChecks
+from .problems import NLS, ForceChecks, LastMade
 
 TINY = 1e-12
 """Relative magnitude under which a start's contact angle is set to 0."""
@@ -99,21 +98,12 @@ class _Layout:
     names: tuple[str, ...]
 
 
-_STRUCTURES: dict = {}
-"""The last operator's layout at rest (:func:`_structure`), by ``id``, with a weak
-reference that tells a new operator at the same address apart."""
-
-
 def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
     """Map the polar unknowns onto the operator's columns and rows at instant ``i``: the
     structure (the same at every instant, made once per operator and scene) with the
     rim moments' directions of the cross-pin frames at ``i``.
     """
-    hit = _STRUCTURES.get(id(op))
-    if hit is None or hit[0]() is not op or hit[1] is not scene:
-        _STRUCTURES.clear()
-        hit = _STRUCTURES[id(op)] = (weakref.ref(op), scene, _structure(op, scene))
-    lay, (sides, joint, cos_at, sin_at) = hit[2]
+    lay, (sides, joint, cos_at, sin_at) = _structure(op, scene)
     frames = op.pin_frames[joint, i]  # (sides, 3 axes, 3)
     rows = np.arange(len(joint))
     return dataclasses.replace(
@@ -121,6 +111,7 @@ def _layout(op: Operator, i: int, scene: Scene) -> _Layout:
         rim_V=np.einsum("srk,sk->rs", sides, frames[rows, sin_at]))
 
 
+@LastMade
 def _structure(op: Operator, scene: Scene) -> tuple[_Layout, tuple]:
     """The polar unknowns on the operator's columns and rows, with the rim moments'
     directions left out (``rim_U``, ``rim_V`` empty) and what gives them at an

@@ -23,6 +23,7 @@ Classes:
 from __future__ import annotations
 
 import functools
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -349,3 +350,23 @@ class NLS(_Problem):
     @property
     def n(self) -> int:
         return np.shape(self.z0)[0]
+
+
+class LastMade:
+    """The one thing last made from an owner (an operator, a batch: objects that hold
+    arrays and so cannot be dict keys), remembered by the owner's identity with a weak
+    reference, so a new owner at a freed one's address is told apart. A loop over the
+    instants of one owner makes its structure once.
+    """
+
+    def __init__(self, make: Callable):
+        self._make, self._last = make, None
+
+    def __call__(self, owner, *also):
+        """``make(owner, *also)``, made again only for another owner or other ``also``."""
+        last = self._last
+        if last is None or last[0]() is not owner or any(
+                a is not b for a, b in zip(last[1], also)):
+            last = self._last = (weakref.ref(owner), also, self._make(owner, *also))
+        return last[2]
+

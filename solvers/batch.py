@@ -10,20 +10,13 @@ array per measure; :meth:`BatchRecord.record` gives instant ``k`` as a :class:`R
 from __future__ import annotations
 
 import time
-import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
+from cardan_forces.formulations.problems import LastMade
 
-from .optimality import (
-    combine,
-    dual_cone_violation,
-    multipliers,
-    stacked_batch,
-    times_P,
-    unique_optimum,
-)
+from .optimality import combine, multipliers, stacked_batch, stacked_measures, unique_optimum
 from .record import Optimality, Record, Residuals, Status, confirm, judge
 
 
@@ -134,27 +127,17 @@ def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
         if y is None:
             given = [None if a else np.zeros(st.b.shape[1]) for a in answered]
             y = multipliers(st, z, given)[0]  # an unanswered instant's measures are inf
-        found = combine(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y),
-                        z, y, dual_cone_violation(st.cones, y))
+        found = stacked_measures(st, z, y)[0]
     for value in (primal, found["dual"], found["gap"]):
         value[~answered] = np.inf
     return (Optimality(primal=primal, dual=found["dual"], gap=found["gap"]), source,
             outcome.y if isinstance(batch, LeastNormBatch) else y)
 
 
-_STACKED: dict = {}
-"""The last conic batch's :class:`~.optimality.Stacked` form, by ``id`` with a weak
-reference (a bench judges one batch many times; finding its patterns costs a pass)."""
-
-
-def _stacked(batch: ConicBatch):
-    """``batch`` as :func:`~.optimality.stacked_batch` gives it, made once per batch."""
-    hit = _STACKED.get(id(batch))
-    if hit is None or hit[0]() is not batch:
-        _STACKED.clear()
-        hit = _STACKED[id(batch)] = (weakref.ref(batch), stacked_batch(
-            batch.P, batch.q, batch.A, batch.b, batch.cones))
-    return hit[1]
+_stacked = LastMade(lambda batch: stacked_batch(batch.P, batch.q, batch.A, batch.b,
+                                                batch.cones))
+"""A conic batch's :func:`~.optimality.stacked_batch` form, made once per batch (a bench
+judges one batch many times; finding its patterns costs a pass)."""
 
 
 def _unique(batch) -> bool:

@@ -134,8 +134,17 @@ def measures(P, q, A, b, cones, z, y) -> dict[str, np.ndarray]:
 
     ``objective`` is the primal objective ``1/2 z'Pz + q'z`` (for an objective gap).
     """
-    return combine(times_P(P, z), q, np.einsum("tmn,tm->tn", A, y), np.einsum("tm,tm->t", b, y),
-                   z, y, dual_cone_violation(cones, y))
+    return stacked_measures(stacked_batch(P, q, A, b, cones), z, y)[0]
+
+
+def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[dict, np.ndarray,
+                                                                          np.ndarray]:
+    """:func:`measures` of answers ``z`` with multipliers ``y`` to the stacked problems
+    ``st``, with the products ``P z`` and ``A'y`` it took (the solver's view reuses them).
+    """
+    Pz, Aty = times_P(st.P, z), st.Aty(y)
+    return (combine(Pz, st.q, Aty, np.einsum("tm,tm->t", st.b, y), z, y,
+                    dual_cone_violation(st.cones, y)), Pz, Aty)
 
 
 def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
@@ -241,7 +250,7 @@ def stacked_batch(P, q, A, b, cones) -> Stacked:
     (:func:`_block`; a per-instant ``P`` as its :class:`Pattern`).
     """
     if P is not None and np.ndim(P) == 3:
-        P = P[0] if np.all(P == P[0]) else Pattern.of(np.asarray(P, float))
+        P = _one_or_pattern(np.asarray(P, float))
     return Stacked(P, np.asarray(q, float), np.asarray(b, float), tuple(cones),
                    (_block(np.asarray(A, float)),))
 
@@ -282,8 +291,14 @@ def _shared_P(problems) -> np.ndarray | Pattern:
     first = problems[0].P
     if all(p.P is first for p in problems):
         return np.asarray(first, float)
-    stacked = _stack(problems, "P")
-    return stacked[0] if np.all(stacked == stacked[0]) else Pattern.of(stacked)
+    return _one_or_pattern(_stack(problems, "P"))
+
+
+def _one_or_pattern(stack: np.ndarray) -> np.ndarray | Pattern:
+    """A (T, n, n) stack as its one matrix where every instant's is the same, else as a
+    :class:`Pattern`.
+    """
+    return stack[0] if np.all(stack == stack[0]) else Pattern.of(stack)
 
 
 @dataclass(frozen=True)
@@ -341,15 +356,13 @@ def _block(stack: np.ndarray) -> np.ndarray | Pattern:
     where at least a quarter of its entries can be nonzero (``socp_face``: 46%, 1.3x
     faster dense), else a :class:`Pattern` (``compliance_hertz``: 15%, 4x faster).
     """
-    pattern = Pattern.of(stack)
-    return stack if 4 * len(pattern.rows) >= stack.shape[1] * stack.shape[2] else pattern
+    nonzero = int(np.any(stack != 0, axis=0).sum())
+    return stack if 4 * nonzero >= stack.shape[1] * stack.shape[2] else Pattern.of(stack)
 
 
 def _times(blk, z: np.ndarray) -> np.ndarray:
     """A block's rows times ``z`` per instant: a bound block, dense or a pattern."""
-    if isinstance(blk, tuple):
-        return blk[0] * z[:, blk[1]]
-    return blk.times(z) if isinstance(blk, Pattern) else (blk @ z[:, :, None])[:, :, 0]
+    return blk[0] * z[:, blk[1]] if isinstance(blk, tuple) else times_P(blk, z)
 
 
 def _at(blk, k):
@@ -411,9 +424,7 @@ class Stacked:
 
     def Pk(self, k: int) -> np.ndarray | None:
         """Instant ``k``'s ``P``."""
-        if isinstance(self.P, Pattern):
-            return self.P.dense(k)
-        return self.P[k] if self.P is not None and self.P.ndim == 3 else self.P
+        return self.P if self.P is None or np.ndim(self.P) == 2 else _at(self.P, k)
 
 
 def _stack_qp(problems) -> Stacked | None:

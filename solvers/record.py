@@ -31,12 +31,10 @@ from cardan_forces.formulations.problems import LCP, LS, NLS, QP, RESIDUALS, res
 
 from .optimality import (
     Stacked,
-    combine,
     conic_key,
-    dual_cone_violation,
     multipliers,
     stack_conic,
-    times_P,
+    stacked_measures,
     unique_optimum,
 )
 from .qp_measures import residuals_from
@@ -483,8 +481,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     distance = _distances(problems, started.x, references)
     confirmed = confirm(status, Optimality(primal=views.primal, dual=views.dual,
                                            gap=views.gap), views.duals)
-    records = _records(problems, solver, outcomes, started, status, confirmed, found,
-                       distance, views, extra_setup_s)
+    records = _records(problems, solver, outcomes, started, status, confirmed, answered,
+                       found, distance, views, extra_setup_s)
     checks_s = (time.perf_counter() - began) / T if T else 0.0
     for record, before in zip(records, elapsed_s if elapsed_s is not None else [0.0] * T):
         object.__setattr__(record, "checks_s", checks_s)  # known once all are built
@@ -540,7 +538,8 @@ def _start_all(problems, outcomes) -> _Started:
 def _distances(problems, X, references) -> tuple[list, list]:
     """``||x - x_ref|| / ||x_ref||`` where a reference is given (else ``None``), for the
     residuals, and the same only where the optimum is one point, for the optimality
-    (:func:`~.optimality.unique_optimum`, decided once per distinct ``P``).
+    (:func:`~.optimality.unique_optimum`, decided once per ``P`` object: instants of one
+    structure share theirs).
     """
     unique: dict = {}
     distance, where_unique = [None] * len(problems), [None] * len(problems)
@@ -549,7 +548,7 @@ def _distances(problems, X, references) -> tuple[list, list]:
             continue
         distance[k] = _reference_distance(X[k], ref)
         P = getattr(problems[k], "P", None)
-        key = (type(problems[k]), None if P is None else np.asarray(P, float).tobytes())
+        key = (type(problems[k]), id(P))  # the problems hold their P while this runs
         if key not in unique:
             unique[key] = unique_optimum(problems[k])
         where_unique[k] = distance[k] if unique[key] else None
@@ -597,10 +596,10 @@ def at_instants(records, t) -> list[Record]:
     return out
 
 
-def _records(problems, solver, outcomes, started: _Started, status, confirmed, found,
-             distance, views: _Views, extra_setup_s) -> list[Record]:
-    """The T records of :func:`finalize_all`, assembled column by column (``distance``:
-    :func:`_distances`' pair).
+def _records(problems, solver, outcomes, started: _Started, status, confirmed, answered,
+             found, distance, views: _Views, extra_setup_s) -> list[Record]:
+    """The T records of :func:`finalize_all`, assembled column by column (``answered``:
+    where the status has an answer; ``distance``: :func:`_distances`' pair).
     """
     T = len(problems)
     residual = {key: found[key].tolist() for key in Residuals.KEYS}
@@ -615,11 +614,11 @@ def _records(problems, solver, outcomes, started: _Started, status, confirmed, f
         map(list, zip(*[[None if v != v else v for v in values[:3]] + [values[3]]
                         for values in measured])))), T) if T else []
     residuals = _instances(Residuals, {**residual, "reference": distance[0]}, T)
-    answered = [s in _ANSWERED for s in confirmed]
     extra = extra_setup_s if extra_setup_s is not None else [0.0] * T
     return _instances(Record, {
         "formulation": [p.formulation for p in problems], "solver": [solver] * T,
-        "status": [_STATUS_OF[s] for s in confirmed], "x": started.x,
+        "status": [_STATUS_OF[s] for s in confirmed],  # np.where made some plain str
+        "x": started.x,
         "names": [tuple(p.checks.names) for p in problems],
         "iterations": [None if o.iterations is None else int(o.iterations) for o in outcomes],
         "setup_s": [o.setup_s + e for o, e in zip(outcomes, extra)],
@@ -723,9 +722,7 @@ def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
     st = st if st is not None else stack_conic([problems[k] for k in idx])
     z = np.array([outcomes[k].z for k in idx], float)
     y, given = multipliers(st, z, [outcomes[k].y for k in idx])
-    Pz, Aty = times_P(st.P, z), st.Aty(y)  # shared by both views
-    found = combine(Pz, st.q, Aty, np.einsum("tm,tm->t", st.b, y), z, y,
-                    dual_cone_violation(st.cones, y))
+    found, Pz, Aty = stacked_measures(st, z, y)  # its products serve both views
     gap, kinds = found["gap"], np.full(len(idx), "duality", object)
     best = np.array([np.nan if optimal_values[k] is None else optimal_values[k] for k in idx])
     objective_gap = ~given & ~np.isnan(best)

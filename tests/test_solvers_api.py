@@ -308,3 +308,17 @@ def test_lsq_linear_multipliers_are_its_penalty_problems():
     conic = qp.as_conic()
     stationarity = conic.P @ z + conic.q + conic.A.T @ y
     assert np.abs(stationarity).max() < 1e-8
+
+
+def test_a_non_finite_answer_fails_but_keeps_the_solvers_word():
+    """An adapter that says ``solved`` and returns NaN forces gives a ``failed`` record
+    whose ``solver_status`` is still what the adapter said (the status before the
+    package judged it), with the reason in the message.
+    """
+    from cardan_forces.solvers.record import finalize
+
+    problem = REFS["ls_min_norm"].problem
+    z = np.full(len(problem.checks.names), np.nan)
+    record = finalize(problem, "stub", Outcome("solved", z))
+    assert record.status == "failed" and record.solver_status == "solved"
+    assert "NaN" in record.message
