@@ -249,9 +249,9 @@ def _rim_moments(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, ...]:
     return dirs @ (k * fsum), dirs, k, fsum, m
 
 
-def _rim(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rim moments of the end faces and their Jacobian; ``Sgn`` is piecewise constant,
-    so it has no derivative.
+def _rim_jacobian(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """Jacobian of the rim moments (:func:`_rim_moments`); ``Sgn`` is piecewise
+    constant, so it has no derivative.
     """
     R, dirs, k, fsum, m = _rim_moments(lay, z)
     J = np.zeros((len(R), len(z)))
@@ -259,7 +259,7 @@ def _rim(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     for col in (0, 1):
         np.add.at(J.T, lay.rim_f[:, col], (dirs * k).T)
         np.add.at(J.T, lay.rim_t[:, col], d_m.T)
-    return R, J
+    return J
 
 
 def _fb_rows(lay: _Layout, z: np.ndarray) -> np.ndarray:
@@ -268,8 +268,8 @@ def _fb_rows(lay: _Layout, z: np.ndarray) -> np.ndarray:
     return np.hypot(a, b) - a - b
 
 
-def _fb(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Fischer-Burmeister rows (eqs. 59-62) and their (generalized) Jacobian."""
+def _fb_jacobian(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """The (generalized) Jacobian of the Fischer-Burmeister rows (:func:`_fb_rows`)."""
     a, b = z[lay.fb[:, 0]], z[lay.fb[:, 1]]
     r = np.hypot(a, b)
     safe = np.where(r > 0, r, 1.0)
@@ -279,7 +279,7 @@ def _fb(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     rows = np.arange(len(a))
     J[rows, lay.fb[:, 0]] = da
     J[rows, lay.fb[:, 1]] = db
-    return r - a - b, J
+    return J
 
 
 def _start(op: Operator, i: int, lay: _Layout) -> np.ndarray:
@@ -325,8 +325,8 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
         z = np.asarray(z, float)
         eq = A @ _dx_dz(lay, z)
         if rim:
-            eq = eq + _rim(lay, z)[1]
-        return np.vstack([eq, _fb(lay, z)[1]])
+            eq = eq + _rim_jacobian(lay, z)
+        return np.vstack([eq, _fb_jacobian(lay, z)])
 
     if rim:
         # judged in the force space of ``socp_face``: the rim moments become end-face

@@ -143,8 +143,9 @@ def set_bounds(op: Operator, quantities: dict[str, np.ndarray], instants: int = 
                 np.inf if r["max"] is None else r["max"])
 
     starts = np.cumsum([0] + [len(rows) for rows in quantities.values()])
+    every = np.vstack(list(quantities.values()))
     for i in picks:
-        found = value_ranges(op, i, np.vstack(list(quantities.values())))
+        found = value_ranges(op, i, every)
         for (q, rows), start in zip(quantities.items(), starts):
             ranges = [span(r) for r in found[start:start + len(rows)]]
             if len(ranges) == 1:

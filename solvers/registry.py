@@ -22,6 +22,7 @@ and reported by :func:`plugin_errors`; it never breaks the registry.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib
 import importlib.metadata
 import time
@@ -148,17 +149,16 @@ def _one(name: str) -> Backend | None:
     declares it, without importing the others' packages (a command that solves with one
     backend does not pay for cvxpy); ``None`` where that does not settle it.
     """
-    if _CACHE:
+    return None if _CACHE else _declared(name)
+
+
+@functools.cache
+def _declared(name: str) -> Backend | None:
+    """:func:`_one`'s lookup, once per name (a solve asks at every instant)."""
+    owners = [m for m in ADAPTERS if name in _adapter(m).EXTRAS]
+    if len(owners) != 1:
         return None
-    if name not in _ONE:  # asked once per name: a solve asks at every instant
-        owners = [m for m in ADAPTERS if name in _adapter(m).EXTRAS]
-        _ONE[name] = None if len(owners) != 1 else next(
-            (b for b in _adapter_backends(owners[0]) if b.name == name), None)
-    return _ONE[name]
-
-
-_ONE: dict[str, Backend | None] = {}
-""":func:`_one`'s answers by name."""
+    return next((b for b in _adapter_backends(owners[0]) if b.name == name), None)
 
 
 def register(backend: Backend) -> Backend:

@@ -76,11 +76,13 @@ def solve_lsq_linear(problem: LS | QP, tol=None, initvals=None, **options) -> Ou
     z = res.x
     solve_s = time.perf_counter() - setup_done
     return Outcome(status, z, iterations=int(res.nit), message=f"{message}; {res.message}",
-                   objective=0.5 * z @ P @ z + q @ z, y=_penalty_duals(problem, z, mu, res),
+                   objective=0.5 * z @ P @ z + q @ z,
+                   y=_penalty_duals(problem, P, q, z, mu, res.active_mask),
                    setup_s=setup_done - start, solve_s=solve_s)
 
 
-def _penalty_duals(problem: QP, z: np.ndarray, mu: float, res) -> np.ndarray:
+def _penalty_duals(problem: QP, P: np.ndarray, q: np.ndarray, z: np.ndarray, mu: float,
+                   active: np.ndarray) -> np.ndarray:
     """The multipliers of the problem ``lsq_linear`` solved, in the rows of the QP's
     conic form: stationarity of the penalized objective over ``mu`` is ``P z + q + A'y
     + z_box = 0`` with ``y = (A z - b) / mu`` (the quadratic-penalty estimate, Nocedal
@@ -90,11 +92,10 @@ def _penalty_duals(problem: QP, z: np.ndarray, mu: float, res) -> np.ndarray:
     the QP's measures show both, as its residuals show the penalty's bias. The checks
     need no multiplier recovery then (a least-squares solve per instant).
     """
-    P, q = np.asarray(problem.P, float), np.asarray(problem.q, float)
-    y = None if problem.A is None else (
-        np.asarray(problem.A, float) @ z - np.asarray(problem.b, float)) / mu
-    gradient = P @ z + q + (0.0 if y is None else np.asarray(problem.A, float).T @ y)
-    z_box = np.where(res.active_mask != 0, -gradient, 0.0)
+    A = None if problem.A is None else np.asarray(problem.A, float)
+    y = None if A is None else (A @ z - np.asarray(problem.b, float)) / mu
+    gradient = P @ z + q + (0.0 if y is None else A.T @ y)
+    z_box = np.where(active != 0, -gradient, 0.0)
     return qp_duals(problem, y, None, z_box)
 
 

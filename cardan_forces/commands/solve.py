@@ -131,17 +131,13 @@ def _check_pairs(built: dict, formulations, solvers) -> None:
     """Every solver asked for takes every formulation asked for (else a
     :class:`UsageError` naming the solvers that can); with no formulation named, the
     solvers must take at least one of the scene's (``built``: the problems,
-    :func:`~.analysis.build_all`).
+    :func:`~.analysis.build_all`; a formulation asked for and refused is already an
+    error).
     """
     if not solvers:
         return
-    usable = {}
-    for name, problem in built.items():
-        if isinstance(problem, NotApplicable):
-            if formulations:
-                raise problem
-            continue
-        usable[name] = backends_for(problem)
+    usable = {name: backends_for(problem) for name, problem in built.items()
+              if not isinstance(problem, NotApplicable)}
     if formulations:
         bad = [f"{f} with {', '.join(s for s in solvers if s not in usable[f])} (solvers "
                f"that take it: {', '.join(usable[f]) or 'none installed'})"
