@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse
-from cardan_forces.formulations.problems import LP
+from cardan_forces.formulations.problems import LP, LastMade
 
 from .record import ACCEPT, Status
 
@@ -150,11 +150,9 @@ class _Proofs:
     """
 
     def __init__(self, lp: LP, point: np.ndarray):
-        n = lp.n
         self.lp = lp
-        self.lb = np.full(n, -np.inf) if lp.lb is None else np.asarray(lp.lb, float)
-        self.ub = np.full(n, np.inf) if lp.ub is None else np.asarray(lp.ub, float)
-        self.points, self.rays = point[None], np.zeros((0, n))
+        _, self.lb, self.ub = _rows(lp)
+        self.points, self.rays = point[None], np.zeros((0, lp.n))
 
     def settle(self, c: np.ndarray) -> tuple[Status | None, float]:
         """``min c'x`` where a point or a ray already proves it: ``(solved, the bounds'
@@ -176,25 +174,44 @@ class _Proofs:
             return
         if status is Status.SOLVED:
             self.points = np.vstack([self.points, found])
-        elif status is Status.UNBOUNDED and _is_ray(self.lp, self.lb, self.ub, found):
+        elif status is Status.UNBOUNDED and _is_ray(self.lp, found):
             self.rays = np.vstack([self.rays, found / np.abs(found).max()])
 
 
-def _is_ray(lp: LP, lb: np.ndarray, ub: np.ndarray, d: np.ndarray) -> bool:
+def _is_ray(lp: LP, d: np.ndarray) -> bool:
     """``d`` is a direction of ``lp``'s set within :data:`ACCEPT` of ``|d|_inf`` (times
-    each row's norm): ``A d = 0``, ``G d <= 0``, ``d >= 0`` where ``lb`` is finite and
-    ``d <= 0`` where ``ub`` is.
+    each row's norm): ``A d = 0``, ``G d <= 0``, ``d >= 0`` where the lower bound is
+    finite and ``d <= 0`` where the upper one is.
     """
     size = float(np.abs(d).max(initial=0.0))
     if not np.isfinite(size) or size == 0.0:
         return False
-    d = d / size
-    worst = [np.where(np.isfinite(lb), -d, -np.inf), np.where(np.isfinite(ub), d, -np.inf)]
-    if lp.A is not None and len(lp.A):
-        worst.append(np.abs(lp.A @ d) / np.maximum(np.abs(lp.A).sum(1), 1e-300))
-    if lp.G is not None and len(lp.G):
-        worst.append((lp.G @ d) / np.maximum(np.abs(lp.G).sum(1), 1e-300))
-    return all(float(np.max(w, initial=-np.inf)) <= ACCEPT for w in worst)
+    return _worst(lp, d / size, ray=True) <= ACCEPT
+
+
+def _worst(lp: LP, z: np.ndarray, ray: bool = False) -> float:
+    """The largest violation of ``lp``'s constraints at ``z``, a row's over its norm:
+    ``|A z - b|``, ``G z - h``, ``lb - z``, ``z - ub``; with ``ray``, of the set's
+    directions (right-hand sides 0, finite bounds 0).
+    """
+    rows, lb, ub = _rows(lp)
+    worst = [lb - z if not ray else np.where(np.isfinite(lb), -z, -np.inf),
+             z - ub if not ray else np.where(np.isfinite(ub), z, -np.inf)]
+    for (M, rhs, norms), equal in zip(rows, (True, False)):
+        if norms is not None:
+            r = M @ z - (0.0 if ray else rhs)
+            worst.append((np.abs(r) if equal else r) / norms)
+    return max(float(np.max(w, initial=-np.inf)) for w in worst)
+
+
+_rows = LastMade(lambda lp: (
+    tuple((M, rhs, None if M is None or not len(M) else
+           np.maximum(np.abs(np.asarray(M, float)).sum(1), 1e-300))
+          for M, rhs in ((lp.A, lp.b), (lp.G, lp.h))),
+    np.full(lp.n, -np.inf) if lp.lb is None else np.asarray(lp.lb, float),
+    np.full(lp.n, np.inf) if lp.ub is None else np.asarray(lp.ub, float)))
+"""An LP's constraint rows with their norms, and its bounds (``-inf``/``inf`` where
+none), made once per LP: every LP run at an instant checks its answer with them."""
 
 
 def _model(lp: LP):
@@ -211,8 +228,8 @@ def _model(lp: LP):
     model = highspy.HighsLp()
     model.num_col_, model.num_row_ = n, M.shape[0]
     model.col_cost_ = np.zeros(n)
-    model.col_lower_ = _finite(np.full(n, -np.inf) if lp.lb is None else lp.lb)
-    model.col_upper_ = _finite(np.full(n, np.inf) if lp.ub is None else lp.ub)
+    _, lb, ub = _rows(lp)
+    model.col_lower_, model.col_upper_ = _finite(lb), _finite(ub)
     model.row_lower_ = _finite(np.concatenate([b, np.full(len(g), -np.inf)]))
     model.row_upper_ = _finite(np.concatenate([b, g]))
     csc = scipy.sparse.csc_matrix(M)
@@ -261,20 +278,12 @@ def _run(h, lp: LP, c: np.ndarray) -> tuple[Status, float, np.ndarray | None]:
     if not _feasible(lp, z):
         return Status.FAILED, np.nan, None
     return Status.SOLVED, float(c @ z), z
+
+
 def _feasible(lp: LP, z: np.ndarray) -> bool:
     """Every constraint of ``lp`` holds at ``z`` within :data:`ACCEPT` times the scale
     ``max(|b|_inf, |z|_inf)`` (times each row's norm).
     """
     scale = max(float(np.abs(z).max(initial=0.0)),
                 0.0 if lp.b is None else float(np.abs(lp.b).max(initial=0.0)), 1e-300)
-    tol = ACCEPT * scale
-    worst = []
-    if lp.A is not None and len(lp.A):
-        worst.append(np.abs(lp.A @ z - lp.b) / np.maximum(np.abs(lp.A).sum(1), 1e-300))
-    if lp.G is not None and len(lp.G):
-        worst.append((lp.G @ z - lp.h) / np.maximum(np.abs(lp.G).sum(1), 1e-300))
-    if lp.lb is not None:
-        worst.append(np.asarray(lp.lb, float) - z)
-    if lp.ub is not None:
-        worst.append(z - np.asarray(lp.ub, float))
-    return all(float(np.max(w, initial=-np.inf)) <= tol for w in worst)
+    return _worst(lp, z) <= ACCEPT * scale

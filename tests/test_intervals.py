@@ -86,8 +86,8 @@ def test_ends_proved_by_a_point_or_a_ray_need_no_lp():
     proofs.add(Status.UNBOUNDED, np.array([2.0, 2.0, 0.0, 0.0]))
     assert proofs.settle(-np.eye(4)[1])[0] is Status.UNBOUNDED
     assert proofs.settle(-np.eye(4)[3])[0] is None
-    assert not _is_ray(lp, np.zeros(4), np.full(4, np.inf), np.array([1.0, 0.9, 0, 0]))
-    assert not _is_ray(lp, np.zeros(4), np.full(4, np.inf), np.array([-1.0, -1.0, 0, 0]))
+    assert not _is_ray(lp, np.array([1.0, 0.9, 0, 0]))
+    assert not _is_ray(lp, np.array([-1.0, -1.0, 0, 0]))
 
 
 def test_a_start_from_another_set_changes_no_answer():
