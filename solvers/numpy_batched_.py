@@ -302,8 +302,12 @@ def _lemke_fallback(M, q, lam, iterations, todo):
 
 
 def _chain_shaped(batch) -> bool:
+    """Whether the batch's rows form a chain of bodies over all its instants: the
+    pattern the solve uses (:func:`structure`), not one instant's, where a column that
+    vanishes at that instant would hide a link.
+    """
     try:
-        chain(batch.A[0])
+        chain(structure(batch.A))
     except ValueError:
         return False
     return True

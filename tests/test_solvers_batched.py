@@ -120,6 +120,15 @@ def test_chain_orders_the_bodies_and_rejects_other_graphs(op):
         nb.chain(star)
 
 
+def test_a_link_missing_at_one_instant_still_makes_a_chain():
+    A = np.zeros((2, 18, 2))
+    A[:, 0, 0] = A[:, 6, 0] = 1.0  # bodies 0-1 linked by column 0 at both instants
+    A[1, 7, 1] = A[1, 12, 1] = 1.0  # bodies 1-2 by column 1, zero at instant 0
+    with pytest.raises(ValueError, match="chain"):
+        nb.chain(A[0])
+    assert nb._chain_shaped(type("Batch", (), {"A": A})())
+
+
 def test_chain_solve_equals_a_dense_solve():
     rng = np.random.default_rng(3)
     blocks = [slice(6 * k, 6 * k + 6) for k in (2, 0, 1)]
