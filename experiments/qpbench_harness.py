@@ -26,6 +26,7 @@ from __future__ import annotations
 import importlib.util
 import math
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -70,14 +71,17 @@ def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
     solver = settings_profiles.profile(backend).solver
     data = qpsolvers_problem(qp, solver)
     options = settings_profiles.options(backend, setting)
-    start = time.perf_counter()
-    try:
-        sol = qpsolvers.solve_problem(data, solver=solver, **options)
-    except Exception as exc:  # as qpbenchmark: an exception is a solution not found
-        sol, message = qpsolvers.Solution(data), f"{type(exc).__name__}: {exc}"
-    else:
-        message = ""
-    runtime = time.perf_counter() - start
+    with warnings.catch_warnings(record=True) as caught:  # the row keeps them, as a
+        warnings.simplefilter("always")  # record does (registry.solve_unchecked)
+        start = time.perf_counter()
+        try:
+            sol = qpsolvers.solve_problem(data, solver=solver, **options)
+        except Exception as exc:  # as qpbenchmark: an exception is a solution not found
+            sol, message = qpsolvers.Solution(data), f"{type(exc).__name__}: {exc}"
+        else:
+            message = ""
+        runtime = time.perf_counter() - start
+    message = "; ".join(filter(None, [message, *dict.fromkeys(str(w.message) for w in caught)]))
     found = bool(sol.found)
     measured = qm.qp_residuals(qp, found, sol.x, sol.y, sol.z, sol.z_box)
     duals = conic_duals(qp, sol) if sol.x is not None else None

@@ -95,3 +95,26 @@ def test_bad_export_requests_are_one_line_and_exit_2(argv, says, tmp_path, capsy
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("cardan: error:") and says in err[0]
     assert not any(tmp_path.iterdir())
+
+
+def test_a_solvers_warning_stays_with_its_row(exported, monkeypatch):
+    """qpsolvers warns when a solver stops short (OSQP's 'maximum iterations reached');
+    the harness keeps such notes with the solve instead of printing them."""
+    import warnings
+
+    import qpsolvers
+
+    real = qpsolvers.solve_problem
+
+    def noisy(*args, **kwargs):
+        warnings.warn("OSQP exited with status 'maximum iterations reached'", stacklevel=2)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(qpsolvers, "solve_problem", noisy)
+    _, problems, _ = exported
+    with warnings.catch_warnings(record=True) as escaped:
+        warnings.simplefilter("always")
+        row = qpbench_harness.solve_both(problems["paper_positive_0000"], "qpsolvers-osqp",
+                                         "default")
+    assert not escaped
+    assert row["setting"] == "default" and row["found"] in (True, False)
