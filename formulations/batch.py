@@ -90,7 +90,9 @@ class ConicBatch:
 
     ``P`` is (n, n) when the same at every instant, else (T, n, n) (or ``None``); ``q``
     (T, n), ``A`` (T, m, n), ``b`` (T, m); ``problems`` the per-instant :class:`Conic`
-    problems (their ``to_forces`` map ``z`` to forces).
+    problems (their ``to_forces`` map ``z`` to forces); ``null_space`` (T, n, k) their
+    formulation's null-space bases of the zero-cone rows (``Conic.null_space``), or
+    None when not every instant has one.
     """
 
     formulation: str
@@ -102,6 +104,7 @@ class ConicBatch:
     cones: tuple
     problems: tuple
     checks: CheckBatch
+    null_space: np.ndarray | None = None
 
 
 def _instants(op, instants) -> np.ndarray:
@@ -168,4 +171,15 @@ def conic_batch(problems: list, instants) -> ConicBatch:
         q=np.array([np.asarray(c.q, float) for c in conics]),
         A=np.array([np.asarray(c.A, float) for c in conics]),
         b=np.array([np.asarray(c.b, float) for c in conics]), cones=first.cones,
-        problems=tuple(conics), checks=stack_checks([p.checks for p in problems]))
+        problems=tuple(conics), checks=stack_checks([p.checks for p in problems]),
+        null_space=_null_spaces(conics))
+
+
+def _null_spaces(conics: list) -> np.ndarray | None:
+    """The problems' null-space bases stacked (None unless every one has one, all of
+    one shape: the reduced structure must not change between instants).
+    """
+    bases = [c.null_space for c in conics]
+    if any(N is None or np.shape(N) != np.shape(bases[0]) for N in bases):
+        return None
+    return np.array(bases)

@@ -102,6 +102,38 @@ def _independent_rows(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndar
     return s[:rank, None] * vt[:rank], u[:, :rank].T @ b
 
 
+def orthogonal_equalities(A: np.ndarray, b: np.ndarray, held=()):
+    """``A x = b`` with ``x[held] = 0`` as mutually orthogonal rows, and an orthonormal
+    basis of their null space, from one SVD of ``A`` without the held columns: rows
+    ``S V' x = U' b`` (zero in the held columns) then ``x_j = 0`` per held column; the
+    basis is the SVD's remaining right singular vectors, zero in the held rows. Returns
+    ``(rows, rhs, basis)``, (r + h, n), (r + h,), (n, n - r - h).
+
+    The conic recasts hand the basis to the reduced form (``Conic.null_space``), which
+    then needs no factorization of its own. Held columns must not change the column
+    space (an end face is one of a pair of opposite columns): the rank stays ``A``'s.
+    """
+    n = A.shape[1]
+    free = np.setdiff1d(np.arange(n), held)
+    u, s, vt = np.linalg.svd(A[:, free])
+    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    rows = np.zeros((rank + len(held), n))
+    rows[:rank, free] = s[:rank, None] * vt[:rank]
+    rows[rank + np.arange(len(held)), list(held)] = 1.0
+    basis = np.zeros((n, len(free) - rank))
+    basis[free] = vt[rank:].T
+    return rows, np.concatenate([u[:, :rank].T @ b, np.zeros(len(held))]), basis
+
+
+def _padded(basis: np.ndarray, extra: int) -> np.ndarray:
+    """The null-space basis with ``extra`` unknowns that no equality row constrains."""
+    n, k = basis.shape
+    out = np.zeros((n + extra, k + extra))
+    out[:n, :k] = basis
+    out[n:, k:] = np.eye(extra)
+    return out
+
+
 def _load_scale(b: np.ndarray) -> float:
     """``||b||``, the unit in which the conic and QP recasts state their unknowns."""
     return max(float(np.linalg.norm(b)), 1e-12)
@@ -165,7 +197,7 @@ def min_max(op: Operator, i: int) -> Conic:
     interior-point iterates well scaled); cones: equality, end faces >= 0, one SOC per
     contact.
     """
-    A, b = equalities(op, i)
+    A, b, basis = orthogonal_equalities(op.A[i], op.b[i])
     m, n = A.shape
     t = n
     scale = _load_scale(b)
@@ -188,7 +220,7 @@ def min_max(op: Operator, i: int) -> Conic:
     q[t] = 1.0
     return Conic(checks=checks(op, i, pairs=False), formulation="min_max",
                  to_forces=lambda z: scale * np.asarray(z)[:n], P=P, q=q, A=np.vstack(blocks),
-                 b=np.concatenate(rhs), cones=tuple(cones))
+                 b=np.concatenate(rhs), cones=tuple(cones), null_space=_padded(basis, 1))
 
 
 def lcp(op: Operator, i: int) -> LCP:
@@ -322,12 +354,11 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     unilateral = np.concatenate([op.unilateral, np.zeros(n - n0, bool)])
     check = ForceChecks(A=A, b=op.b[i], names=tuple(names), unilateral=unilateral,
                         pairs=op.pairs, cones=tuple(cones) + slip_cones(op, i))
-    reduced, b_reduced = _independent_rows(A, op.b[i])
-    held = np.eye(n)[list(idle)]
-    blocks = [np.vstack([reduced, held])]
+    rows, rhs_eq, basis = orthogonal_equalities(A, op.b[i], held=idle)
+    blocks = [rows]
     scale = _load_scale(op.b[i])
-    rhs = [np.concatenate([b_reduced / scale, np.zeros(len(held))])]
-    cone_list = [("zero", len(reduced) + len(held))]
+    rhs = [rhs_eq / scale]
+    cone_list = [("zero", len(rows))]
     uni = np.flatnonzero(unilateral)
     G = slip_rows(op, i, n)
     blocks.append(np.vstack([_minus_identity_rows(uni, n), G]))
@@ -343,7 +374,7 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     P = np.diag(np.concatenate([np.ones(n0), weights]))
     return Conic(checks=check, formulation=formulation, to_forces=lambda z: scale * np.asarray(z),
                  P=P, q=np.zeros(n), A=np.vstack(blocks), b=np.concatenate(rhs),
-                 cones=tuple(cone_list))
+                 cones=tuple(cone_list), null_space=basis)
 
 
 def _pin_frames(op: Operator, i: int) -> dict[str, np.ndarray]:
@@ -451,10 +482,9 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     power = [c for c, bearing in enumerate(is_bearing) if law == "hertz" and not bearing]
     nz = n + nc + len(power)
     P, q = np.zeros((nz, nz)), np.zeros(nz)
-    held = np.zeros((len(merged), nz))
-    held[np.arange(len(merged)), list(merged)] = 1.0
-    blocks = [np.vstack([np.hstack([A, np.zeros((m, nz - n))]), held])]
-    rhs, cones = [np.concatenate([b, np.zeros(len(merged))])], [("zero", m + len(merged))]
+    rows, rhs_eq, basis = orthogonal_equalities(op.A[i], op.b[i], held=list(merged))
+    blocks = [np.hstack([rows, np.zeros((len(rows), nz - n))])]
+    rhs, cones = [rhs_eq / sb], [("zero", len(rows))]
     uni = [j for j in np.flatnonzero(op.unilateral) if j not in merged and j not in
            merged.values()]
     G = slip_rows(op, i, nz)
@@ -490,7 +520,8 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
 
     return Conic(checks=checks(op, i), formulation=name, to_forces=to_forces, P=P / unit,
                  q=q / unit,
-                 A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones))
+                 A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones),
+                 null_space=_padded(basis, nz - n))
 
 
 def _linear(op: Operator, column: int) -> bool:

@@ -297,6 +297,12 @@ class Conic(_Problem):
     ``cones`` lists the blocks of K in row order as ``(kind, size)``:
     ``("zero", m)``, ``("nonneg", m)``, ``("soc", m)`` (first entry the apex), or
     ``("pow", alpha)`` (3 rows: ``x^alpha * y^(1-alpha) >= |z|``, x, y >= 0).
+
+    ``null_space``: an orthonormal basis (n, k) of the null space of the zero-cone rows,
+    given by a formulation that has it from its own factorization, whose zero-cone rows
+    are then mutually orthogonal (None: not known); the reduced form
+    (:func:`~cardan_forces.solvers.conversions.eliminate_equalities`) uses it instead
+    of factoring the rows again.
     """
 
     P: np.ndarray | None = None
@@ -304,6 +310,7 @@ class Conic(_Problem):
     A: np.ndarray = None
     b: np.ndarray = None
     cones: tuple[tuple[str, float], ...] = ()
+    null_space: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = np.shape(self.q)[0]

@@ -168,9 +168,22 @@ def _null_space(A_eq: np.ndarray, b_eq: np.ndarray):
     return z0, V[:, :, k:], (V[:, :, :k], s[:, :k, None] * np.eye(k), U)
 
 
-def eliminate_equalities(P, q, A, b, cones) -> Reduced:
+def _given_null_space(A_eq: np.ndarray, b_eq: np.ndarray, N: np.ndarray):
+    """:func:`_null_space`'s ``(z0, N, factors)`` from a formulation's orthonormal basis
+    ``N`` of mutually orthogonal rows (``Conic.null_space``), without a factorization:
+    ``A_eq' = Q R`` with ``Q`` the rows over their norms and ``R`` the norms (diagonal).
+    """
+    s = np.sqrt(np.einsum("tij,tij->ti", A_eq, A_eq))
+    Q = np.transpose(A_eq, (0, 2, 1)) / s[:, None, :]
+    R = s[:, :, None] * np.eye(s.shape[1])
+    return _mv(Q, b_eq / s), N, (Q, R, None)
+
+
+def eliminate_equalities(P, q, A, b, cones, null_space=None) -> Reduced:
     """The stacked conic problems ``(P, q, A, b)`` (``P`` (n, n), (T, n, n) or None;
-    ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m)) in their reduced form (:class:`Reduced`).
+    ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m)) in their reduced form (:class:`Reduced`);
+    ``null_space`` (T, n, k): the formulation's bases (``Conic.null_space``), used when
+    they fit the rows' count (``k = n - rows``), else the rows are factored here.
     """
     A, b, q = np.asarray(A, float), np.asarray(b, float), np.asarray(q, float)
     T, _, n = A.shape
@@ -178,7 +191,10 @@ def eliminate_equalities(P, q, A, b, cones) -> Reduced:
     P = np.broadcast_to(P, (T, n, n))
     eq, rest, kept = _zero_rows(cones)
     A_in = A[:, rest]
-    z0, N, factors = _null_space(A[:, eq], b[:, eq])
+    if null_space is not None and np.shape(null_space) == (T, n, n - len(eq)):
+        z0, N, factors = _given_null_space(A[:, eq], b[:, eq], null_space)
+    else:
+        z0, N, factors = _null_space(A[:, eq], b[:, eq])
     Pz0 = _mv(P, z0)
     Nt = np.transpose(N, (0, 2, 1))
     return Reduced(
@@ -192,7 +208,8 @@ def reduced_conic(conic: Conic) -> tuple[Conic, Reduced]:
     the original's: only a solver sees it) and the :class:`Reduced` that lifts answers.
     """
     red = eliminate_equalities(conic.P, conic.q[None], np.asarray(conic.A, float)[None],
-                               np.asarray(conic.b, float)[None], conic.cones)
+                               np.asarray(conic.b, float)[None], conic.cones,
+                               None if conic.null_space is None else conic.null_space[None])
     problem = Conic(checks=conic.checks, formulation=conic.formulation, P=red.P[0],
                     q=red.q[0], A=red.A[0], b=red.b[0], cones=red.cones)
     return problem, red

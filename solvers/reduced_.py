@@ -67,9 +67,10 @@ def _batched(solve_batch):
 
     def run(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
         start = time.perf_counter()
-        red = eliminate_equalities(batch.P, batch.q, batch.A, batch.b, batch.cones)
+        red = eliminate_equalities(batch.P, batch.q, batch.A, batch.b, batch.cones,
+                                   batch.null_space)
         inner = dataclasses.replace(batch, P=red.P, q=red.q, A=red.A, b=red.b,
-                                    cones=red.cones, problems=())
+                                    cones=red.cones, problems=(), null_space=None)
         reduced = time.perf_counter()
         out = solve_batch(inner, tol=tol, **options)
         lifting = time.perf_counter()

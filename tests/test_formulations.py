@@ -11,7 +11,7 @@ from cardan_forces.experiments import study
 from cardan_forces.experiments.analysis import solve_all
 from cardan_forces.experiments.study import intervals
 from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.formulations.convex import contacts
+from cardan_forces.formulations.convex import contacts, orthogonal_equalities
 from cardan_forces.formulations.sets import interval_slack
 from cardan_forces.solvers import Status, backends_for, solve
 
@@ -243,3 +243,24 @@ def test_friction_cones_hold_and_vanish_without_friction():
     assert np.abs(r.x[n:]).max() > 1.0
     y = [rough.index(f"bearing.input.{b}.y") for b in ("near", "far")]
     assert np.allclose(r.x[y], positive.x[y], atol=1e-6)
+
+
+def test_orthogonal_equalities_keep_the_feasible_set():
+    """Rows with a held column (one of a pair of opposite columns) describe the same
+    set as ``A x = b, x_held = 0``: mutually orthogonal rows, an orthonormal null-space
+    basis of the right dimension, and every ``x0 + N y`` solves the original system."""
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(4, 6))
+    A[:, 5] = -A[:, 4]  # a pair: holding column 5 leaves the column space as it is
+    A[3] = A[0] + A[1]  # a dependent row: rank 3
+    b = A @ np.array([1.0, -2.0, 0.5, 0.0, 3.0, 0.0])
+    rows, rhs, basis = orthogonal_equalities(A, b, held=[5])
+    gram = rows @ rows.T
+    assert gram == pytest.approx(np.diag(np.diag(gram)), abs=1e-12)
+    assert basis.shape == (6, 6 - 3 - 1)
+    assert basis.T @ basis == pytest.approx(np.eye(2), abs=1e-12)
+    x0 = rows.T @ (rhs / np.diag(gram))
+    for y in (np.zeros(2), np.array([1.0, -4.0])):
+        x = x0 + basis @ y
+        assert A @ x == pytest.approx(b, abs=1e-10)
+        assert x[5] == pytest.approx(0.0, abs=1e-12)

@@ -79,6 +79,25 @@ def problems():
     return {name: fbatch.build_problems(op, name, INSTANTS) for name in FORMULATIONS}
 
 
+@pytest.mark.parametrize("name", ["socp_face", "min_max", "compliance_hertz"])
+def test_formulations_null_space_is_the_factored_one(problems, name):
+    """A formulation's own null-space basis (``Conic.null_space``) spans what factoring
+    its zero-cone rows gives, and the reduction from it has the same least-norm point
+    and the same reduced objective at the same point of the subspace."""
+    conic = fbatch.as_conic(problems[name][1])
+    data = (conic.P, conic.q[None], conic.A[None], conic.b[None], conic.cones)
+    given, factored = (eliminate_equalities(*data, N) for N in (conic.null_space[None], None))
+    N, M = given.N[0], factored.N[0]
+    assert N.T @ N == pytest.approx(np.eye(N.shape[1]), abs=1e-12)
+    assert M @ (M.T @ N) == pytest.approx(N, abs=1e-10)  # the same subspace
+    assert given.z0 == pytest.approx(factored.z0, abs=1e-12)
+    rotation = M.T @ N  # y for the given basis is rotation @ y for the factored one
+    y = np.linspace(-1.0, 1.0, N.shape[1])
+    for red, point in ((given, y), (factored, rotation @ y)):
+        value = 0.5 * point @ red.P[0] @ point + red.q[0] @ point + red.offset[0]
+        assert value == pytest.approx(objective_value(conic, red.lift(point[None], None)[0][0]))
+
+
 def _agree(problem, record, fresh) -> None:
     assert record.status.has_answer and fresh.status.has_answer, record.message
     # complementarity is left out: in positive it is no constraint but a property of the
