@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
+from cardan_forces.driveline.determinacy import RANK_RTOL
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.kinematics import rest_geometry
 from cardan_forces.driveline.scene import Scene
@@ -222,44 +223,83 @@ def applies(op: Operator) -> None:
 
 def _to_forces(lay: _Layout, z: np.ndarray) -> np.ndarray:
     """Polar unknowns -> the 36 Cartesian forces (eqs. 11-14, 37-38, 44-45)."""
-    z = np.asarray(z, float)
     f, a = z[lay.mag], z[lay.ang]
     return lay.P @ (f * np.cos(a)) + lay.Q @ (f * np.sin(a)) + lay.L @ z
 
 
-def _dx_dz(lay: _Layout, z: np.ndarray) -> np.ndarray:
-    """Jacobian of :func:`_to_forces` (n_x, n_z)."""
-    f, a = z[lay.mag], z[lay.ang]
-    c, s = np.cos(a), np.sin(a)
-    J = lay.L.copy()
-    J[:, lay.mag] += lay.P * c + lay.Q * s
-    J[:, lay.ang] += (lay.Q * c - lay.P * s) * f
-    return J
-
-
-def _rim_moments(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Rim moments of the end faces (eqs. 35-36, 42-43 in eqs. 50-58), with the parts
-    their Jacobian reuses: ``(R, dirs, k, fsum, m)``.
+def _rim_terms(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per trunnion pair, the rim moment's size and direction (eqs. 33-36, 42-43): the
+    moment is ``kf (cos m U + sin m V)`` with ``kf = k (f_a + f_b)``,
+    ``k = -rt Sgn(sin((t_b - t_a)/2))`` and ``m = (t_a + t_b)/2``; returns
+    ``(kf, m, k, fsum)`` (``Sgn`` is piecewise constant: its derivative is 0).
     """
     ta, tb = z[lay.rim_t[:, 0]], z[lay.rim_t[:, 1]]
     fsum = z[lay.rim_f[:, 0]] + z[lay.rim_f[:, 1]]
-    m = 0.5 * (ta + tb)
     k = -lay.rim_r * np.sign(np.sin(0.5 * (tb - ta)))
-    dirs = lay.rim_U * np.cos(m) + lay.rim_V * np.sin(m)  # (rows, sides)
-    return dirs @ (k * fsum), dirs, k, fsum, m
+    return k * fsum, 0.5 * (ta + tb), k, fsum
 
 
-def _rim_jacobian(lay: _Layout, z: np.ndarray) -> np.ndarray:
-    """Jacobian of the rim moments (:func:`_rim_moments`); ``Sgn`` is piecewise
-    constant, so it has no derivative.
+def _rim_moments(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """The rim moments of the end faces in the Newton-Euler rows (eqs. 50-58)."""
+    kf, m = _rim_terms(lay, z)[:2]
+    return lay.rim_U @ (kf * np.cos(m)) + lay.rim_V @ (kf * np.sin(m))
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """The Newton-Euler rows (eqs. 49-58) at one instant with the operator's ``A`` taken
+    into the layout's maps once (``A P``, ``A Q``, ``A L``), so that an evaluation is one
+    product over the stacked polar terms instead of building the 36 forces first.
     """
-    R, dirs, k, fsum, m = _rim_moments(lay, z)
-    J = np.zeros((len(R), len(z)))
-    d_m = (lay.rim_V * np.cos(m) - lay.rim_U * np.sin(m)) * (0.5 * k * fsum)
-    for col in (0, 1):
-        np.add.at(J.T, lay.rim_f[:, col], (dirs * k).T)
-        np.add.at(J.T, lay.rim_t[:, col], d_m.T)
-    return J
+
+    B: np.ndarray  # (rows, 2 n_polar + n_z [+ 2 n_sides]): [A P, A Q, A L (, U, V)]
+    b: np.ndarray
+    n_polar: int
+    n_z: int
+
+
+def _rows(lay: _Layout, A: np.ndarray, b: np.ndarray, rim: bool) -> _Rows:
+    """:class:`_Rows` of ``A x(z) (+ rim moments) = b`` at one instant."""
+    blocks = [A @ lay.P, A @ lay.Q, A @ lay.L] + ([lay.rim_U, lay.rim_V] if rim else [])
+    return _Rows(B=np.hstack(blocks), b=b, n_polar=len(lay.mag), n_z=len(lay.names))
+
+
+def _residual(lay: _Layout, rows: _Rows, z: np.ndarray) -> np.ndarray:
+    """The paper's residual ``F(z)``: Newton-Euler rows (eqs. 49-58, with the rim
+    moments when ``rows`` has them) then the Fischer-Burmeister rows (eqs. 59-62).
+    """
+    f, a = z[lay.mag], z[lay.ang]
+    if rows.B.shape[1] > 2 * rows.n_polar + rows.n_z:
+        kf, m = _rim_terms(lay, z)[:2]
+        angle = np.concatenate([a, m])
+        c, s = np.cos(angle), np.sin(angle)
+        p = rows.n_polar
+        w = np.concatenate([f * c[:p], f * s[:p], z, kf * c[p:], kf * s[p:]])
+    else:
+        w = np.concatenate([f * np.cos(a), f * np.sin(a), z])
+    return np.concatenate([rows.B @ w - rows.b, _fb_rows(lay, z)])
+
+
+def _jacobian(lay: _Layout, rows: _Rows, z: np.ndarray) -> np.ndarray:
+    """Jacobian of :func:`_residual` (rows x n_z). The rim moments' columns: each pair's
+    two end-face forces and two contact angles enter once (distinct unknowns per pair).
+    """
+    p, n = rows.n_polar, rows.n_z
+    AP, AQ = rows.B[:, :p], rows.B[:, p:2 * p]
+    f, a = z[lay.mag], z[lay.ang]
+    c, s = np.cos(a), np.sin(a)
+    J = rows.B[:, 2 * p:2 * p + n].copy()
+    J[:, lay.mag] += AP * c + AQ * s
+    J[:, lay.ang] += (AQ * c - AP * s) * f
+    if rows.B.shape[1] > 2 * p + n:
+        U, V = rows.B[:, 2 * p + n:].reshape(len(rows.b), 2, -1).transpose(1, 0, 2)
+        kf, m, k = _rim_terms(lay, z)[:3]
+        cm, sm = np.cos(m), np.sin(m)
+        along, turn = (U * cm + V * sm) * k, (V * cm - U * sm) * (0.5 * kf)
+        for col in (0, 1):
+            J[:, lay.rim_f[:, col]] += along
+            J[:, lay.rim_t[:, col]] += turn
+    return np.vstack([J, _fb_jacobian(lay, z)])
 
 
 def _fb_rows(lay: _Layout, z: np.ndarray) -> np.ndarray:
@@ -313,30 +353,31 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
     lay = _layout(op, i, scene)
     A, b = op.A[i], op.b[i]
     scale = max(float(np.linalg.norm(b)), 1e-12)
+    rows = _rows(lay, A, b, rim)
 
     def fun(z):
-        z = np.asarray(z, float)
-        eq = A @ _to_forces(lay, z) - b
-        if rim:
-            eq = eq + _rim_moments(lay, z)[0]
-        return np.concatenate([eq, _fb_rows(lay, z)])
+        return _residual(lay, rows, np.asarray(z, float))
 
     def jac(z):
-        z = np.asarray(z, float)
-        eq = A @ _dx_dz(lay, z)
-        if rim:
-            eq = eq + _rim_jacobian(lay, z)
-        return np.vstack([eq, _fb_jacobian(lay, z)])
+        return _jacobian(lay, rows, np.asarray(z, float))
 
     if rim:
         # judged in the force space of ``socp_face``: the rim moments become end-face
         # moments, which the centre-of-pressure cone ||m|| <= rt f must contain
-        face = socp_face(op, i)
-        checks, to_forces = face.checks, _with_face_moments(lay, face, op)
+        plan = _face_plan(op, scene)
+        M = np.where(plan.sine, lay.rim_V[:, plan.side], lay.rim_U[:, plan.side])
+        checks = dataclasses.replace(plan.checks, A=np.hstack([A, M]), b=b)
+
+        def to_forces(z):
+            z = np.asarray(z, float)
+            x = _to_forces(lay, z)
+            return np.concatenate([x, _face_moments(lay, plan, M, x, z)])
     else:
         checks = ForceChecks(A=A, b=b, names=op.names, unilateral=op.unilateral,
                              pairs=op.pairs)
-        to_forces = lambda z: _to_forces(lay, z)  # noqa: E731
+
+        def to_forces(z):
+            return _to_forces(lay, np.asarray(z, float))
     return PaperNLS(
         checks=checks, formulation="paper", to_forces=to_forces,
         fun=fun, jac=jac, z0=_start(op, i, lay), unknown_names=lay.names,
@@ -345,23 +386,76 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
     )
 
 
-def _with_face_moments(lay: _Layout, face, op: Operator):
-    """Map polar unknowns to ``socp_face``'s forces: the Cartesian forces, then each end
-    face's moment. The rim moments of one trunnion pair are shared by its two faces in
-    proportion to their forces (both sit on the same diameter), found as the weighted
-    least-norm ``m`` with ``M m`` = the rim terms.
+@dataclass(frozen=True)
+class _FacePlan:
+    """``socp_face``'s force space for the paper's answers, the same at every instant
+    of an operator: its checks at the first instant (names, signs, pairs, cones; ``A``
+    and ``b`` are replaced per instant), and per end-face moment unknown its trunnion
+    pair (``side``), whether it lies along the pair's ``V`` (sine) rim direction or its
+    ``U`` (cosine) one, and which face of the pair owns it (``face``, 0 or 1).
+    ``pair_x`` (pairs, 2): the faces' force columns.
+    ``split``: every face has one moment along ``U`` and one along ``V`` and the pairs'
+    rim directions are independent, so :func:`_face_moments` has its closed form.
     """
-    n = len(op.names)
-    M = face.checks.A[:, n:]
-    owner = [cone.apex for cone in face.checks.cones for _ in cone.members]
 
-    def to_forces(z):
-        z = np.asarray(z, float)
-        x = _to_forces(lay, z)
-        weight = np.sqrt(np.maximum(x[owner], 0.0))
-        found = scipy.linalg.lstsq(M * weight, _rim_moments(lay, z)[0],
-                                   lapack_driver="gelsy", check_finite=False)[0]
-        m = weight * found  # the least-norm answer, as pinv's (a QR with pivoting: 2x)
-        return np.concatenate([x, m])
+    checks: ForceChecks
+    side: np.ndarray
+    sine: np.ndarray
+    face: np.ndarray
+    pair_x: np.ndarray
+    split: bool
 
-    return to_forces
+
+@LastMade
+def _face_plan(op: Operator, scene: Scene) -> _FacePlan:
+    """:class:`_FacePlan` of ``op``: ``socp_face``'s moment columns (the pin-frame axes
+    normal to each trunnion, on the pin's rows and the opposite on the yoke's) matched
+    to the rim directions ``U``, ``V`` of the paper's layout, both at the first instant.
+    """
+    face, lay = socp_face(op, 0).checks, _layout(op, 0, scene)
+    pair_x = np.argmax(lay.L[:, lay.rim_f], axis=0).reshape(-1, 2)  # unit columns of L
+    side, sine, which = [], [], []
+    for cone in face.cones:
+        s, f = (int(v[0]) for v in np.nonzero(pair_x == cone.apex))
+        for member in cone.members:
+            col = face.A[:, member]
+            along_v = bool(np.allclose(col, lay.rim_V[:, s]))
+            if not (along_v or np.allclose(col, lay.rim_U[:, s])):
+                raise ValueError(f"socp_face's moment {face.names[member]} is not along its "
+                                 "trunnion pair's rim directions")
+            side.append(s)
+            sine.append(along_v)
+            which.append(f)
+    side, sine, which = np.array(side, int), np.array(sine, bool), np.array(which, int)
+    n_pairs = len(pair_x)
+    per_face = np.zeros((n_pairs, 2, 2), int)
+    np.add.at(per_face, (side, which, sine.astype(int)), 1)
+    independent = np.linalg.matrix_rank(np.hstack([lay.rim_U, lay.rim_V])) == 2 * n_pairs
+    return _FacePlan(checks=face, side=side, sine=sine, face=which, pair_x=pair_x,
+                     split=bool(independent and np.all(per_face == 1)))
+
+
+def _face_moments(lay: _Layout, plan: _FacePlan, M: np.ndarray, x: np.ndarray,
+                  z: np.ndarray) -> np.ndarray:
+    """The end-face moments that carry the rim moments (eqs. 35-36, 42-43): the
+    weighted least-norm ``m`` with ``M m`` = the rim terms, weights ``max(f, 0)`` of
+    the owning faces. Where the pairs' rim directions are independent and every pair
+    has a pushing face, each pair's moment ``kf (cos m, sin m)`` is shared by its two
+    faces in proportion to their forces (both sit on the same diameter): that is the
+    least-norm answer in closed form. Otherwise (no pushing face under a nonzero rim
+    term) the least-squares split by the SVD with the package's rank rule
+    (:data:`RANK_RTOL`): ``M W`` has singular values at 1e-16 relative that are zeros,
+    on which a QR with pivoting (``gelsy``) or the SVD at machine precision misjudge the
+    rank and return a point other than the least-norm one.
+    """
+    kf, m = _rim_terms(lay, z)[:2]
+    push = np.maximum(x[plan.pair_x], 0.0)
+    total = push[:, 0] + push[:, 1]
+    if plan.split and not np.any((total <= 0.0) & (kf != 0.0)):
+        share = push / np.where(total > 0.0, total, 1.0)[:, None]
+        along = np.where(plan.sine, np.sin(m)[plan.side], np.cos(m)[plan.side])
+        return share[plan.side, plan.face] * kf[plan.side] * along
+    weight = np.sqrt(push[plan.side, plan.face])
+    found = scipy.linalg.lstsq(M * weight, _rim_moments(lay, z), cond=RANK_RTOL,
+                               check_finite=False)[0]
+    return weight * found

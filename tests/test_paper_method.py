@@ -6,7 +6,10 @@ import pytest
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.experiments.hard import CASES
 from cardan_forces.experiments.paper_method import multistart, solve_paper
+from cardan_forces.formulations.convex import socp_face
 from cardan_forces.formulations.paper import build_paper
 
 TIMES = [0.5, 1.3, 2.77]
@@ -175,3 +178,53 @@ def test_canonical_flips_magnitudes_without_changing_forces(op):
     np.testing.assert_allclose(problem.to_forces(flipped), problem.to_forces(z),
                                atol=1e-9 * np.abs(problem.to_forces(z)).max())
     assert problem.canonical(flipped)[1] is False
+
+
+def _least_norm_forces(problem, op, i, z):
+    """The forces, then the end-face moments as the weighted least-norm ``m`` with
+    ``M m`` = the rim terms of the paper's rows (``fun`` less ``A x - b``), by the
+    pseudo-inverse (SVD, rank rule 1e-9): the rule ``to_forces`` follows.
+    """
+    n = len(op.names)
+    x = problem.to_forces(z)[:n]
+    M = problem.checks.A[:, n:]
+    owner = [cone.apex for cone in problem.checks.cones for _ in cone.members]
+    weight = np.sqrt(np.maximum(x[owner], 0.0))
+    rim = problem.fun(z)[:len(M)] - (op.A[i] @ x - op.b[i])
+    return np.concatenate([x, weight * (np.linalg.pinv(M * weight, rcond=1e-9) @ rim)])
+
+
+@pytest.mark.parametrize("case", ["paper", "speed-1000", "gravity-horizontal"])
+def test_face_moments_are_the_weighted_least_norm_split(case):
+    """The closed-form split (each pair's rim moment shared in proportion to its faces'
+    forces) equals the least-norm solve on random points, with some faces idle and some
+    pulling (where no face of a pair pushes, the least-squares split is taken)."""
+    scene = (load_scene("paper") if case == "paper" else
+             next(c for c in CASES if c.name == case).scene("paper"))
+    op = build_operator(simulate(scene, scene.time.start_s + np.array([0.0, 1e-3, 7e-3])))
+    rng = np.random.default_rng(4)
+    for i in range(len(op.t)):
+        problem = build_paper(op, i)
+        top = np.abs(problem.z0).max()
+        for trial in range(12):
+            z = problem.z0 + 0.3 * top * rng.normal(size=problem.n)
+            faces = problem.end_faces
+            z[faces] = rng.uniform(0.0, top, len(faces)) if trial % 2 else z[faces]
+            z[faces[::2]] = 0.0 if trial % 3 == 0 else z[faces[::2]]
+            want = _least_norm_forces(problem, op, i, z)
+            got = problem.to_forces(z)
+            assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+            n = len(op.names)
+            M = problem.checks.A[:, n:]
+            assert np.allclose(M @ got[n:], M @ want[n:], atol=1e-12 * top)
+
+
+def test_checks_are_socp_face_s(op):
+    """The paper's answers are judged in ``socp_face``'s force space, built without it."""
+    for i in range(len(op.t)):
+        mine, theirs = build_paper(op, i).checks, socp_face(op, i).checks
+        np.testing.assert_array_equal(mine.A, theirs.A)
+        np.testing.assert_array_equal(mine.b, theirs.b)
+        assert (mine.names, mine.pairs, mine.cones) == (theirs.names, theirs.pairs,
+                                                        theirs.cones)
+        np.testing.assert_array_equal(mine.unilateral, theirs.unilateral)
