@@ -354,7 +354,7 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     unilateral = np.concatenate([op.unilateral, np.zeros(n - n0, bool)])
     check = ForceChecks(A=A, b=op.b[i], names=tuple(names), unilateral=unilateral,
                         pairs=op.pairs, cones=tuple(cones) + slip_cones(op, i))
-    rows, rhs_eq, basis = orthogonal_equalities(A, op.b[i], held=idle)
+    rows, rhs_eq, basis = orthogonal_equalities(A, op.b[i], held=_held(idle, cones))
     blocks = [rows]
     scale = _load_scale(op.b[i])
     rhs = [rhs_eq / scale]
@@ -375,6 +375,16 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
     return Conic(checks=check, formulation=formulation, to_forces=lambda z: scale * np.asarray(z),
                  P=P, q=np.zeros(n), A=np.vstack(blocks), b=np.concatenate(rhs),
                  cones=tuple(cone_list), null_space=basis)
+
+
+def _held(idle, cones) -> list[int]:
+    """Columns held at zero: the idle ones and the members of every cone whose apex is
+    an idle column alone (``||members|| <= scale * 0`` forces them to zero anyway; held,
+    they leave the reduced form's unknowns, which the cone would only pin down).
+    """
+    idle = list(idle)
+    return idle + [k for c in cones if c.apex in idle and not c.apex_terms
+                   for k in c.members]
 
 
 def _pin_frames(op: Operator, i: int) -> dict[str, np.ndarray]:
