@@ -80,11 +80,18 @@ def _pattern(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
 
 
 def _settings(tol, batch_size: int, options: dict):
+    """The settings of moreau: ``options`` named as a field of ``moreau.IPMSettings`` (e.g.
+    ``equilibrate_enable``) go to the interior-point settings, the others to
+    ``moreau.Settings``.
+    """
     import moreau
 
-    ipm = moreau.IPMSettings(**dict.fromkeys(TOLERANCES, tol)) if tol is not None else None
+    fields = moreau.IPMSettings.model_fields
+    ipm = {k: v for k, v in options.items() if k in fields}
+    ipm |= dict.fromkeys(TOLERANCES, tol) if tol is not None else {}
     return moreau.Settings(device="cpu", batch_size=batch_size,
-                           **({"ipm_settings": ipm} if ipm else {}), **options)
+                           **({"ipm_settings": moreau.IPMSettings(**ipm)} if ipm else {}),
+                           **{k: v for k, v in options.items() if k not in fields})
 
 
 CACHE_SIZE = 8
