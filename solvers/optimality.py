@@ -137,14 +137,15 @@ def measures(P, q, A, b, cones, z, y) -> dict[str, np.ndarray]:
     return stacked_measures(stacked_batch(P, q, A, b, cones), z, y)[0]
 
 
-def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[dict, np.ndarray,
-                                                                          np.ndarray]:
+def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[
+        dict, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`measures` of answers ``z`` with multipliers ``y`` to the stacked problems
-    ``st``, with the products ``P z`` and ``A'y`` it took (the solver's view reuses them).
+    ``st``, with what it took that the solver's view needs too (``P z``, ``A'y`` and
+    the dual cone's violation of ``y``), so they are computed once.
     """
-    Pz, Aty = times_P(st.P, z), st.Aty(y)
-    return (combine(Pz, st.q, Aty, np.einsum("tm,tm->t", st.b, y), z, y,
-                    dual_cone_violation(st.cones, y)), Pz, Aty)
+    Pz, Aty, dual_cone = times_P(st.P, z), st.Aty(y), dual_cone_violation(st.cones, y)
+    return (combine(Pz, st.q, Aty, np.einsum("tm,tm->t", st.b, y), z, y, dual_cone),
+            Pz, Aty, dual_cone)
 
 
 def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
@@ -247,12 +248,12 @@ def multipliers(st: Stacked, z: np.ndarray, given: list) -> tuple[np.ndarray, np
 def stacked_batch(P, q, A, b, cones) -> Stacked:
     """A batch's stacked arrays (``P`` (n, n), (T, n, n) or ``None``; ``A`` (T, m, n)) as
     a :class:`Stacked`, its products run as the per-instant checks run them
-    (:func:`_block`; a per-instant ``P`` as its :class:`Pattern`).
+    (:func:`_blocks`; a per-instant ``P`` as its :class:`Pattern`).
     """
     if P is not None and np.ndim(P) == 3:
         P = _one_or_pattern(np.asarray(P, float))
     return Stacked(P, np.asarray(q, float), np.asarray(b, float), tuple(cones),
-                   (_block(np.asarray(A, float)),))
+                   _blocks(np.asarray(A, float)))
 
 
 def unique_optimum(problem) -> bool:
@@ -360,26 +361,42 @@ def _block(stack: np.ndarray) -> np.ndarray | Pattern:
     return stack if 4 * nonzero >= stack.shape[1] * stack.shape[2] else Pattern.of(stack)
 
 
+def _blocks(stack: np.ndarray) -> tuple:
+    """A (T, r, n) stack of constraint rows as blocks in row order: each run of rows
+    that are the same at every instant as their one (r', n) matrix (a cone's rows: one
+    product serves all instants), each other run as :func:`_block` makes it. A conic
+    form's cone rows are most of its rows and rarely change with the instant, so the
+    stacked products read only the rows that do (a third of ``min_max``'s).
+    """
+    same = (np.all(stack == stack[:1], axis=(0, 2)) if len(stack)
+            else np.zeros(stack.shape[1], bool)).tolist()
+    starts = [r for r in range(len(same)) if r == 0 or same[r] != same[r - 1]]
+    return tuple(stack[0, a:b] if same[a] else _block(stack[:, a:b])
+                 for a, b in zip(starts, starts[1:] + [len(same)]))
+
+
 def _times(blk, z: np.ndarray) -> np.ndarray:
-    """A block's rows times ``z`` per instant: a bound block, dense or a pattern."""
+    """A block's rows times ``z`` per instant: a bound block, shared, dense or a pattern."""
     return blk[0] * z[:, blk[1]] if isinstance(blk, tuple) else times_P(blk, z)
 
 
 def _at(blk, k):
-    """Instant(s) ``k`` of a dense stack or pattern: a matrix for one, a stack for many."""
+    """Instant(s) ``k`` of a block of rows (shared, a dense stack or a pattern): a matrix
+    for one, a block for many.
+    """
     if isinstance(blk, Pattern):
         return blk.dense(k) if np.ndim(k) == 0 else blk.take(k)
-    return blk[k]
+    return blk if blk.ndim == 2 else blk[k]
 
 
 @dataclass(frozen=True)
 class Stacked:
     """T problems of one structure in Clarabel's standard form, stacked: ``P`` (n, n)
     when shared, a :class:`Pattern`, (T, n, n) (a batch's) or ``None``; ``q`` (T, n),
-    ``b`` (T, m), ``cones``; the rows of ``A`` as ``blocks`` in row order, each a dense
-    (T, r, n) stack, a :class:`Pattern` (:func:`_block`) or a bound block ``(sign,
-    columns)`` (rows ``sign * e_j'``, a QP's finite bounds), so bounds are never written
-    out as identity rows.
+    ``b`` (T, m), ``cones``; the rows of ``A`` as ``blocks`` in row order, each rows
+    shared by all instants (r, n), a dense (T, r, n) stack, a :class:`Pattern`
+    (:func:`_blocks`) or a bound block ``(sign, columns)`` (rows ``sign * e_j'``, a QP's
+    finite bounds), so bounds are never written out as identity rows.
     """
 
     P: np.ndarray | Pattern | None
@@ -401,8 +418,8 @@ class Stacked:
             part = y[:, row:row + rows]
             if isinstance(blk, Pattern):
                 out += blk.transposed_times(part)
-            elif isinstance(blk, np.ndarray):
-                out += (part[:, None, :] @ blk)[:, 0]  # stacked products: 2x einsum's
+            elif isinstance(blk, np.ndarray):  # stacked products: 2x einsum's
+                out += part @ blk if blk.ndim == 2 else (part[:, None, :] @ blk)[:, 0]
             else:
                 np.add.at(out, (slice(None), blk[1]), blk[0] * part)
             row += rows
@@ -434,11 +451,11 @@ def _stack_qp(problems) -> Stacked | None:
     first = problems[0]
     blocks, rhs, cones, ineq = [], [], [], None
     if first.A is not None:
-        blocks.append(_block(_stack(problems, "A")))
+        blocks += _blocks(_stack(problems, "A"))
         rhs.append(_stack(problems, "b"))
         cones.append(("zero", len(first.b)))
     if first.G is not None:
-        blocks.append(_block(_stack(problems, "G")))
+        blocks += _blocks(_stack(problems, "G"))
         rhs.append(_stack(problems, "h"))
         ineq = len(first.h)
     for name, sign in (("lb", -1.0), ("ub", 1.0)):
@@ -465,7 +482,7 @@ def _stack_ls(problems) -> Stacked:
     P = (np.diag(weights[0]) if np.all(weights == weights[0])
          else Pattern(weights, diagonal, diagonal, (n, n)))
     return Stacked(P, np.zeros((T, n)), _stack(problems, "b"), (("zero", m),),
-                   (_block(_stack(problems, "A")),))
+                   _blocks(_stack(problems, "A")))
 
 
 def conic_key(problem) -> tuple | None:
@@ -498,4 +515,4 @@ def stack_conic(problems) -> Stacked:
     conics = [convert(p, (Conic,)) for p in problems]
     P = None if conics[0].P is None else _shared_P(conics)
     return Stacked(P, _stack(conics, "q"), _stack(conics, "b"), conics[0].cones,
-                   (_block(_stack(conics, "A")),))
+                   _blocks(_stack(conics, "A")))

@@ -115,15 +115,19 @@ def conic_residuals(P, q, A, b, cones, z, y, *, check_dual_cone: bool) -> dict:
                           check_dual_cone=check_dual_cone)
 
 
-def residuals_from(Pz, q, Az, Aty, b, cones, z, y, *, check_dual_cone: bool) -> dict:
+def residuals_from(Pz, q, Az, Aty, b, cones, z, y, *, check_dual_cone: bool,
+                   dual_cone: np.ndarray | None = None) -> dict:
     """:func:`conic_residuals` from the products ``P z``, ``A z`` and ``A'y`` (for
-    stacked data whose products are cheaper than dense ones, e.g. a QP's bound rows).
+    stacked data whose products are cheaper than dense ones, e.g. a QP's bound rows),
+    and ``dual_cone``, the dual cone's violation of ``y`` where already measured
+    (:func:`~.optimality.dual_cone_violation`).
     """
     z, y, b, q = (np.asarray(v, float) for v in (z, y, b, q))
     bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
     dual = np.abs(Pz + q + Aty).max(axis=1, initial=0.0)
     if check_dual_cone:
-        dual = np.maximum(dual, dual_cone_violation(cones, y))
+        dual = np.maximum(dual, dual_cone_violation(cones, y) if dual_cone is None
+                          else dual_cone)
     with np.errstate(invalid="ignore", over="ignore"):
         out = {"primal": cone_violation(cones, b - Az), "dual": dual,
                "gap": np.abs(np.einsum("ti,ti->t", z, Pz) + np.einsum("ti,ti->t", q, z)

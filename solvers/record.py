@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import enum
 import functools
+import itertools
 import math
 import time
 from collections.abc import Iterator, Mapping
@@ -468,11 +469,11 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     began, T = time.perf_counter(), len(problems)
     references = references if references is not None else [None] * T
     received = received if received is not None else problems
-    started = _start_all(problems, outcomes)
     stacks = stacks if stacks is not None and stacks.holds(problems) else None
+    started = _start_all(problems, outcomes, None if stacks is None else stacks.A.shape[2])
     found = _residuals(problems, started.x, stacks)
-    primal = Residuals(**found).largest()
-    started.fail_nonfinite(np.flatnonzero(~np.isfinite(primal)))
+    primal = np.array([found[key] for key in Residuals.KEYS]).max(axis=0)
+    started.fail_nonfinite(np.flatnonzero(~np.isfinite(primal)).tolist())
     status = judge(started.status, primal)
     answered = (status == Status.SOLVED) | (status == Status.INACCURATE)
     views = _optimality_all(problems, outcomes, answered, primal,
@@ -484,20 +485,29 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     records = _records(problems, solver, outcomes, started, status, confirmed, answered,
                        found, distance, views, extra_setup_s)
     checks_s = (time.perf_counter() - began) / T if T else 0.0
-    for record, before in zip(records, elapsed_s if elapsed_s is not None else [0.0] * T):
-        object.__setattr__(record, "checks_s", checks_s)  # known once all are built
-        object.__setattr__(record, "wall_s", before + checks_s)
+    for values, before in zip(map(vars, records),  # known once all are built
+                              elapsed_s if elapsed_s is not None else [0.0] * T):
+        values["checks_s"], values["wall_s"] = checks_s, before + checks_s
     return records
 
 
 @dataclass
 class _Started:
-    """Status, forces and notes of T outcomes before the checks (:func:`_start_all`)."""
+    """Status, forces and notes of T outcomes before the checks (:func:`_start_all`):
+    ``messages`` the outcomes' own, ``notes`` the notes of the instants the start added
+    one to (their message first), kept apart so the others cost nothing.
+    """
 
     solver_status: list
     status: list
     x: list
-    notes: list
+    messages: list
+    notes: dict = field(default_factory=dict)
+
+    def note(self, k: int, text: str) -> None:
+        """Add ``text`` to instant ``k``'s notes."""
+        first = [self.messages[k]] if self.messages[k] else []
+        self.notes[k] = [*self.notes.get(k, first), text]
 
     def fail_nonfinite(self, candidates) -> None:
         """Mark ``failed`` the answers among ``candidates`` whose forces are NaN or inf."""
@@ -505,7 +515,7 @@ class _Started:
             if self.status[k].has_answer and not np.all(np.isfinite(self.x[k])):
                 self.status[k] = Status.FAILED
                 self.x[k] = np.full(len(self.x[k]), np.nan)
-                self.notes[k] = [*self.notes[k], "ValueError: solver returned NaN or inf"]
+                self.note(k, "ValueError: solver returned NaN or inf")
 
 
 _STATUS_OF = {**{s.value: s for s in Status}, **{s: s for s in Status}}
@@ -513,25 +523,27 @@ _STATUS_OF = {**{s.value: s for s in Status}, **{s: s for s in Status}}
 dict lookup (an enum call costs as much as the rest of an instant's start)."""
 
 
-def _start_all(problems, outcomes) -> _Started:
+def _start_all(problems, outcomes, n: int | None = None) -> _Started:
     """:class:`_Started` of every outcome: its status (an unknown one is ``failed``)
-    and, where it has an answer, its forces by ``problem.to_forces``.
+    and, where it has an answer, its forces by ``problem.to_forces`` (``n``: the number
+    of forces of every problem, where one structure fixes it).
     """
     T = len(problems)
-    started = _Started([None] * T, [None] * T, [None] * T, [None] * T)
-    for k, (problem, outcome) in enumerate(zip(problems, outcomes)):
-        n = len(problem.checks.names)
-        notes = [outcome.message] if outcome.message else []
-        status = _STATUS_OF.get(outcome.status)
-        if status is None:
-            status, notes = Status.FAILED, [*notes, f"unknown status {outcome.status!r}"]
-        x = None
-        if status in _ANSWERED:
-            x, why = _forces(problem, outcome, n)
+    status = [_STATUS_OF.get(o.status) for o in outcomes]
+    started = _Started(status, [None] * T, [None] * T, [o.message or "" for o in outcomes])
+    for k, first in enumerate(status):
+        if first is None:
+            status[k] = Status.FAILED
+            started.note(k, f"unknown status {outcomes[k].status!r}")
+        elif first in _ANSWERED:
+            x, why = _forces(problems[k], outcomes[k], n or len(problems[k].checks.names))
+            started.x[k] = x
             if why:
-                status, notes = Status.FAILED, [*notes, why]
-        started.solver_status[k], started.status[k], started.notes[k] = status, status, notes
-        started.x[k] = np.full(n, np.nan) if x is None else x
+                status[k] = Status.FAILED
+                started.note(k, why)
+    for k in [k for k, x in enumerate(started.x) if x is None]:
+        started.x[k] = np.full(n or len(problems[k].checks.names), np.nan)
+    started.status = list(status)
     return started
 
 
@@ -564,22 +576,22 @@ def _defaults(cls) -> tuple:
                   functools.partial(lambda value: value, f.default)) for f in fields(cls))
 
 
-def _instances(cls, columns: dict, T: int) -> list:
-    """T instances of the frozen dataclass ``cls`` from ``columns`` (field -> T values;
-    fields not given take their defaults). Each instance's ``__dict__`` is filled at
-    once instead of through the frozen ``__init__``'s one ``object.__setattr__`` per
-    field: a record costs 1 us instead of 6, which was the largest part of the checks
-    of a run. The values must already be of the fields' types (no ``__post_init__``);
-    the instances compare, print and refuse assignment as any other.
+def _instances(cls, columns: dict, T: int, shared: dict | None = None) -> list:
+    """T instances of the frozen dataclass ``cls`` from ``columns`` (field -> T values)
+    and ``shared`` (field -> the one value of every instance; fields in neither take
+    their defaults). Each instance's ``__dict__`` is filled at once instead of through
+    the frozen ``__init__``'s one ``object.__setattr__`` per field: a record costs 1 us
+    instead of 6, which was the largest part of the checks of a run. The values must
+    already be of the fields' types (no ``__post_init__``); the instances compare,
+    print and refuse assignment as any other.
     """
-    for name, make in _defaults(cls):
-        if name not in columns:
-            columns[name] = [make()] * T
-    names, out, new = tuple(columns), [], object.__new__
-    for values in zip(*columns.values()):
-        item = new(cls)
-        item.__dict__.update(zip(names, values))
-        out.append(item)
+    shared = shared or {}
+    shared = {**{name: make() for name, make in _defaults(cls)
+                 if name not in columns and name not in shared}, **shared}
+    names, out = tuple(columns), list(map(object.__new__, itertools.repeat(cls, T)))
+    for values, row in zip(map(vars, out), zip(*columns.values())):
+        values.update(shared)
+        values.update(zip(names, row))
     return out
 
 
@@ -603,33 +615,49 @@ def _records(problems, solver, outcomes, started: _Started, status, confirmed, a
     """
     T = len(problems)
     residual = {key: found[key].tolist() for key in Residuals.KEYS}
-    notes = [_notes(started.notes[k], started.status[k], status[k], confirmed[k],
-                    {key: residual[key][k] for key in Residuals.KEYS})
-             if status[k] != started.status[k] or confirmed[k] != status[k]
-             else started.notes[k] for k in range(T)]
-    measured = zip(views.primal.tolist(), views.dual.tolist(), views.gap.tolist(),
-                   distance[1])
-    optimality = _instances(Optimality, dict(zip(
-        ("primal", "dual", "gap", "distance"),
-        map(list, zip(*[[None if v != v else v for v in values[:3]] + [values[3]]
-                        for values in measured])))), T) if T else []
+    optimality = _instances(Optimality, {
+        "primal": _floats(views.primal), "dual": _floats(views.dual),
+        "gap": _floats(views.gap), "distance": distance[1]}, T)
     residuals = _instances(Residuals, {**residual, "reference": distance[0]}, T)
     extra = extra_setup_s if extra_setup_s is not None else [0.0] * T
+    z = [o.z for o in outcomes]
     return _instances(Record, {
-        "formulation": [p.formulation for p in problems], "solver": [solver] * T,
-        "status": [_STATUS_OF[s] for s in confirmed],  # np.where made some plain str
+        "formulation": [p.formulation for p in problems],
+        "status": [_STATUS_OF[s] for s in confirmed.tolist()],  # np.where made some str
         "x": started.x,
         "names": [tuple(p.checks.names) for p in problems],
         "iterations": [None if o.iterations is None else int(o.iterations) for o in outcomes],
         "setup_s": [o.setup_s + e for o, e in zip(outcomes, extra)],
         "solve_s": [o.solve_s for o in outcomes], "residuals": residuals,
-        "message": ["; ".join(n) for n in notes],
-        "z": [None if o.z is None else np.asarray(o.z) for o in outcomes],
+        "message": _messages(started, status, confirmed, residual),
+        "z": [v if v is None or type(v) is np.ndarray else np.asarray(v) for v in z],
         "objective": [float(o.objective) if a and o.objective is not None else None
-                      for o, a in zip(outcomes, answered)],
-        "optimality": optimality, "duals": [str(d) for d in views.duals],
-        "gap_kind": [str(g) for g in views.kinds], "y": views.y,
-        "solver_status": started.solver_status, "solver_optimality": views.solver}, T)
+                      for o, a in zip(outcomes, answered.tolist())],
+        "optimality": optimality, "duals": views.duals.tolist(),
+        "gap_kind": views.kinds.tolist(), "y": views.y,
+        "solver_status": started.solver_status, "solver_optimality": views.solver}, T,
+        {"solver": solver})
+
+
+def _floats(values: np.ndarray) -> list:
+    """``values`` as floats, ``None`` for NaN (a measure the record has none of)."""
+    out = values.tolist()
+    return [None if v != v else v for v in out] if np.isnan(values).any() else out
+
+
+def _messages(started: _Started, status, confirmed, residual: dict) -> list[str]:
+    """Each record's message: the outcome's, with the start's notes and why the
+    package changed the solver's status, where it did (``residual``: key -> T values).
+    """
+    messages = list(started.messages)
+    changed = (status != np.array(started.status, object)) | (confirmed != status)
+    for k in sorted(started.notes.keys() | set(np.flatnonzero(changed).tolist())):
+        notes = started.notes.get(k, [messages[k]] if messages[k] else [])
+        if changed[k]:
+            notes = _notes(notes, started.status[k], status[k], confirmed[k],
+                           {key: residual[key][k] for key in Residuals.KEYS})
+        messages[k] = "; ".join(notes)
+    return messages
 
 
 def _notes(notes, first, judged, confirmed, found) -> list[str]:
@@ -667,20 +695,20 @@ def _optimality_all(problems, outcomes, answered, primal, optimal_values, receiv
     """The package's optimality (relative) and the solver's (absolute, where the
     problem has a conic form) of T answers; NaN marks a measure a record has none of.
     """
-    T = len(problems)
+    T, unanswered = len(problems), ~answered
     views = _Views(primal=primal.copy(), dual=np.full(T, np.nan), gap=np.full(T, np.nan),
                    duals=np.full(T, "none", object), kinds=np.full(T, "", object),
                    y=[None] * T, solver=[None] * T)
-    views.primal[~answered] = math.inf
-    views.dual[~answered], views.gap[~answered] = math.inf, math.inf
-    live = [k for k in range(T) if answered[k]]
+    views.primal[unanswered] = math.inf
+    views.dual[unanswered], views.gap[unanswered] = math.inf, math.inf
+    live = np.flatnonzero(answered).tolist()
     if stacks is not None and stacks.conic is not None:
         if live:
             st = stacks.conic if len(live) == T else stacks.conic.take(live)
-            _conic(problems, outcomes, np.array(live), views, optimal_values, received, st)
+            _conic(problems, outcomes, live, views, optimal_values, received, st)
         return views
     for idx in _groups([problems[k] for k in live], _kind_key):
-        idx = np.array(live)[idx]
+        idx = [live[j] for j in idx.tolist()]
         problem = problems[idx[0]]
         if isinstance(problem, LCP):
             _lcp(problems, outcomes, idx, views)
@@ -712,7 +740,7 @@ def _lcp(problems, outcomes, idx, views: _Views) -> None:
         views.y[k] = w[j]
 
 
-def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
+def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, received,
            st: Stacked | None = None) -> None:
     """Optimality of answers to problems with one conic form (:func:`stack_conic`):
     the package's relative measures with the solver's multipliers (recovered where it
@@ -720,26 +748,44 @@ def _conic(problems, outcomes, idx, views: _Views, optimal_values, received,
     where it gave them. ``st``: the problems at ``idx`` stacked beforehand.
     """
     st = st if st is not None else stack_conic([problems[k] for k in idx])
-    z = np.array([outcomes[k].z for k in idx], float)
-    y, given = multipliers(st, z, [outcomes[k].y for k in idx])
-    found, Pz, Aty = stacked_measures(st, z, y)  # its products serve both views
+    chosen = [outcomes[k] for k in idx]
+    z = np.array([o.z for o in chosen], float)
+    y, given = multipliers(st, z, [o.y for o in chosen])
+    found, Pz, Aty, dual_cone = stacked_measures(st, z, y)  # products serve both views
     gap, kinds = found["gap"], np.full(len(idx), "duality", object)
-    best = np.array([np.nan if optimal_values[k] is None else optimal_values[k] for k in idx])
-    objective_gap = ~given & ~np.isnan(best)
-    gap = np.where(objective_gap, np.abs(found["objective"] - best)
-                   / np.maximum(np.abs(best), 1e-300), gap)
-    kinds[objective_gap] = "objective"
+    if not given.all():  # where the solver gave no multipliers, an objective gap
+        best = np.array([np.nan if optimal_values[k] is None else optimal_values[k]
+                         for k in idx])
+        objective_gap = ~given & ~np.isnan(best)
+        gap = np.where(objective_gap, np.abs(found["objective"] - best)
+                       / np.maximum(np.abs(best), 1e-300), gap)
+        kinds[objective_gap] = "objective"
     views.dual[idx], views.gap[idx], views.kinds[idx] = found["dual"], gap, kinds
-    views.duals[idx] = np.where(given, "solver", "recovered")
-    for j, k in enumerate(idx):
-        views.y[k] = y[j]
+    duals = np.full(len(idx), "recovered", object)
+    duals[given] = "solver"
+    views.duals[idx] = duals
+    for k, row in zip(idx, y):
+        views.y[k] = row
     if given.any():
-        as_qp = isinstance(received[idx[0]], (LS, QP))
-        zs, ys = z[given], y[given]
-        sub = st if given.all() else st.take(np.flatnonzero(given))
-        solver = residuals_from(Pz[given], sub.q, sub.Az(zs), Aty[given], sub.b, st.cones,
-                                zs, ys, check_dual_cone=not as_qp)
-        found = _instances(Optimality, {key: solver[key].tolist()
-                                        for key in ("primal", "dual", "gap")}, len(zs))
-        for k, optimality in zip(idx[given], found):
-            views.solver[k] = optimality
+        _solver_view(st, given, z, y, Pz, Aty, dual_cone,
+                     isinstance(received[idx[0]], (LS, QP)),
+                     list(itertools.compress(idx, given.tolist())), views)
+
+
+def _solver_view(st: Stacked, given, z, y, Pz, Aty, dual_cone, as_qp: bool, idx: list,
+                 views: _Views) -> None:
+    """The solver's optimality (:func:`~.qp_measures.residuals_from`) of the answers
+    whose multipliers the solver gave (``given``, at instants ``idx``), from the
+    products the package's view took (``as_qp``: the backend received a QP or a least
+    norm, whose multipliers are not sign-checked).
+    """
+    if not given.all():
+        st, z, y, Pz, Aty, dual_cone = (st.take(np.flatnonzero(given)), z[given], y[given],
+                                        Pz[given], Aty[given], dual_cone[given])
+    Pz = np.ascontiguousarray(Pz)  # a pattern's are column-major: einsum rounds by layout
+    solver = residuals_from(Pz, st.q, st.Az(z), Aty, st.b, st.cones, z, y,
+                            check_dual_cone=not as_qp, dual_cone=dual_cone)
+    found = _instances(Optimality, {key: solver[key].tolist()
+                                    for key in ("primal", "dual", "gap")}, len(z))
+    for k, optimality in zip(idx, found):
+        views.solver[k] = optimality
