@@ -240,11 +240,11 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c):
     jac = model.jacobian_compiled(0.0, y)
     n, nb = len(y), model.n_bodies
     lu, pivots = np.zeros((6 * nb, 6 * nb)), np.zeros(6 * nb, kernels.F_INT_nptype)
-    blocks = np.zeros((nb, 4, 4))
-    assert kernels._factor(jac, c, lu, pivots, blocks, np.zeros((nb, 4, 3))) == 0
+    blocks, coupling = np.zeros((nb, 4, 4)), np.zeros((nb, 4, 3))
+    assert kernels._factor(jac, c, lu, pivots, blocks, coupling) == 0
     b = np.random.default_rng(2).standard_normal(n)
     x = b.copy()
-    kernels._solve(jac, c, lu, pivots, blocks, x, np.zeros((2, n)))
+    kernels._solve(jac, c, lu, pivots, blocks, coupling, x, np.zeros((2, n)))
     matrix = np.eye(n) - c * jac
     dense = np.linalg.solve(matrix, b)
     assert np.abs(matrix @ x - b).max() <= 1e-13 * np.abs(matrix).max() * np.abs(x).max()
