@@ -221,85 +221,105 @@ def applies(op: Operator) -> None:
             "the paper's 3 shafts, 2 joints and 2 bearings on each end shaft)")
 
 
-def _to_forces(lay: _Layout, z: np.ndarray) -> np.ndarray:
-    """Polar unknowns -> the 36 Cartesian forces (eqs. 11-14, 37-38, 44-45)."""
+@dataclass(frozen=True)
+class _Terms:
+    """What maps the polar unknowns to the forces at every instant of an operator: the
+    layout's indices (``lay``, rim directions left out; ``take``: the unknowns the
+    polar terms read, in :func:`_polar`'s order) and the forces as a product
+    ``x = forces @ w[:2p + n]`` of the polar terms ``w``.
+    """
+
+    lay: _Layout
+    take: np.ndarray
+    neg_rt: np.ndarray  # (pairs, 1): -rt per trunnion pair
+    forces: np.ndarray  # (n_x, 2p + n_z): [P, Q, L]
+    rim: bool
+
+
+@LastMade
+def _terms(op: Operator, scene: Scene, rim: bool) -> _Terms:
+    """:class:`_Terms` of ``op`` (with the rim moments or not), made once per operator."""
+    lay = _structure(op, scene)[0]
+    take = np.concatenate([lay.mag, lay.ang] + ([lay.rim_t.T.ravel(), lay.rim_f.T.ravel()]
+                                                if rim else []))
+    return _Terms(lay=lay, take=take, neg_rt=-lay.rim_r[:, None],
+                  forces=np.hstack([lay.P, lay.Q, lay.L]), rim=rim)
+
+
+def _polar(t: _Terms, zt: np.ndarray) -> np.ndarray:
+    """The polar terms ``w = [f cos a, f sin a, z (, kf cos m, kf sin m)]`` (len(w), T)
+    of the points ``zt`` (n_z, T), one per column (eqs. 11-14, 37-38, 44-45; the rim's
+    eqs. 33-36, 42-43: per trunnion pair ``kf = k (f_a + f_b)``,
+    ``k = -rt Sgn(sin((t_b - t_a)/2))``, ``m = (t_a + t_b)/2``).
+    """
+    g = zt[t.take]
+    p = len(t.lay.mag)
+    f, a = g[:p], g[p:2 * p]
+    polar = [f * np.cos(a), f * np.sin(a), zt]
+    if t.rim:
+        S = len(t.neg_rt)
+        ta, tb, fa, fb = (g[2 * p + q * S:2 * p + (q + 1) * S] for q in range(4))
+        kf = t.neg_rt * np.sign(np.sin(0.5 * (tb - ta))) * (fa + fb)
+        m = 0.5 * (ta + tb)
+        polar += [kf * np.cos(m), kf * np.sin(m)]
+    return np.concatenate(polar)
+
+
+def _cartesian(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """Polar unknowns -> the 36 Cartesian forces (eqs. 11-14, 37-38, 44-45) in the
+    residual's order of operations (its roots move with its last bits:
+    :func:`build_paper`).
+    """
     f, a = z[lay.mag], z[lay.ang]
     return lay.P @ (f * np.cos(a)) + lay.Q @ (f * np.sin(a)) + lay.L @ z
 
 
-def _rim_terms(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Per trunnion pair, the rim moment's size and direction (eqs. 33-36, 42-43): the
-    moment is ``kf (cos m U + sin m V)`` with ``kf = k (f_a + f_b)``,
-    ``k = -rt Sgn(sin((t_b - t_a)/2))`` and ``m = (t_a + t_b)/2``; returns
-    ``(kf, m, k, fsum)`` (``Sgn`` is piecewise constant: its derivative is 0).
+def _rim_moments(lay: _Layout, z: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Rim moments of the end faces (eqs. 35-36, 42-43 in eqs. 50-58), with the parts
+    their Jacobian reuses: ``(R, dirs, k, fsum, m)``.
     """
-    ta, tb = z[lay.rim_t[:, 0]], z[lay.rim_t[:, 1]]
-    fsum = z[lay.rim_f[:, 0]] + z[lay.rim_f[:, 1]]
+    t, f = z[lay.rim_t], z[lay.rim_f]
+    ta, tb = t[:, 0], t[:, 1]
+    fsum = f[:, 0] + f[:, 1]
+    m = 0.5 * (ta + tb)
     k = -lay.rim_r * np.sign(np.sin(0.5 * (tb - ta)))
-    return k * fsum, 0.5 * (ta + tb), k, fsum
+    dirs = lay.rim_U * np.cos(m) + lay.rim_V * np.sin(m)  # (rows, sides)
+    return dirs @ (k * fsum), dirs, k, fsum, m
 
 
-def _rim_moments(lay: _Layout, z: np.ndarray) -> np.ndarray:
-    """The rim moments of the end faces in the Newton-Euler rows (eqs. 50-58)."""
-    kf, m = _rim_terms(lay, z)[:2]
-    return lay.rim_U @ (kf * np.cos(m)) + lay.rim_V @ (kf * np.sin(m))
-
-
-@dataclass(frozen=True)
-class _Rows:
-    """The Newton-Euler rows (eqs. 49-58) at one instant with the operator's ``A`` taken
-    into the layout's maps once (``A P``, ``A Q``, ``A L``), so that an evaluation is one
-    product over the stacked polar terms instead of building the 36 forces first.
+def _residual(lay: _Layout, A: np.ndarray, b: np.ndarray, rim: bool,
+              z: np.ndarray) -> np.ndarray:
+    """The paper's residual ``F(z)``: the Newton-Euler rows (eqs. 49-58, with the rim
+    moments when ``rim``), then the Fischer-Burmeister rows (eqs. 59-62).
     """
-
-    B: np.ndarray  # (rows, 2 n_polar + n_z [+ 2 n_sides]): [A P, A Q, A L (, U, V)]
-    b: np.ndarray
-    n_polar: int
-    n_z: int
-
-
-def _rows(lay: _Layout, A: np.ndarray, b: np.ndarray, rim: bool) -> _Rows:
-    """:class:`_Rows` of ``A x(z) (+ rim moments) = b`` at one instant."""
-    blocks = [A @ lay.P, A @ lay.Q, A @ lay.L] + ([lay.rim_U, lay.rim_V] if rim else [])
-    return _Rows(B=np.hstack(blocks), b=b, n_polar=len(lay.mag), n_z=len(lay.names))
+    eq = A @ _cartesian(lay, z) - b
+    if rim:
+        eq = eq + _rim_moments(lay, z)[0]
+    return np.concatenate([eq, _fb_rows(lay, z)])
 
 
-def _residual(lay: _Layout, rows: _Rows, z: np.ndarray) -> np.ndarray:
-    """The paper's residual ``F(z)``: Newton-Euler rows (eqs. 49-58, with the rim
-    moments when ``rows`` has them) then the Fischer-Burmeister rows (eqs. 59-62).
+def _jacobian(lay: _Layout, A: np.ndarray, rim: bool, z: np.ndarray) -> np.ndarray:
+    """Jacobian of :func:`_residual`: ``A dx/dz`` (plus the rim moments' derivative;
+    ``Sgn`` is piecewise constant, so it has none) over the Fischer-Burmeister rows'.
     """
-    f, a = z[lay.mag], z[lay.ang]
-    if rows.B.shape[1] > 2 * rows.n_polar + rows.n_z:
-        kf, m = _rim_terms(lay, z)[:2]
-        angle = np.concatenate([a, m])
-        c, s = np.cos(angle), np.sin(angle)
-        p = rows.n_polar
-        w = np.concatenate([f * c[:p], f * s[:p], z, kf * c[p:], kf * s[p:]])
-    else:
-        w = np.concatenate([f * np.cos(a), f * np.sin(a), z])
-    return np.concatenate([rows.B @ w - rows.b, _fb_rows(lay, z)])
-
-
-def _jacobian(lay: _Layout, rows: _Rows, z: np.ndarray) -> np.ndarray:
-    """Jacobian of :func:`_residual` (rows x n_z). The rim moments' columns: each pair's
-    two end-face forces and two contact angles enter once (distinct unknowns per pair).
-    """
-    p, n = rows.n_polar, rows.n_z
-    AP, AQ = rows.B[:, :p], rows.B[:, p:2 * p]
     f, a = z[lay.mag], z[lay.ang]
     c, s = np.cos(a), np.sin(a)
-    J = rows.B[:, 2 * p:2 * p + n].copy()
-    J[:, lay.mag] += AP * c + AQ * s
-    J[:, lay.ang] += (AQ * c - AP * s) * f
-    if rows.B.shape[1] > 2 * p + n:
-        U, V = rows.B[:, 2 * p + n:].reshape(len(rows.b), 2, -1).transpose(1, 0, 2)
-        kf, m, k = _rim_terms(lay, z)[:3]
-        cm, sm = np.cos(m), np.sin(m)
-        along, turn = (U * cm + V * sm) * k, (V * cm - U * sm) * (0.5 * kf)
-        for col in (0, 1):
+    dx = lay.L.copy()
+    dx[:, lay.mag] += lay.P * c + lay.Q * s
+    dx[:, lay.ang] += (lay.Q * c - lay.P * s) * f
+    eq = A @ dx
+    if rim:
+        R, dirs, k, fsum, m = _rim_moments(lay, z)
+        along = dirs * k
+        turn = (lay.rim_V * np.cos(m) - lay.rim_U * np.sin(m)) * (0.5 * k * fsum)
+        J = np.zeros((len(R), len(z)))
+        for col in (0, 1):  # a pair's two forces and two angles: distinct unknowns
             J[:, lay.rim_f[:, col]] += along
             J[:, lay.rim_t[:, col]] += turn
-    return np.vstack([J, _fb_jacobian(lay, z)])
+        eq = eq + J
+    fb = np.zeros((len(lay.fb), len(z)))
+    fb[np.arange(len(lay.fb))[:, None], lay.fb] = _fb_slopes(lay, z)
+    return np.vstack([eq, fb])
 
 
 def _fb_rows(lay: _Layout, z: np.ndarray) -> np.ndarray:
@@ -308,18 +328,16 @@ def _fb_rows(lay: _Layout, z: np.ndarray) -> np.ndarray:
     return np.hypot(a, b) - a - b
 
 
-def _fb_jacobian(lay: _Layout, z: np.ndarray) -> np.ndarray:
-    """The (generalized) Jacobian of the Fischer-Burmeister rows (:func:`_fb_rows`)."""
-    a, b = z[lay.fb[:, 0]], z[lay.fb[:, 1]]
-    r = np.hypot(a, b)
-    safe = np.where(r > 0, r, 1.0)
-    da = np.where(r > 0, a / safe - 1.0, _FB_ORIGIN)
-    db = np.where(r > 0, b / safe - 1.0, _FB_ORIGIN)
-    J = np.zeros((len(a), len(z)))
-    rows = np.arange(len(a))
-    J[rows, lay.fb[:, 0]] = da
-    J[rows, lay.fb[:, 1]] = db
-    return J
+def _fb_slopes(lay: _Layout, z: np.ndarray) -> np.ndarray:
+    """The (generalized) derivatives (pairs, 2) of the Fischer-Burmeister rows
+    (:func:`_fb_rows`) in their pair's two unknowns ``a, b``: ``a / r - 1``,
+    ``b / r - 1`` with ``r = hypot(a, b)``, and :data:`_FB_ORIGIN` at ``r = 0``.
+    """
+    ab = z[lay.fb]
+    r = np.hypot(ab[:, 0], ab[:, 1])[:, None]
+    out, live = np.full(ab.shape, _FB_ORIGIN), r > 0
+    np.divide(ab, r, out=out, where=live)
+    return np.subtract(out, 1.0, out=out, where=live)
 
 
 def _start(op: Operator, i: int, lay: _Layout) -> np.ndarray:
@@ -347,19 +365,23 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
     force space (forces plus end-face moments, the rim moments being such moments on
     the cone's boundary), so the package's residuals check the paper's own model;
     ``paper_residual(z)`` is ``||F(z)|| / ||b||`` of the paper's equations.
+
+    ``fun`` and ``jac`` keep their order of operations: the system is singular at its
+    roots (rank 33 of 34, the closed loop's self-stress, condition 1e17-1e18), so the
+    root a solve reaches moves along that direction with the residual's last bits
+    (``F (1 + 2^-52)`` moves ``fsolve``'s forces by 12 % on ``paper`` at 0 s).
     """
     scene = op.scene if scene is None else scene
     applies(op)
-    lay = _layout(op, i, scene)
+    lay, t = _layout(op, i, scene), _terms(op, scene, rim)
     A, b = op.A[i], op.b[i]
     scale = max(float(np.linalg.norm(b)), 1e-12)
-    rows = _rows(lay, A, b, rim)
 
     def fun(z):
-        return _residual(lay, rows, np.asarray(z, float))
+        return _residual(lay, A, b, rim, np.asarray(z, float))
 
     def jac(z):
-        return _jacobian(lay, rows, np.asarray(z, float))
+        return _jacobian(lay, A, rim, np.asarray(z, float))
 
     if rim:
         # judged in the force space of ``socp_face``: the rim moments become end-face
@@ -367,17 +389,11 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
         plan = _face_plan(op, scene)
         M = np.where(plan.sine, lay.rim_V[:, plan.side], lay.rim_U[:, plan.side])
         checks = dataclasses.replace(plan.checks, A=np.hstack([A, M]), b=b)
-
-        def to_forces(z):
-            z = np.asarray(z, float)
-            x = _to_forces(lay, z)
-            return np.concatenate([x, _face_moments(lay, plan, M, x, z)])
+        to_forces = _PaperForces(t, plan, M, np.hstack([lay.rim_U, lay.rim_V]))
     else:
         checks = ForceChecks(A=A, b=b, names=op.names, unilateral=op.unilateral,
                              pairs=op.pairs)
-
-        def to_forces(z):
-            return _to_forces(lay, np.asarray(z, float))
+        to_forces = _PaperForces(t)
     return PaperNLS(
         checks=checks, formulation="paper", to_forces=to_forces,
         fun=fun, jac=jac, z0=_start(op, i, lay), unknown_names=lay.names,
@@ -392,17 +408,19 @@ class _FacePlan:
     of an operator: its checks at the first instant (names, signs, pairs, cones; ``A``
     and ``b`` are replaced per instant), and per end-face moment unknown its trunnion
     pair (``side``), whether it lies along the pair's ``V`` (sine) rim direction or its
-    ``U`` (cosine) one, and which face of the pair owns it (``face``, 0 or 1).
-    ``pair_x`` (pairs, 2): the faces' force columns.
-    ``split``: every face has one moment along ``U`` and one along ``V`` and the pairs'
-    rim directions are independent, so :func:`_face_moments` has its closed form.
+    ``U`` (cosine) one, which face owns it (``slot`` in ``faces``: the force columns of
+    the two faces of pair ``s`` at ``2 s`` and ``2 s + 1``) and where its pair's rim term
+    along that direction sits in the polar terms ``w`` (``rim_at``). ``split``: every face has one
+    moment along ``U`` and one along ``V`` and the pairs' rim directions are
+    independent, so :func:`_face_moments` has its closed form.
     """
 
     checks: ForceChecks
     side: np.ndarray
     sine: np.ndarray
-    face: np.ndarray
-    pair_x: np.ndarray
+    slot: np.ndarray
+    rim_at: np.ndarray
+    faces: np.ndarray
     split: bool
 
 
@@ -431,31 +449,78 @@ def _face_plan(op: Operator, scene: Scene) -> _FacePlan:
     per_face = np.zeros((n_pairs, 2, 2), int)
     np.add.at(per_face, (side, which, sine.astype(int)), 1)
     independent = np.linalg.matrix_rank(np.hstack([lay.rim_U, lay.rim_V])) == 2 * n_pairs
-    return _FacePlan(checks=face, side=side, sine=sine, face=which, pair_x=pair_x,
+    first = 2 * len(lay.mag) + len(lay.names)  # the rim terms' place in w
+    return _FacePlan(checks=face, side=side, sine=sine, slot=2 * side + which,
+                     rim_at=first + sine * n_pairs + side, faces=pair_x.ravel(),
                      split=bool(independent and np.all(per_face == 1)))
 
 
-def _face_moments(lay: _Layout, plan: _FacePlan, M: np.ndarray, x: np.ndarray,
-                  z: np.ndarray) -> np.ndarray:
-    """The end-face moments that carry the rim moments (eqs. 35-36, 42-43): the
-    weighted least-norm ``m`` with ``M m`` = the rim terms, weights ``max(f, 0)`` of
-    the owning faces. Where the pairs' rim directions are independent and every pair
-    has a pushing face, each pair's moment ``kf (cos m, sin m)`` is shared by its two
-    faces in proportion to their forces (both sit on the same diameter): that is the
-    least-norm answer in closed form. Otherwise (no pushing face under a nonzero rim
-    term) the least-squares split by the SVD with the package's rank rule
-    (:data:`RANK_RTOL`): ``M W`` has singular values at 1e-16 relative that are zeros,
-    on which a QR with pivoting (``gelsy``) or the SVD at machine precision misjudge the
-    rank and return a point other than the least-norm one.
+@dataclass(frozen=True, eq=False)
+class _PaperForces:
+    """The map from the paper's polar unknowns to the forces it is judged on, at one
+    instant: the 36 Cartesian forces (eqs. 11-14, 37-38, 44-45), then with the rim
+    each end face's moment (:func:`_face_moments`; ``M``: the moments' columns in the
+    rows, ``UV``: the rim directions ``[U, V]`` at this instant). Called on one point
+    ``z`` (n_z,); :meth:`stacked` maps the points of many instants at once.
     """
-    kf, m = _rim_terms(lay, z)[:2]
-    push = np.maximum(x[plan.pair_x], 0.0)
-    total = push[:, 0] + push[:, 1]
-    if plan.split and not np.any((total <= 0.0) & (kf != 0.0)):
-        share = push / np.where(total > 0.0, total, 1.0)[:, None]
-        along = np.where(plan.sine, np.sin(m)[plan.side], np.cos(m)[plan.side])
-        return share[plan.side, plan.face] * kf[plan.side] * along
-    weight = np.sqrt(push[plan.side, plan.face])
-    found = scipy.linalg.lstsq(M * weight, _rim_moments(lay, z), cond=RANK_RTOL,
-                               check_finite=False)[0]
-    return weight * found
+
+    terms: _Terms
+    plan: _FacePlan | None = None
+    M: np.ndarray | None = field(default=None, repr=False)
+    UV: np.ndarray | None = field(default=None, repr=False)
+
+    def __call__(self, z) -> np.ndarray:
+        return self.stacked([self], np.asarray(z, float)[None])[0]
+
+    @staticmethod
+    def stacked(maps: list[_PaperForces], Z: np.ndarray) -> np.ndarray:
+        """The forces (T, n) of the points ``Z`` (T, n_z), row ``k`` by ``maps[k]``; the
+        maps share their :class:`_Terms` (instants of one operator).
+        """
+        t = maps[0].terms
+        w = _polar(t, np.asarray(Z, float).T)
+        X = t.forces @ w[:t.forces.shape[1]]  # (n_x, T)
+        if not t.rim:
+            return X.T
+        m, exact = _face_moments(maps[0].plan, w, X)
+        if not exact.all():
+            for k in np.flatnonzero(~exact):
+                m[:, k] = maps[k].least_squares(w[:, k], X[:, k])
+        return np.concatenate([X, m]).T
+
+    def least_squares(self, w: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """The end-face moments as the weighted least-norm (least-squares) ``m`` with
+        ``M m`` = the rim terms, by the SVD with the package's rank rule
+        (:data:`RANK_RTOL`): where a pair has no pushing face under a nonzero rim term.
+        ``M W`` has singular values at 1e-16 relative that are zeros, on which a QR with
+        pivoting (``gelsy``) or the SVD at machine precision misjudge the rank and return
+        a point other than the least-norm one.
+        """
+        plan = self.plan
+        weight = np.sqrt(np.maximum(x[plan.faces[plan.slot]], 0.0))
+        rim = self.UV @ w[len(w) - self.UV.shape[1]:]
+        found = scipy.linalg.lstsq(self.M * weight, rim, cond=RANK_RTOL,
+                                   check_finite=False)[0]
+        return weight * found
+
+
+def _face_moments(plan: _FacePlan, w: np.ndarray, X: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The end-face moments that carry the rim moments (eqs. 35-36, 42-43) at a stack
+    of points (``w``, ``X``: their polar terms and forces, one column each): the
+    weighted least-norm ``m`` with ``M m`` = the rim terms, weights
+    ``max(f, 0)`` of the owning faces. Where the pairs' rim directions are independent
+    and every pair with a rim term has a pushing face, each pair's moment
+    ``kf (cos m, sin m)`` is shared by its two faces in proportion to their forces (both
+    sit on the same diameter): the least-norm answer in closed form. Returns the
+    moments and where they are that answer (elsewhere :meth:`_PaperForces.least_squares`).
+    """
+    push = np.maximum(X[plan.faces], 0.0)  # (2 pairs, T)
+    total = push[0::2] + push[1::2]
+    pushing = total > 0.0
+    exact = pushing.all(axis=0)
+    if not exact.all():  # a pair without a pushing face: exact where it has no rim term
+        S = len(total)
+        exact = (pushing | ((w[-2 * S:-S] == 0.0) & (w[-S:] == 0.0))).all(axis=0)
+    share = push[plan.slot] / (total + ~pushing)[plan.side]
+    return share * w[plan.rim_at], exact & plan.split

@@ -228,3 +228,19 @@ def test_checks_are_socp_face_s(op):
         assert (mine.names, mine.pairs, mine.cones) == (theirs.names, theirs.pairs,
                                                         theirs.cones)
         np.testing.assert_array_equal(mine.unilateral, theirs.unilateral)
+
+
+def test_stacked_forces_are_the_per_instant_maps(paper):
+    """The map over many instants at once gives each instant's own map's forces, also
+    where a pair without a pushing face sends an instant to the least-squares split."""
+    op = build_operator(simulate(paper, [0.2, 0.9, 1.6, 2.3]))
+    problems = [build_paper(op, i) for i in range(len(op.t))]
+    rng = np.random.default_rng(5)
+    Z = np.array([p.z0 + rng.normal(size=p.n) for p in problems])
+    faces = problems[0].end_faces
+    Z[:, faces] = np.abs(Z[:, faces]) + 1.0
+    Z[1, faces[:2]] = -1.0  # both faces of one pair pull, under a nonzero rim term
+    maps = [p.to_forces for p in problems]
+    stacked = type(maps[0]).stacked(maps, Z)
+    each = np.array([m(z) for m, z in zip(maps, Z)])
+    np.testing.assert_allclose(stacked, each, rtol=0, atol=1e-13 * np.abs(each).max())
