@@ -483,15 +483,29 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
                   P=np.diag(p / p.max()), q=np.zeros(n), A=A, b=b,
                   lb=np.where(op.unilateral, 0.0, -np.inf), G=G if len(G) else None,
                   h=np.zeros(len(G)) if len(G) else None)
-    # conic form: z = (x, r_c per contact, s_c per power-law contact); the second face
-    # of each pair is held at 0, the first one signed
+    return _compliance_conic(op, i, laws, is_bearing, law == "hertz", use_gaps, sb, name)
+
+
+def _compliance_conic(op: Operator, i: int, laws, is_bearing, hertz: bool, use_gaps: bool,
+                      sb: float, name: str) -> Conic:
+    """:func:`compliance`'s conic form, ``z = (x, then r_c and s_c per contact)``; the
+    second face of each end-face pair is held at 0, the first one signed.
+
+    Every contact has ``r_c >= ||f_c||`` (a second-order cone) and its energy on
+    ``r_c`` (``P`` for a linear law), plus ``s_c`` (a power cone) for a Hertz law;
+    except a Hertz law on one component without gap (an end face's signed force),
+    which puts that component in the power cone itself (the cone bounds ``|z|``): the
+    same optimum with fewer unknowns and cone rows. (A linear law's energy put on the
+    force itself, without ``r_c``, left Clarabel's equilibrium at 6e-8 of the load at
+    1e6 N m, against 1e-9 on ``r_c``.)
+    """
+    n = len(op.names)
     merged = {b_: a_ for a_, b_ in op.pairs}
     kept = [c for c, (group, _, _) in enumerate(laws) if group[0] not in merged]
     laws, is_bearing = [laws[c] for c in kept], [is_bearing[c] for c in kept]
-    nc = len(laws)
-    power = [c for c, bearing in enumerate(is_bearing) if law == "hertz" and not bearing]
-    nz = n + nc + len(power)
-    P, q = np.zeros((nz, nz)), np.zeros(nz)
+    power = [hertz and not bearing for bearing in is_bearing]
+    radius = [use_gaps or not p or len(g) > 1 for (g, _, _), p in zip(laws, power)]
+    nz = n + sum(radius) + sum(power)
     rows, rhs_eq, basis = orthogonal_equalities(op.A[i], op.b[i], held=list(merged))
     blocks = [np.hstack([rows, np.zeros((len(rows), nz - n))])]
     rhs, cones = [rhs_eq / sb], [("zero", len(rows))]
@@ -501,25 +515,8 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     blocks.append(np.vstack([_minus_identity_rows(uni, nz), G]))
     rhs.append(np.zeros(len(uni) + len(G)))
     cones.append(("nonneg", len(uni) + len(G)))
-    for c, ((group, k, gap), bearing) in enumerate(zip(laws, is_bearing)):
-        r = n + c
-        soc = np.zeros((len(group) + 1, nz))
-        soc[0, r] = -1.0
-        soc[np.arange(1, len(group) + 1), group] = -1.0
-        blocks.append(soc)
-        rhs.append(np.zeros(len(group) + 1))
-        cones.append(("soc", len(group) + 1))
-        q[r] = gap if use_gaps else 0.0
-        if c in power:
-            s = n + nc + power.index(c)
-            q[s] = n_exp / (n_exp + 1.0) * k ** (-1.0 / n_exp) * sb ** (1.0 / n_exp)
-            cone = np.zeros((3, nz))
-            cone[0, s], cone[2, r] = -1.0, -1.0
-            blocks.append(cone)
-            rhs.append(np.array([0.0, 1.0, 0.0]))
-            cones.append(("pow", n_exp / (n_exp + 1.0)))
-        else:
-            P[r, r] = sb / (k if bearing else k * d_ref ** (n_exp - 1.0))
+    P, q = _contact_energies(op.scene, laws, is_bearing, power, radius, use_gaps, sb, n,
+                             (blocks, rhs, cones))
     unit = max(np.abs(q).max(), P.max())
 
     def to_forces(z):
@@ -529,9 +526,40 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
         return x
 
     return Conic(checks=checks(op, i), formulation=name, to_forces=to_forces, P=P / unit,
-                 q=q / unit,
-                 A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones),
+                 q=q / unit, A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones),
                  null_space=_padded(basis, nz - n))
+
+
+def _contact_energies(scene, laws, is_bearing, power, radius, use_gaps, sb, n, out):
+    """``P`` and ``q`` of :func:`_compliance_conic`'s energies; each contact's cone rows
+    are appended to ``out`` = ``(blocks, rhs, cones)``. Units as in :func:`compliance`.
+    """
+    n_exp, d_ref = scene.contact.exponent, scene.contact.damping_full_depth_m
+    nz = n + sum(radius) + sum(power)
+    P, q = np.zeros((nz, nz)), np.zeros(nz)
+    blocks, rhs, cones = out
+    unknowns = iter(range(n, nz))
+    for (group, k, gap), bearing, pw, rad in zip(laws, is_bearing, power, radius):
+        load = next(unknowns) if rad else group[0]  # what the energy acts on
+        if rad:
+            soc = np.zeros((len(group) + 1, nz))
+            soc[0, load] = -1.0
+            soc[np.arange(1, len(group) + 1), group] = -1.0
+            blocks.append(soc)
+            rhs.append(np.zeros(len(group) + 1))
+            cones.append(("soc", len(group) + 1))
+            q[load] = gap if use_gaps else 0.0
+        if pw:
+            s = next(unknowns)
+            q[s] = n_exp / (n_exp + 1.0) * k ** (-1.0 / n_exp) * sb ** (1.0 / n_exp)
+            cone = np.zeros((3, nz))
+            cone[0, s], cone[2, load] = -1.0, -1.0
+            blocks.append(cone)
+            rhs.append(np.array([0.0, 1.0, 0.0]))
+            cones.append(("pow", n_exp / (n_exp + 1.0)))
+        else:
+            P[load, load] = sb / (k if bearing else k * d_ref ** (n_exp - 1.0))
+    return P, q
 
 
 def _linear(op: Operator, column: int) -> bool:
