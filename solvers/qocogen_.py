@@ -53,6 +53,14 @@ SETTINGS = ("max_iters", "bisect_iters", "iter_ref_iters", "kkt_static_reg",
             "kkt_dynamic_reg", "abstol", "reltol", "abstol_inacc", "reltol_inacc")
 """Settings of the generated solver an option may set (the others keep its defaults)."""
 
+DEFAULTS = {"iter_ref_iters": 0}
+"""Settings that differ from the generated solver's own defaults (an option overrides
+them): no iterative refinement of the KKT solves. On the reduced ``min_max`` and
+``socp_face`` (1001 instants each) it changed no status or iteration count and left the
+package's measures at the same levels (dual residual at the default tolerance 4.5e-10
+with it, 5.8e-10 without; at 1e-10 4e-13 and 3e-11, the gap unchanged), and it costs a
+fifth of the solve."""
+
 STATUS = {1: "solved", 2: "inaccurate", 4: "inaccurate"}
 """Generated solver status -> ours; anything else is failed."""
 
@@ -206,7 +214,7 @@ def _options(tol, options: dict) -> np.ndarray:
     unknown = set(options) - set(SETTINGS)
     if unknown:
         raise TypeError(f"qocogen takes no option {', '.join(sorted(unknown))}")
-    chosen = settings.options_for(TOLERANCES, tol) | options
+    chosen = DEFAULTS | settings.options_for(TOLERANCES, tol) | options
     return np.array([float(chosen.get(name, np.nan)) for name in SETTINGS])
 
 
