@@ -15,6 +15,7 @@ per figure what the numbers say next to the paper's text.
 from __future__ import annotations
 
 import datetime
+import functools
 import importlib.util
 import os
 import signal
@@ -78,6 +79,10 @@ ENGINE_BOUND_INSTANTS = 11
 ENGINE_RTOL = 1e-4
 """A load of MuJoCo's is inside the rigid band within this share of the largest load:
 its soft constraints leave ``A x = b`` at ~1e-5 (module doc of the engine's tests)."""
+LONGEST_FIRST = ("paper", "min_max", "positive", "compliance")
+"""The rigid-model methods by their cost over a figure's window, longest first (CPU s
+per 1001 instants on ``paper-fig15``, one run: 4.1, 2.3, 1.2, 0.5): the order in which
+Fig. 15's jobs are queued for the worker processes."""
 BOUND_INSTANTS = 41
 """Instants (evenly spread) at which Figs. 13-15's solution-set intervals are computed."""
 QUICK_S = 0.15
@@ -559,8 +564,7 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     out.mkdir(parents=True, exist_ok=True)
     runs.start(([scene] if shown else []) + fig15)
     try:  # the rigid-model work first, while the penalty simulations run
-        work15 = [(s, o, runs.submit(_rigid_work_of, s, times, (15,), rigid))
-                  for s, o in fig15_ops]  # in the workers when there are workers
+        work15 = _submit_fig15(runs, fig15_ops, times, rigid)  # in the workers, if any
         work = _rigid_work(op, [f for f in figs if f in (13, 14)], rigid, progress)
         compliance = _compliance_histories(runs, scene) if runs.penalty and shown else None
         engine = _engine_work(scene, times, progress) if ENGINE in methods else None
@@ -599,11 +603,44 @@ def _rigid_work(op: Operator, figs, rigid, progress) -> dict:
     return work
 
 
-def _rigid_work_of(scene: Scene, times: np.ndarray, figs, rigid) -> dict:
-    """:func:`_rigid_work` on ``scene``'s motion at ``times`` (what a worker process runs:
-    the same motion and operator as this process builds, from the same scene).
+@functools.lru_cache(maxsize=len(FIG15_SCENES))
+def _operator_of(scene: Scene, times: tuple[float, ...]) -> Operator:
+    """``scene``'s operator at ``times``, as this process builds it (a worker process
+    builds it once per scene for all its jobs on that scene).
     """
-    return _rigid_work(build_operator(simulate(scene, times)), figs, rigid, None)
+    return build_operator(simulate(scene, np.array(times)))
+
+
+def _history_job(scene: Scene, times: tuple[float, ...], method: str) -> History:
+    """A worker's job: ``method``'s history on ``scene`` at ``times``."""
+    return history(_operator_of(scene, times), method)
+
+
+def _bounds_job(scene: Scene, times: tuple[float, ...]) -> dict:
+    """A worker's job: the rigid set's bounds of Figs. 14-15 on ``scene`` at ``times``."""
+    op = _operator_of(scene, times)
+    return set_bounds(op, bearing_quantities(op))
+
+
+def _submit_fig15(runs: _Runs, fig15_ops, times: np.ndarray, rigid) -> list:
+    """Fig. 15's rigid work in the worker processes: one job per scene and method and
+    one per scene's bounds, queued behind the penalty simulations longest first
+    (:data:`LONGEST_FIRST`), so that the two workers end together (a single job per
+    scene leaves one worker some 6 s of CPU behind the other). Returns ``(scene,
+    operator, {method or "bounds": Future})``, the dict ``None`` without workers.
+    """
+    if runs.pool is None:
+        return [(s, o, None) for s, o in fig15_ops]
+    order = sorted(rigid, key=lambda m: LONGEST_FIRST.index(m) if m in LONGEST_FIRST
+                   else len(LONGEST_FIRST))
+    jobs = {s.name: {} for s, _ in fig15_ops}
+    key = tuple(float(t) for t in times)
+    for method in order:
+        for s, _ in fig15_ops:
+            jobs[s.name][method] = runs.submit(_history_job, s, key, method)
+    for s, _ in fig15_ops:
+        jobs[s.name]["bounds"] = runs.submit(_bounds_job, s, key)
+    return [(s, o, jobs[s.name]) for s, o in fig15_ops]
 
 
 def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs, work,
@@ -702,16 +739,16 @@ def _gravity(scene: Scene) -> str:
 def _fig15(runs: _Runs, scenes_work, rigid, out: Path, formats) -> list:
     """Fig. 15 on each of its scenes (a figure ``fig15_<scene>`` each), and a section
     saying which of them matches the paper's text (both verdicts ``agrees``).
-    ``scenes_work``: ``(scene, operator, its rigid work's Future or None)``; ``None``:
-    that work is done here.
+    ``scenes_work``: ``(scene, operator, its jobs' Futures or None)``
+    (:func:`_submit_fig15`); ``None``: that work is done here.
     """
     sections, verdicts = [], []
-    for scene, op, work in scenes_work:
-        if work is None:
+    for scene, op, jobs in scenes_work:
+        if jobs is None:
             work = _rigid_work(op, (15,), rigid, runs.progress)
         else:
             runs.progress(f"repro: waiting for the fig 15 methods on {scene.name} ...")
-            work = work.result()
+            work = {"hist": {m: jobs[m].result() for m in rigid}, 14: jobs["bounds"].result()}
         pen = runs.penalty_result(scene, f"Fig. 15 ({scene.name})")
         hist = dict(work["hist"]) | ({} if pen is None else
                                      {PENALTY: penalty_history(pen, op.names)})
