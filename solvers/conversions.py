@@ -73,8 +73,9 @@ class Reduced:
     pseudo-inverse of ``A_eq'`` and so the equality rows' multipliers;
     ``rows_eq`` / ``rows_in`` the full problem's row indices of each part; ``offset``
     (T,) the objective at ``z0`` (the reduced objective plus it is the full one);
-    ``P_full`` (T, n, n), ``q_full`` (T, n) and ``A_in`` (T, m_in, n) the full problem's
-    data that :meth:`lift` reads.
+    ``P_full`` (T, n, n), or its diagonal (T, n) when every instant's is diagonal,
+    ``q_full`` (T, n) and ``A_in`` (T, m_in, n) the full problem's data that
+    :meth:`lift` reads.
     """
 
     P: np.ndarray
@@ -101,8 +102,7 @@ class Reduced:
         z = self.z0 + _mv(self.N, y)
         if dual_in is None:
             return z, None
-        g = -(_mv(self.P_full, z) + self.q_full
-              + _mv(np.transpose(self.A_in, (0, 2, 1)), dual_in))
+        g = -(_times(self.P_full, z) + self.q_full + (dual_in[:, None] @ self.A_in)[:, 0])
         Q, R, U = self.factors
         lam = _triangular(R, _mv(np.transpose(Q, (0, 2, 1)), g))
         lam = lam if U is None else _mv(U, lam)
@@ -116,6 +116,28 @@ def _mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:
     slower on these shapes).
     """
     return (M @ v[..., None])[..., 0]
+
+
+def _times(P: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``P[t] @ v[t]`` for ``P`` stacked (T, n, n) or diagonal (T, n)."""
+    return P * v if P.ndim == 2 else _mv(P, v)
+
+
+def _diagonal(P: np.ndarray) -> np.ndarray | None:
+    """The diagonal of ``P`` ((n, n) or (T, n, n)) if every matrix is diagonal, else
+    None: one count of nonzeros, cheaper than the dense products it saves.
+    """
+    d = np.diagonal(P, axis1=-2, axis2=-1)
+    return d if np.count_nonzero(P) == np.count_nonzero(d) else None
+
+
+def _part(M: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``M[:, rows]``: a view, not a copy, when ``rows`` are one ascending run (the
+    zero cone first, as in every formulation here).
+    """
+    if len(rows) and rows[-1] - rows[0] == len(rows) - 1:
+        return M[:, rows[0]:rows[-1] + 1]
+    return M[:, rows]
 
 
 def _triangular(R: np.ndarray, v: np.ndarray, transposed: bool = False) -> np.ndarray:
@@ -188,18 +210,20 @@ def eliminate_equalities(P, q, A, b, cones, null_space=None) -> Reduced:
     A, b, q = np.asarray(A, float), np.asarray(b, float), np.asarray(q, float)
     T, _, n = A.shape
     P = np.zeros((n, n)) if P is None else np.asarray(P, float)
-    P = np.broadcast_to(P, (T, n, n))
+    d = _diagonal(P)
+    P = np.broadcast_to(P, (T, n, n)) if d is None else np.broadcast_to(d, (T, n))
     eq, rest, kept = _zero_rows(cones)
-    A_in = A[:, rest]
+    A_in, A_eq, b_eq = _part(A, rest), _part(A, eq), _part(b, eq)
     if null_space is not None and np.shape(null_space) == (T, n, n - len(eq)):
-        z0, N, factors = _given_null_space(A[:, eq], b[:, eq], null_space)
+        z0, N, factors = _given_null_space(A_eq, b_eq, null_space)
     else:
-        z0, N, factors = _null_space(A[:, eq], b[:, eq])
-    Pz0 = _mv(P, z0)
+        z0, N, factors = _null_space(A_eq, b_eq)
+    Pz0 = _times(P, z0)
     Nt = np.transpose(N, (0, 2, 1))
     return Reduced(
-        P=Nt @ P @ N, q=_mv(Nt, Pz0 + q), A=A_in @ N, b=b[:, rest] - _mv(A_in, z0),
-        cones=kept, z0=z0, N=N, factors=factors, rows_eq=eq, rows_in=rest,
+        P=(Nt @ P @ N) if d is None else (Nt * P[:, None, :]) @ N, q=_mv(Nt, Pz0 + q),
+        A=A_in @ N, b=_part(b, rest) - _mv(A_in, z0), cones=kept, z0=z0, N=N,
+        factors=factors, rows_eq=eq, rows_in=rest,
         offset=np.einsum("tn,tn->t", z0, 0.5 * Pz0 + q), P_full=P, q_full=q, A_in=A_in)
 
 

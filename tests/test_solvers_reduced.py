@@ -8,6 +8,8 @@ problem (residuals, dual residual and gap with the lifted multipliers).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from cardan_forces.driveline.dynamics import simulate
@@ -62,6 +64,22 @@ def test_dependent_rows_reduce_at_their_rank():
     # multipliers are the least-norm ones, split evenly
     _, y = red.lift(np.zeros((1, 2)), np.zeros((1, 3)))
     assert y[0] == pytest.approx([-0.5, -0.5, 0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("P", [np.diag([1.0, 2.0, 3.0]),
+                               np.array([[2.0, 1.0, 0.0], [1.0, 2.0, 0.0], [0.0, 0.0, 1.0]])])
+def test_reduced_objective_and_rows_are_the_full_ones(P):
+    """At any ``y``, the reduced objective plus the offset is the full objective at the
+    lifted ``z``, and the reduced cone rows are the full ones there (a diagonal ``P``
+    takes a shortcut of its own, a full one the general products)."""
+    problem = dataclasses.replace(_simplex(np.array([[1.0, 1.0, 1.0]]), np.array([3.0])),
+                                  P=P, q=np.array([0.5, -1.0, 0.0]))
+    inner, red = reduced_conic(problem)
+    for y in (np.zeros(2), np.array([0.3, -1.2])):
+        z = red.lift(y[None], None)[0][0]
+        full = 0.5 * z @ P @ z + problem.q @ z
+        assert 0.5 * y @ inner.P @ y + inner.q @ y + red.offset[0] == pytest.approx(full)
+        assert inner.b - inner.A @ y == pytest.approx(problem.b[1:] - problem.A[1:] @ z)
 
 
 def test_rank_changing_between_instants_is_refused():
