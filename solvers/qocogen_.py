@@ -235,6 +235,20 @@ def _pattern(mask: np.ndarray):
     return spa.csc_matrix((np.ones(len(rows)), rows, indptr), shape=mask.shape), rows, cols
 
 
+def _entries(M: np.ndarray, mask: np.ndarray, rows_of: np.ndarray, T: int):
+    """The CSC pattern of ``mask`` (over the rows ``rows_of`` of the stack ``M``) and
+    its entries' values per instant, C-ordered (T, k) as the driver reads them: one
+    ``np.take`` on the flattened rows (``M[:, rows, cols]`` comes out ordered by entry,
+    not by instant, and reordering it cost 6 times the gather); a shared ``P`` is
+    broadcast.
+    """
+    pattern, rows, cols = _pattern(mask)
+    picked = np.take(M.reshape(len(M), -1), rows_of[rows] * M.shape[2] + cols, axis=1)
+    if len(picked) != T:
+        picked = np.ascontiguousarray(np.broadcast_to(picked, (T, len(rows))))
+    return pattern, picked
+
+
 def _data(batch: ConicBatch):
     """The batch in the generated solver's terms: ``(dims, patterns, values, rows)``;
     values ``P, c, A, b, G, h`` per instant (matrices as their entries in CSC order of
@@ -245,18 +259,32 @@ def _data(batch: ConicBatch):
     eq, cone, nonneg, sizes = layout(batch.cones)
     P = np.zeros((1, n, n)) if batch.P is None else np.asarray(batch.P, float)
     P = P if P.ndim == 3 else P[None]
-    A = np.asarray(batch.A, float)
-    patterns, entries = [], []
-    for M, mask in ((P, np.triu(np.any(P != 0, axis=0))), (A[:, eq], None),
-                    (A[:, cone], None)):
-        pattern, rows, cols = _pattern(np.any(M != 0, axis=0) if mask is None else mask)
-        patterns.append(pattern)
-        entries.append(np.ascontiguousarray(np.broadcast_to(M[:, rows, cols],
-                                                            (T, len(rows)))))
-    b = np.asarray(batch.b, float)
+    A, b = np.asarray(batch.A, float), np.asarray(batch.b, float)
+    nonzero = np.any(A != 0, axis=0)
+    parts = (_entries(P, np.triu(np.any(P != 0, axis=0)), np.arange(n), T),
+             _entries(A, nonzero[eq], eq, T), _entries(A, nonzero[cone], cone, T))
+    patterns, entries = zip(*parts)
     values = (entries[0], np.ascontiguousarray(batch.q, float), entries[1],
-              np.ascontiguousarray(b[:, eq]), entries[2], np.ascontiguousarray(b[:, cone]))
-    return (n, len(cone), len(eq), nonneg, tuple(sizes)), patterns, values, (eq, cone)
+              np.take(b, eq, axis=1), entries[2], np.take(b, cone, axis=1))
+    return (n, len(cone), len(eq), nonneg, tuple(sizes)), list(patterns), values, (eq, cone)
+
+
+def _statuses(codes: np.ndarray, info: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Our status and a message per instant from the driver's status codes and ``info``
+    (objective, dual residual, gap): by table over all instants at once, a message
+    written only where an instant is not solved.
+    """
+    table = np.array([STATUS.get(k, "failed") for k in range(len(NAMES))], object)
+    known = (codes >= 0) & (codes < len(NAMES))
+    status = np.full(len(codes), "failed", object)
+    status[known] = table[codes[known]]
+    status[(codes == 1) & (np.max(info[:, 1:], axis=1) > CLAIM_TOL)] = "inaccurate"
+    messages = np.full(len(codes), "", object)
+    for t in np.flatnonzero(status != "solved"):
+        k, (_, dual, gap) = int(codes[t]), info[t]
+        messages[t] = (f"qocogen: {NAMES[k] if 0 <= k < len(NAMES) else k} (dual residual "
+                       f"{dual:.1e}, gap {gap:.1e})")
+    return status, tuple(messages)
 
 
 def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
@@ -282,13 +310,7 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     solved = time.perf_counter()
     duals = np.empty((T, len(eq) + len(cone)))
     duals[:, eq], duals[:, cone] = y, z
-    claimed = (codes == 1) & (np.max(info[:, 1:], axis=1) > CLAIM_TOL)
-    status = np.array(["inaccurate" if c else STATUS.get(int(k), "failed")
-                       for k, c in zip(codes, claimed)], object)
-    messages = tuple("" if s == "solved" else
-                     f"qocogen: {NAMES[k] if 0 <= k < len(NAMES) else k} (dual residual "
-                     f"{d:.1e}, gap {g:.1e})"
-                     for s, k, (_, d, g) in zip(status, codes, info))
+    status, messages = _statuses(codes, info)
     return BatchOutcome(status=status, z=x, y=duals, iterations=iterations.astype(int),
                         setup_s=laid_out - start, solve_s=solved - loaded, messages=messages,
                         stages={"layout": laid_out - start, "compile": compile_s,

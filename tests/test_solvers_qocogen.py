@@ -101,3 +101,19 @@ def test_answers_do_not_depend_on_the_order(min_max):
     forward = solve_batch(fbatch.conic_batch(min_max, INSTANTS), SOLVER, tol=TOL)
     backward = solve_batch(fbatch.conic_batch(min_max[::-1], INSTANTS[::-1]), SOLVER, tol=TOL)
     assert np.array_equal(forward.z, backward.z[::-1])
+
+
+def test_status_rule_by_table():
+    """Solved only where the generated solver says so and its own dual residual and gap
+    are within the claim; its inaccurate codes are inaccurate, any other code failed;
+    a message names the code wherever an instant is not solved."""
+    from cardan_forces.solvers.qocogen_ import CLAIM_TOL, _statuses
+
+    codes = np.array([1, 1, 2, 4, 3, 9], np.int32)
+    info = np.zeros((6, 3))
+    info[1, 2] = 10 * CLAIM_TOL  # a gap beyond the claim
+    status, messages = _statuses(codes, info)
+    assert list(status) == ["solved", "inaccurate", "inaccurate", "inaccurate", "failed",
+                            "failed"]
+    assert messages[0] == "" and all("qocogen: " in m for m in messages[1:])
+    assert "9" in messages[5]
