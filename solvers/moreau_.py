@@ -71,9 +71,8 @@ def grouped_rows(cones) -> tuple[np.ndarray, object]:
     return order.astype(int), spec
 
 
-def _pattern(stack: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """CSR structure of the union of nonzeros of a (T, r, c) stack, and its (row, col)."""
-    mask = np.any(stack != 0, axis=0)
+def _pattern(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """CSR structure of a (r, c) mask of nonzeros, and its (row, col)."""
     rows, cols = np.nonzero(mask)
     offsets = np.concatenate([[0], np.cumsum(mask.sum(axis=1))])
     return offsets, cols, rows, cols
@@ -173,17 +172,22 @@ def _solve(batch: ConicBatch, tol, options, warm=None):
     start = time.perf_counter()
     T, m, n = batch.A.shape
     order, cones = grouped_rows(batch.cones)
-    A, b = batch.A[:, order], batch.b[:, order]
+    A = np.asarray(batch.A, float)
     P = (np.zeros((n, n)) if batch.P is None else np.asarray(batch.P, float))
     P = P if P.ndim == 3 else P[None]
-    p_off, p_col, p_r, p_c = _pattern(P)
-    a_off, a_col, a_r, a_c = _pattern(A)
+    p_off, p_col, p_r, p_c = _pattern(np.any(P != 0, axis=0))
+    a_off, a_col, a_r, a_c = _pattern(np.any(A != 0, axis=0)[order])
+    # entries by np.take on the flattened rows: C-ordered (T, k), where a fancy index
+    # (A[:, order][:, rows, cols]) comes out ordered by entry and must be reordered
+    A_values = np.take(A.reshape(T, -1), order[a_r] * n + a_c, axis=1)
+    b = np.take(batch.b, order, axis=1)
     converted = time.perf_counter()
     solver = _compiled(n, m, ((p_off, p_col), (a_off, a_col)), cones, T, tol, options)
     compiled = time.perf_counter()
     # per-instant values for both (moreau 0.4.1 mishandles a shared P with per-instant A)
-    P_values = np.ascontiguousarray(np.broadcast_to(P[:, p_r, p_c], (T, len(p_r))))
-    solver.setup(P_values, A[:, a_r, a_c])
+    P_values = np.take(P.reshape(len(P), -1), p_r * n + p_c, axis=1)
+    P_values = np.ascontiguousarray(np.broadcast_to(P_values, (T, len(p_r))))
+    solver.setup(P_values, A_values)
     setup_done = time.perf_counter()
     with warnings.catch_warnings():  # moreau re-solves those instants cold itself, and
         # says so with every index on stderr; the records judge the answers as any other
