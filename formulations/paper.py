@@ -380,8 +380,9 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
     def fun(z):
         return _residual(lay, A, b, rim, np.asarray(z, float))
 
+    @_last_point
     def jac(z):
-        return _jacobian(lay, A, rim, np.asarray(z, float))
+        return _jacobian(lay, A, rim, z)
 
     if rim:
         # judged in the force space of ``socp_face``: the rim moments become end-face
@@ -400,6 +401,24 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
         paper_residual=lambda z: float(np.linalg.norm(fun(z))) / scale,
         rim=rim, radial=lay.mag, angles=lay.ang, end_faces=lay.fb.ravel(),
     )
+
+
+def _last_point(f):
+    """``f`` (of a point ``z``) that gives again, as a copy, the value it gave last when
+    called at the same point again instead of computing it: a warm-started ``fsolve``
+    asks for the Jacobian at one point twice or three times an instant (scipy checks
+    the start before MINPACK starts, the record's note asks at the answer).
+    """
+    last = [None, None]
+
+    def at(z):
+        z = np.asarray(z, float)
+        key = z.tobytes()
+        if key != last[0]:
+            last[:] = key, f(z)
+        return last[1].copy()
+
+    return at
 
 
 @dataclass(frozen=True)

@@ -244,3 +244,15 @@ def test_stacked_forces_are_the_per_instant_maps(paper):
     stacked = type(maps[0]).stacked(maps, Z)
     each = np.array([m(z) for m, z in zip(maps, Z)])
     np.testing.assert_allclose(stacked, each, rtol=0, atol=1e-13 * np.abs(each).max())
+
+
+def test_a_jacobian_asked_again_at_a_point_is_its_own_copy(op):
+    """The Jacobian remembered for a repeated point is that point's, and a caller that
+    changes the array it got does not change what the next caller gets."""
+    problem = build_paper(op, 1)
+    z = problem.z0 + np.random.default_rng(6).normal(size=problem.n)
+    first = problem.jac(z)
+    first[:] = 0.0
+    np.testing.assert_array_equal(problem.jac(z), build_paper(op, 1).jac(z))
+    other = z + 1.0
+    np.testing.assert_array_equal(problem.jac(other), build_paper(op, 1).jac(other))
