@@ -46,7 +46,7 @@ All functions take a batch: ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m), ``z`` (
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
@@ -137,15 +137,14 @@ def measures(P, q, A, b, cones, z, y) -> dict[str, np.ndarray]:
     return stacked_measures(stacked_batch(P, q, A, b, cones), z, y)[0]
 
 
-def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[
-        dict, np.ndarray, np.ndarray, np.ndarray]:
+def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[dict, Parts]:
     """:func:`measures` of answers ``z`` with multipliers ``y`` to the stacked problems
-    ``st``, with what it took that the solver's view needs too (``P z``, ``A'y`` and
-    the dual cone's violation of ``y``), so they are computed once.
+    ``st``, and the :class:`Parts` they were made of (the solver's view is made of the
+    same, :func:`~.qp_measures.from_parts`, so each is computed once).
     """
-    Pz, Aty, dual_cone = times_P(st.P, z), st.Aty(y), dual_cone_violation(st.cones, y)
-    return (combine(Pz, st.q, Aty, np.einsum("tm,tm->t", st.b, y), z, y, dual_cone),
-            Pz, Aty, dual_cone)
+    parts = Parts.of(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y), z,
+                     y, dual_cone_violation(st.cones, y))
+    return _combined(parts, st.q, y), parts
 
 
 def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
@@ -153,17 +152,53 @@ def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
     violation), for a backend whose problem form gives them more cheaply than
     :func:`measures`' dense products.
     """
-    floor = np.full(len(z), TINY)
-    stationarity = _inf(Pz + q + Aty) / np.maximum.reduce([_inf(Pz), _inf(q), _inf(Aty), floor])
-    cone = cone_violation / np.maximum(_inf(y), TINY)
-    quad = np.einsum("ti,ti->t", z, Pz)
-    primal = 0.5 * quad + np.einsum("ti,ti->t", q, z)
-    dual_obj = -0.5 * quad - bty
+    return _combined(Parts.of(Pz, q, Aty, bty, z, y, cone_violation), q, y)
+
+
+@dataclass(frozen=True)
+class Parts:
+    """What the measures of T answers ``z`` with multipliers ``y`` are made of, (T,)
+    arrays but the products: ``Pz`` and ``Aty`` (T, n); ``dual_cone``, the dual cone's
+    violation of ``y`` (``None`` where not measured); ``stationarity``
+    ``||Pz + q + A'y||_inf``; ``quad`` ``z'Pz``, ``linear`` ``q'z``, ``bty`` ``b'y``;
+    ``bad``: where ``z`` or ``y`` is not finite. The package's view (relative) and the
+    solver's (absolute, :func:`~.qp_measures.from_parts`) are both made of them.
+    """
+
+    Pz: np.ndarray
+    Aty: np.ndarray
+    dual_cone: np.ndarray
+    stationarity: np.ndarray
+    quad: np.ndarray
+    linear: np.ndarray
+    bty: np.ndarray
+    bad: np.ndarray
+
+    @classmethod
+    def of(cls, Pz, q, Aty, bty, z, y, dual_cone) -> Parts:
+        """The parts from the products and the dual cone's violation (``None``: not
+        measured, for a QP's multipliers).
+        """
+        bad = ~(np.isfinite(z).all(axis=1) & np.isfinite(y).all(axis=1))
+        return cls(Pz, Aty, dual_cone, _inf(Pz + q + Aty), np.einsum("ti,ti->t", z, Pz),
+                   np.einsum("ti,ti->t", q, z), bty, bad)
+
+    def take(self, rows) -> Parts:
+        """The parts of the answers at ``rows`` (indices or a mask)."""
+        return Parts(*(getattr(self, f.name)[rows] for f in fields(self)))
+
+
+def _combined(parts: Parts, q, y) -> dict[str, np.ndarray]:
+    """The package's measures (the module docstring's formulas) from their parts."""
+    stationarity = parts.stationarity / np.maximum(
+        np.maximum(_inf(parts.Pz), _inf(q)), np.maximum(_inf(parts.Aty), TINY))
+    cone = parts.dual_cone / np.maximum(_inf(y), TINY)
+    primal = 0.5 * parts.quad + parts.linear
+    dual_obj = -0.5 * parts.quad - parts.bty
     gap = np.abs(primal - dual_obj) / np.maximum(np.maximum(np.abs(primal), np.abs(dual_obj)),
                                                  TINY)
-    bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
     dual = np.maximum(stationarity, cone)
-    dual[bad], gap[bad] = np.inf, np.inf
+    dual[parts.bad], gap[parts.bad] = np.inf, np.inf
     return {"dual": dual, "gap": gap, "objective": primal}
 
 
@@ -334,12 +369,14 @@ class Pattern:
         return cls(dense[:, rows, cols], rows, cols, dense.shape[1:])
 
     def times(self, v: np.ndarray) -> np.ndarray:
-        """``M_t v_t`` per instant (T, r) for ``v`` (T, n)."""
-        return np.asarray((self.sums[0] @ (self.values * v[:, self.cols]).T).T)
+        """``M_t v_t`` per instant (T, r) for ``v`` (T, n), row-major as a dense
+        product's (a sum over a row rounds by the row's layout).
+        """
+        return np.ascontiguousarray((self.sums[0] @ (self.values * v[:, self.cols]).T).T)
 
     def transposed_times(self, v: np.ndarray) -> np.ndarray:
-        """``M_t' v_t`` per instant (T, n) for ``v`` (T, r)."""
-        return np.asarray((self.sums[1] @ (self.values * v[:, self.rows]).T).T)
+        """``M_t' v_t`` per instant (T, n) for ``v`` (T, r), row-major."""
+        return np.ascontiguousarray((self.sums[1] @ (self.values * v[:, self.rows]).T).T)
 
     def dense(self, k: int) -> np.ndarray:
         """Instant ``k``'s matrix."""

@@ -40,7 +40,7 @@ import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
 
 from .conversions import convert
-from .optimality import cone_layout, dual_cone_violation, times_P
+from .optimality import Parts, cone_layout, dual_cone_violation, times_P
 
 
 @dataclass(frozen=True)
@@ -115,25 +115,29 @@ def conic_residuals(P, q, A, b, cones, z, y, *, check_dual_cone: bool) -> dict:
                           check_dual_cone=check_dual_cone)
 
 
-def residuals_from(Pz, q, Az, Aty, b, cones, z, y, *, check_dual_cone: bool,
-                   dual_cone: np.ndarray | None = None) -> dict:
+def residuals_from(Pz, q, Az, Aty, b, cones, z, y, *, check_dual_cone: bool) -> dict:
     """:func:`conic_residuals` from the products ``P z``, ``A z`` and ``A'y`` (for
-    stacked data whose products are cheaper than dense ones, e.g. a QP's bound rows),
-    and ``dual_cone``, the dual cone's violation of ``y`` where already measured
-    (:func:`~.optimality.dual_cone_violation`).
+    stacked data whose products are cheaper than dense ones, e.g. a QP's bound rows).
     """
     z, y, b, q = (np.asarray(v, float) for v in (z, y, b, q))
-    bad = ~(np.all(np.isfinite(z), axis=1) & np.all(np.isfinite(y), axis=1))
-    dual = np.abs(Pz + q + Aty).max(axis=1, initial=0.0)
-    if check_dual_cone:
-        dual = np.maximum(dual, dual_cone_violation(cones, y) if dual_cone is None
-                          else dual_cone)
     with np.errstate(invalid="ignore", over="ignore"):
-        out = {"primal": cone_violation(cones, b - Az), "dual": dual,
-               "gap": np.abs(np.einsum("ti,ti->t", z, Pz) + np.einsum("ti,ti->t", q, z)
-                             + np.einsum("tm,tm->t", b, y))}
+        parts = Parts.of(Pz, q, Aty, np.einsum("tm,tm->t", b, y), z, y,
+                         dual_cone_violation(cones, y) if check_dual_cone else None)
+    return from_parts(parts, b - Az, cones, check_dual_cone=check_dual_cone)
+
+
+def from_parts(parts: Parts, slack: np.ndarray, cones, *, check_dual_cone: bool) -> dict:
+    """:func:`conic_residuals` from the :class:`~.optimality.Parts` of the package's
+    measures of the same answers (:func:`~.optimality.stacked_measures`) and the slack
+    ``b - A z``: the same three numbers without computing their parts again.
+    """
+    dual = (np.maximum(parts.stationarity, parts.dual_cone) if check_dual_cone
+            else parts.stationarity.copy())
+    with np.errstate(invalid="ignore", over="ignore"):
+        out = {"primal": cone_violation(cones, slack), "dual": dual,
+               "gap": np.abs(parts.quad + parts.linear + parts.bty)}
     for value in out.values():
-        value[bad] = np.inf
+        value[parts.bad] = np.inf
     return out
 
 

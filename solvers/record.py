@@ -31,6 +31,7 @@ import numpy as np
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP, RESIDUALS, residuals_batch
 
 from .optimality import (
+    Parts,
     Stacked,
     conic_key,
     multipliers,
@@ -38,7 +39,7 @@ from .optimality import (
     stacked_measures,
     unique_optimum,
 )
-from .qp_measures import residuals_from
+from .qp_measures import from_parts
 
 
 class Status(str, enum.Enum):
@@ -751,7 +752,7 @@ def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, receive
     chosen = [outcomes[k] for k in idx]
     z = np.array([o.z for o in chosen], float)
     y, given = multipliers(st, z, [o.y for o in chosen])
-    found, Pz, Aty, dual_cone = stacked_measures(st, z, y)  # products serve both views
+    found, parts = stacked_measures(st, z, y)  # its parts serve both views
     gap, kinds = found["gap"], np.full(len(idx), "duality", object)
     if not given.all():  # where the solver gave no multipliers, an objective gap
         best = np.array([np.nan if optimal_values[k] is None else optimal_values[k]
@@ -767,24 +768,20 @@ def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, receive
     for k, row in zip(idx, y):
         views.y[k] = row
     if given.any():
-        _solver_view(st, given, z, y, Pz, Aty, dual_cone,
-                     isinstance(received[idx[0]], (LS, QP)),
+        _solver_view(st, given, z, parts, isinstance(received[idx[0]], (LS, QP)),
                      list(itertools.compress(idx, given.tolist())), views)
 
 
-def _solver_view(st: Stacked, given, z, y, Pz, Aty, dual_cone, as_qp: bool, idx: list,
+def _solver_view(st: Stacked, given, z, parts: Parts, as_qp: bool, idx: list,
                  views: _Views) -> None:
-    """The solver's optimality (:func:`~.qp_measures.residuals_from`) of the answers
-    whose multipliers the solver gave (``given``, at instants ``idx``), from the
-    products the package's view took (``as_qp``: the backend received a QP or a least
-    norm, whose multipliers are not sign-checked).
+    """The solver's optimality (:func:`~.qp_measures.from_parts`) of the answers ``z``
+    whose multipliers the solver gave (``given``, at instants ``idx``), from the parts
+    of the package's view (``as_qp``: the backend received a QP or a least norm, whose
+    multipliers are not sign-checked).
     """
     if not given.all():
-        st, z, y, Pz, Aty, dual_cone = (st.take(np.flatnonzero(given)), z[given], y[given],
-                                        Pz[given], Aty[given], dual_cone[given])
-    Pz = np.ascontiguousarray(Pz)  # a pattern's are column-major: einsum rounds by layout
-    solver = residuals_from(Pz, st.q, st.Az(z), Aty, st.b, st.cones, z, y,
-                            check_dual_cone=not as_qp, dual_cone=dual_cone)
+        st, z, parts = st.take(np.flatnonzero(given)), z[given], parts.take(given)
+    solver = from_parts(parts, st.b - st.Az(z), st.cones, check_dual_cone=not as_qp)
     found = _instances(Optimality, {key: solver[key].tolist()
                                     for key in ("primal", "dual", "gap")}, len(z))
     for k, optimality in zip(idx, found):
