@@ -68,7 +68,8 @@ class Reduced:
 
     ``P`` (T, k, k), ``q`` (T, k), ``A`` (T, m_in, k), ``b`` (T, m_in), ``cones`` the
     reduced problem's; ``z0`` (T, n), ``N`` (T, n, k); ``factors`` ``(Q, R, U)`` with
-    ``A_eq' = Q R U'`` (``Q`` (T, n, s) orthonormal, ``R`` (T, s, s) invertible, ``U``
+    ``A_eq' = Q R U'`` (``Q`` (T, n, s) orthonormal, ``R`` (T, s, s) upper triangular
+    and invertible, or (T, s) its diagonal when diagonal, ``U``
     (T, r, s) orthonormal or None for the identity; ``s`` the rank), which give the
     pseudo-inverse of ``A_eq'`` and so the equality rows' multipliers;
     ``rows_eq`` / ``rows_in`` the full problem's row indices of each part; ``offset``
@@ -104,7 +105,8 @@ class Reduced:
             return z, None
         g = -(_times(self.P_full, z) + self.q_full + (dual_in[:, None] @ self.A_in)[:, 0])
         Q, R, U = self.factors
-        lam = _triangular(R, _mv(np.transpose(Q, (0, 2, 1)), g))
+        v = _mv(np.transpose(Q, (0, 2, 1)), g)
+        lam = v / R if R.ndim == 2 else _triangular(R, v)
         lam = lam if U is None else _mv(U, lam)
         duals = np.empty((len(z), len(self.rows_eq) + len(self.rows_in)))
         duals[:, self.rows_eq], duals[:, self.rows_in] = lam, dual_in
@@ -197,8 +199,7 @@ def _given_null_space(A_eq: np.ndarray, b_eq: np.ndarray, N: np.ndarray):
     """
     s = np.sqrt(np.einsum("tij,tij->ti", A_eq, A_eq))
     Q = np.transpose(A_eq, (0, 2, 1)) / s[:, None, :]
-    R = s[:, :, None] * np.eye(s.shape[1])
-    return _mv(Q, b_eq / s), N, (Q, R, None)
+    return _mv(Q, b_eq / s), N, (Q, s, None)
 
 
 def eliminate_equalities(P, q, A, b, cones, null_space=None) -> Reduced:
