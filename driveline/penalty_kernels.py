@@ -672,7 +672,21 @@ else:  # pragma: no cover - the caller uses SciPy's integrators instead
 
 
 @njit(cache=True)
-def _factor(jac, c, lu, pivots, blocks, coupling):
+def _linked(nb, topology):
+    """``linked[k, j]``: body ``k``'s accelerations can depend on body ``j``'s states (the
+    same body, or the two share a contact; the ground, ``nb``, has none). Every other
+    block of the Jacobian's velocity and rate rows is zero: on ``paper`` half of them.
+    """
+    linked = np.eye(nb, dtype=np.bool_)
+    for c in range(topology.shape[0]):
+        a, b = topology[c, 0], topology[c, 1]
+        if a < nb and b < nb:
+            linked[a, b] = linked[b, a] = True
+    return linked
+
+
+@njit(cache=True)
+def _factor(jac, c, lu, pivots, blocks, coupling, linked):
     """Factor ``M = I - c J`` for :func:`_solve`, eliminating first what the equations'
     structure gives (state layout of :class:`penalty._Model`): the displacement rows
     read ``x_u - c x_v = b_u`` and each body's quaternion rows involve only its own
@@ -681,7 +695,8 @@ def _factor(jac, c, lu, pivots, blocks, coupling):
     ``M_rr + c M_ru E_v + c M_rq A^-1 J_qw``, factored by LAPACK's ``getrf`` into ``lu``
     (held transposed: LAPACK's column-major view of it is the matrix); ``blocks`` gets
     the ``A_k^-1``, ``coupling`` (nb, 4, 3) the ``A_k^-1 J_qw``. A 30 x 30 factorization
-    on ``paper`` instead of 65 x 65.
+    on ``paper`` instead of 65 x 65. ``linked`` (:func:`_linked`): the bodies whose
+    states a body's rows can depend on; the others' columns are zero and skipped.
     """
     nb = blocks.shape[0]
     r0, m = 7 * nb, 6 * nb
@@ -701,11 +716,13 @@ def _factor(jac, c, lu, pivots, blocks, coupling):
                     g += blocks[k, i4, j4] * jac[q + j4, r0 + w + e]
                 coupling[k, i4, e] = g
     for i in range(m):
-        row = r0 + i
+        row, body = r0 + i, (i % (3 * nb)) // 3
         for j in range(m):
             lu[j, i] = -c * jac[row, r0 + j]
         lu[i, i] += 1.0
         for k in range(nb):
+            if not linked[body, k]:
+                continue
             for e in range(3):  # x_u = b_u + c x_v: M_ru's columns onto x_v's
                 lu[3 * k + e, i] += -c * jac[row, 3 * k + e] * c
             q, w = 3 * nb + 4 * k, 3 * nb + 3 * k
@@ -718,9 +735,10 @@ def _factor(jac, c, lu, pivots, blocks, coupling):
 
 
 @njit(cache=True)
-def _solve(jac, c, lu, pivots, blocks, coupling, b, work):
+def _solve(jac, c, lu, pivots, blocks, coupling, linked, b, work):
     """``b <- (I - c J)^-1 b`` from :func:`_factor`'s elimination and factors (``lu``,
-    ``pivots``, ``blocks``, ``coupling``); ``work``: two rows of scratch as long as ``b``.
+    ``pivots``, ``blocks``, ``coupling``; ``linked`` as there); ``work``: two rows of
+    scratch as long as ``b``.
     """
     nb = blocks.shape[0]
     r0, m = 7 * nb, 6 * nb
@@ -731,12 +749,16 @@ def _solve(jac, c, lu, pivots, blocks, coupling, b, work):
             xq[4 * k + i] = (blocks[k, i, 0] * b[q] + blocks[k, i, 1] * b[q + 1]
                              + blocks[k, i, 2] * b[q + 2] + blocks[k, i, 3] * b[q + 3])
     for i in range(m):
-        row = r0 + i
+        row, body = r0 + i, (i % (3 * nb)) // 3
         total = 0.0
-        for j in range(3 * nb):
-            total += jac[row, j] * b[j]
-        for j in range(4 * nb):
-            total += jac[row, 3 * nb + j] * xq[j]
+        for k in range(nb):
+            if linked[body, k]:
+                for j in range(3 * k, 3 * k + 3):
+                    total += jac[row, j] * b[j]
+        for k in range(nb):
+            if linked[body, k]:
+                for j in range(4 * k, 4 * k + 4):
+                    total += jac[row, 3 * nb + j] * xq[j]
         r[i] = b[row] + c * total  # b_r - M_ru b_u - M_rq A^-1 b_q, M = -c J off the diagonal
     _lu_solve(lu, pivots, r[:m])
     for i in range(m):
@@ -871,13 +893,13 @@ def start(t0, y0, t_bound, atol, rtol, args):
     """A run's state at ``t0``: (floats, ints, differences ``D``, Jacobian, LU factors,
     pivots, quaternion blocks: :func:`_factor`, scratch), for :func:`advance`. The
     scratch (vectors by the ``W_`` rows, :func:`_change_d`'s matrices and rows, the
-    right-hand side's :func:`_scratch`, :func:`_factor`'s coupling) is made here once: a
-    step allocates nothing.
+    right-hand side's :func:`_scratch`, :func:`_factor`'s coupling, the bodies'
+    :func:`_linked`) is made here once: a step allocates nothing.
     """
     n, nb = y0.shape[0], args[1].shape[0]
     work = (np.zeros((W_SOLVE + 2, n)), np.zeros((3, MAX_ORDER + 1, MAX_ORDER + 1)),
             np.zeros((MAX_ORDER + 1, n)), _scratch(y0, nb, args[2].shape[0]),
-            np.zeros((nb, 4, 3)))
+            np.zeros((nb, 4, 3)), _linked(nb, args[2]))
     ints = np.zeros(10, dtype=np.int64)
     ints[I_ORDER] = 1
     h, f0 = initial_step(t0, y0, t_bound, atol, rtol, ints, args, work)
@@ -916,7 +938,7 @@ def _newton(t_new, c, jac, lu, pivots, blocks, floats, ints, args, work):
             dy[i] = c * f[i] - psi[i] - d[i]
         if not finite:
             break
-        _solve(jac, c, lu, pivots, blocks, work[4], dy, vec[W_SOLVE:])
+        _solve(jac, c, lu, pivots, blocks, work[4], work[5], dy, vec[W_SOLVE:])
         dy_norm = _norm(dy, scale)
         rate = dy_norm / dy_norm_old if dy_norm_old > 0.0 else -1.0
         if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - iterations + 1)
@@ -979,7 +1001,7 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
         c = h_abs / alpha[order]
         while True:
             if ints[I_LU] == 0 or abs(c / floats[F_C] - 1.0) > LU_KEEP:
-                _factor(jac, c, lu, pivots, blocks, work[4])
+                _factor(jac, c, lu, pivots, blocks, work[4], work[5])
                 ints[I_NLU] += 1
                 ints[I_LU], floats[F_C], floats[F_RATE] = 1, c, 1.0
             converged, n_iter = _newton(t_new, c, jac, lu, pivots, blocks, floats, ints,

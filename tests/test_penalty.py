@@ -227,6 +227,30 @@ def test_compiled_jacobian_is_exact_on_slip_joints_and_floating_bearings(name):
 
 
 @pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
+def test_bodies_without_a_shared_contact_do_not_couple(model):
+    """The Newton solve skips the blocks of bodies that share no contact
+    (:func:`penalty_kernels._linked`): in the NumPy model's complex-step Jacobian at a
+    pressed state, a body's accelerations do not move with such a body's states, and
+    do with every linked one's (every body touches one here).
+    """
+    y = _pressed_state(model, 3)
+    _, step = model.tolerances(1e-8)
+    jac = model.jacobian(0.0, y, step)
+    nb = model.n_bodies
+    linked = penalty.kernels._linked(nb, model.kernel_args[2])
+
+    def states(j):  # displacement, quaternion, velocity, rate of body j
+        return np.r_[3 * j:3 * j + 3, 3 * nb + 4 * j:3 * nb + 4 * j + 4,
+                     7 * nb + 3 * j:7 * nb + 3 * j + 3, 10 * nb + 3 * j:10 * nb + 3 * j + 3]
+
+    for k in range(nb):
+        rows = np.r_[7 * nb + 3 * k:7 * nb + 3 * k + 3, 10 * nb + 3 * k:10 * nb + 3 * k + 3]
+        for j in range(nb):
+            block = jac[np.ix_(rows, states(j))]
+            assert np.any(block != 0.0) == linked[k, j], (k, j)
+
+
+@pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
 @pytest.mark.parametrize("c", [1e-7, 1e-5, 1e-3])
 def test_structured_newton_solve_equals_a_dense_solve(model, c):
     """The integrator solves ``(I - c J) x = b`` by eliminating the displacement and
@@ -241,10 +265,11 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c):
     n, nb = len(y), model.n_bodies
     lu, pivots = np.zeros((6 * nb, 6 * nb)), np.zeros(6 * nb, kernels.F_INT_nptype)
     blocks, coupling = np.zeros((nb, 4, 4)), np.zeros((nb, 4, 3))
-    assert kernels._factor(jac, c, lu, pivots, blocks, coupling) == 0
+    linked = kernels._linked(nb, model.kernel_args[2])
+    assert kernels._factor(jac, c, lu, pivots, blocks, coupling, linked) == 0
     b = np.random.default_rng(2).standard_normal(n)
     x = b.copy()
-    kernels._solve(jac, c, lu, pivots, blocks, coupling, x, np.zeros((2, n)))
+    kernels._solve(jac, c, lu, pivots, blocks, coupling, linked, x, np.zeros((2, n)))
     matrix = np.eye(n) - c * jac
     dense = np.linalg.solve(matrix, b)
     assert np.abs(matrix @ x - b).max() <= 1e-13 * np.abs(matrix).max() * np.abs(x).max()
