@@ -22,6 +22,7 @@ import signal
 import time
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
+from dataclasses import dataclass
 from multiprocessing import get_all_start_methods, get_context
 from pathlib import Path
 
@@ -79,10 +80,13 @@ ENGINE_BOUND_INSTANTS = 11
 ENGINE_RTOL = 1e-4
 """A load of MuJoCo's is inside the rigid band within this share of the largest load:
 its soft constraints leave ``A x = b`` at ~1e-5 (module doc of the engine's tests)."""
-LONGEST_FIRST = ("paper", "min_max", "positive", "compliance")
-"""The rigid-model methods by their cost over a figure's window, longest first (CPU s
-per 1001 instants on ``paper-fig15``, one run: 4.1, 2.3, 1.2, 0.5): the order in which
-Fig. 15's jobs are queued for the worker processes."""
+JOB_COST_S = {("paper", None): 4.0, ("min_max", None): 2.0, ("positive", None): 1.0,
+              ("compliance", None): 0.5, ("compliance_hertz", "clarabel"): 2.7,
+              ("compliance", "clarabel"): 2.3, ("positive", "qpsolvers-daqp"): 1.0,
+              ("min_norm", "numpy-kkt"): 0.6, ("bounds", None): 0.2}
+"""CPU s of a rigid-model job, ``(method, backend)`` over 1001 instants of the paper's
+scenes (one run each on a 2-core machine; an unknown job counts 1 s): jobs are queued
+for the worker processes longest first, so that they end together."""
 BOUND_INSTANTS = 41
 """Instants (evenly spread) at which Figs. 13-15's solution-set intervals are computed."""
 QUICK_S = 0.15
@@ -563,14 +567,21 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
         check_request(s, o, methods, (15,))
     out.mkdir(parents=True, exist_ok=True)
     runs.start(([scene] if shown else []) + fig15)
-    try:  # the rigid-model work first, while the penalty simulations run
-        work15 = _submit_fig15(runs, fig15_ops, times, rigid)  # in the workers, if any
-        work = _rigid_work(op, [f for f in figs if f in (13, 14)], rigid, progress)
-        compliance = _compliance_histories(runs, scene) if runs.penalty and shown else None
+    try:  # the rigid-model work queued behind the penalty simulations, in the workers
+        main_figs = [f for f in figs if f in (13, 14)]
+        plan = _compliance_plan(runs, scene) if runs.penalty and shown else None
+        jobs = _rigid_jobs(scene, op, main_figs, rigid) + [
+            job for s, o in fig15_ops for job in _rigid_jobs(s, o, (15,), rigid)]
+        futures = _run_jobs(runs, jobs + (plan[3] if plan else []), times)
         engine = _engine_work(scene, times, progress) if ENGINE in methods else None
+        work = _rigid_result(runs, futures, scene, main_figs, rigid)
+        compliance = None if plan is None else (plan[0], {
+            m: futures[(plan[0].scene, m, solver)].result() for m, solver in plan[1].items()},
+            plan[2])
         sections = _main_figures(runs, scene, motion, op, figs, work, compliance, out,
                                  formats)
-        sections += _fig15(runs, work15, rigid, out, formats)
+        sections += _fig15(runs, [(s, o, _rigid_result(runs, futures, s, (15,), rigid))
+                                  for s, o in fig15_ops], out, formats)
         if engine is not None:
             sections.append(_engine_section(engine, runs, out, formats))
     except BaseException:
@@ -585,62 +596,86 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     return path
 
 
-def _rigid_work(op: Operator, figs, rigid, progress) -> dict:
-    """The rigid-model work of Figs. 13-15 on ``op``: the methods' histories
-    (``"hist"``) and the rigid set's bounds (``13``: joint 1's contacts; ``14``: the
-    first shaft's bearings, for Figs. 14 and 15).
+@dataclass(frozen=True)
+class _Job:
+    """A piece of rigid-model work: ``fn(op, *args)`` on ``scene``'s operator ``op``
+    (a worker process builds its own from ``scene`` and the run's instants); ``key``
+    names it (the same key: the same work, done once), ``cost_s`` orders the queue.
+    """
+
+    key: tuple
+    cost_s: float
+    fn: Callable
+    scene: Scene
+    op: Operator
+    args: tuple
+
+
+def _rigid_jobs(scene: Scene, op: Operator, figs, rigid) -> list[_Job]:
+    """The rigid-model work of Figs. 13-15 on ``scene`` as jobs: each method's history
+    and the rigid set's bounds (13: joint 1's contacts; 14: the first shaft's bearings,
+    for Figs. 14 and 15); none without such a figure.
     """
     if not figs:
-        return {"hist": {}}
-    work = {"hist": _histories(op, rigid, progress)}
-    say = progress or (lambda _: None)
-    if 13 in figs:
-        say("repro: fig 13 solution-set intervals ...")
-        work[13] = set_bounds(op, joint_quantities(op))
-    if 14 in figs or 15 in figs:
-        say(f"repro: fig {max(figs)} solution-set intervals ...")
-        work[14] = set_bounds(op, bearing_quantities(op))
-    return work
+        return []
+    jobs = [_Job((scene, m, None), JOB_COST_S.get((m, None), 1.0), history, scene, op, (m,))
+            for m in rigid]
+    for number in (13, 14):
+        if number in figs or (number == 14 and 15 in figs):
+            jobs.append(_Job((scene, number), JOB_COST_S[("bounds", None)], _bounds,
+                             scene, op, (number,)))
+    return jobs
 
 
-@functools.lru_cache(maxsize=len(FIG15_SCENES))
+def _bounds(op: Operator, number: int) -> dict:
+    """The rigid set's bounds of Fig. 13 (joint 1's contacts) or 14-15 (the bearings)."""
+    return set_bounds(op, joint_quantities(op) if number == 13 else bearing_quantities(op))
+
+
+@functools.lru_cache(maxsize=len(FIG15_SCENES) + 2)
 def _operator_of(scene: Scene, times: tuple[float, ...]) -> Operator:
-    """``scene``'s operator at ``times``, as this process builds it (a worker process
-    builds it once per scene for all its jobs on that scene).
+    """``scene``'s operator at ``times``, built once per scene in a worker process for
+    all its jobs on that scene.
     """
     return build_operator(simulate(scene, np.array(times)))
 
 
-def _history_job(scene: Scene, times: tuple[float, ...], method: str) -> History:
-    """A worker's job: ``method``'s history on ``scene`` at ``times``."""
-    return history(_operator_of(scene, times), method)
+def _in_worker(fn: Callable, scene: Scene, times: tuple[float, ...], *args):
+    """What a worker process runs for a :class:`_Job`: ``fn`` on ``scene``'s operator."""
+    return fn(_operator_of(scene, times), *args)
 
 
-def _bounds_job(scene: Scene, times: tuple[float, ...]) -> dict:
-    """A worker's job: the rigid set's bounds of Figs. 14-15 on ``scene`` at ``times``."""
-    op = _operator_of(scene, times)
-    return set_bounds(op, bearing_quantities(op))
-
-
-def _submit_fig15(runs: _Runs, fig15_ops, times: np.ndarray, rigid) -> list:
-    """Fig. 15's rigid work in the worker processes: one job per scene and method and
-    one per scene's bounds, queued behind the penalty simulations longest first
-    (:data:`LONGEST_FIRST`), so that the two workers end together (a single job per
-    scene leaves one worker some 6 s of CPU behind the other). Returns ``(scene,
-    operator, {method or "bounds": Future})``, the dict ``None`` without workers.
+def _run_jobs(runs: _Runs, jobs: list[_Job], times: np.ndarray) -> dict:
+    """``key -> Future`` of each job (one per key): queued for the worker processes
+    behind the penalty simulations, longest first, so that the workers end together
+    while this process draws; without workers, done here at once.
     """
+    unique = {job.key: job for job in reversed(jobs)}  # the first of a key stays
+    order = sorted(unique.values(), key=lambda job: -job.cost_s)
     if runs.pool is None:
-        return [(s, o, None) for s, o in fig15_ops]
-    order = sorted(rigid, key=lambda m: LONGEST_FIRST.index(m) if m in LONGEST_FIRST
-                   else len(LONGEST_FIRST))
-    jobs = {s.name: {} for s, _ in fig15_ops}
-    key = tuple(float(t) for t in times)
-    for method in order:
-        for s, _ in fig15_ops:
-            jobs[s.name][method] = runs.submit(_history_job, s, key, method)
-    for s, _ in fig15_ops:
-        jobs[s.name]["bounds"] = runs.submit(_bounds_job, s, key)
-    return [(s, o, jobs[s.name]) for s, o in fig15_ops]
+        order = bar(order, "repro", unit="job")
+    instants, out = tuple(float(t) for t in times), {}
+    for job in order:
+        future = runs.submit(_in_worker, job.fn, job.scene, instants, *job.args)
+        if future is None:
+            future = Future()
+            future.set_result(job.fn(job.op, *job.args))
+        out[job.key] = future
+    return out
+
+
+def _rigid_result(runs: _Runs, futures: dict, scene: Scene, figs, rigid) -> dict:
+    """The rigid-model work of :func:`_rigid_jobs` on ``scene`` as the figures take it:
+    ``{"hist": {method: History}, 13: bounds, 14: bounds}`` (what ``figs`` need).
+    """
+    if not figs:
+        return {"hist": {}}
+    keys = [(scene, m, None) for m in rigid] + [(scene, n) for n in (13, 14)
+                                                 if (scene, n) in futures]
+    if not all(futures[k].done() for k in keys):
+        runs.progress(f"repro: waiting for the rigid-model work on {scene.name} ...")
+    work = {"hist": {m: futures[(scene, m, None)].result() for m in rigid}}
+    return work | {k[1]: futures[k].result() for k in keys[len(rigid):]}
 
 
 def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs, work,
@@ -712,10 +747,6 @@ def _speed_notes(motion: Motion, pen, shafts) -> list[str]:
     return lines
 
 
-def _histories(op: Operator, rigid, progress) -> dict[str, History]:
-    return {m: history(op, m, progress=progress) for m in bar(rigid, "repro", unit="method")}
-
-
 def _contact_figures(op: Operator, figs, work, out: Path, formats, penalty) -> list:
     hist = dict(work["hist"]) | ({} if penalty is None else {PENALTY: penalty})
     forces = {m: h.forces for m, h in hist.items()}
@@ -736,19 +767,13 @@ def _gravity(scene: Scene) -> str:
     return "gravity (" + ", ".join(f"{g:g}" for g in scene.gravity_m_s2) + ") m/s^2"
 
 
-def _fig15(runs: _Runs, scenes_work, rigid, out: Path, formats) -> list:
+def _fig15(runs: _Runs, scenes_work, out: Path, formats) -> list:
     """Fig. 15 on each of its scenes (a figure ``fig15_<scene>`` each), and a section
     saying which of them matches the paper's text (both verdicts ``agrees``).
-    ``scenes_work``: ``(scene, operator, its jobs' Futures or None)``
-    (:func:`_submit_fig15`); ``None``: that work is done here.
+    ``scenes_work``: ``(scene, operator, its rigid-model work)`` (:func:`_rigid_result`).
     """
     sections, verdicts = [], []
-    for scene, op, jobs in scenes_work:
-        if jobs is None:
-            work = _rigid_work(op, (15,), rigid, runs.progress)
-        else:
-            runs.progress(f"repro: waiting for the fig 15 methods on {scene.name} ...")
-            work = {"hist": {m: jobs[m].result() for m in rigid}, 14: jobs["bounds"].result()}
+    for scene, op, work in scenes_work:
         pen = runs.penalty_result(scene, f"Fig. 15 ({scene.name})")
         hist = dict(work["hist"]) | ({} if pen is None else
                                      {PENALTY: penalty_history(pen, op.names)})
@@ -780,21 +805,23 @@ def _fig15_summary(verdicts: list[tuple[Scene, dict[str, str]]]):
     return ("Fig. 15: which horizontal gravity matches the paper's text", None, lines)
 
 
-def _compliance_histories(runs: _Runs, scene: Scene):
-    """The methods of :data:`COMPLIANCE_VS_PENALTY` over time on the released scene's
-    rigid operator (those that do not apply left out, with why): the operator, the
-    histories by method, the refusals.
+def _compliance_plan(runs: _Runs, scene: Scene):
+    """The methods of :data:`COMPLIANCE_VS_PENALTY` on the released scene's rigid
+    operator (those that do not apply left out, with why): the operator, ``{method:
+    backend}`` of those that apply, the refusals, and their histories as jobs.
     """
     runs.progress("repro: compliance vs penalty ...")
     op = build_operator(runs.motion(released(scene), "the compliance comparison"))
-    hist, skipped = {}, []
+    applies, skipped = {}, []
     for method, solver in COMPLIANCE_VS_PENALTY.items():
         why = _refusal(op.scene, op, method)  # builds the method's first problem
         if why:
             skipped.append(f"`{method}` ({why})")
         else:
-            hist[method] = history(op, method, solver)
-    return op, hist, skipped
+            applies[method] = solver
+    jobs = [_Job((op.scene, m, s), JOB_COST_S.get((m, s), 1.0), history, op.scene, op, (m, s))
+            for m, s in applies.items()]
+    return op, applies, skipped, jobs
 
 
 def _compliance_vs_penalty(compliance, result, out: Path):
