@@ -118,7 +118,8 @@ def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
     _, nonneg, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
     worst = np.maximum(0.0, -y[:, nonneg]).max(axis=1, initial=0.0)
     if len(apex):
-        spread = np.sqrt(np.einsum("tkj,tkj->tk", y[:, members] * mask, y[:, members] * mask))
+        spread = y[:, members] * mask
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))
         worst = np.maximum(worst, (spread - y[:, apex]).max(axis=1))
     if len(pows):
         u, v, w = (np.maximum(y[:, pows[:, 0]], 0.0), np.maximum(y[:, pows[:, 1]], 0.0),
@@ -273,11 +274,11 @@ def multipliers(st: Stacked, z: np.ndarray, given: list) -> tuple[np.ndarray, np
     per-instant checks and a batch's find their multipliers.
     """
     m = st.b.shape[1]
-    mask = np.array([g is not None and len(g) == m for g in given], bool)
-    y = np.array([given[k] if mask[k] else
-                  recover(st.Pk(k), st.q[k], st.A(k), st.b[k], st.cones, z[k])
-                  for k in range(len(z))], float).reshape(len(z), m)
-    return y, mask
+    mask = [g is not None and len(g) == m for g in given]
+    y = np.array(given if all(mask) else [
+        given[k] if mask[k] else recover(st.Pk(k), st.q[k], st.A(k), st.b[k], st.cones, z[k])
+        for k in range(len(z))], float).reshape(len(z), m)
+    return y, np.array(mask, bool)
 
 
 def stacked_batch(P, q, A, b, cones) -> Stacked:

@@ -83,7 +83,8 @@ def cone_violation(cones, s: np.ndarray) -> np.ndarray:
     worst = np.abs(s[:, zero]).max(axis=1, initial=0.0)
     worst = np.maximum(worst, (-s[:, nonneg]).max(axis=1, initial=0.0))
     if len(apex):
-        spread = np.sqrt(np.einsum("tkj,tkj->tk", s[:, members] * mask, s[:, members] * mask))
+        spread = s[:, members] * mask
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))
         worst = np.maximum(worst, (spread - s[:, apex]).max(axis=1))
     if len(pows):
         u, v, w = s[:, pows[:, 0]], s[:, pows[:, 1]], s[:, pows[:, 2]]

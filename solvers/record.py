@@ -90,7 +90,14 @@ class Status(str, enum.Enum):
         return format(self.value, spec)
 
 
-_ANSWERED = frozenset({Status.SOLVED, Status.INACCURATE})
+_SOLVED, _INACCURATE = Status.SOLVED, Status.INACCURATE
+"""The members the status rule compares with, looked up once (an enum's class attribute
+costs a Python call each time)."""
+_AS_SOLVED, _AS_INACCURATE = np.array(_SOLVED, object), np.array(_INACCURATE, object)
+"""The same as 0-d object arrays, for numpy: ``np.where`` puts the members themselves in
+its result (a bare member it turns into a string through the enum's ``__str__``), and a
+comparison does not ask the enum class for numpy's hooks (a Python call each)."""
+_ANSWERED = frozenset({_SOLVED, _INACCURATE})
 
 ACCEPT = 1e-6
 """Largest relative residual (equilibrium, sign, complementarity, cone) of a solved record."""
@@ -329,7 +336,7 @@ def judge(status, worst):
     batched, decides by this one rule).
     """
     status, worst = np.asarray(status, object), np.asarray(worst, float)
-    return np.where((status == Status.SOLVED) & ~(worst <= ACCEPT), Status.INACCURATE, status)
+    return np.where((status == _AS_SOLVED) & ~(worst <= ACCEPT), _AS_INACCURATE, status)
 
 
 def confirm(status, optimality: Optimality, duals: str):
@@ -342,8 +349,8 @@ def confirm(status, optimality: Optimality, duals: str):
     """
     status = np.asarray(status, object)
     with_duals = np.asarray(duals, object) != "none"
-    return np.where((status == Status.INACCURATE) & optimality.confirms() & with_duals,
-                    Status.SOLVED, status)
+    return np.where((status == _AS_INACCURATE) & optimality.confirms() & with_duals,
+                    _AS_SOLVED, status)
 
 
 def _forces(problem, outcome: Outcome, n: int) -> tuple[np.ndarray, str]:
@@ -476,13 +483,15 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     primal = np.array([found[key] for key in Residuals.KEYS]).max(axis=0)
     started.fail_nonfinite(np.flatnonzero(~np.isfinite(primal)).tolist())
     status = judge(started.status, primal)
-    answered = (status == Status.SOLVED) | (status == Status.INACCURATE)
+    inaccurate = status == _AS_INACCURATE
+    answered = (status == _AS_SOLVED) | inaccurate
     views = _optimality_all(problems, outcomes, answered, primal,
                             optimal_values if optimal_values is not None else [None] * T,
                             received, stacks)
     distance = _distances(problems, started.x, references)
-    confirmed = confirm(status, Optimality(primal=views.primal, dual=views.dual,
-                                           gap=views.gap), views.duals)
+    confirmed = (confirm(status, Optimality(primal=views.primal, dual=views.dual,
+                                            gap=views.gap), views.duals)
+                 if inaccurate.any() else status)  # it turns only inaccurate ones
     records = _records(problems, solver, outcomes, started, status, confirmed, answered,
                        found, distance, views, extra_setup_s)
     checks_s = (time.perf_counter() - began) / T if T else 0.0
@@ -624,13 +633,13 @@ def _records(problems, solver, outcomes, started: _Started, status, confirmed, a
     z = [o.z for o in outcomes]
     return _instances(Record, {
         "formulation": [p.formulation for p in problems],
-        "status": [_STATUS_OF[s] for s in confirmed.tolist()],  # np.where made some str
+        "status": confirmed.tolist(),
         "x": started.x,
         "names": [tuple(p.checks.names) for p in problems],
         "iterations": [None if o.iterations is None else int(o.iterations) for o in outcomes],
         "setup_s": [o.setup_s + e for o, e in zip(outcomes, extra)],
         "solve_s": [o.solve_s for o in outcomes], "residuals": residuals,
-        "message": _messages(started, status, confirmed, residual),
+        "message": _messages(started, status, confirmed, found),
         "z": [v if v is None or type(v) is np.ndarray else np.asarray(v) for v in z],
         "objective": [float(o.objective) if a and o.objective is not None else None
                       for o, a in zip(outcomes, answered.tolist())],
@@ -648,27 +657,22 @@ def _floats(values: np.ndarray) -> list:
 
 def _messages(started: _Started, status, confirmed, residual: dict) -> list[str]:
     """Each record's message: the outcome's, with the start's notes and why the
-    package changed the solver's status, where it did (``residual``: key -> T values).
+    package changed the solver's status, where it did (``residual``: key -> (T,) array;
+    they are never NaN, a non-finite answer's are ``inf``).
     """
     messages = list(started.messages)
-    changed = (status != np.array(started.status, object)) | (confirmed != status)
-    for k in sorted(started.notes.keys() | set(np.flatnonzero(changed).tolist())):
+    judged = status != np.array(started.status, object)
+    turned = confirmed != status
+    worst = np.argmax([residual[key] for key in Residuals.KEYS], axis=0).tolist()
+    for k in sorted(started.notes.keys() | set(np.flatnonzero(judged | turned).tolist())):
         notes = started.notes.get(k, [messages[k]] if messages[k] else [])
-        if changed[k]:
-            notes = _notes(notes, started.status[k], status[k], confirmed[k],
-                           {key: residual[key][k] for key in Residuals.KEYS})
+        if judged[k]:
+            key = Residuals.KEYS[worst[k]]
+            notes = [*notes, f"{key} residual {residual[key][k]:.1e} > {ACCEPT:.0e}"]
+        if turned[k]:
+            notes = [*notes, "confirmed by the package's primal, dual and gap measures"]
         messages[k] = "; ".join(notes)
     return messages
-
-
-def _notes(notes, first, judged, confirmed, found) -> list[str]:
-    """An instant's notes with why the package changed the solver's status."""
-    if judged != first:
-        worst = max(Residuals.KEYS, key=found.get)
-        notes = [*notes, f"{worst} residual {found[worst]:.1e} > {ACCEPT:.0e}"]
-    if confirmed != judged:
-        notes = [*notes, "confirmed by the package's primal, dual and gap measures"]
-    return notes
 
 
 def finalize(
