@@ -31,21 +31,25 @@ WRAPPED = {"clarabel": clarabel_, "qoco": qoco_, "qoco-batched": qoco_, "moreau"
 """Backend name -> its adapter module; each gets a ``<name>-reduced`` variant (``qocogen``
 only this one: its module is no adapter of the registry's own)."""
 
-UNSCALED = {"clarabel": {"equilibrate_enable": False}, "moreau": {"equilibrate_enable": False},
-            "moreau-warm": {"equilibrate_enable": False}}
-"""Options a reduced variant passes to its backend on a problem with power cones unless
-the caller sets them: no equilibration. The reduced data are the formulation's (in
-units of the load) seen through an orthonormal basis; Clarabel's and moreau's Ruiz
-scaling of them nearly doubled the iterations on ``compliance_hertz`` (20 against 11,
-the same answers and measures), where on the full form it changes nothing. Without
-power cones it is kept: off, moreau missed one ``socp_face`` instant of 1001."""
+UNSCALED = {"clarabel": ("soc", "pow"), "moreau": ("pow",), "moreau-warm": ("pow",)}
+"""Backend -> the cone kinds on which its reduced variant runs without equilibration
+(``equilibrate_enable=False`` unless the caller sets it). The reduced data are the
+formulation's (in units of the load) seen through an orthonormal basis. Measured on
+the paper's 1001 instants: Clarabel's and moreau's Ruiz scaling nearly doubled the
+iterations on ``compliance_hertz`` (20 against 11); Clarabel per instant, without it,
+took 8.7 iterations instead of 13.4 on ``min_max`` (and solved the two instants it left
+inaccurate) and 7.4 instead of 8.4 on ``socp_face``, but left 23 ``positive`` instants
+inaccurate instead of 21 (so it keeps it on linear cones alone); moreau without it
+missed one ``socp_face`` instant, so it keeps it there."""
 
 
-def _defaults(defaults: dict, cones, options: dict) -> dict:
-    """The options for the wrapped backend: ``defaults`` (on power cones only) under
-    the caller's.
+def _defaults(backend: str, cones, options: dict) -> dict:
+    """The options for the wrapped backend: no equilibration where :data:`UNSCALED`
+    says so, under the caller's options.
     """
-    return (defaults if any(kind == "pow" for kind, _ in cones) else {}) | options
+    off = any(kind in UNSCALED.get(backend, ()) for kind, _ in cones)
+    return ({"equilibrate_enable": False} if off else {}) | options
+
 
 EXTRAS: dict[str, str | None] = {f"{name}-reduced": module.EXTRAS[name]
                                  for name, module in WRAPPED.items()}
@@ -55,7 +59,7 @@ def _has_equalities(problem) -> bool:
     return any(kind == "zero" for kind, _ in problem.cones)
 
 
-def _per_instant(solve, defaults: dict):
+def _per_instant(solve, name: str):
     """``solve`` (a per-instant conic backend's) on the reduced problem with
     :func:`_defaults`, lifted back (the wrapped backends take no start, so
     ``initvals`` is not passed on).
@@ -65,7 +69,7 @@ def _per_instant(solve, defaults: dict):
         start = time.perf_counter()
         inner, red = reduced_conic(problem)
         reduced_s = time.perf_counter() - start
-        out = solve(inner, tol=tol, **_defaults(defaults, inner.cones, options))
+        out = solve(inner, tol=tol, **_defaults(name, inner.cones, options))
         lifted = time.perf_counter()
         if out.z is None:
             return dataclasses.replace(out, setup_s=out.setup_s + reduced_s)
@@ -79,7 +83,7 @@ def _per_instant(solve, defaults: dict):
     return run
 
 
-def _batched(solve_batch, defaults: dict):
+def _batched(solve_batch, name: str):
     """``solve_batch`` (a batched conic backend's) on the reduced batch with
     :func:`_defaults`, lifted back.
     """
@@ -91,7 +95,7 @@ def _batched(solve_batch, defaults: dict):
         inner = dataclasses.replace(batch, P=red.P, q=red.q, A=red.A, b=red.b,
                                     cones=red.cones, problems=(), null_space=None)
         reduced = time.perf_counter()
-        out = solve_batch(inner, tol=tol, **_defaults(defaults, inner.cones, options))
+        out = solve_batch(inner, tol=tol, **_defaults(name, inner.cones, options))
         lifting = time.perf_counter()
         z, y = red.lift(np.asarray(out.z, float), out.y)
         done = time.perf_counter()
@@ -103,11 +107,11 @@ def _batched(solve_batch, defaults: dict):
 
 
 def _variant(backend: Backend) -> Backend:
-    supports, defaults = backend.supports, UNSCALED.get(backend.name, {})
+    supports, name = backend.supports, backend.name
     return dataclasses.replace(
         backend, name=f"{backend.name}-reduced",
-        solve=None if backend.solve is None else _per_instant(backend.solve, defaults),
-        batch=None if backend.batch is None else _batched(backend.batch, defaults),
+        solve=None if backend.solve is None else _per_instant(backend.solve, name),
+        batch=None if backend.batch is None else _batched(backend.batch, name),
         supports=lambda problem: _has_equalities(problem) and supports(problem),
         warm_start=False)
 
