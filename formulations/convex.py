@@ -195,9 +195,9 @@ def positive(op: Operator, i: int) -> QP:
 def min_max(op: Operator, i: int) -> Conic:
     """Variables ``z = (x, t) / ||b||`` (forces in units of the load, which keeps the
     interior-point iterates well scaled); cones: equality, end faces >= 0, one SOC per
-    contact, except a one-component push-only contact (an end face), whose ``|x| <= t``
-    is the linear ``x <= t`` next to ``x >= 0`` (a nonnegative row, cheaper for an
-    interior-point method than a 2-row cone).
+    contact. An end face's ``|x| <= t`` stays a cone: as the linear row ``x <= t`` next
+    to ``x >= 0`` (the same optimum, 8 cones fewer) it made the generated QOCO solve 11%
+    faster but left moreau's full form ``AlmostSolved`` at one paper instant of 1001.
     """
     A, b, basis = orthogonal_equalities(op.A[i], op.b[i])
     m, n = A.shape
@@ -206,13 +206,10 @@ def min_max(op: Operator, i: int) -> Conic:
     blocks, rhs, cones = [np.hstack([A, np.zeros((m, 1))])], [b / scale], [("zero", m)]
     uni = np.flatnonzero(op.unilateral)
     G = slip_rows(op, i, n + 1)
-    linear = [g for g in contacts(op) if len(g) == 1 and op.unilateral[g[0]]]
-    below = -_minus_identity_rows([g[0] for g in linear], n + 1)
-    below[:, t] = -1.0
-    blocks.append(np.vstack([_minus_identity_rows(uni, n + 1), below, G]))
-    rhs.append(np.zeros(len(uni) + len(below) + len(G)))
-    cones.append(("nonneg", len(uni) + len(below) + len(G)))
-    for group in (g for g in contacts(op) if g not in linear):
+    blocks.append(np.vstack([_minus_identity_rows(uni, n + 1), G]))
+    rhs.append(np.zeros(len(uni) + len(G)))
+    cones.append(("nonneg", len(uni) + len(G)))
+    for group in contacts(op):
         soc = np.zeros((len(group) + 1, n + 1))
         soc[0, t] = -1.0
         soc[np.arange(1, len(group) + 1), group] = -1.0
