@@ -885,7 +885,7 @@ def initial_step(t0, y0, t_bound, atol, rtol, ints, args, work):
 
 
 # rows of the integrator's vector scratch (``work[0]``)
-W_PREDICT, W_SCALE, W_PSI, W_Y, W_D, W_DY, W_F, W_SOLVE = range(8)
+W_PREDICT, W_SCALE, W_PSI, W_Y, W_D, W_DY, W_F, W_F_PREDICT, W_SOLVE = range(9)
 
 
 @njit(cache=True)
@@ -915,12 +915,14 @@ def start(t0, y0, t_bound, atol, rtol, args):
 
 
 @njit(cache=True)
-def _newton(t_new, c, jac, lu, pivots, blocks, floats, ints, args, work):
+def _newton(t_new, c, jac, lu, pivots, blocks, floats, ints, args, work, again):
     """SciPy's ``solve_bdf_system``: the simplified Newton iteration of one step from
     the prediction (``work`` rows ``W_PREDICT``, ``W_PSI``, ``W_SCALE``) into ``y``
     (``W_Y``) and ``d = y - y_predict`` (``W_D``); (converged, iterations). As CVODE
     (and unlike SciPy), a first correction already below the tolerance times the last
-    rate seen with this LU is accepted without a second evaluation.
+    rate seen with this LU is accepted without a second evaluation. ``again``: the
+    iteration restarts from the same prediction (after a fresh Jacobian), whose
+    right-hand side is kept in row ``W_F_PREDICT`` from the first start.
     """
     vec = work[0]
     y_predict, scale, psi = vec[W_PREDICT], vec[W_SCALE], vec[W_PSI]
@@ -931,7 +933,12 @@ def _newton(t_new, c, jac, lu, pivots, blocks, floats, ints, args, work):
     dy_norm_old, converged, iterations = -1.0, False, 0
     while iterations < NEWTON_MAXITER:
         iterations += 1
-        _rhs(t_new, y, ints, args, work, f)
+        if iterations == 1 and again:
+            f[:] = vec[W_F_PREDICT]
+        else:
+            _rhs(t_new, y, ints, args, work, f)
+            if iterations == 1:
+                vec[W_F_PREDICT, :] = f
         finite = True
         for i in range(n):
             finite &= np.isfinite(f[i])
@@ -998,20 +1005,20 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
             ints[I_EQUAL] = 0
         h_abs = t_new - t
         _predict(d, order, alpha, gamma, atol, rtol, vec)
-        c = h_abs / alpha[order]
+        c, again = h_abs / alpha[order], False
         while True:
             if ints[I_LU] == 0 or abs(c / floats[F_C] - 1.0) > LU_KEEP:
                 _factor(jac, c, lu, pivots, blocks, work[4], work[5])
                 ints[I_NLU] += 1
                 ints[I_LU], floats[F_C], floats[F_RATE] = 1, c, 1.0
             converged, n_iter = _newton(t_new, c, jac, lu, pivots, blocks, floats, ints,
-                                        args, work)
+                                        args, work, again)
             if converged or ints[I_JAC_CURRENT] == 1:
                 break
             jac[:] = jacobian(t_new, vec[W_PREDICT], args[0], args[1], args[2], args[3],
                               args[4], args[5])
             ints[I_JEV] += 1
-            ints[I_LU], ints[I_JAC_CURRENT] = 0, 1
+            ints[I_LU], ints[I_JAC_CURRENT], again = 0, 1, True
         if not converged:
             h_abs *= 0.5
             _change_d(d, order, 0.5, work)
