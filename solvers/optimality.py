@@ -459,7 +459,7 @@ class Stacked:
             elif isinstance(blk, np.ndarray):  # stacked products: 2x einsum's
                 out += part @ blk if blk.ndim == 2 else (part[:, None, :] @ blk)[:, 0]
             else:
-                np.add.at(out, (slice(None), blk[1]), blk[0] * part)
+                out[:, blk[1]] += blk[0] * part  # its columns are distinct
             row += rows
         return out
 

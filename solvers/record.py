@@ -741,8 +741,7 @@ def _lcp(problems, outcomes, idx, views: _Views) -> None:
     views.dual[idx] = np.maximum(0.0, -w.min(axis=1, initial=0.0)) / unit
     views.gap[idx] = np.abs(np.einsum("ti,ti->t", z, w)) / unit ** 2
     views.duals[idx], views.kinds[idx] = "lcp", "complementarity"
-    for j, k in enumerate(idx):
-        views.y[k] = w[j]
+    _place(views.y, idx, list(w))
 
 
 def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, received,
@@ -765,12 +764,11 @@ def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, receive
         gap = np.where(objective_gap, np.abs(found["objective"] - best)
                        / np.maximum(np.abs(best), 1e-300), gap)
         kinds[objective_gap] = "objective"
-    views.dual[idx], views.gap[idx], views.kinds[idx] = found["dual"], gap, kinds
-    duals = np.full(len(idx), "recovered", object)
-    duals[given] = "solver"
-    views.duals[idx] = duals
-    for k, row in zip(idx, y):
-        views.y[k] = row
+    every = len(idx) == len(views.y)  # then slices and whole lists, not indices
+    at = slice(None) if every else np.array(idx)
+    views.dual[at], views.gap[at], views.kinds[at] = found["dual"], gap, kinds
+    views.duals[at] = "solver" if given.all() else np.where(given, "solver", "recovered")
+    _place(views.y, idx, list(y))
     if given.any():
         _solver_view(st, given, z, parts, isinstance(received[idx[0]], (LS, QP)),
                      list(itertools.compress(idx, given.tolist())), views)
@@ -788,5 +786,13 @@ def _solver_view(st: Stacked, given, z, parts: Parts, as_qp: bool, idx: list,
     solver = from_parts(parts, st.b - st.Az(z), st.cones, check_dual_cone=not as_qp)
     found = _instances(Optimality, {key: solver[key].tolist()
                                     for key in ("primal", "dual", "gap")}, len(z))
-    for k, optimality in zip(idx, found):
-        views.solver[k] = optimality
+    _place(views.solver, idx, found)
+
+
+def _place(out: list, idx: list, values: list) -> None:
+    """``out[idx[j]] = values[j]`` for every j, at once where ``idx`` is every place."""
+    if len(idx) == len(out):
+        out[:] = values
+    else:
+        for k, value in zip(idx, values):
+            out[k] = value
