@@ -663,8 +663,11 @@ def _messages(started: _Started, status, confirmed, residual: dict) -> list[str]
     messages = list(started.messages)
     judged = status != np.array(started.status, object)
     turned = confirmed != status
+    changed = np.flatnonzero(judged | turned).tolist()
+    if not changed and not started.notes:
+        return messages
     worst = np.argmax([residual[key] for key in Residuals.KEYS], axis=0).tolist()
-    for k in sorted(started.notes.keys() | set(np.flatnonzero(judged | turned).tolist())):
+    for k in sorted(started.notes.keys() | set(changed)):
         notes = started.notes.get(k, [messages[k]] if messages[k] else [])
         if judged[k]:
             key = Residuals.KEYS[worst[k]]
