@@ -308,6 +308,27 @@ def test_stacked_conic_form_equals_each_conversion():
         assert np.allclose(stacked.Aty(y)[k], conic.A.T @ y[k], rtol=0, atol=1e-14)
 
 
+
+def test_rows_shared_by_every_instant_are_kept_once_and_give_each_instants_products():
+    """Rows the same at every instant (a cone's) are one matrix, the others a stack, in
+    row order; products, an instant's A and a subset of instants equal the dense ones."""
+    from cardan_forces.solvers.optimality import stacked_batch
+
+    rng = np.random.default_rng(1)
+    T, m, n = 4, 7, 3
+    A = np.broadcast_to(rng.standard_normal((m, n)), (T, m, n)).copy()
+    A[:, [1, 2, 5]] = rng.standard_normal((T, 3, n))  # rows that change with the instant
+    stacked = stacked_batch(None, np.zeros((T, n)), A, np.zeros((T, m)), (("zero", m),))
+    assert [np.ndim(block) for block in stacked.blocks] == [2, 3, 2, 3, 2]
+    z, y = rng.standard_normal((T, n)), rng.standard_normal((T, m))
+    for k in range(T):
+        assert np.array_equal(stacked.A(k), A[k])
+        assert np.allclose(stacked.Az(z)[k], A[k] @ z[k], rtol=0, atol=1e-14)
+        assert np.allclose(stacked.Aty(y)[k], A[k].T @ y[k], rtol=0, atol=1e-14)
+    some = stacked.take(np.array([3, 1]))
+    assert np.array_equal(some.A(0), A[3]) and np.array_equal(some.A(1), A[1])
+    assert np.allclose(some.Az(z[[3, 1]]), stacked.Az(z)[[3, 1]], rtol=0, atol=1e-14)
+
 def test_every_record_carries_the_solver_view_of_the_problem_it_received():
     """The record's solver optimality is qp_measures.solver_optimality of the received
     problem with the solver's multipliers (absolute), beside the package's relative
