@@ -264,3 +264,22 @@ def test_orthogonal_equalities_keep_the_feasible_set():
         x = x0 + basis @ y
         assert A @ x == pytest.approx(b, abs=1e-10)
         assert x[5] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_holding_an_idle_faces_moments_keeps_the_optimum(paper, monkeypatch):
+    """``socp_face`` holds an idle end face's moments at zero with the face (its cone
+    ``||m|| <= rt * 0`` forces them there): the optimal value is the one of the problem
+    where only the cone holds them."""
+    from cardan_forces.formulations import convex
+
+    op = build_operator(simulate(paper, [0.1, 0.35]))
+    tight = [convex.socp_face(op, i) for i in range(2)]
+    held = [solve(problem, "clarabel", tol=1e-10) for problem in tight]
+    monkeypatch.setattr(convex, "_held", lambda idle, cones: list(idle))
+    loose = [convex.socp_face(op, i) for i in range(2)]
+    assert loose[0].null_space.shape[1] > tight[0].null_space.shape[1]  # the moments free
+    for record, problem in zip(held, loose):
+        free = solve(problem, "clarabel", tol=1e-10)
+        assert record.solved and free.solved
+        value = [0.5 * r.z @ problem.P @ r.z for r in (record, free)]
+        assert value[0] == pytest.approx(value[1], rel=1e-7)
