@@ -341,3 +341,41 @@ def test_every_record_carries_the_solver_view_of_the_problem_it_received():
     assert record.solver_status == "solved"
     assert dict(record.solver_optimality) == pytest.approx(expected, rel=1e-12, abs=1e-300)
     assert record.wall_s >= record.solve_s + record.checks_s
+
+
+class _Halved:
+    """A map to forces that offers the stacked form (``stacked``), counting its calls."""
+
+    calls = 0
+
+    def __call__(self, z):
+        return 0.5 * np.asarray(z, float)
+
+    @staticmethod
+    def stacked(maps, Z):
+        _Halved.calls += 1
+        return 0.5 * np.asarray(Z, float)
+
+
+def test_a_map_that_offers_its_stacked_form_maps_a_run_at_once_as_one_at_a_time():
+    """Forces of a run whose maps offer ``stacked`` come from one call and equal the
+    per-instant map's; an answer it cannot take (none given) falls back to the
+    per-instant map, which names the failure."""
+    from cardan_forces.solvers.record import finalize_all, stack_all
+
+    problems = [QP(checks=_checks(np.ones((1, 3)), [1.0 + k], [True] * 3), formulation="ref",
+                   to_forces=_Halved(), P=np.eye(3), q=np.zeros(3), A=np.ones((1, 3)),
+                   b=np.array([2.0 + 2 * k]), lb=np.zeros(3)) for k in range(3)]
+    outcomes = [Outcome("solved", np.full(3, (2.0 + 2 * k) / 3)) for k in range(3)]
+    _Halved.calls = 0
+    together = finalize_all(problems, "hand", outcomes, stacks=stack_all(problems))
+    assert _Halved.calls == 1
+    for problem, outcome, record in zip(problems, outcomes, together):
+        assert np.array_equal(record.x, finalize(problem, "hand", outcome).x)
+        assert record.status == "solved" and record.residuals["equilibrium"] < 1e-15
+    outcomes[1] = Outcome("solved", None)
+    _Halved.calls = 0
+    mixed = finalize_all(problems, "hand", outcomes, stacks=stack_all(problems))
+    assert _Halved.calls == 0
+    assert [r.status for r in mixed] == ["solved", "failed", "solved"]
+    assert "solver returned no solution" in mixed[1].message
