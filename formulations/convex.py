@@ -33,7 +33,7 @@ from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.determinacy import RANK_RTOL, determinacy
 from cardan_forces.driveline.equilibrium import Operator
 
-from .problems import LCP, LS, QP, Conic, ForceChecks, SecondOrderCone
+from .problems import LCP, LS, QP, Conic, ForceChecks, Scaled, SecondOrderCone
 
 MIN_MAX_NORM_WEIGHT = 1e-4
 """Weight of the tie-breaking ``1/2 ||x / ||b|| ||^2`` term of ``min_max`` (its cost in
@@ -187,7 +187,7 @@ def positive(op: Operator, i: int) -> QP:
     scale = _load_scale(b)
     G = slip_rows(op, i)
     return QP(checks=checks(op, i), formulation="positive",
-              to_forces=lambda z: scale * np.asarray(z), P=np.eye(n), q=np.zeros(n),
+              to_forces=Scaled(scale), P=np.eye(n), q=np.zeros(n),
               A=A, b=b / scale, lb=lb, G=G if len(G) else None,
               h=np.zeros(len(G)) if len(G) else None)
 
@@ -221,7 +221,7 @@ def min_max(op: Operator, i: int) -> Conic:
     q = np.zeros(n + 1)
     q[t] = 1.0
     return Conic(checks=checks(op, i, pairs=False), formulation="min_max",
-                 to_forces=lambda z: scale * np.asarray(z)[:n], P=P, q=q, A=np.vstack(blocks),
+                 to_forces=Scaled(scale, n), P=P, q=q, A=np.vstack(blocks),
                  b=np.concatenate(rhs), cones=tuple(cones), null_space=_padded(basis, 1))
 
 
@@ -374,7 +374,7 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
         rhs.append(np.zeros(1 + len(c.members)))
         cone_list.append(("soc", 1 + len(c.members)))
     P = np.diag(np.concatenate([np.ones(n0), weights]))
-    return Conic(checks=check, formulation=formulation, to_forces=lambda z: scale * np.asarray(z),
+    return Conic(checks=check, formulation=formulation, to_forces=Scaled(scale),
                  P=P, q=np.zeros(n), A=np.vstack(blocks), b=np.concatenate(rhs),
                  cones=tuple(cone_list), null_space=basis)
 
@@ -481,7 +481,7 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
         p = np.zeros(n)
         for (group, k, _), bearing in zip(laws, is_bearing):
             p[group] = 1.0 / (k if bearing else k * d_ref ** (n_exp - 1.0))
-        return QP(checks=checks(op, i), formulation=name, to_forces=lambda z: sb * np.asarray(z),
+        return QP(checks=checks(op, i), formulation=name, to_forces=Scaled(sb),
                   P=np.diag(p / p.max()), q=np.zeros(n), A=A, b=b,
                   lb=np.where(op.unilateral, 0.0, -np.inf), G=G if len(G) else None,
                   h=np.zeros(len(G)) if len(G) else None)
@@ -520,16 +520,10 @@ def _compliance_conic(op: Operator, i: int, laws, is_bearing, hertz: bool, use_g
     P, q = _contact_energies(op.scene, laws, is_bearing, power, radius, use_gaps, sb, n,
                              (blocks, rhs, cones))
     unit = max(np.abs(q).max(), P.max())
-
-    def to_forces(z):
-        x = sb * np.asarray(z, float)[:n]
-        for b_, a_ in merged.items():
-            x[a_], x[b_] = max(x[a_], 0.0), max(-x[a_], 0.0)
-        return x
-
-    return Conic(checks=checks(op, i), formulation=name, to_forces=to_forces, P=P / unit,
-                 q=q / unit, A=np.vstack(blocks), b=np.concatenate(rhs), cones=tuple(cones),
-                 null_space=_padded(basis, nz - n))
+    signed = tuple((a_, b_) for b_, a_ in merged.items())
+    return Conic(checks=checks(op, i), formulation=name, to_forces=Scaled(sb, n, signed),
+                 P=P / unit, q=q / unit, A=np.vstack(blocks), b=np.concatenate(rhs),
+                 cones=tuple(cones), null_space=_padded(basis, nz - n))
 
 
 def _contact_energies(scene, laws, is_bearing, power, radius, use_gaps, sb, n, out):

@@ -158,6 +158,43 @@ def _identity(z: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class Scaled:
+    """The map of a problem whose first ``n`` unknowns are the forces in units of
+    ``scale`` (N; all unknowns where ``n`` is None): ``x = scale * z[:n]``. ``signed``:
+    end-face pairs ``(a, b)`` carried as one signed force in column ``a``, with
+    ``F_a = max(z_a, 0)``, ``F_b = max(-z_a, 0)`` (the conic compliance's pairs).
+    Called on one point; :meth:`stacked` maps the points of a run's instants at once
+    (the check pass's hook, ``solvers.record``), one product instead of a call each.
+    """
+
+    scale: float
+    n: int | None = None
+    signed: tuple[tuple[int, int], ...] = ()
+
+    def __call__(self, z) -> np.ndarray:
+        return self._split(self.scale * np.asarray(z, float)[:self.n])
+
+    @staticmethod
+    def stacked(maps: list[Scaled], Z: np.ndarray) -> np.ndarray:
+        """The forces (T, n) of the points ``Z`` (T, n_z), row ``k`` by ``maps[k]``; the
+        maps share ``n`` and ``signed`` (instants of one structure).
+        """
+        first = maps[0]
+        if any(m.n != first.n or m.signed != first.signed for m in maps):
+            raise ValueError("the maps are of different structures")
+        scale = np.fromiter((m.scale for m in maps), float, len(maps))
+        return first._split(scale[:, None] * np.asarray(Z, float)[:, :first.n])
+
+    def _split(self, x: np.ndarray) -> np.ndarray:
+        """``x`` (..., n) with each signed pair's force put on its pushing face."""
+        if self.signed:
+            a, b = np.array(self.signed).T
+            x[..., b] = np.maximum(-x[..., a], 0.0)
+            x[..., a] = np.maximum(x[..., a], 0.0)
+        return x
+
+
+@dataclass(frozen=True)
 class _Problem:
     """Fields shared by every problem class."""
 

@@ -92,8 +92,17 @@ def _forces(batch, outcome: BatchOutcome, answered: np.ndarray) -> np.ndarray:
     if isinstance(batch, LeastNormBatch):
         return np.where(answered[:, None], outcome.z, np.nan)
     X = np.full((len(outcome.z), len(batch.checks.names)), np.nan)
-    for k in np.flatnonzero(answered):
-        X[k] = batch.problems[k].to_forces(outcome.z[k])
+    rows = np.flatnonzero(answered)
+    maps = [batch.problems[k].to_forces for k in rows]
+    stacked = getattr(type(maps[0]), "stacked", None) if maps else None
+    if stacked is not None and all(type(f) is type(maps[0]) for f in maps):
+        try:  # one call for all instants (the maps of one structure, record's hook)
+            X[rows] = stacked(maps, outcome.z[rows])
+            return X
+        except ValueError:  # maps of different structures: one call each
+            pass
+    for k, f in zip(rows, maps):
+        X[k] = f(outcome.z[k])
     return X
 
 

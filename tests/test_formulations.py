@@ -283,3 +283,17 @@ def test_holding_an_idle_faces_moments_keeps_the_optimum(paper, monkeypatch):
         assert record.solved and free.solved
         value = [0.5 * r.z @ problem.P @ r.z for r in (record, free)]
         assert value[0] == pytest.approx(value[1], rel=1e-7)
+
+
+def test_scaled_map_of_many_instants_equals_its_calls():
+    """``x = scale z[:n]``, a signed pair's force on its pushing face; the stacked map
+    gives each instant's call, and refuses maps of two structures."""
+    from cardan_forces.formulations.problems import Scaled
+
+    maps = [Scaled(2.0, 3, ((0, 2),)), Scaled(3.0, 3, ((0, 2),))]
+    Z = np.array([[1.0, -1.0, 5.0, 9.0], [-2.0, 4.0, 7.0, 9.0]])
+    X = Scaled.stacked(maps, Z)
+    assert X.tolist() == [[2.0, -2.0, 0.0], [0.0, 12.0, 6.0]]
+    assert all(np.array_equal(X[k], maps[k](Z[k])) for k in range(2))
+    with pytest.raises(ValueError, match="structures"):
+        Scaled.stacked([Scaled(1.0), Scaled(1.0, 3)], Z)
