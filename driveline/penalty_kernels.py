@@ -360,6 +360,17 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     evaluation) is skipped before its kinematics; one on the ground has only ``a``'s 13
     columns.
     """
+    jac = np.empty((y.shape[0], y.shape[0]))
+    _jacobian_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads), jac)
+    return jac
+
+
+@njit(cache=True)
+def _jacobian_into(t, y, args, jac):
+    """:func:`jacobian` into ``jac`` (the integrator's own array: no new matrix per
+    Jacobian), with ``args`` the model arguments of :func:`rhs` as one tuple.
+    """
+    n_shafts, bodies, topology, geometry, laws, loads = args
     n, nb, m = y.shape[0], bodies.shape[0], topology.shape[0]
     _, pushes, _, force, moment, frames = contact_forces(y, bodies, topology, geometry, laws,
                                                          loads[11])
@@ -367,7 +378,7 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     drot = np.zeros((nb + 1, 4, 3, 3))
     for k in range(nb):
         _rotation_rates(y[3 * nb + 4 * k:3 * nb + 4 * k + 4], rot[k], drot[k])
-    jac = np.zeros((n, n))
+    jac[:] = 0.0
     dmoment = np.zeros((nb, 3, n))  # d(net moment on body k)/dy, global
     work = np.zeros((9, 3))
     grad, rates = np.zeros((3, 12)), np.zeros((9, 12))
@@ -396,8 +407,8 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
                 if kb < nb:
                     jac[7 * nb + 3 * kb + i, col] -= rows[0, i, k] / bodies[kb, 0]
                     dmoment[kb, i, col] += rows[2, i, k]
-    _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac)
-    return jac
+    _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac,
+                _linked(nb, topology))
 
 
 @njit(cache=True)
@@ -547,9 +558,11 @@ def _local_rates(y, nb, ka, kb, g, frames, drot, work, dloc, cols):
 
 
 @njit(cache=True)
-def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac):
+def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac,
+                linked):
     """The rows of ``x' = v``, ``q' = q (0, w) / 2`` and ``w' = J^-1 (R^T M - w x J w)``
-    (with the torques' rates added to ``dmoment``); ``moment``: the net contact moments.
+    (with the torques' rates added to ``dmoment``); ``moment``: the net contact moments;
+    ``dmoment`` is zero outside the columns of the ``linked`` bodies (:func:`_linked`).
     """
     torque_in, torque_load = harmonic(loads[3:7], t), harmonic(loads[7:11], t)
     total = moment[:nb].copy()
@@ -569,10 +582,15 @@ def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, j
         for i in range(3):
             jac[u + i, v + i] = 1.0
             a, b = (i + 1) % 3, (i + 2) % 3
-            for col in range(y.shape[0]):  # R^T dM
-                jac[w + i, col] += (rot[k, 0, i] * dmoment[k, 0, col]
-                                    + rot[k, 1, i] * dmoment[k, 1, col]
-                                    + rot[k, 2, i] * dmoment[k, 2, col]) / inertia[i]
+            for j in range(nb):  # R^T dM
+                if not linked[k, j]:
+                    continue
+                for first, size in ((3 * j, 3), (3 * nb + 4 * j, 4), (7 * nb + 3 * j, 3),
+                                    (10 * nb + 3 * j, 3)):
+                    for col in range(first, first + size):
+                        jac[w + i, col] += (rot[k, 0, i] * dmoment[k, 0, col]
+                                            + rot[k, 1, i] * dmoment[k, 1, col]
+                                            + rot[k, 2, i] * dmoment[k, 2, col]) / inertia[i]
             for kq in range(4):  # (dR/dq)^T M on the body's own quaternion
                 jac[w + i, q + kq] += (drot[k, kq, 0, i] * total[k, 0]
                                        + drot[k, kq, 1, i] * total[k, 1]
@@ -1025,8 +1043,7 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
                                         args, work, again)
             if converged or ints[I_JAC_CURRENT] == 1:
                 break
-            jac[:] = jacobian(t_new, vec[W_PREDICT], args[0], args[1], args[2], args[3],
-                              args[4], args[5])
+            _jacobian_into(t_new, vec[W_PREDICT], args, jac)
             ints[I_JEV] += 1
             ints[I_LU], ints[I_JAC_CURRENT], again = 0, 1, True
         if not converged:
