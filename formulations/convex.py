@@ -494,20 +494,20 @@ def _compliance_conic(op: Operator, i: int, laws, is_bearing, hertz: bool, use_g
     second face of each end-face pair is held at 0, the first one signed.
 
     Every contact has ``r_c >= ||f_c||`` (a second-order cone) and its energy on
-    ``r_c`` (``P`` for a linear law), plus ``s_c`` (a power cone) for a Hertz law;
-    except a Hertz law on one component without gap (an end face's signed force),
-    which puts that component in the power cone itself (the cone bounds ``|z|``): the
-    same optimum with fewer unknowns and cone rows. (A linear law's energy put on the
-    force itself, without ``r_c``, left Clarabel's equilibrium at 6e-8 of the load at
-    1e6 N m, against 1e-9 on ``r_c``.)
+    ``r_c`` (``P`` for a linear law), plus ``s_c`` (a power cone) for a Hertz law.
+    Shortcuts with the same optimum were measured and not kept: an end face's signed
+    force in its power cone itself, without ``r_c`` (4 unknowns fewer on ``paper``,
+    moreau 15% faster), left Clarabel's full form at ``InsufficientProgress`` on a
+    straight ``propshaft`` (its idle faces at the cone's apex); a linear law's energy on
+    the force itself left Clarabel's equilibrium at 6e-8 of the load at 1e6 N m,
+    against 1e-9 on ``r_c``.
     """
     n = len(op.names)
     merged = {b_: a_ for a_, b_ in op.pairs}
     kept = [c for c, (group, _, _) in enumerate(laws) if group[0] not in merged]
     laws, is_bearing = [laws[c] for c in kept], [is_bearing[c] for c in kept]
     power = [hertz and not bearing for bearing in is_bearing]
-    radius = [use_gaps or not p or len(g) > 1 for (g, _, _), p in zip(laws, power)]
-    nz = n + sum(radius) + sum(power)
+    nz = n + len(laws) + sum(power)
     rows, rhs_eq, basis = orthogonal_equalities(op.A[i], op.b[i], held=list(merged))
     blocks = [np.hstack([rows, np.zeros((len(rows), nz - n))])]
     rhs, cones = [rhs_eq / sb], [("zero", len(rows))]
@@ -517,7 +517,7 @@ def _compliance_conic(op: Operator, i: int, laws, is_bearing, hertz: bool, use_g
     blocks.append(np.vstack([_minus_identity_rows(uni, nz), G]))
     rhs.append(np.zeros(len(uni) + len(G)))
     cones.append(("nonneg", len(uni) + len(G)))
-    P, q = _contact_energies(op.scene, laws, is_bearing, power, radius, use_gaps, sb, n,
+    P, q = _contact_energies(op.scene, laws, is_bearing, power, use_gaps, sb, n,
                              (blocks, rhs, cones))
     unit = max(np.abs(q).max(), P.max())
     signed = tuple((a_, b_) for b_, a_ in merged.items())
@@ -526,25 +526,24 @@ def _compliance_conic(op: Operator, i: int, laws, is_bearing, hertz: bool, use_g
                  cones=tuple(cones), null_space=_padded(basis, nz - n))
 
 
-def _contact_energies(scene, laws, is_bearing, power, radius, use_gaps, sb, n, out):
+def _contact_energies(scene, laws, is_bearing, power, use_gaps, sb, n, out):
     """``P`` and ``q`` of :func:`_compliance_conic`'s energies; each contact's cone rows
     are appended to ``out`` = ``(blocks, rhs, cones)``. Units as in :func:`compliance`.
     """
     n_exp, d_ref = scene.contact.exponent, scene.contact.damping_full_depth_m
-    nz = n + sum(radius) + sum(power)
+    nz = n + len(laws) + sum(power)
     P, q = np.zeros((nz, nz)), np.zeros(nz)
     blocks, rhs, cones = out
     unknowns = iter(range(n, nz))
-    for (group, k, gap), bearing, pw, rad in zip(laws, is_bearing, power, radius):
-        load = next(unknowns) if rad else group[0]  # what the energy acts on
-        if rad:
-            soc = np.zeros((len(group) + 1, nz))
-            soc[0, load] = -1.0
-            soc[np.arange(1, len(group) + 1), group] = -1.0
-            blocks.append(soc)
-            rhs.append(np.zeros(len(group) + 1))
-            cones.append(("soc", len(group) + 1))
-            q[load] = gap if use_gaps else 0.0
+    for (group, k, gap), bearing, pw in zip(laws, is_bearing, power):
+        load = next(unknowns)  # r_c, what the energy acts on
+        soc = np.zeros((len(group) + 1, nz))
+        soc[0, load] = -1.0
+        soc[np.arange(1, len(group) + 1), group] = -1.0
+        blocks.append(soc)
+        rhs.append(np.zeros(len(group) + 1))
+        cones.append(("soc", len(group) + 1))
+        q[load] = gap if use_gaps else 0.0
         if pw:
             s = next(unknowns)
             q[s] = n_exp / (n_exp + 1.0) * k ** (-1.0 / n_exp) * sb ** (1.0 / n_exp)

@@ -297,3 +297,16 @@ def test_scaled_map_of_many_instants_equals_its_calls():
     assert all(np.array_equal(X[k], maps[k](Z[k])) for k in range(2))
     with pytest.raises(ValueError, match="structures"):
         Scaled.stacked([Scaled(1.0), Scaled(1.0, 3)], Z)
+
+
+def test_hertz_compliance_full_form_holds_equilibrium_on_a_straight_propshaft():
+    """A straight line leaves the end faces idle, at their cones' apex; Clarabel on the
+    full conic form must still reach equilibrium there (a form that put the signed face
+    force straight into its power cone stalled it at 0.37 of the load)."""
+    from cardan_forces.experiments.hard import CASES
+    from cardan_forces.solvers import solve
+
+    scene = next(c for c in CASES if c.name == "articulation-0").scene("propshaft")
+    op = build_operator(simulate(scene, scene.time.instants()[:1]))
+    record = solve(FORMULATIONS["compliance_hertz"](op, 0), "clarabel")
+    assert record.residuals.equilibrium <= 1e-6
