@@ -21,7 +21,8 @@ PROFILE_COLUMNS = ("formulation", "profile", "clock", "level", "solver", "solved
                    "tau", "fraction")
 VIEW_COLUMNS = ("problem", "formulation", "solver", "setting", "found", "primal", "dual", "gap",
                 "solver_ok", "solver_rule", "equilibrium", "sign", "complementarity", "cone",
-                "distance", "force_ok", "force_rule", "runtime_s", "solver_s", "end_to_end_s")
+                "distance", "force_ok", "force_rule", "runtime_s", "solver_s", "end_to_end_s",
+                "message")
 """Columns of ``bench_views.csv``: each solve of the two-view harness, one row."""
 
 

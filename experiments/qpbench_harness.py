@@ -114,7 +114,9 @@ def solve_conic_both(problem, backend: str, setting: str, reference=None) -> dic
 
 def _row(problem, backend, setting, found, measured, record, runtime, solver_s,
          began) -> dict:
-    """One harness row: both views of a solve, its rules and its three times."""
+    """One harness row: both views of a solve, its rules, its three times and the
+    record's message (the solver's notes and warnings).
+    """
     force = {k: float(record.residuals[k]) for k in Residuals.KEYS}
     if record.residuals.reference is not None and unique_optimum(problem):
         force["distance"] = float(record.residuals.reference)
@@ -128,7 +130,7 @@ def _row(problem, backend, setting, found, measured, record, runtime, solver_s,
                     and all(v <= FORCE_LEVEL for v in force.values()),
         "force_rule": force_rule(record.status, force),
         "runtime_s": runtime, "solver_s": solver_s,
-        "end_to_end_s": time.perf_counter() - began,
+        "end_to_end_s": time.perf_counter() - began, "message": record.message,
     }
 
 

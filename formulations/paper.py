@@ -499,6 +499,8 @@ class _PaperForces:
         per-instant call costs some 25 us, calls included).
         """
         t = maps[0].terms
+        if any(m.terms is not t or m.plan is not maps[0].plan for m in maps):
+            raise ValueError("the maps are of different operators")
         w = _polar(t, np.asarray(Z, float).T)
         X = t.forces @ w[:t.forces.shape[1]]  # (n_x, T)
         if not t.rim:

@@ -157,6 +157,21 @@ def _identity(z: np.ndarray) -> np.ndarray:
     return np.asarray(z, float)
 
 
+def map_all(maps: list, Z: np.ndarray) -> np.ndarray | None:
+    """The forces (T, n) of the points ``Z`` (T, n_z), row ``k`` by ``maps[k]``, in one
+    call where the maps offer one: ``to_forces`` maps of one type whose type has
+    ``stacked(maps, Z)`` (:class:`Scaled`, the paper method's map) and of one structure.
+    ``None`` where they do not: then each instant is mapped alone.
+    """
+    stacked = getattr(type(maps[0]), "stacked", None) if len(maps) else None
+    if stacked is None or any(type(f) is not type(maps[0]) for f in maps):
+        return None
+    try:
+        return np.asarray(stacked(maps, Z), float)
+    except (ValueError, IndexError):  # maps of other structures, points of other sizes
+        return None
+
+
 @dataclass(frozen=True)
 class Scaled:
     """The map of a problem whose first ``n`` unknowns are the forces in units of

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
-from cardan_forces.formulations.problems import LastMade
+from cardan_forces.formulations.problems import LastMade, map_all
 
 from .optimality import combine, multipliers, stacked_batch, stacked_measures, unique_optimum
 from .record import Optimality, Record, Residuals, Status, confirm, judge
@@ -94,13 +94,10 @@ def _forces(batch, outcome: BatchOutcome, answered: np.ndarray) -> np.ndarray:
     X = np.full((len(outcome.z), len(batch.checks.names)), np.nan)
     rows = np.flatnonzero(answered)
     maps = [batch.problems[k].to_forces for k in rows]
-    stacked = getattr(type(maps[0]), "stacked", None) if maps else None
-    if stacked is not None and all(type(f) is type(maps[0]) for f in maps):
-        try:  # one call for all instants (the maps of one structure, record's hook)
-            X[rows] = stacked(maps, outcome.z[rows])
-            return X
-        except ValueError:  # maps of different structures: one call each
-            pass
+    mapped = map_all(maps, outcome.z[rows])
+    if mapped is not None:
+        X[rows] = mapped
+        return X
     for k, f in zip(rows, maps):
         X[k] = f(outcome.z[k])
     return X

@@ -59,7 +59,9 @@ them): no iterative refinement of the KKT solves. On the reduced ``min_max`` and
 ``socp_face`` (1001 instants each) it changed no status or iteration count and left the
 package's measures at the same levels (dual residual at the default tolerance 4.5e-10
 with it, 5.8e-10 without; at 1e-10 4e-13 and 3e-11, the gap unchanged), and it costs a
-fifth of the solve."""
+fifth of the solve. Badly scaled cases lose more: on ``cardan hard``'s 89 deg case the
+worst dual residual of ``min_max`` is 7.2e-8 without it against 4.5e-9 with it (every
+instant still solved)."""
 
 STATUS = {1: "solved", 2: "inaccurate", 4: "inaccurate"}
 """Generated solver status -> ours; anything else is failed."""

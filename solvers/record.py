@@ -28,7 +28,15 @@ from dataclasses import MISSING, dataclass, field, fields
 from typing import ClassVar
 
 import numpy as np
-from cardan_forces.formulations.problems import LCP, LS, NLS, QP, RESIDUALS, residuals_batch
+from cardan_forces.formulations.problems import (
+    LCP,
+    LS,
+    NLS,
+    QP,
+    RESIDUALS,
+    map_all,
+    residuals_batch,
+)
 
 from .optimality import (
     Parts,
@@ -540,7 +548,7 @@ def _start_all(problems, outcomes, n: int | None = None) -> _Started:
     """
     T = len(problems)
     status = [_STATUS_OF.get(o.status) for o in outcomes]
-    started = _Started(status, [None] * T, [None] * T, [o.message or "" for o in outcomes])
+    started = _Started([], [], [None] * T, [o.message or "" for o in outcomes])
     mapped = _stacked_forces(problems, outcomes, [k for k, s in enumerate(status)
                                                   if s in _ANSWERED], n)
     for k, first in enumerate(status):
@@ -556,7 +564,7 @@ def _start_all(problems, outcomes, n: int | None = None) -> _Started:
                 started.note(k, why)
     for k in [k for k, x in enumerate(started.x) if x is None]:
         started.x[k] = np.full(n or len(problems[k].checks.names), np.nan)
-    started.status = list(status)
+    started.solver_status, started.status = status, list(status)  # the judging turns status
     return started
 
 
@@ -568,15 +576,13 @@ def _stacked_forces(problems, outcomes, rows: list, n: int | None) -> dict:
     where they do not, or where it fails: then each instant is mapped alone, with its
     own error.
     """
-    maps = [problems[k].to_forces for k in rows]
-    stacked = getattr(type(maps[0]), "stacked", None) if maps else None
-    if stacked is None or n is None or any(type(f) is not type(maps[0]) for f in maps):
+    if n is None or not rows:
         return {}
     try:
         Z = np.array([outcomes[k].z for k in rows], float)
-        X = np.asarray(stacked(maps, Z), float) if Z.ndim == 2 else None
-    except Exception:  # a missing or ragged answer: found and told per instant
+    except (TypeError, ValueError):  # a missing or ragged answer: found and told per instant
         return {}
+    X = map_all([problems[k].to_forces for k in rows], Z) if Z.ndim == 2 else None
     return dict(zip(rows, X)) if X is not None and X.shape == (len(rows), n) else {}
 
 
@@ -774,7 +780,7 @@ def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, receive
            st: Stacked | None = None) -> None:
     """Optimality of answers to problems with one conic form (:func:`stack_conic`):
     the package's relative measures with the solver's multipliers (recovered where it
-    gave none), and the solver's absolute ones (:func:`~.qp_measures.residuals_from`)
+    gave none), and the solver's absolute ones (:func:`~.qp_measures.from_parts`)
     where it gave them. ``st``: the problems at ``idx`` stacked beforehand.
     """
     st = st if st is not None else stack_conic([problems[k] for k in idx])

@@ -117,4 +117,4 @@ def test_a_solvers_warning_stays_with_its_row(exported, monkeypatch):
         row = qpbench_harness.solve_both(problems["paper_positive_0000"], "qpsolvers-osqp",
                                          "default")
     assert not escaped
-    assert row["setting"] == "default" and row["found"] in (True, False)
+    assert "maximum iterations reached" in row["message"]

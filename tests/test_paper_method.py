@@ -230,9 +230,11 @@ def test_checks_are_socp_face_s(op):
         np.testing.assert_array_equal(mine.unilateral, theirs.unilateral)
 
 
-def test_stacked_forces_are_the_per_instant_maps(paper):
-    """The map over many instants at once gives each instant's own map's forces, also
-    where a pair without a pushing face sends an instant to the least-squares split."""
+def test_stacked_forces_are_the_least_norm_split_at_each_instant(paper):
+    """The map over many instants at once gives each instant the weighted least-norm
+    split (:func:`_least_norm_forces`, by the pseudo-inverse), also where a pair
+    without a pushing face sends an instant to the least-squares split; it refuses maps
+    of two operators."""
     op = build_operator(simulate(paper, [0.2, 0.9, 1.6, 2.3]))
     problems = [build_paper(op, i) for i in range(len(op.t))]
     rng = np.random.default_rng(5)
@@ -242,8 +244,12 @@ def test_stacked_forces_are_the_per_instant_maps(paper):
     Z[1, faces[:2]] = -1.0  # both faces of one pair pull, under a nonzero rim term
     maps = [p.to_forces for p in problems]
     stacked = type(maps[0]).stacked(maps, Z)
-    each = np.array([m(z) for m, z in zip(maps, Z)])
-    np.testing.assert_allclose(stacked, each, rtol=0, atol=1e-13 * np.abs(each).max())
+    each = np.array([_least_norm_forces(p, op, i, z) for i, (p, z) in enumerate(zip(problems,
+                                                                                  Z))])
+    np.testing.assert_allclose(stacked, each, rtol=0, atol=1e-12 * np.abs(each).max())
+    other = build_paper(build_operator(simulate(paper, [0.2])), 0).to_forces
+    with pytest.raises(ValueError, match="operators"):
+        type(maps[0]).stacked([maps[0], other], Z[:2])
 
 
 def test_a_jacobian_asked_again_at_a_point_is_its_own_copy(op):
