@@ -252,12 +252,15 @@ def test_bodies_without_a_shared_contact_do_not_couple(model):
 
 @pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
 @pytest.mark.parametrize("c", [1e-7, 1e-5, 1e-3])
-def test_structured_newton_solve_equals_a_dense_solve(model, c):
+@pytest.mark.parametrize("by_blocks", [True, False])
+def test_structured_newton_solve_equals_a_dense_solve(model, c, by_blocks):
     """The integrator solves ``(I - c J) x = b`` by eliminating the displacement and
-    quaternion rows first (a 30 x 30 factorization instead of 65 x 65): a backward
-    error ``|M x - b| / (|M| |x|)`` at round-off, as a dense solve's, and the same ``x``
-    to 1e-8 of its size (the matrix is ill-conditioned: ``J`` spans 1e-3 ... 1e10),
-    for values of ``c`` (the step over the formula's coefficient) across those it takes.
+    quaternion rows first (a 30 x 30 system instead of 65 x 65), factored block by block
+    along the chain of bodies (``by_blocks``) or by ``getrf`` (bodies that form no
+    chain): a backward error ``|M x - b| / (|M| |x|)`` at round-off, as a dense
+    solve's, and the same ``x`` to 1e-8 of its size (the matrix is ill-conditioned:
+    ``J`` spans 1e-3 ... 1e10), for values of ``c`` (the step over the formula's
+    coefficient) across those it takes.
     """
     kernels = penalty.kernels
     y = _pressed_state(model, 1)
@@ -266,14 +269,44 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c):
     lu, pivots = np.zeros((6 * nb, 6 * nb)), np.zeros(6 * nb, kernels.F_INT_nptype)
     blocks, coupling = np.zeros((nb, 4, 4)), np.zeros((nb, 4, 3))
     linked = kernels._linked(nb, model.kernel_args[2])
-    assert kernels._factor(jac, c, lu, pivots, blocks, coupling, linked) == 0
+    chain = kernels._new_chain(linked)
+    assert len(chain[0]) == nb  # paper's bodies form a chain
+    if not by_blocks:
+        chain = (chain[0][:0], *chain[1:])
+    assert kernels._factor(jac, c, lu, pivots, blocks, coupling, linked, chain) == 0
     b = np.random.default_rng(2).standard_normal(n)
     x = b.copy()
-    kernels._solve(jac, c, lu, pivots, blocks, coupling, linked, x, np.zeros((2, n)))
+    kernels._solve(jac, c, lu, pivots, blocks, coupling, linked, chain, x, np.zeros((2, n)))
     matrix = np.eye(n) - c * jac
     dense = np.linalg.solve(matrix, b)
     assert np.abs(matrix @ x - b).max() <= 1e-13 * np.abs(matrix).max() * np.abs(x).max()
     assert np.abs(x - dense).max() <= 1e-8 * np.abs(dense).max()
+
+
+@pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
+@pytest.mark.parametrize(("edges", "chains"), [
+    ([(0, 3), (3, 1), (1, 4), (4, 2)], True),  # shaft, pin, shaft, pin, shaft
+    ([(0, 1), (2, 3)], True),  # two chains, and a body on its own
+    ([(0, 1), (1, 2), (2, 0)], False),  # a loop
+    ([(0, 1), (0, 2), (0, 3)], False),  # a body with three neighbours
+])
+def test_chain_order_puts_linked_bodies_side_by_side(edges, chains):
+    """The order of the block factorization (:func:`penalty_kernels._chain_order`) has
+    every pair of linked bodies next to each other (so the reduced matrix is block
+    tridiagonal), every body once; where the links form no chain there is no order
+    (the factorization falls back to ``getrf``).
+    """
+    kernels = penalty.kernels
+    linked = np.eye(5, dtype=bool)
+    for a, b in edges:
+        linked[a, b] = linked[b, a] = True
+    order = kernels._chain_order(linked)
+    if not chains:
+        assert len(order) == 0
+        return
+    assert sorted(order) == list(range(5))
+    place = np.argsort(order)
+    assert all(abs(place[a] - place[b]) == 1 for a, b in edges)
 
 
 @pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
