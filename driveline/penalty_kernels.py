@@ -341,15 +341,6 @@ def _rotation_rates(q, rot, out):
 
 
 @njit(cache=True)
-def _cross_columns(a, m, scale, out):
-    """``out += scale * (a x m[:, c])`` for every column ``c`` of the (3, k) ``m``."""
-    for c in range(m.shape[1]):
-        out[0, c] += scale * (a[1] * m[2, c] - a[2] * m[1, c])
-        out[1, c] += scale * (a[2] * m[0, c] - a[0] * m[2, c])
-        out[2, c] += scale * (a[0] * m[1, c] - a[1] * m[0, c])
-
-
-@njit(cache=True)
 def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     """``df/dy`` (exact to round-off) by the chain rule: per contact in touch, the
     derivative of its force on ``a`` with respect to its local kinematics (``p, ea, ub,
@@ -508,53 +499,68 @@ def _local_rates(y, nb, ka, kb, g, frames, drot, work, dloc, cols):
     """``d(p, ea, ub, rel, arm, arm_b)`` of one contact (:func:`_local`, its rows in
     ``work``; rows 7-8 scratch) with respect to the 13 states of ``a`` (local columns
     0-12: displacement, quaternion, velocity, rate) and of ``b`` (13-25), into ``dloc``
-    (18, 26); ``cols``: their state indices (-1: the ground's).
+    (18, 26); ``cols``: their state indices (-1: the ground's). Elements are indexed
+    one by one, with no views of rows in the loops (each view costs the array's
+    reference count twice).
     """
     rot, omega = frames[2], frames[4]
     p, spin, turned = work[0], work[7], work[8]
     dloc[:] = 0.0
     cols[:] = -1
     for side in range(2):
-        k, sign, off = (ka, 1.0, 0) if side == 0 else (kb, -1.0, 13)
+        k, sign, off, gp = (ka, 1.0, 0, 0) if side == 0 else (kb, -1.0, 13, 6)
         if k == nb:
-            continue  # the ground does not move
-        point, axis = (g[0:3], g[3:6]) if side == 0 else (g[6:9], g[9:12])
+            continue  # the ground does not move; its point g[gp:gp+3], axis g[gp+3:gp+6]
         for i in range(3):
             cols[off + i] = 3 * k + i
             cols[off + 7 + i] = 7 * nb + 3 * k + i
             cols[off + 10 + i] = 10 * nb + 3 * k + i
         for i in range(4):
             cols[off + 3 + i] = 3 * nb + 4 * k + i
-        wk = y[10 * nb + 3 * k:10 * nb + 3 * k + 3]
-        spin[:] = 0.0  # w x point, body axes
-        _cross_add(wk, point, 1.0, spin)
+        w = 10 * nb + 3 * k
+        spin[0] = 0.0 + (y[w + 1] * g[gp + 2] - y[w + 2] * g[gp + 1])  # w x point, body
+        spin[1] = 0.0 + (y[w + 2] * g[gp] - y[w] * g[gp + 2])
+        spin[2] = 0.0 + (y[w] * g[gp + 1] - y[w + 1] * g[gp])
         for i in range(3):
             dloc[i, off + i] = sign  # p
             dloc[9 + i, off + 7 + i] = sign  # rel
             for kq in range(4):
-                dr = drot[k, kq, i]
-                at_point = dr[0] * point[0] + dr[1] * point[1] + dr[2] * point[2]
+                d0, d1, d2 = drot[k, kq, i, 0], drot[k, kq, i, 1], drot[k, kq, i, 2]
+                at_point = d0 * g[gp] + d1 * g[gp + 1] + d2 * g[gp + 2]
                 dloc[i, off + 3 + kq] = sign * at_point
                 dloc[12 + 3 * side + i, off + 3 + kq] = at_point  # arm, arm_b
-                dloc[3 + 3 * side + i, off + 3 + kq] = dr[0] * axis[0] + dr[1] * axis[1] \
-                    + dr[2] * axis[2]  # ea, ub
-                dloc[9 + i, off + 3 + kq] = sign * (dr[0] * spin[0] + dr[1] * spin[1]
-                                                    + dr[2] * spin[2])
+                dloc[3 + 3 * side + i, off + 3 + kq] = d0 * g[gp + 3] + d1 * g[gp + 4] \
+                    + d2 * g[gp + 5]  # ea, ub
+                dloc[9 + i, off + 3 + kq] = sign * (d0 * spin[0] + d1 * spin[1] + d2 * spin[2])
         for j in range(3):  # d(R (w x point))/dw_j = R (e_j x point)
             a, b = (j + 1) % 3, (j + 2) % 3
             for i in range(3):  # e_j x point = point[a] e_b - point[b] e_a
-                dloc[9 + i, off + 10 + j] = sign * (rot[k, i, b] * point[a]
-                                                    - rot[k, i, a] * point[b])
+                dloc[9 + i, off + 10 + j] = sign * (rot[k, i, b] * g[gp + a]
+                                                    - rot[k, i, a] * g[gp + b])
         if side == 1:  # rel has - (R_b w_b) x p: its rates in q_b and w_b
             for kq in range(4):  # (dR/dq) w, by hand: a 3 x 3 product through BLAS costs more
                 for i in range(3):
-                    turned[i] = drot[k, kq, i, 0] * wk[0] + drot[k, kq, i, 1] * wk[1] \
-                        + drot[k, kq, i, 2] * wk[2]
-                _cross_add(p, turned, 1.0, dloc[9:12, off + 3 + kq])
+                    turned[i] = drot[k, kq, i, 0] * y[w] + drot[k, kq, i, 1] * y[w + 1] \
+                        + drot[k, kq, i, 2] * y[w + 2]
+                _cross_into(p[0], p[1], p[2], turned[0], turned[1], turned[2], dloc,
+                            off + 3 + kq)
             for j in range(3):
-                _cross_add(p, rot[k, :, j], 1.0, dloc[9:12, off + 10 + j])
+                _cross_into(p[0], p[1], p[2], rot[k, 0, j], rot[k, 1, j], rot[k, 2, j], dloc,
+                            off + 10 + j)
     if kb < nb:  # and - omega_b x dp
-        _cross_columns(omega[kb], dloc[0:3], -1.0, dloc[9:12])
+        o0, o1, o2 = omega[kb, 0], omega[kb, 1], omega[kb, 2]
+        for col in range(26):
+            dloc[9, col] += -(o1 * dloc[2, col] - o2 * dloc[1, col])
+            dloc[10, col] += -(o2 * dloc[0, col] - o0 * dloc[2, col])
+            dloc[11, col] += -(o0 * dloc[1, col] - o1 * dloc[0, col])
+
+
+@njit(cache=True, inline="always")
+def _cross_into(a0, a1, a2, b0, b1, b2, dloc, col):
+    """``dloc[9:12, col] += a x b`` (the relative velocity's rows), element by element."""
+    dloc[9, col] += a1 * b2 - a2 * b1
+    dloc[10, col] += a2 * b0 - a0 * b2
+    dloc[11, col] += a0 * b1 - a1 * b0
 
 
 @njit(cache=True)
