@@ -40,10 +40,12 @@ COMPLEX_STEP = 1e-30
 below round-off, so the derivative is exact to the precision of the function."""
 
 
-@njit(cache=True)
-def _rotation(q, out):
-    """Rotation matrix (body to global) of a quaternion (w, x, y, z) of any norm."""
-    w, x, y, z = q[0], q[1], q[2], q[3]
+@njit(cache=True, inline="always")
+def _rotation(state, at, out):
+    """Rotation matrix (body to global) of the quaternion (w, x, y, z), of any norm, at
+    ``state[at:at + 4]``, into the (3, 3) ``out``.
+    """
+    w, x, y, z = state[at], state[at + 1], state[at + 2], state[at + 3]
     n = w * w + x * x + y * y + z * z
     out[0, 0] = (w * w + x * x - y * y - z * z) / n
     out[1, 1] = (w * w - x * x + y * y - z * z) / n
@@ -54,14 +56,6 @@ def _rotation(q, out):
     out[2, 0] = 2.0 * (x * z - w * y) / n
     out[1, 2] = 2.0 * (y * z - w * x) / n
     out[2, 1] = 2.0 * (y * z + w * x) / n
-
-
-@njit(cache=True)
-def _cross_add(a, b, scale, out):
-    """``out += scale * (a x b)`` for 3-vectors."""
-    out[0] += scale * (a[1] * b[2] - a[2] * b[1])
-    out[1] += scale * (a[2] * b[0] - a[0] * b[2])
-    out[2] += scale * (a[0] * b[1] - a[1] * b[0])
 
 
 @njit(cache=True)
@@ -89,15 +83,18 @@ def _frames(y, rest_centre, centre, vel, rot, rate, omega):
     from the state ``y`` (layout of :class:`penalty._Model`).
     """
     nb = rest_centre.shape[0]
-    for k in range(nb):
-        _rotation(y[3 * nb + 4 * k:3 * nb + 4 * k + 4], rot[k])
-        w = y[10 * nb + 3 * k:10 * nb + 3 * k + 3]
+    for k in range(nb):  # element by element: no views of rows in the loop
+        _rotation(y, 3 * nb + 4 * k, rot[k])
+        w = 10 * nb + 3 * k
+        w0, w1, w2 = y[w], y[w + 1], y[w + 2]
         for i in range(3):
             centre[k, i] = rest_centre[k, i] + y[3 * k + i]
             vel[k, i] = y[7 * nb + 3 * k + i]
-            rate[k, i] = 0.0
-            _cross_add(rot[k, i], w, 1.0, rate[k, i])
-            omega[k, i] = rot[k, i, 0] * w[0] + rot[k, i, 1] * w[1] + rot[k, i, 2] * w[2]
+            r0, r1, r2 = rot[k, i, 0], rot[k, i, 1], rot[k, i, 2]
+            rate[k, i, 0] = 0.0 + 1.0 * (r1 * w2 - r2 * w1)  # row i of R [w]x
+            rate[k, i, 1] = 0.0 + 1.0 * (r2 * w0 - r0 * w2)
+            rate[k, i, 2] = 0.0 + 1.0 * (r0 * w1 - r1 * w0)
+            omega[k, i] = r0 * w0 + r1 * w1 + r2 * w2
 
 
 @njit(cache=True)
@@ -112,39 +109,48 @@ def _new_frames(y, nb):
 
 
 @njit(cache=True, inline="always")
-def _local(frames, ka, kb, g, work):
-    """Into ``work`` rows 0-5, for one contact between bodies ``ka`` and ``kb`` with
-    geometry row ``g`` (``s, e, j, u``): the offset ``p`` of a's point from b's, the axes
-    ``ea`` (on a) and ``ub`` (on b), the relative velocity ``rel`` of a's material point
-    at ``p`` against b's, and the arms of the points from a's and b's centres.
+def _local(frames, ka, kb, geometry, c, work):
+    """Into ``work`` rows 0-5, for contact ``c`` between bodies ``ka`` and ``kb`` with
+    geometry row ``geometry[c]`` (``s, e, j, u``): the offset ``p`` of a's point from
+    b's, the axes ``ea`` (on a) and ``ub`` (on b), the relative velocity ``rel`` of a's
+    material point at ``p`` against b's, and the arms of the points from a's and b's
+    centres. Element by element, no views of rows: in the right-hand side's loop over
+    contacts each view costs its array's reference count twice.
     """
-    _offset(frames, ka, kb, g, work)
-    _relative(frames, ka, kb, g, work)
+    _offset(frames, ka, kb, geometry, c, work)
+    _relative(frames, ka, kb, geometry, c, work)
 
 
 @njit(cache=True, inline="always")
-def _offset(frames, ka, kb, g, work):
+def _offset(frames, ka, kb, geometry, c, work):
     """:func:`_local`'s geometry: ``p``, ``ea``, ``ub`` and the arms (not ``rel``)."""
     centre, rot = frames[0], frames[2]
-    p, ea, ub, arm, arm_b = work[0], work[1], work[2], work[4], work[5]
-    for i in range(3):
-        arm[i] = rot[ka, i, 0] * g[0] + rot[ka, i, 1] * g[1] + rot[ka, i, 2] * g[2]
-        ea[i] = rot[ka, i, 0] * g[3] + rot[ka, i, 1] * g[4] + rot[ka, i, 2] * g[5]
-        arm_b[i] = rot[kb, i, 0] * g[6] + rot[kb, i, 1] * g[7] + rot[kb, i, 2] * g[8]
-        ub[i] = rot[kb, i, 0] * g[9] + rot[kb, i, 1] * g[10] + rot[kb, i, 2] * g[11]
-        p[i] = centre[ka, i] + arm[i] - centre[kb, i] - arm_b[i]
+    for i in range(3):  # rows: 0 p, 1 ea, 2 ub, 4 arm, 5 arm_b
+        work[4, i] = rot[ka, i, 0] * geometry[c, 0] + rot[ka, i, 1] * geometry[c, 1] \
+            + rot[ka, i, 2] * geometry[c, 2]
+        work[1, i] = rot[ka, i, 0] * geometry[c, 3] + rot[ka, i, 1] * geometry[c, 4] \
+            + rot[ka, i, 2] * geometry[c, 5]
+        work[5, i] = rot[kb, i, 0] * geometry[c, 6] + rot[kb, i, 1] * geometry[c, 7] \
+            + rot[kb, i, 2] * geometry[c, 8]
+        work[2, i] = rot[kb, i, 0] * geometry[c, 9] + rot[kb, i, 1] * geometry[c, 10] \
+            + rot[kb, i, 2] * geometry[c, 11]
+        work[0, i] = centre[ka, i] + work[4, i] - centre[kb, i] - work[5, i]
 
 
 @njit(cache=True, inline="always")
-def _relative(frames, ka, kb, g, work):
-    """:func:`_local`'s relative velocity ``rel``, after :func:`_offset`."""
+def _relative(frames, ka, kb, geometry, c, work):
+    """:func:`_local`'s relative velocity ``rel`` (row 3), after :func:`_offset`."""
     vel, rate, omega = frames[1], frames[3], frames[4]
-    p, rel = work[0], work[3]
     for i in range(3):
-        rel[i] = (vel[ka, i] - vel[kb, i]
-                  + rate[ka, i, 0] * g[0] + rate[ka, i, 1] * g[1] + rate[ka, i, 2] * g[2]
-                  - rate[kb, i, 0] * g[6] - rate[kb, i, 1] * g[7] - rate[kb, i, 2] * g[8])
-    _cross_add(omega[kb], p, -1.0, rel)
+        work[3, i] = (vel[ka, i] - vel[kb, i]
+                      + rate[ka, i, 0] * geometry[c, 0] + rate[ka, i, 1] * geometry[c, 1]
+                      + rate[ka, i, 2] * geometry[c, 2]
+                      - rate[kb, i, 0] * geometry[c, 6] - rate[kb, i, 1] * geometry[c, 7]
+                      - rate[kb, i, 2] * geometry[c, 8])
+    # - omega_b x p
+    work[3, 0] += -1.0 * (omega[kb, 1] * work[0, 2] - omega[kb, 2] * work[0, 1])
+    work[3, 1] += -1.0 * (omega[kb, 2] * work[0, 0] - omega[kb, 0] * work[0, 2])
+    work[3, 2] += -1.0 * (omega[kb, 0] * work[0, 1] - omega[kb, 1] * work[0, 0])
 
 
 @njit(cache=True, inline="always")
@@ -197,27 +203,31 @@ def _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force,
     """Add every contact to the bodies' net ``force`` and ``moment``
     (global, about their centres) and write its penetration, push and force on ``a``.
     The geometry of :meth:`penalty._Model.contacts`, one contact at a time, the relative
-    velocity and the law only for those that touch; ``work``: a (7, 3) scratch array.
+    velocity and the law only for those that touch; ``work``: a (7, 3) scratch array,
+    its rows' views taken once (:func:`_local`).
     """
+    p, ea, ub, rel, arm, arm_b, normal = work[0], work[1], work[2], work[3], work[4], \
+        work[5], work[6]
     for c in range(topology.shape[0]):
-        ka, kb = topology[c, 0], topology[c, 1]
-        _offset(frames, ka, kb, geometry[c], work)
-        p, ea, ub, rel, arm, arm_b = work[0], work[1], work[2], work[3], work[4], work[5]
-        depth[c] = _depth(p, ea, ub, topology[c, 2] == 1, laws[c, 0], work[6])
+        ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
+        _offset(frames, ka, kb, geometry, c, work)
+        depth[c] = _depth(p, ea, ub, radial, laws[c, 0], normal)
         if depth[c].real <= 0.0:  # out of touch: no force (eq. 75)
             push[c] = 0.0
-            on_a[c] = 0.0
+            for i in range(3):
+                on_a[c, i] = 0.0
             continue
-        _relative(frames, ka, kb, geometry[c], work)
+        _relative(frames, ka, kb, geometry, c, work)
+        push[c] = _pressed(depth[c], ea, rel, radial, laws[c], d_max, normal)
         for i in range(3):
-            on_a[c, i] = work[6, i]  # the normal
-        push[c] = _pressed(depth[c], ea, rel, topology[c, 2] == 1, laws[c], d_max, on_a[c])
-        for i in range(3):
-            force[ka, i] += on_a[c, i]
-            force[kb, i] -= on_a[c, i]
+            on_a[c, i] = normal[i]  # now the force on a
+            force[ka, i] += normal[i]
+            force[kb, i] -= normal[i]
             p[i] += arm_b[i]  # the contact point from b's centre
-        _cross_add(arm, on_a[c], 1.0, moment[ka])
-        _cross_add(p, on_a[c], -1.0, moment[kb])
+        for i in range(3):  # moment on a: arm x F; on b: -(p + arm_b) x F
+            j, k = (i + 1) % 3, (i + 2) % 3
+            moment[ka, i] += 1.0 * (arm[j] * normal[k] - arm[k] * normal[j])
+            moment[kb, i] += -1.0 * (p[j] * normal[k] - p[k] * normal[j])
 
 
 @njit(cache=True)
@@ -271,22 +281,27 @@ def _bodies(t, y, rot, force, moment, n_shafts, bodies, loads, dy, work):
         moment[0, i] += torque_in * rot[0, i, 1]
         moment[n_shafts - 1, i] -= torque_load * rot[n_shafts - 1, i, 1]
     jw, dw = work[0], work[1]
-    for k in range(nb):
-        q = y[3 * nb + 4 * k:3 * nb + 4 * k + 4]
-        w = y[10 * nb + 3 * k:10 * nb + 3 * k + 3]
+    for k in range(nb):  # element by element: no views of rows in the loop
+        q, w = 3 * nb + 4 * k, 10 * nb + 3 * k
+        w0, w1, w2 = y[w], y[w + 1], y[w + 2]
         for i in range(3):
             dy[3 * k + i] = y[7 * nb + 3 * k + i]
             dy[7 * nb + 3 * k + i] = force[k, i] / bodies[k, 0] + loads[i]
-            jw[i] = bodies[k, 1 + i] * w[i]
+            jw[i] = bodies[k, 1 + i] * y[w + i]
             dw[i] = rot[k, 0, i] * moment[k, 0] + rot[k, 1, i] * moment[k, 1] \
                 + rot[k, 2, i] * moment[k, 2]
-        _cross_add(w, jw, -1.0, dw)
+        dw[0] += -1.0 * (w1 * jw[2] - w2 * jw[1])  # - w x J w
+        dw[1] += -1.0 * (w2 * jw[0] - w0 * jw[2])
+        dw[2] += -1.0 * (w0 * jw[1] - w1 * jw[0])
         for i in range(3):
-            dy[10 * nb + 3 * k + i] = dw[i] / bodies[k, 1 + i]
-        dy[3 * nb + 4 * k] = -0.5 * (q[1] * w[0] + q[2] * w[1] + q[3] * w[2])
+            dy[w + i] = dw[i] / bodies[k, 1 + i]
+        q0, q1, q2, q3 = y[q], y[q + 1], y[q + 2], y[q + 3]
+        dy[q] = -0.5 * (q1 * w0 + q2 * w1 + q3 * w2)
         for i in range(3):
-            dy[3 * nb + 4 * k + 1 + i] = 0.5 * q[0] * w[i]
-        _cross_add(q[1:], w, 0.5, dy[3 * nb + 4 * k + 1:3 * nb + 4 * k + 4])
+            dy[q + 1 + i] = 0.5 * q0 * y[w + i]
+        dy[q + 1] += 0.5 * (q2 * w2 - q3 * w1)  # + (q_v x w) / 2
+        dy[q + 2] += 0.5 * (q3 * w0 - q1 * w2)
+        dy[q + 3] += 0.5 * (q1 * w1 - q2 * w0)
 
 
 @njit(cache=True)
@@ -380,7 +395,7 @@ def _jacobian_into(t, y, args, jac):
         if pushes[c] <= 0.0:
             continue  # out of touch (or pulled off by the damping): no force, no rate
         ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
-        _local(frames, ka, kb, geometry[c], work)
+        _local(frames, ka, kb, geometry, c, work)
         depth, push = _push(work[0], work[1], work[2], work[3], radial, laws[c], loads[11],
                             work[6])
         _push_rates(work[0], work[1], work[2], work[3], radial, laws[c], loads[11], depth,
