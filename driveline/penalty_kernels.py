@@ -125,16 +125,15 @@ def _local(frames, ka, kb, geometry, c, work):
 def _offset(frames, ka, kb, geometry, c, work):
     """:func:`_local`'s geometry: ``p``, ``ea``, ``ub`` and the arms (not ``rel``)."""
     centre, rot = frames[0], frames[2]
-    for i in range(3):  # rows: 0 p, 1 ea, 2 ub, 4 arm, 5 arm_b
-        work[4, i] = rot[ka, i, 0] * geometry[c, 0] + rot[ka, i, 1] * geometry[c, 1] \
-            + rot[ka, i, 2] * geometry[c, 2]
-        work[1, i] = rot[ka, i, 0] * geometry[c, 3] + rot[ka, i, 1] * geometry[c, 4] \
-            + rot[ka, i, 2] * geometry[c, 5]
-        work[5, i] = rot[kb, i, 0] * geometry[c, 6] + rot[kb, i, 1] * geometry[c, 7] \
-            + rot[kb, i, 2] * geometry[c, 8]
-        work[2, i] = rot[kb, i, 0] * geometry[c, 9] + rot[kb, i, 1] * geometry[c, 10] \
-            + rot[kb, i, 2] * geometry[c, 11]
-        work[0, i] = centre[ka, i] + work[4, i] - centre[kb, i] - work[5, i]
+    for i in range(3):  # rows: 0 p, 1 ea, 2 ub, 4 arm, 5 arm_b (kept in registers)
+        a0, a1, a2 = rot[ka, i, 0], rot[ka, i, 1], rot[ka, i, 2]
+        b0, b1, b2 = rot[kb, i, 0], rot[kb, i, 1], rot[kb, i, 2]
+        arm = a0 * geometry[c, 0] + a1 * geometry[c, 1] + a2 * geometry[c, 2]
+        arm_b = b0 * geometry[c, 6] + b1 * geometry[c, 7] + b2 * geometry[c, 8]
+        work[1, i] = a0 * geometry[c, 3] + a1 * geometry[c, 4] + a2 * geometry[c, 5]
+        work[2, i] = b0 * geometry[c, 9] + b1 * geometry[c, 10] + b2 * geometry[c, 11]
+        work[4, i], work[5, i] = arm, arm_b
+        work[0, i] = centre[ka, i] + arm - centre[kb, i] - arm_b
 
 
 @njit(cache=True, inline="always")
