@@ -366,14 +366,16 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     columns.
     """
     jac = np.empty((y.shape[0], y.shape[0]))
-    _jacobian_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads), jac)
+    _jacobian_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads), jac,
+                   _linked(bodies.shape[0], topology))
     return jac
 
 
 @njit(cache=True)
-def _jacobian_into(t, y, args, jac):
+def _jacobian_into(t, y, args, jac, linked):
     """:func:`jacobian` into ``jac`` (the integrator's own array: no new matrix per
-    Jacobian), with ``args`` the model arguments of :func:`rhs` as one tuple.
+    Jacobian), with ``args`` the model arguments of :func:`rhs` as one tuple and
+    ``linked`` the bodies' :func:`_linked` (made once per run).
     """
     n_shafts, bodies, topology, geometry, laws, loads = args
     n, nb, m = y.shape[0], bodies.shape[0], topology.shape[0]
@@ -412,8 +414,7 @@ def _jacobian_into(t, y, args, jac):
                 if kb < nb:
                     jac[7 * nb + 3 * kb + i, col] -= rows[0, i, k] / bodies[kb, 0]
                     dmoment[kb, i, col] += rows[2, i, k]
-    _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac,
-                _linked(nb, topology))
+    _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac, linked)
 
 
 @njit(cache=True)
@@ -1151,9 +1152,10 @@ def start(t0, y0, t_bound, atol, rtol, args):
     allocates nothing.
     """
     n, nb = y0.shape[0], args[1].shape[0]
+    linked = _linked(nb, args[2])
     work = (np.zeros((W_SOLVE + 2, n)), np.zeros((3, MAX_ORDER + 1, MAX_ORDER + 1)),
             np.zeros((MAX_ORDER + 1, n)), _scratch(y0, nb, args[2].shape[0]),
-            np.zeros((nb, 4, 3)), _linked(nb, args[2]), _new_chain(_linked(nb, args[2])))
+            np.zeros((nb, 4, 3)), linked, _new_chain(linked))
     ints = np.zeros(10, dtype=np.int64)
     ints[I_ORDER] = 1
     h, f0 = initial_step(t0, y0, t_bound, atol, rtol, ints, args, work)
@@ -1269,7 +1271,7 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
                                         args, work, again)
             if converged or ints[I_JAC_CURRENT] == 1:
                 break
-            _jacobian_into(t_new, vec[W_PREDICT], args, jac)
+            _jacobian_into(t_new, vec[W_PREDICT], args, jac, work[5])
             ints[I_JEV] += 1
             ints[I_LU], ints[I_JAC_CURRENT], again = 0, 1, True
         if not converged:
