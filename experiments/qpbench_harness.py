@@ -37,6 +37,7 @@ from cardan_forces.solvers.conversions import convert
 from cardan_forces.solvers.optimality import unique_optimum
 from cardan_forces.solvers.qpsolvers_ import conic_duals
 from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status, finalize
+from cardan_forces.solvers.registry import with_warnings
 
 from .export import as_qp, class_name
 
@@ -71,8 +72,8 @@ def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
     solver = settings_profiles.profile(backend).solver
     data = qpsolvers_problem(qp, solver)
     options = settings_profiles.options(backend, setting)
-    with warnings.catch_warnings(record=True) as caught:  # the row keeps them, as a
-        warnings.simplefilter("always")  # record does (registry.solve_unchecked)
+    with warnings.catch_warnings(record=True) as caught:  # kept with the row
+        warnings.simplefilter("always")
         start = time.perf_counter()
         try:
             sol = qpsolvers.solve_problem(data, solver=solver, **options)
@@ -81,7 +82,7 @@ def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
         else:
             message = ""
         runtime = time.perf_counter() - start
-    message = "; ".join(filter(None, [message, *dict.fromkeys(str(w.message) for w in caught)]))
+    message = with_warnings(message, caught)
     found = bool(sol.found)
     measured = qm.qp_residuals(qp, found, sol.x, sol.y, sol.z, sol.z_box)
     duals = conic_duals(qp, sol) if sol.x is not None else None

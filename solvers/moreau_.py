@@ -162,9 +162,7 @@ def _subset(batch: ConicBatch, rows: np.ndarray) -> ConicBatch:
     """The batch at ``rows`` (its numbers only: what the solver reads)."""
     P = batch.P[rows] if np.ndim(batch.P) == 3 else batch.P
     return dataclasses.replace(batch, instants=batch.instants[rows], P=P, q=batch.q[rows],
-                               A=batch.A[rows], b=batch.b[rows], problems=(),
-                               null_space=None if batch.null_space is None
-                               else batch.null_space[rows])
+                               A=batch.A[rows], b=batch.b[rows], problems=(), null_space=None)
 
 
 def _solve(batch: ConicBatch, tol, options, warm=None):

@@ -372,11 +372,17 @@ def solve_unchecked(problem, solver: str, tol: float | None = None,
             elapsed = time.perf_counter() - start
             return pending(Outcome(Status.FAILED, None, message=f"{type(exc).__name__}: {exc}",
                                    setup_s=convert_s, solve_s=elapsed - convert_s), converted)
-    notes = dict.fromkeys(str(w.message) for w in caught)
-    if notes:
-        message = "; ".join(filter(None, [outcome.message, *notes]))
-        outcome = dataclasses.replace(outcome, message=message)
+    if caught:
+        outcome = dataclasses.replace(outcome, message=with_warnings(outcome.message, caught))
     return pending(outcome, converted, convert_s)
+
+
+def with_warnings(message: str, caught) -> str:
+    """``message`` with the distinct texts of the warnings ``caught`` while a solver ran
+    (``warnings.catch_warnings(record=True)``), joined by ``"; "``: a solver's notes stay
+    with its solve instead of reaching stderr.
+    """
+    return "; ".join(filter(None, [message, *dict.fromkeys(str(w.message) for w in caught)]))
 
 
 def batch_backends(batch) -> list[str]:
