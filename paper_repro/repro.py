@@ -572,12 +572,11 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
         plan = _compliance_plan(runs, scene) if runs.penalty and shown else None
         jobs = _rigid_jobs(scene, op, main_figs, rigid) + [
             job for s, o in fig15_ops for job in _rigid_jobs(s, o, (15,), rigid)]
-        futures = _run_jobs(runs, jobs + (plan[3] if plan else []), times)
+        futures = _run_jobs(runs, jobs + (plan[2] if plan else []))
         engine = _engine_work(scene, times, progress) if ENGINE in methods else None
         work = _rigid_result(runs, futures, scene, main_figs, rigid)
         compliance = None if plan is None else (plan[0], {
-            m: futures[(plan[0].scene, m, solver)].result() for m, solver in plan[1].items()},
-            plan[2])
+            job.args[0]: futures[job.key].result() for job in plan[2]}, plan[1])
         sections = _main_figures(runs, scene, motion, op, figs, work, compliance, out,
                                  formats)
         sections += _fig15(runs, [(s, o, _rigid_result(runs, futures, s, (15,), rigid))
@@ -598,15 +597,14 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
 
 @dataclass(frozen=True)
 class _Job:
-    """A piece of rigid-model work: ``fn(op, *args)`` on ``scene``'s operator ``op``
-    (a worker process builds its own from ``scene`` and the run's instants); ``key``
-    names it (the same key: the same work, done once), ``cost_s`` orders the queue.
+    """A piece of rigid-model work: ``fn(op, *args)`` on the operator ``op`` (a worker
+    process builds its own from ``op.scene`` and the run's instants); ``key`` names it
+    (the same key: the same work, done once), ``cost_s`` orders the queue.
     """
 
     key: tuple
     cost_s: float
     fn: Callable
-    scene: Scene
     op: Operator
     args: tuple
 
@@ -618,12 +616,12 @@ def _rigid_jobs(scene: Scene, op: Operator, figs, rigid) -> list[_Job]:
     """
     if not figs:
         return []
-    jobs = [_Job((scene, m, None), JOB_COST_S.get((m, None), 1.0), history, scene, op, (m,))
+    jobs = [_Job((scene, m, None), JOB_COST_S.get((m, None), 1.0), history, op, (m,))
             for m in rigid]
     for number in (13, 14):
         if number in figs or (number == 14 and 15 in figs):
-            jobs.append(_Job((scene, number), JOB_COST_S[("bounds", None)], _bounds,
-                             scene, op, (number,)))
+            jobs.append(_Job((scene, number), JOB_COST_S[("bounds", None)], _bounds, op,
+                             (number,)))
     return jobs
 
 
@@ -645,7 +643,7 @@ def _in_worker(fn: Callable, scene: Scene, times: tuple[float, ...], *args):
     return fn(_operator_of(scene, times), *args)
 
 
-def _run_jobs(runs: _Runs, jobs: list[_Job], times: np.ndarray) -> dict:
+def _run_jobs(runs: _Runs, jobs: list[_Job]) -> dict:
     """``key -> Future`` of each job (one per key): queued for the worker processes
     behind the penalty simulations, longest first, so that the workers end together
     while this process draws; without workers, done here at once.
@@ -654,9 +652,9 @@ def _run_jobs(runs: _Runs, jobs: list[_Job], times: np.ndarray) -> dict:
     order = sorted(unique.values(), key=lambda job: -job.cost_s)
     if runs.pool is None:
         order = bar(order, "repro", unit="job")
-    instants, out = tuple(float(t) for t in times), {}
+    instants, out = tuple(float(t) for t in runs.times), {}
     for job in order:
-        future = runs.submit(_in_worker, job.fn, job.scene, instants, *job.args)
+        future = runs.submit(_in_worker, job.fn, job.op.scene, instants, *job.args)
         if future is None:
             future = Future()
             future.set_result(job.fn(job.op, *job.args))
@@ -807,21 +805,21 @@ def _fig15_summary(verdicts: list[tuple[Scene, dict[str, str]]]):
 
 def _compliance_plan(runs: _Runs, scene: Scene):
     """The methods of :data:`COMPLIANCE_VS_PENALTY` on the released scene's rigid
-    operator (those that do not apply left out, with why): the operator, ``{method:
-    backend}`` of those that apply, the refusals, and their histories as jobs.
+    operator (those that do not apply left out, with why): the operator, the
+    refusals, and the histories of those that apply as jobs (``args``: method,
+    backend).
     """
     runs.progress("repro: compliance vs penalty ...")
     op = build_operator(runs.motion(released(scene), "the compliance comparison"))
-    applies, skipped = {}, []
+    jobs, skipped = [], []
     for method, solver in COMPLIANCE_VS_PENALTY.items():
         why = _refusal(op.scene, op, method)  # builds the method's first problem
         if why:
             skipped.append(f"`{method}` ({why})")
         else:
-            applies[method] = solver
-    jobs = [_Job((op.scene, m, s), JOB_COST_S.get((m, s), 1.0), history, op.scene, op, (m, s))
-            for m, s in applies.items()]
-    return op, applies, skipped, jobs
+            jobs.append(_Job((op.scene, method, solver), JOB_COST_S.get((method, solver), 1.0),
+                             history, op, (method, solver)))
+    return op, skipped, jobs
 
 
 def _compliance_vs_penalty(compliance, result, out: Path):
