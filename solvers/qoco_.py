@@ -100,17 +100,16 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
                    solve_s=solved - setup_done, y=y)
 
 
-def _structure(stack: np.ndarray):
-    """CSC pattern of the union of nonzeros of a (T, r, c) stack: a matrix of ones in it
-    (a placeholder that no value can thin out) and the (row, col) of its entries in CSC
-    order, which is the order QOCO's updates take the values in.
+def csc_ones(mask: np.ndarray):
+    """CSC pattern of a (r, c) boolean ``mask``: a matrix of ones on it (a placeholder
+    that no value can thin out) and the (row, col) of its entries in CSC order, which is
+    the order QOCO's updates (and the generated solver's) take the values in.
     """
     import scipy.sparse as spa
 
-    cols, rows = np.nonzero(np.any(stack != 0, axis=0).T)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=stack.shape[2]))])
-    ones = spa.csc_matrix((np.ones(len(rows)), rows, indptr), shape=stack.shape[1:])
-    return ones, rows, cols
+    cols, rows = np.nonzero(mask.T)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=mask.shape[1]))])
+    return spa.csc_matrix((np.ones(len(rows)), rows, indptr), shape=mask.shape), rows, cols
 
 
 def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
@@ -129,7 +128,8 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     eq, cone, nonneg, sizes = layout(batch.cones)
     P = np.zeros((n, n)) if batch.P is None else np.asarray(batch.P, float)
     P = np.triu(np.broadcast_to(P, (T, n, n)))
-    parts = [_structure(M) for M in (P, batch.A[:, eq], batch.A[:, cone])]
+    parts = [csc_ones(np.any(M != 0, axis=0))  # the union of the instants' nonzeros
+             for M in (P, batch.A[:, eq], batch.A[:, cone])]
     solver = qoco.QOCO()
     chosen = {"verbose": 0} | settings.options_for(TOLERANCES, tol) | options
     b = np.asarray(batch.b, float)

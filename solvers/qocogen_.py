@@ -41,7 +41,7 @@ from cardan_forces.formulations.batch import ConicBatch
 
 from . import qoco_, settings
 from .batch import BatchOutcome
-from .qoco_ import CLAIM_TOL, layout
+from .qoco_ import CLAIM_TOL, csc_ones, layout
 from .registry import Backend, dist_version
 
 EXTRAS: dict[str, str | None] = {"qocogen": "qocogen"}
@@ -225,16 +225,12 @@ def _pointer(array: np.ndarray):
 
 
 def _pattern(mask: np.ndarray):
-    """CSC matrix of ones on ``mask`` (None if empty) and the (row, col) of its entries
-    in CSC order, the order the generated solver's updates take the values in.
+    """:func:`.qoco_.csc_ones` of ``mask``, with no matrix where it is empty (the
+    generated solver takes none).
     """
-    import scipy.sparse as spa
-
     if not mask.any():
         return None, np.zeros(0, int), np.zeros(0, int)
-    cols, rows = np.nonzero(mask.T)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=mask.shape[1]))])
-    return spa.csc_matrix((np.ones(len(rows)), rows, indptr), shape=mask.shape), rows, cols
+    return csc_ones(mask)
 
 
 def _entries(M: np.ndarray, mask: np.ndarray, rows_of: np.ndarray, T: int):
