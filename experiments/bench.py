@@ -8,8 +8,9 @@ package's ``solve`` — conversion, the solver, the checks — split in every ro
   the formulation's own start), ``warm`` (the previous answer as start, for backends
   that declare a warm start) and ``batched`` (backends that solve a formulation's batch
   at once: NumPy for the least-norm family, moreau for the conic forms). A per-instant
-  run stops after ``--budget-s`` seconds (the paper's baseline, its default backend
-  warm-started, never does).
+  run stops after ``--budget-s`` seconds once it has covered 150 instants
+  (``LEAST_INSTANTS``; the paper's baseline, its default backend warm-started, never
+  stops).
 - **Accuracy vs time** on evenly spaced instants over the tolerance ladder and each
   backend's defaults, accuracy measured by the package's relative optimality measures
   (:mod:`.bench_metrics`): success per level, Pareto fronts, Dolan-Moré performance
@@ -203,8 +204,8 @@ def add_parser(subparsers) -> None:
                    help="one backend (repeatable; batched ones too, e.g. numpy-batched); "
                         "default all")
     p.add_argument("--budget-s", type=_seconds, default=runs.BUDGET_S,
-                   help=f"seconds per per-instant run before it stops (default "
-                        f"{runs.BUDGET_S:g})")
+                   help=f"seconds per per-instant run before it stops, once it has "
+                        f"{runs.LEAST_INSTANTS} instants (default {runs.BUDGET_S:g})")
     p.add_argument("--format", type=format_list, default=("png",), metavar="FORMATS",
                    help="image formats of the figures, comma-separated among "
                         f"{','.join(FORMATS)} (default png)")

@@ -132,7 +132,7 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
                     instants: Sequence[int] | None = None, tol: float | None = None,
                     problem: Callable[[int], object] | None = None, warm: bool = False,
                     restart: bool = False, budget_s: float = math.inf,
-                    references: dict | None = None,
+                    least: int = 1, references: dict | None = None,
                     progress: Callable[[str], None] | None = None,
                     stacks: Stacks | None = None) -> History:
     """``formulation`` solved with ``solver`` (default :func:`default_backend`) at
@@ -141,12 +141,12 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     ``problem(i)`` gives instant ``i``'s problem (default: built by the formulation);
     ``warm``: each instant starts from the previous answer, and with ``restart`` a
     failed warm start is solved again cold (the paper's nonsmooth system can fall off a
-    branch, its Sgn of eqs. 35-36); ``budget_s``: stop after this long (at least one
-    instant); ``references``: ``{i: (forces, optimal value)}`` for the records'
-    distance and objective gap; ``stacks``: ``problem(i)``'s check data stacked
-    beforehand at every instant ``i`` of ``op`` (:func:`~.record.stack_all`), so the
-    checks do not stack each instant's matrices. An exception becomes a ``failed``
-    record, never a crash.
+    branch, its Sgn of eqs. 35-36); ``budget_s``: stop after this long, once ``least``
+    instants (at least one) are solved; ``references``: ``{i: (forces, optimal
+    value)}`` for the records' distance and objective gap; ``stacks``:
+    ``problem(i)``'s check data stacked beforehand at every instant ``i`` of ``op``
+    (:func:`~.record.stack_all`), so the checks do not stack each instant's matrices.
+    An exception becomes a ``failed`` record, never a crash.
     """
     picks = list(range(len(op.t)) if instants is None else instants)
     make = problem or (lambda i: FORMULATIONS[formulation](op, i))
@@ -154,7 +154,7 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     get_backend(solver)  # an unknown or absent backend is an error, not failed records
     records, walls, start, previous = [], [], time.perf_counter(), None
     for k, i in enumerate(picks):
-        if records and time.perf_counter() - start > budget_s:
+        if len(records) >= max(least, 1) and time.perf_counter() - start > budget_s:
             break
         began = time.perf_counter()
         record = _solve_one(op, formulation, make, int(i), solver, tol,

@@ -38,6 +38,13 @@ def test_a_problem_that_cannot_be_built_is_a_failed_instant(op):
     assert np.isinf(h.jumps()[1:]).all() and h.jumps()[0] == 0.0
 
 
+def test_a_budget_stops_a_run_only_once_it_has_its_least_instants(op):
+    """A budget every solve exceeds: one instant by default, ``least`` when asked."""
+    assert len(study.solve_over_time(op, "positive", budget_s=1e-12).records) == 1
+    h = study.solve_over_time(op, "positive", budget_s=1e-12, least=3)
+    assert len(h.records) == 3 and h.solved == 3
+
+
 def test_an_unknown_backend_is_an_error_not_failed_records(op):
     with pytest.raises(SolverNotFound):
         study.solve_over_time(op, "positive", "no-such-backend")
