@@ -808,18 +808,33 @@ def _solve(jac, c, lu, pivots, blocks, coupling, linked, chain, b, work):
         for i in range(4):
             xq[4 * k + i] = (blocks[k, i, 0] * b[q] + blocks[k, i, 1] * b[q + 1]
                              + blocks[k, i, 2] * b[q + 2] + blocks[k, i, 3] * b[q + 3])
-    for i in range(m):
-        row, body = r0 + i, (i % (3 * nb)) // 3
-        total = 0.0
+    for body in range(nb):  # the body's six rows at once: six independent sums
+        v, w = r0 + 3 * body, r0 + 3 * nb + 3 * body
+        t0 = t1 = t2 = t3 = t4 = t5 = 0.0
         for k in range(nb):
             if linked[body, k]:
                 for j in range(3 * k, 3 * k + 3):
-                    total += jac[row, j] * b[j]
+                    bj = b[j]
+                    t0 += jac[v, j] * bj
+                    t1 += jac[v + 1, j] * bj
+                    t2 += jac[v + 2, j] * bj
+                    t3 += jac[w, j] * bj
+                    t4 += jac[w + 1, j] * bj
+                    t5 += jac[w + 2, j] * bj
         for k in range(nb):
             if linked[body, k]:
                 for j in range(4 * k, 4 * k + 4):
-                    total += jac[row, 3 * nb + j] * xq[j]
-        r[i] = b[row] + c * total  # b_r - M_ru b_u - M_rq A^-1 b_q, M = -c J off the diagonal
+                    xj, col = xq[j], 3 * nb + j
+                    t0 += jac[v, col] * xj
+                    t1 += jac[v + 1, col] * xj
+                    t2 += jac[v + 2, col] * xj
+                    t3 += jac[w, col] * xj
+                    t4 += jac[w + 1, col] * xj
+                    t5 += jac[w + 2, col] * xj
+        # b_r - M_ru b_u - M_rq A^-1 b_q, M = -c J off the diagonal
+        i, e = v - r0, w - r0
+        r[i], r[i + 1], r[i + 2] = b[v] + c * t0, b[v + 1] + c * t1, b[v + 2] + c * t2
+        r[e], r[e + 1], r[e + 2] = b[w] + c * t3, b[w + 1] + c * t4, b[w + 2] + c * t5
     if chain[0].shape[0] > 0:
         _solve_chain(chain, r)
     else:
@@ -965,6 +980,27 @@ def _lu6_solve(a, pivots, x):
 
 
 @njit(cache=True)
+def _lu6_solve_vector(a, pivots, x):
+    """:func:`_lu6_solve` for one vector ``x`` (6,): the same operations, in the same
+    order, on a contiguous row instead of a column of a 2-D view.
+    """
+    for k in range(6):
+        p = pivots[k]
+        if p != k:
+            x[k], x[p] = x[p], x[k]
+    for i in range(1, 6):
+        total = x[i]
+        for j in range(i):
+            total -= a[i, j] * x[j]
+        x[i] = total
+    for i in range(5, -1, -1):
+        total = x[i]
+        for j in range(i + 1, 6):
+            total -= a[i, j] * x[j]
+        x[i] = total / a[i, i]
+
+
+@njit(cache=True)
 def _factor_chain(jac, c, coupling, linked, chain):
     """Block LU of :func:`_factor`'s reduced matrix, block tridiagonal in the chain's
     order (:func:`_chain_order`): ``D'_p = D_p - A_p X_{p-1}`` factored with partial
@@ -1016,7 +1052,7 @@ def _solve_chain(chain, r):
                 for k in range(6):
                     total -= tri[p, 1, a, k] * ys[p - 1, k]
             y[a] = total
-        _lu6_solve(tri[p, 0], pivots[p], ys[p:p + 1].T)
+        _lu6_solve_vector(tri[p, 0], pivots[p], y)
     for p in range(nb - 2, -1, -1):
         for a in range(6):
             total = ys[p, a]
