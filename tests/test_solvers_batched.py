@@ -187,6 +187,26 @@ def test_an_instant_answer_does_not_depend_on_its_batch(op):
         assert np.array_equal(part, full[chosen])
 
 
+def test_a_group_of_instants_where_only_some_take_a_refinement_step(op, monkeypatch):
+    """The compiled pass solves instants in groups; with the refinement threshold between
+    the instants' own residuals, some instants of a group take the step and others not:
+    each still gets the NumPy path's answer, and the same answer alone as in the batch."""
+    pytest.importorskip("numba")
+    batch = fbatch.least_norm_batch(op, "positive")
+    K = batch.A @ batch.A.transpose(0, 2, 1)
+    delta = nb.GRAM_RTOL * np.trace(K, axis1=1, axis2=2) / K.shape[1]
+    mu = np.linalg.solve(K + delta[:, None, None] * np.eye(K.shape[1]), batch.b[:, :, None])
+    residual = np.linalg.norm(batch.b[:, :, None] - K @ mu, axis=(1, 2))
+    relative = residual / np.linalg.norm(batch.b, axis=1)
+    monkeypatch.setattr(nb, "REFINE_RTOL", float(np.median(relative)))
+    args = (batch.A, batch.b, None, batch.signed)
+    compiled, plain = nb.least_norm(*args)[0], nb._least_norm_numpy(*args)[0]
+    assert np.abs(compiled - plain).max() <= 1e-11 * np.abs(plain).max()
+    for i in (0, 9, 21, 40):
+        alone = nb.least_norm(batch.A[[i]], batch.b[[i]], None, batch.signed)[0]
+        assert np.array_equal(alone[0], compiled[i])
+
+
 def test_compiled_active_set_equals_the_numpy_one():
     pytest.importorskip("numba")
     rng = np.random.default_rng(11)
