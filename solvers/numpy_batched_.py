@@ -33,6 +33,7 @@ memory between its steps.
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -66,7 +67,7 @@ MAX_ITER = 30
 def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> BatchOutcome:
     """The batch's least norm (with signs where it has them), forces and multipliers."""
     x, mu, nu, iterations, fallback, stages = least_norm(batch.A, batch.b, batch.weights,
-                                                         batch.signed, max_iter)
+                                                         batch.signed, max_iter, batch.pattern)
     duals = np.concatenate([-mu, nu[:, np.flatnonzero(batch.signed)]], axis=1)
     T = len(x)
     messages = tuple(np.where(fallback, "Lemke fallback", "")) if fallback.any() else ()
@@ -77,9 +78,11 @@ def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> Ba
 
 
 def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
-               signed: np.ndarray | None = None, max_iter: int = MAX_ITER):
+               signed: np.ndarray | None = None, max_iter: int = MAX_ITER,
+               pattern: np.ndarray | None = None):
     """Least ``1/2 x'Wx`` on ``A x = b`` (stacked, ``A`` (T, m, n)), optionally with
-    ``x[signed] >= 0``: ``(x, mu, nu, iterations, fallback, stages)``.
+    ``x[signed] >= 0``: ``(x, mu, nu, iterations, fallback, stages)``. ``pattern``: where
+    ``A`` is nonzero at some instant (:func:`structure`, found from ``A`` if not given).
 
     Compiled by numba where installed (extra ``numba``, :func:`._batched_kernels.least_norm`:
     one pass over the instants, eight at a time from their rows to their forces); else
@@ -94,10 +97,10 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     T, m, n = A.shape
     u = _signed(signed, n)
     root = np.sqrt(w) if w is not None else np.zeros((0, n))
-    u, *layout = _layout(structure(A), u)
+    u, layout = _layout(structure(A) if pattern is None else pattern, u)
     x, mu, lam, iterations, settled = compiled(
         np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u,
-        tuple(layout), (GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA))
+        layout, (GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA))
     nu = np.zeros((T, n))
     nu[:, u] = lam if w is None else lam * root[:, u]
     stages = {"compiled": time.perf_counter() - clock}
@@ -210,6 +213,22 @@ def chain_solve(K: np.ndarray, R: np.ndarray, blocks: list[slice]) -> np.ndarray
 
 
 def _layout(pattern: np.ndarray, u: np.ndarray):
+    """:func:`_make_layout` of the pattern and signed columns, made once per structure
+    (a batch's structure is the same at every call; finding it is Python work over
+    its blocks): ``(u, layout)``.
+    """
+    return _layout_of(pattern.shape, np.asarray(pattern, bool).tobytes(),
+                      np.asarray(u, np.int64).tobytes())
+
+
+@functools.lru_cache(maxsize=8)
+def _layout_of(shape: tuple, pattern: bytes, u: bytes):
+    u, *layout = _make_layout(np.frombuffer(pattern, bool).reshape(shape),
+                              np.frombuffer(u, np.int64))
+    return u, tuple(layout)
+
+
+def _make_layout(pattern: np.ndarray, u: np.ndarray):
     """The compiled kernel's view of the rows' nonzero ``pattern`` (m, n) (see
     :func:`._batched_kernels.least_norm`): the signed columns ``u`` sorted by the first
     body they touch along the chain, the bodies' first rows in chain order, per body the
@@ -303,11 +322,11 @@ def _lemke_fallback(M, q, lam, iterations, todo):
 
 def _chain_shaped(batch) -> bool:
     """Whether the batch's rows form a chain of bodies over all its instants: the
-    pattern the solve uses (:func:`structure`), not one instant's, where a column that
-    vanishes at that instant would hide a link.
+    pattern the solve uses (``batch.pattern``, :func:`structure`), not one instant's,
+    where a column that vanishes at that instant would hide a link.
     """
     try:
-        chain(structure(batch.A))
+        chain(batch.pattern)
     except ValueError:
         return False
     return True

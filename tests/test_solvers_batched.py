@@ -126,7 +126,9 @@ def test_a_link_missing_at_one_instant_still_makes_a_chain():
     A[1, 7, 1] = A[1, 12, 1] = 1.0  # bodies 1-2 by column 1, zero at instant 0
     with pytest.raises(ValueError, match="chain"):
         nb.chain(A[0])
-    assert nb._chain_shaped(type("Batch", (), {"A": A})())
+    batch = fbatch.LeastNormBatch("min_norm", np.arange(2), A, np.zeros((2, 18)), None,
+                                  np.zeros(2, bool), checks=None)  # pattern: from A
+    assert nb._chain_shaped(batch)
 
 
 def test_chain_solve_equals_a_dense_solve():
