@@ -195,9 +195,10 @@ def positive(op: Operator, i: int) -> QP:
 def min_max(op: Operator, i: int) -> Conic:
     """Variables ``z = (x, t) / ||b||`` (forces in units of the load, which keeps the
     interior-point iterates well scaled); cones: equality, end faces >= 0, one SOC per
-    contact. An end face's ``|x| <= t`` stays a cone: as the linear row ``x <= t`` next
-    to ``x >= 0`` (the same optimum, 8 cones fewer) it made the generated QOCO solve 11%
-    faster but left moreau's full form ``AlmostSolved`` at one paper instant of 1001.
+    contact. An end face's ``|x| <= t`` stays a cone here: as the linear row ``x <= t``
+    next to ``x >= 0`` (the same optimum, 8 cones fewer) it left moreau's full form
+    ``AlmostSolved`` at one paper instant of 1001; the solvers' reduced form folds it into
+    that row, for every backend alike.
     """
     A, b, basis = orthogonal_equalities(op.A[i], op.b[i])
     m, n = A.shape

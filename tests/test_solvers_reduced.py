@@ -90,6 +90,54 @@ def test_rank_changing_between_instants_is_refused():
                              (("zero", 2), ("nonneg", 3)))
 
 
+def _peak(sign: float) -> Conic:
+    """min t on x1 + x2 = 2 sign, sign x >= 0, |x_i| <= t over z = (x1, x2, t): the
+    optimum x = (sign, sign), t = 1. Each two-row cone's member is ``x_i``, the slack of
+    the row ``sign x_i >= 0`` times ``sign``.
+    """
+    rows = np.array([[1.0, 1.0, 0.0]])
+    checks = ForceChecks(A=rows, b=np.array([2 * sign]), names=("x1", "x2", "t"),
+                         unilateral=np.zeros(3, bool))
+    A = np.vstack([rows, -sign * np.eye(3)[:2], [[0, 0, -1], [-1, 0, 0]],
+                   [[0, 0, -1], [0, -1, 0]]])
+    return Conic(checks=checks, formulation="ref", P=None, q=np.array([0.0, 0.0, 1.0]),
+                 A=A, b=np.array([2 * sign, 0, 0, 0, 0, 0, 0]),
+                 cones=(("zero", 1), ("nonneg", 2), ("soc", 2), ("soc", 2)))
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_two_row_cones_fold_into_linear_rows(sign):
+    """Both cones fold (one linear row each, no cone left) and the lifted answer and
+    multipliers are the full problem's, known by hand: stationarity in t makes the two
+    cones' apex multipliers sum to 1, symmetry splits it, so the cones' multipliers are
+    (1/2, -sign/2) (on their boundary, opposite to the slack (1, sign)), the bounds'
+    are 0 (x inside them) and the equality's is -sign/2."""
+    from cardan_forces.solvers.reduced_ import fold
+
+    problem = _peak(sign)
+    _, red = reduced_conic(problem)
+    plan = fold(red.A_in, problem.b[None, red.rows_in], red.cones)
+    assert plan is not None and plan.cones == (("nonneg", 4),)
+    record = solve(problem, "clarabel-reduced", tol=TOL)
+    assert record.z == pytest.approx([sign, sign, 1.0], abs=1e-6)
+    assert record.y == pytest.approx([-sign / 2, 0, 0, 0.5, -sign / 2, 0.5, -sign / 2],
+                                     abs=1e-6)
+
+
+def test_a_cone_folds_only_where_its_row_matches_at_every_instant():
+    """Two instants whose nonnegative row matches the cone's member at the first only:
+    nothing folds (a plan is one structure for the whole batch)."""
+    from cardan_forces.solvers.reduced_ import fold
+
+    A = np.zeros((2, 3, 2))
+    A[:, 0, 0] = -1.0  # nonneg row: -x
+    A[:, 1, 1] = -1.0  # cone apex: t
+    A[:, 2, 0] = [-1.0, -2.0]  # cone member: x, then 2x
+    cones = (("nonneg", 1), ("soc", 2))
+    assert fold(A[:1], np.zeros((1, 3)), cones) is not None
+    assert fold(A, np.zeros((2, 3)), cones) is None
+
+
 @pytest.fixture(scope="module")
 def problems():
     scene = load_scene("paper")
