@@ -365,33 +365,48 @@ def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
     evaluation) is skipped before its kinematics; one on the ground has only ``a``'s 13
     columns.
     """
-    jac = np.empty((y.shape[0], y.shape[0]))
+    n, nb = y.shape[0], bodies.shape[0]
+    jac = np.empty((n, n))
     _jacobian_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads), jac,
-                   _linked(bodies.shape[0], topology))
+                   _linked(nb, topology), _scratch(y, nb, topology.shape[0]),
+                   _jacobian_scratch(nb, n))
     return jac
 
 
 @njit(cache=True)
-def _jacobian_into(t, y, args, jac, linked):
+def _jacobian_scratch(nb, n):
+    """The arrays :func:`_jacobian_into` fills: the rotations' rates (nb + 1, 4, 3, 3;
+    the ground's stay zero), the net moments' rates (nb, 3, n), a (9, 3) scratch
+    (:func:`_local`'s rows), a contact's ``grad`` (3, 12) and ``rates`` (9, 12)
+    (:func:`_push_rates`), ``dloc`` (18, 26) and its state indices (26,)
+    (:func:`_local_rates`), ``rows`` (3, 3, 26) (:func:`_contact_rows`). Made once per
+    run by the integrator: its Jacobians then allocate nothing.
+    """
+    return (np.zeros((nb + 1, 4, 3, 3)), np.zeros((nb, 3, n)), np.zeros((9, 3)),
+            np.zeros((3, 12)), np.zeros((9, 12)), np.zeros((18, 26)),
+            np.zeros(26, dtype=np.int64), np.zeros((3, 3, 26)))
+
+
+@njit(cache=True)
+def _jacobian_into(t, y, args, jac, linked, scratch, own):
     """:func:`jacobian` into ``jac`` (the integrator's own array: no new matrix per
-    Jacobian), with ``args`` the model arguments of :func:`rhs` as one tuple and
-    ``linked`` the bodies' :func:`_linked` (made once per run).
+    Jacobian), with ``args`` the model arguments of :func:`rhs` as one tuple,
+    ``linked`` the bodies' :func:`_linked`, ``scratch`` the contacts' arrays
+    (:func:`_scratch`, shared with the right-hand side: each evaluation fills them
+    anew) and ``own`` :func:`_jacobian_scratch`'s, all made once per run.
     """
     n_shafts, bodies, topology, geometry, laws, loads = args
-    n, nb, m = y.shape[0], bodies.shape[0], topology.shape[0]
-    _, pushes, _, force, moment, frames = contact_forces(y, bodies, topology, geometry, laws,
-                                                         loads[11])
+    nb, m = bodies.shape[0], topology.shape[0]
+    _contacts_into(y, bodies, topology, geometry, laws, loads[11], scratch)
+    pushes, moment, frames = scratch[0][1], scratch[1][1], scratch[4]
     rot = frames[2]
-    drot = np.zeros((nb + 1, 4, 3, 3))
+    # d(p, ea, ub, rel, arm, arm_b)/d(states of a, then b); d(force on a, moment on a,
+    # moment on b); dmoment: d(net moment on body k)/dy, global
+    drot, dmoment, work, grad, rates, dloc, cols, rows = own
     for k in range(nb):
         _rotation_rates(y[3 * nb + 4 * k:3 * nb + 4 * k + 4], rot[k], drot[k])
     jac[:] = 0.0
-    dmoment = np.zeros((nb, 3, n))  # d(net moment on body k)/dy, global
-    work = np.zeros((9, 3))
-    grad, rates = np.zeros((3, 12)), np.zeros((9, 12))
-    dloc = np.zeros((18, 26))  # d(p, ea, ub, rel, arm, arm_b)/d(states of a, then b)
-    rows = np.zeros((3, 3, 26))  # d(force on a, moment on a, moment on b)
-    cols = np.zeros(26, dtype=np.int64)
+    dmoment[:] = 0.0
     for c in range(m):
         if pushes[c] <= 0.0:
             continue  # out of touch (or pulled off by the damping): no force, no rate
@@ -423,18 +438,22 @@ def _contact_rows(grad, dloc, work, width, rows):
     columns) into ``rows``: of its force on ``a`` (``grad`` times ``dloc``), of its
     moments on ``a`` (``arm x F``) and on ``b`` (``-(p + arm_b) x F``). ``work`` holds
     :func:`_local`'s rows and the force (row 6). Loops over whole rows of contiguous
-    arrays (no views of columns), which the compiler vectorizes.
+    arrays (no views of columns), which the compiler vectorizes: ``grad`` times
+    ``dloc`` row by row of ``dloc``, each sum in the order of ``k``; the zeros of
+    ``dloc`` (two thirds of it) add ``+-0`` to sums that start at ``+0`` and so can
+    never be ``-0``: the same sums as skipping them, without a branch per element.
     """
     dforce, dmom_a, dmom_b = rows[0], rows[1], rows[2]
-    for col in range(width):  # by columns: two thirds of dloc's rows are zero in each
-        f0, f1, f2 = 0.0, 0.0, 0.0
-        for k in range(12):
+    for i in range(3):
+        for col in range(width):
+            dforce[i, col] = 0.0
+    for k in range(12):
+        g0, g1, g2 = grad[0, k], grad[1, k], grad[2, k]
+        for col in range(width):
             rate = dloc[k, col]
-            if rate != 0.0:
-                f0 += grad[0, k] * rate
-                f1 += grad[1, k] * rate
-                f2 += grad[2, k] * rate
-        dforce[0, col], dforce[1, col], dforce[2, col] = f0, f1, f2
+            dforce[0, col] += g0 * rate
+            dforce[1, col] += g1 * rate
+            dforce[2, col] += g2 * rate
     arm, f = work[4], work[6]
     point = work[7]  # the contact point from b's centre, p + arm_b
     for i in range(3):
@@ -1184,14 +1203,14 @@ def start(t0, y0, t_bound, atol, rtol, args):
     pivots, quaternion blocks: :func:`_factor`, scratch), for :func:`advance`. The
     scratch (vectors by the ``W_`` rows, :func:`_change_d`'s matrices and rows, the
     right-hand side's :func:`_scratch`, :func:`_factor`'s coupling, the bodies'
-    :func:`_linked`, the block factors of :func:`_new_chain`) is made here once: a step
-    allocates nothing.
+    :func:`_linked`, the block factors of :func:`_new_chain`, the Jacobian's
+    :func:`_jacobian_scratch`) is made here once: a step allocates nothing.
     """
     n, nb = y0.shape[0], args[1].shape[0]
     linked = _linked(nb, args[2])
     work = (np.zeros((W_SOLVE + 2, n)), np.zeros((3, MAX_ORDER + 1, MAX_ORDER + 1)),
             np.zeros((MAX_ORDER + 1, n)), _scratch(y0, nb, args[2].shape[0]),
-            np.zeros((nb, 4, 3)), linked, _new_chain(linked))
+            np.zeros((nb, 4, 3)), linked, _new_chain(linked), _jacobian_scratch(nb, n))
     ints = np.zeros(10, dtype=np.int64)
     ints[I_ORDER] = 1
     h, f0 = initial_step(t0, y0, t_bound, atol, rtol, ints, args, work)
@@ -1307,7 +1326,7 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
                                         args, work, again)
             if converged or ints[I_JAC_CURRENT] == 1:
                 break
-            _jacobian_into(t_new, vec[W_PREDICT], args, jac, work[5])
+            _jacobian_into(t_new, vec[W_PREDICT], args, jac, work[5], work[3], work[7])
             ints[I_JEV] += 1
             ints[I_LU], ints[I_JAC_CURRENT], again = 0, 1, True
         if not converged:
