@@ -4,7 +4,8 @@ qocogen writes a custom interior-point solver (QOCO's algorithm) for one sparsit
 ``P``, ``A``, ``G`` and one cone layout: the KKT factorization is unrolled for that
 pattern, so a solve has no symbolic work and no Python between iterations. This module
 generates it once per structure, compiles it with a small driver that solves every
-instant of a batch in one C call (each instant's numbers replace the last), and keeps
+instant of a batch in one C call (each instant's numbers replace the last), with a
+line search that computes QOCO's bisected step in closed form (:data:`STEP`), and keeps
 the shared library in a user cache directory named by a hash of the structure: a later
 process loads it (milliseconds) instead of compiling (seconds to minutes, reported in
 the ``compile`` stage and by :func:`compile_seconds`, never in a solve's time).
@@ -118,6 +119,64 @@ int cardan_solve_batch(int T, int nP, int nA, int nG, const double* P, const dou
 """The batch driver compiled with the generated sources (the current iterate is read
 from the workspace, so an instant that stops early never shows an earlier answer)."""
 
+PROTOTYPE = """#include <math.h>
+#include "cone.h"
+double cardan_boundary_step(double* u, double* Du, double f, Workspace* work);
+"""
+"""Put before the generated ``cone.c`` (its header guards against a second inclusion)."""
+
+STEP = r"""
+/* QOCO's line search without its bisection: the bisection returns the largest multiple
+   of 2^-k (k = bisect_iters) below f times the step to the cones' boundary, at most
+   1 - 2^-k; this computes that step per block in closed form (a nonnegative row's
+   ratio; a second-order cone's boundary by ECOS's formula, u moved to the cone's axis
+   by a hyperbolic rotation) and rounds it down to the same grid. Where u is not
+   strictly inside its cones, the bisection decides. */
+double cardan_boundary_step(double* u, double* Du, double f, Workspace* work) {
+   double amax = 1.0 / f;
+   int idx = 0;
+   for (; idx < work->l; ++idx) {
+      if (!(u[idx] > 0)) return bisection_search(u, Du, f, work);
+      if (Du[idx] * amax < -u[idx]) amax = -u[idx] / Du[idx];
+   }
+   for (int i = 0; i < work->nsoc; ++i) {
+      int n = work->q[i];
+      double* v = &u[idx];
+      double* d = &Du[idx];
+      double vv = 0.0, vd = 0.0;
+      for (int j = 1; j < n; ++j) { vv += v[j] * v[j]; vd += v[j] * d[j]; }
+      double norm2 = v[0] * v[0] - vv;
+      if (!(v[0] > 0 && norm2 > 0)) return bisection_search(u, Du, f, work);
+      double inv = 1.0 / sqrt(norm2);
+      double rho0 = (v[0] * d[0] - vd) * inv * inv;
+      double factor = (rho0 + d[0] * inv) / (v[0] * inv + 1.0);
+      double rho1 = 0.0;
+      for (int j = 1; j < n; ++j) {
+         double r = (d[j] - factor * v[j]) * inv;
+         rho1 += r * r;
+      }
+      double sigma = sqrt(rho1) - rho0;
+      if (sigma * amax > 1.0) amax = 1.0 / sigma;
+      idx += n;
+   }
+   double grid = ldexp(1.0, work->settings.bisect_iters);
+   double below = ceil(f * amax * grid) - 1.0;
+   return (below < 0.0 ? 0.0 : below > grid - 1.0 ? grid - 1.0 : below) / grid;
+}
+"""
+"""The generated solver's line search (appended to ``cone.c``, after :data:`PROTOTYPE`):
+QOCO's step, one pass over the cones instead of the bisection's five (each a pass that
+takes a square root per cone). The step is the bisection's (the same grid below the
+boundary), so the iterations are QOCO's: on the paper's 1001 instants the same
+iterations and answers to the bit, the generated solve 1.13
+times faster on the reduced ``min_max`` and 1.07 on ``socp_face``, the whole batch 1.09
+and 1.05 (best of nine interleaved). The step at the boundary itself (0.99 of it, up
+to the bisection's largest) took 7% fewer iterations on ``min_max`` but stalled every
+``socp_face`` instant of ``cardan hard``'s 1e6 N m case (step below 1e-8, gap 1e-5)."""
+
+BISECTION_CALL = "return bisection_search(u, Du, f, work);"
+"""The call in the generated ``linesearch`` that :data:`STEP` replaces."""
+
 SOURCES = ("qoco_custom.c", "cone.c", "utils.c", "ldl.c", "kkt.c", "driver.c")
 
 
@@ -159,7 +218,7 @@ def _version() -> str:
 
 def _key(dims, patterns) -> str:
     """The structure's name in the cache: a hash of everything the library depends on."""
-    digest = hashlib.sha256(repr((dims, CFLAGS, DRIVER, _version())).encode())
+    digest = hashlib.sha256(repr((dims, CFLAGS, DRIVER, PROTOTYPE, STEP, _version())).encode())
     for pattern in patterns:
         if pattern is not None:
             digest.update(pattern.indptr.tobytes() + b"|" + pattern.indices.tobytes())
@@ -183,6 +242,7 @@ def _build(target: Path, dims, patterns) -> None:
                                     name="solver")
         source = Path(folder) / "solver"
         (source / "driver.c").write_text(DRIVER)
+        _exact_steps(source / "cone.c")
         built = source / "solver.so"
         done = subprocess.run([compiler(), *CFLAGS, "-o", str(built), *SOURCES, "-lm"],
                               cwd=source, capture_output=True, text=True)
@@ -191,6 +251,16 @@ def _build(target: Path, dims, patterns) -> None:
             raise RuntimeError("compiling the generated solver failed: "
                                + (errors or done.stderr.splitlines() or ["no output"])[0])
         os.replace(built, target)
+
+
+def _exact_steps(cone: Path) -> None:
+    """The generated ``cone.c`` with :data:`STEP` as its line search."""
+    text = cone.read_text()
+    if text.count(BISECTION_CALL) != 1:
+        raise RuntimeError(f"qocogen {_version()}: the generated line search has no "
+                           f"'{BISECTION_CALL}' to replace")
+    cone.write_text(PROTOTYPE + text.replace(BISECTION_CALL, BISECTION_CALL.replace(
+        "bisection_search", "cardan_boundary_step")) + STEP)
 
 
 def _library(dims, patterns) -> tuple[ctypes.CDLL, float]:

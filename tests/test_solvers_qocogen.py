@@ -103,6 +103,22 @@ def test_answers_do_not_depend_on_the_order(min_max):
     assert np.array_equal(forward.z, backward.z[::-1])
 
 
+def test_line_search_takes_the_bisections_steps(min_max, tmp_path, monkeypatch):
+    """The closed-form line search rounds the step to the cones' boundary down to the
+    bisection's grid, so the solver takes QOCO's own steps: its answers are those of the
+    generated solver with its bisection (built apart, into another cache), to rounding.
+    A step off that grid (the boundary's own) ends elsewhere within the tolerance."""
+    from cardan_forces.solvers import qocogen_
+
+    batch = fbatch.conic_batch(min_max, INSTANTS)
+    ours = solve_batch(batch, SOLVER, tol=TOL)
+    monkeypatch.setenv("CARDAN_FORCES_CACHE", str(tmp_path))
+    monkeypatch.setattr(qocogen_, "_exact_steps", lambda cone: None)
+    bisected = solve_batch(batch, SOLVER, tol=TOL)
+    assert set(ours.status) == set(bisected.status) == {"solved"}
+    np.testing.assert_allclose(ours.z, bisected.z, rtol=0.0, atol=1e-12)
+
+
 def test_status_rule_by_table():
     """Solved only where the generated solver says so and its own dual residual and gap
     are within the claim; its inaccurate codes are inaccurate, any other code failed;
