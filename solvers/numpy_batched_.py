@@ -323,10 +323,11 @@ def _lemke_fallback(M, q, lam, iterations, todo):
 def _chain_shaped(batch) -> bool:
     """Whether the batch's rows form a chain of bodies over all its instants: the
     pattern the solve uses (``batch.pattern``, :func:`structure`), not one instant's,
-    where a column that vanishes at that instant would hide a link.
+    where a column that vanishes at that instant would hide a link. Asked at every
+    solve: the layout made from the pattern (:func:`_layout`) is kept for the solve.
     """
     try:
-        chain(batch.pattern)
+        _layout(batch.pattern, _signed(batch.signed, batch.pattern.shape[1]))
     except ValueError:
         return False
     return True
