@@ -70,8 +70,13 @@ STATUS = {1: "solved", 2: "inaccurate", 4: "inaccurate"}
 NAMES = ("unsolved", "solved", "solved inaccurate", "numerical error", "max iterations")
 """The generated solver's status codes, by value."""
 
-CFLAGS = ("-O3", "-fPIC", "-shared")
-"""Portable flags (no ``-march=native``: the cache may be shared between machines)."""
+CFLAGS = ("-O3", "-fno-math-errno", "-fPIC", "-shared")
+"""Portable flags (no ``-march=native``: the cache may be shared between machines).
+``-fno-math-errno``: a square root is one instruction, without the call that would set
+``errno`` for a negative argument (nothing reads it); the same answers to the bit, the
+generated solve 3% faster on the reduced ``min_max`` (best of nine interleaved, twice).
+``-march=native``, ``-flto``, ``-fno-semantic-interposition`` and ``-funroll-loops``
+gained 0-3% there, within the spread."""
 
 DRIVER = r"""
 #include <stdlib.h>
