@@ -25,7 +25,7 @@ also keep the end faces ``x_u >= 0``. With ``y = W^{1/2} x`` and ``B = A W^{-1/2
 The multipliers come out of the same solve: ``W x = A' mu + E_u nu`` with
 ``mu = K^-1 (b - U lam)`` and ``nu_u = sqrt(w_u) lam``, so every record has the solver's
 duals. A direct method: ``tol`` is ignored. With numba installed the whole method runs
-compiled, eight instants at a time from their rows to their forces
+compiled, 64 instants at a time from their rows to their forces
 (:mod:`._batched_kernels`): NumPy pays a per-matrix overhead on 6 x 6 blocks larger
 than their arithmetic, forms all of ``B B'`` and streams (T, ...) intermediates through
 memory between its steps.
@@ -85,7 +85,7 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     ``A`` is nonzero at some instant (:func:`structure`, found from ``A`` if not given).
 
     Compiled by numba where installed (extra ``numba``, :func:`._batched_kernels.least_norm`:
-    one pass over the instants, eight at a time from their rows to their forces); else
+    one pass over the instants, 64 at a time from their rows to their forces); else
     NumPy, all instants per step. Instants whose active set does not settle are solved again with
     Lemke's method.
     """
