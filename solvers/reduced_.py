@@ -18,6 +18,7 @@ Which backends get a reduced variant is :data:`WRAPPED`: data, one line each.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -68,81 +69,98 @@ class Folded:
     (folded there, moreau's full form was left ``AlmostSolved`` at one instant).
 
     ``apex``, ``member``, ``sign``: per folded cone its two rows (of the problem's cone
-    rows) and the sign; ``rest`` the rows kept as they are; ``cones`` the folded
-    problem's, the new rows first, joined to a leading nonnegative block; ``runs`` the
-    kept rows as ``(source, target)`` slices of consecutive rows. The folded
-    row's multiplier ``w >= 0`` is the cone's ``(w, -sign w)``: the same terms in
-    stationarity and complementarity.
+    rows) and the sign; ``order`` the rows the folded problem starts from (the apexes,
+    then the rows kept as they are); ``cones`` the folded problem's, the new rows first,
+    joined to a leading nonnegative block. The folded row's multiplier ``w >= 0`` is the
+    cone's ``(w, -sign w)``: the same terms in stationarity and complementarity.
     """
 
     apex: np.ndarray
     member: np.ndarray
     sign: np.ndarray
-    rest: np.ndarray
+    order: np.ndarray
     cones: tuple
-    runs: tuple = ()
 
     def rows(self, A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The folded problem's rows from the cone rows ``A`` (T, m, k), ``b`` (T, m):
-        written into one array each, the kept rows copied run by run (an index array
-        would copy them twice).
-        """
+        """The folded problem's rows from the cone rows ``A`` (T, m, k), ``b`` (T, m)."""
         f = len(self.apex)
-        out_A = np.empty((A.shape[0], f + len(self.rest), A.shape[2]))
-        out_b = np.empty((b.shape[0], f + len(self.rest)))
-        np.subtract(A[:, self.apex], self.sign[:, None] * A[:, self.member], out=out_A[:, :f])
-        np.subtract(b[:, self.apex], self.sign * b[:, self.member], out=out_b[:, :f])
-        for source, target in self.runs:
-            out_A[:, target], out_b[:, target] = A[:, source], b[:, source]
+        out_A, out_b = np.take(A, self.order, axis=1), np.take(b, self.order, axis=1)
+        out_A[:, :f] -= self.sign[:, None] * A[:, self.member]
+        out_b[:, :f] -= self.sign * b[:, self.member]
         return out_A, out_b
 
     def duals(self, y: np.ndarray) -> np.ndarray:
         """The cone rows' multipliers (T, m) from the folded problem's (T, m')."""
         f = len(self.apex)
-        out = np.empty((len(y), f + len(self.member) + len(self.rest)))
-        out[:, self.rest], out[:, self.apex] = y[:, f:], y[:, :f]
+        out = np.empty((len(y), len(self.order) + f))
+        out[:, self.order] = y
         out[:, self.member] = -self.sign * y[:, :f]
         return out
 
 
-def _key(A: np.ndarray, b: np.ndarray, row: int, sign: float) -> tuple:
-    """One instant's row ``sign (A[row], b[row])`` as a dictionary key (``+ 0.0``: no
-    negative zero).
+@functools.lru_cache(maxsize=64)
+def _candidates(cones) -> tuple[np.ndarray, np.ndarray]:
+    """The rows of the nonnegative blocks of ``cones`` and the apex rows of its two-row
+    second-order cones (each member the row after it).
     """
-    return tuple((sign * A[row] + 0.0).tolist()) + (sign * b[row] + 0.0,)
+    parts = blocks(cones)
+    nonneg = [r for kind, _, rows in parts if kind == "nonneg" for r in range(rows.start,
+                                                                               rows.stop)]
+    apexes = [rows.start for kind, size, rows in parts if kind == "soc" and size == 2]
+    return np.array(nonneg, int), np.array(apexes, int)
+
+
+@functools.lru_cache(maxsize=64)
+def _plan(cones, apex: tuple, sign: tuple) -> Folded:
+    """The :class:`Folded` of ``cones`` with the two-row cones at ``apex`` folded."""
+    parts = blocks(cones)
+    folded = set(apex) | {r + 1 for r in apex}
+    rest = [r for r in range(parts[-1][2].stop) if r not in folded]
+    kept = [(kind, size) for kind, size, rows in parts if rows.start not in apex]
+    lead = kept.pop(0)[1] if kept and kept[0][0] == "nonneg" else 0
+    arrays = [np.array(apex, int), np.array(apex, int) + 1, np.array(sign),
+              np.array(list(apex) + rest, int)]
+    for array in arrays:
+        array.flags.writeable = False  # shared by every batch of this structure
+    return Folded(*arrays, (("nonneg", len(apex) + lead), *kept))
+
+
+@functools.lru_cache(maxsize=256)
+def _matches(members: bytes, bounds: bytes, width: int):
+    """Which member rows (``members``, rows of ``width`` numbers with their right-hand
+    side) equal a nonnegative row (``bounds``) or its negative: ``(found, partner,
+    sign)``, indices into the members and the bounds. Cached by the rows' bytes, so the
+    instants of a per-instant run, whose rows repeat, match once.
+    """
+    member = np.frombuffer(members).reshape(-1, 1, width)
+    bound = np.frombuffer(bounds).reshape(1, -1, width)
+    same, opposite = np.all(member == bound, axis=2), np.all(member == -bound, axis=2)
+    sign = np.where(same.any(axis=1), 1.0, np.where(opposite.any(axis=1), -1.0, 0.0))
+    partner = np.where(same.any(axis=1), same.argmax(axis=1), opposite.argmax(axis=1))
+    found = np.flatnonzero(sign)
+    return found, partner[found], sign[found]
 
 
 def fold(A: np.ndarray, b: np.ndarray, cones) -> Folded | None:
     """The :class:`Folded` plan of the cone rows ``A`` (T, m, n), ``b`` (T, m) under
-    ``cones`` (no zero cone), or None where no two-row cone folds. Rows are matched at
-    the first instant and confirmed at every instant, to the bit.
+    ``cones`` (no zero cone), or None where no two-row cone folds. A cone's member row
+    is matched to a nonnegative row at the first instant and confirmed at every other
+    instant, to the bit.
     """
-    parts = blocks(cones)
-    nonneg = {_key(A[0], b[0], r, 1.0): r for kind, _, rows in parts if kind == "nonneg"
-              for r in range(rows.start, rows.stop)}
-    apex, member, sign = [], [], []
-    for kind, size, rows in parts:
-        if kind != "soc" or size != 2:
-            continue
-        for s in (1.0, -1.0):
-            k = nonneg.get(_key(A[0], b[0], rows.start + 1, s))
-            if k is not None and np.array_equal(s * A[:, rows.start + 1], A[:, k]) \
-                    and np.array_equal(s * b[:, rows.start + 1], b[:, k]):
-                apex.append(rows.start)
-                member.append(rows.start + 1)
-                sign.append(s)
-                break
-    if not apex:
+    nonneg, apexes = _candidates(cones)
+    if not len(nonneg) or not len(apexes):
         return None
-    rest = np.setdiff1d(np.arange(A.shape[1]), apex + member)
-    kept = [(kind, size) for kind, size, rows in parts if rows.start not in apex]
-    lead = kept.pop(0)[1] if kept and kept[0][0] == "nonneg" else 0
-    breaks = np.flatnonzero(np.diff(rest) != 1) + 1
-    starts, stops = np.r_[0, breaks], np.r_[breaks, len(rest)]
-    runs = tuple((slice(rest[i], rest[j - 1] + 1), slice(len(apex) + i, len(apex) + j))
-                 for i, j in zip(starts.tolist(), stops.tolist()))
-    return Folded(np.array(apex), np.array(member), np.array(sign), rest,
-                  (("nonneg", len(apex) + lead), *kept), runs)
+    first = np.concatenate([A[0], b[0][:, None]], axis=1)
+    found, partner, sign = _matches(first[apexes + 1].tobytes(), first[nonneg].tobytes(),
+                                    first.shape[1])
+    apexes, partner = apexes[found], nonneg[partner]
+    if len(A) > 1:
+        confirmed = (np.all(A[:, apexes + 1] == sign[:, None] * A[:, partner], axis=(0, 2))
+                     & np.all(b[:, apexes + 1] == sign * b[:, partner], axis=0))
+        apexes, sign = apexes[confirmed], sign[confirmed]
+    if not len(apexes):
+        return None
+    return _plan(cones, tuple(apexes.tolist()), tuple(sign.tolist()))
 
 
 def _reduce(P, q, A, b, cones, null_space):
