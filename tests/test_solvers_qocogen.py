@@ -119,6 +119,39 @@ def test_line_search_takes_the_bisections_steps(min_max, tmp_path, monkeypatch):
     np.testing.assert_allclose(ours.z, bisected.z, rtol=0.0, atol=1e-12)
 
 
+@pytest.mark.parametrize("caller_sets_refinement", [False, True])
+def test_unsolved_instants_are_solved_again_refined(fresh_cache, monkeypatch,
+                                                    caller_sets_refinement):
+    """An instant the first call leaves unsolved (made so here: its code replaced by
+    'numerical error') is solved again alone with iterative refinement, its iterations
+    added; the others keep their first answer. A caller's own ``iter_ref_iters`` is
+    final: no second call."""
+    from cardan_forces.solvers import qocogen_
+
+    calls, real = [], qocogen_._run
+
+    def run(library, dims, values, chosen):
+        out = real(library, dims, values, chosen)
+        calls.append((len(values[1]), chosen[qocogen_.SETTINGS.index("iter_ref_iters")]))
+        if len(calls) == 1:
+            out[4][1] = 3
+        return out
+
+    monkeypatch.setattr(qocogen_, "_run", run)
+    batch = fbatch.conic_batch([_nearest(c) for c in (2.0, 1.0, 0.5)], [0, 1, 2])
+    options = {"iter_ref_iters": 0} if caller_sets_refinement else {}
+    result = qocogen_.solve_batch(batch, **options)
+    dims, patterns, values, _ = qocogen_._data(batch)
+    alone = real(qocogen_._library(dims, patterns)[0], dims, [v[1:2] for v in values],
+                 qocogen_._options(None, {"iter_ref_iters": 1}))
+    if caller_sets_refinement:
+        assert calls == [(3, 0.0)] and result.status[1] == "failed"
+    else:
+        assert calls == [(3, 0.0), (1, 1.0)] and set(result.status) == {"solved"}
+        assert np.array_equal(result.z[1], alone[0][0])
+        assert result.iterations[1] > alone[3][0]
+
+
 def test_status_rule_by_table():
     """Solved only where the generated solver says so and its own dual residual and gap
     are within the claim; its inaccurate codes are inaccurate, any other code failed;
