@@ -12,17 +12,17 @@ of ``B`` are touched (a contact column loads at most two bodies).
 Every array of a group has the instants as its last axis (``X[i, j, e]``: entry ``(i,
 j)`` of the group's instant ``e``), so that each step's innermost loop runs over the
 instants with the same arithmetic in every lane, and LLVM's loop vectorizer turns it
-into vector instructions. The loops read their length from the arrays (``lanes``): a
-constant length is unrolled into scalar code instead (numba leaves LLVM's SLP
-vectorizer off); eight lanes of constant length took 1.6 times these seconds on
+into vector instructions. Eight lanes were too few: such a loop is unrolled into scalar
+code (numba leaves LLVM's SLP vectorizer off), and took 1.6 times these seconds on
 ``paper``'s least-norm family (best of 25 interleaved). The LCP, whose active set
 differs between instants, is solved one instant after the other. A group short of
 :data:`W` instants (the batch's last) repeats its last instant in the lanes left over.
 
 No operation mixes lanes, sums run in a fixed order and nothing is fused or
 reassociated (no fastmath: every operation rounds as IEEE 754 says, in a vector lane
-as in the scalar remainder of a loop), so an instant's answer is the same whatever else
-is in its batch and wherever it sits in its group.
+as in the scalar copy of a loop that LLVM keeps beside it), so an instant's answer is
+the same whatever else is in its batch and wherever it sits in its group. Compiling
+takes about half a minute, once: numba caches the machine code.
 """
 
 from __future__ import annotations
@@ -40,7 +40,6 @@ doubles; a group's arrays, about 0.6 MB on ``paper``, fit a 1 MB second-level ca
 TINY = float(np.finfo(float).tiny)
 """Smallest normal double: the floor of ``||b||`` in the refinement test."""
 
-
 @njit(cache=True)
 def _rows(A, root, ts, starts, own, n_own, G, scale):
     """The group's block rows of ``B = A W^-1/2`` (instants ``ts``): ``G[6k + i, p, e] =
@@ -48,15 +47,14 @@ def _rows(A, root, ts, starts, own, n_own, G, scale):
     ``k`` (``root`` with no rows: ``W = I``), as a product with the reciprocal (one
     division per column, not per entry); ``scale`` (W) scratch.
     """
-    lanes = G.shape[-1]
     for k in range(len(starts)):
         s = starts[k]
         for p in range(n_own[k]):
             c = own[k, p]
-            for e in range(lanes):
+            for e in range(W):
                 scale[e] = 1.0 / root[ts[e], c] if root.shape[0] else 1.0
             for i in range(B):
-                for e in range(lanes):
+                for e in range(W):
                     G[B * k + i, p, e] = A[ts[e], s + i, c] * scale[e]
 
 
@@ -65,25 +63,24 @@ def _gram(G, n_own, sh_a, sh_b, n_sh, L, H):
     """The Gram blocks of the group: the lower triangles of ``K_kk`` into ``L[6k:6k+6]``
     and ``K_k,k+1`` into ``H[6k:6k+6]`` (from the columns touching both bodies).
     """
-    lanes = L.shape[-1]
     nb = len(n_own)
     for k in range(nb):
         o = B * k
         for i in range(B):
             for j in range(i + 1):
-                for e in range(lanes):
+                for e in range(W):
                     L[o + i, j, e] = 0.0
                 for p in range(n_own[k]):
-                    for e in range(lanes):
+                    for e in range(W):
                         L[o + i, j, e] += G[o + i, p, e] * G[o + j, p, e]
         if k < nb - 1:
             for i in range(B):
                 for j in range(B):
-                    for e in range(lanes):
+                    for e in range(W):
                         H[o + i, j, e] = 0.0
                     for p in range(n_sh[k]):
                         a, c = sh_a[k, p], sh_b[k, p]
-                        for e in range(lanes):
+                        for e in range(W):
                             H[o + i, j, e] += G[o + i, a, e] * G[o + B + j, c, e]
 
 
@@ -92,18 +89,17 @@ def _cholesky(L, o):
     """Lower Cholesky factor of the 6 x 6 positive definite blocks ``L[o:o+6]`` in place
     (lower triangles), with the reciprocals of their diagonals on the diagonal.
     """
-    lanes = L.shape[-1]
     for j in range(B):
         for k in range(j):
-            for e in range(lanes):
+            for e in range(W):
                 L[o + j, j, e] -= L[o + j, k, e] * L[o + j, k, e]
-        for e in range(lanes):
+        for e in range(W):
             L[o + j, j, e] = 1.0 / np.sqrt(L[o + j, j, e])
         for i in range(j + 1, B):
             for k in range(j):
-                for e in range(lanes):
+                for e in range(W):
                     L[o + i, j, e] -= L[o + i, k, e] * L[o + j, k, e]
-            for e in range(lanes):
+            for e in range(W):
                 L[o + i, j, e] *= L[o + j, j, e]
 
 
@@ -115,26 +111,25 @@ def _factor(G, n_own, sh_a, sh_b, n_sh, rtol, L, H):
     blocks ``L[6k:6k+6]``, the Cholesky factors of the pivots ``D_k = K_kk - H_k-1'
     H_k-1``, and below them ``H[6k:6k+6]'`` with ``H_k = L_k^-1 K_k,k+1``.
     """
-    lanes = L.shape[-1]
     nb = len(n_own)
     _gram(G, n_own, sh_a, sh_b, n_sh, L, H)
-    delta = np.zeros(lanes)
+    delta = np.zeros(W)
     for k in range(nb):
         for i in range(B):
-            for e in range(lanes):
+            for e in range(W):
                 delta[e] += L[B * k + i, i, e]
-    for e in range(lanes):
+    for e in range(W):
         delta[e] *= rtol / (nb * B)
     for k in range(nb):
         o = B * k
         for i in range(B):
-            for e in range(lanes):
+            for e in range(W):
                 L[o + i, i, e] += delta[e]
         if k > 0:
             for i in range(B):
                 for j in range(i + 1):
                     for p in range(B):
-                        for e in range(lanes):
+                        for e in range(W):
                             L[o + i, j, e] -= H[o - B + p, i, e] * H[o - B + p, j, e]
         _cholesky(L, o)
         if k < nb - 1:
@@ -144,26 +139,24 @@ def _factor(G, n_own, sh_a, sh_b, n_sh, rtol, L, H):
 @njit(cache=True)
 def _forward(L, o, X, s, nc):
     """``X[s:s+6, :nc] <- L^-1 X[s:s+6, :nc]``, ``L = L[o:o+6]`` from :func:`_cholesky`."""
-    lanes = X.shape[-1]
     for c in range(nc):
         for i in range(B):
             for k in range(i):
-                for e in range(lanes):
+                for e in range(W):
                     X[s + i, c, e] -= L[o + i, k, e] * X[s + k, c, e]
-            for e in range(lanes):
+            for e in range(W):
                 X[s + i, c, e] *= L[o + i, i, e]
 
 
 @njit(cache=True)
 def _backward(L, o, X, s):
     """``X[s:s+6] <- L^-T X[s:s+6]``, ``L = L[o:o+6]`` from :func:`_cholesky`."""
-    lanes = X.shape[-1]
     for c in range(X.shape[1]):
         for i in range(B - 1, -1, -1):
             for k in range(i + 1, B):
-                for e in range(lanes):
+                for e in range(W):
                     X[s + i, c, e] -= L[o + k, i, e] * X[s + k, c, e]
-            for e in range(lanes):
+            for e in range(W):
                 X[s + i, c, e] *= L[o + i, i, e]
 
 
@@ -172,14 +165,13 @@ def _down(L, H, starts, Z, ncols):
     """``Z <- C^-1 Z`` (m, r, W) with :func:`_factor`'s ``K = C C'``, in place, where the
     columns from ``ncols[k]`` on are zero down to body ``k`` (and stay zero).
     """
-    lanes = Z.shape[-1]
     for k in range(len(starts)):
         if k > 0:  # Z_k -= H_k-1' Z_k-1
             s, o, h = starts[k], starts[k - 1], B * (k - 1)
             for i in range(B):
                 for c in range(ncols[k - 1]):
                     for p in range(B):
-                        for e in range(lanes):
+                        for e in range(W):
                             Z[s + i, c, e] -= H[h + p, i, e] * Z[o + p, c, e]
         _forward(L, B * k, Z, starts[k], ncols[k])
 
@@ -187,7 +179,6 @@ def _down(L, H, starts, Z, ncols):
 @njit(cache=True)
 def _up(L, H, starts, Z):
     """``Z <- C^-T Z`` (m, r, W), in place."""
-    lanes = Z.shape[-1]
     nb = len(starts)
     for k in range(nb - 1, -1, -1):
         if k < nb - 1:  # Z_k -= H_k Z_k+1
@@ -195,7 +186,7 @@ def _up(L, H, starts, Z):
             for i in range(B):
                 for c in range(Z.shape[1]):
                     for p in range(B):
-                        for e in range(lanes):
+                        for e in range(W):
                             Z[s + i, c, e] -= H[B * k + i, p, e] * Z[o + p, c, e]
         _backward(L, B * k, Z, starts[k])
 
@@ -203,44 +194,41 @@ def _up(L, H, starts, Z):
 @njit(cache=True)
 def _times_Bt(G, own, n_own, starts, v, c_in, out):
     """``out = B' v[:, c_in]`` (n, W) on the nonzero blocks of ``B``."""
-    lanes = out.shape[-1]
     out[:] = 0.0
     for k in range(len(starts)):
         s = starts[k]
         for p in range(n_own[k]):
             c = own[k, p]
             for i in range(B):
-                for e in range(lanes):
+                for e in range(W):
                     out[c, e] += G[B * k + i, p, e] * v[s + i, c_in, e]
 
 
 @njit(cache=True)
 def _times_B(G, own, n_own, starts, y, out):
     """``out = B y`` (m, W) on the nonzero blocks of ``B``."""
-    lanes = out.shape[-1]
     for k in range(len(starts)):
         s = starts[k]
         for i in range(B):
-            for e in range(lanes):
+            for e in range(W):
                 out[s + i, e] = 0.0
             for p in range(n_own[k]):
                 c = own[k, p]
-                for e in range(lanes):
+                for e in range(W):
                     out[s + i, e] += G[B * k + i, p, e] * y[c, e]
 
 
 @njit(cache=True)
 def _rhs(G, b, ts, starts, upos, R):
     """The right-hand sides ``R = [b, U]`` (m, 1 + k, W) of the group, ``U = B[:, u]``."""
-    lanes = R.shape[-1]
     for k in range(len(starts)):
         s = starts[k]
         for i in range(B):
-            for e in range(lanes):
+            for e in range(W):
                 R[s + i, 0, e] = b[ts[e], s + i]
             for j in range(upos.shape[1]):
                 p = upos[k, j]
-                for e in range(lanes):
+                for e in range(W):
                     R[s + i, 1 + j, e] = G[B * k + i, p, e] if p >= 0 else 0.0
 
 
@@ -250,16 +238,15 @@ def _inexact(G, own, n_own, starts, b, ts, y, v, w, rtol, out):
     ||b||``: the bias of ``delta`` calls for a step of iterative refinement (``v``,
     ``w`` scratch); ``out`` (W) booleans. Whether any does.
     """
-    lanes = w.shape[-1]
     _times_Bt(G, own, n_own, starts, y, 0, v)
     _times_B(G, own, n_own, starts, v, w)
-    res, size = np.zeros(lanes), np.zeros(lanes)
+    res, size = np.zeros(W), np.zeros(W)
     for i in range(len(w)):
-        for e in range(lanes):
+        for e in range(W):
             bi = b[ts[e], i]
             res[e] += (bi - w[i, e]) ** 2
             size[e] += bi ** 2
-    for e in range(lanes):
+    for e in range(W):
         out[e] = np.sqrt(res[e]) > rtol * max(np.sqrt(size[e]), TINY)
     return out.any()
 
@@ -270,7 +257,6 @@ def _refined(G, own, n_own, starts, L, H, upos, b, ts, Y, scratch):
     [b, U]``, with one step of iterative refinement on the exact ``B B'``: ``Z += K^-1
     (R - B B' Z)``.
     """
-    lanes = Y.shape[-1]
     Z, R, dZ, v, w, every = scratch
     m, r = Z.shape[0], Z.shape[1]
     _rhs(G, b, ts, starts, upos, R)
@@ -280,13 +266,13 @@ def _refined(G, own, n_own, starts, L, H, upos, b, ts, Y, scratch):
         _times_Bt(G, own, n_own, starts, Z, c, v)
         _times_B(G, own, n_own, starts, v, w)
         for i in range(m):
-            for e in range(lanes):
+            for e in range(W):
                 dZ[i, c, e] = R[i, c, e] - w[i, e]
     _down(L, H, starts, dZ, every)
     _up(L, H, starts, dZ)
     for i in range(m):
         for c in range(r):
-            for e in range(lanes):
+            for e in range(W):
                 Z[i, c, e] += dZ[i, c, e]
 
 
@@ -298,7 +284,6 @@ def _faces_reduced(Y, starts, first, M, q):
     body ``first[i]`` in chain order (the faces sorted by it); the products are summed
     body by body, six rows at a time.
     """
-    lanes = Y.shape[-1]
     nf = q.shape[0]
     M[:] = 0.0
     q[:] = 0.0
@@ -308,17 +293,17 @@ def _faces_reduced(Y, starts, first, M, q):
             if first[i] > k:
                 break
             for r in range(B):
-                for e in range(lanes):
+                for e in range(W):
                     q[i, e] += Y[s + r, 1 + i, e] * Y[s + r, 0, e]
             for j in range(i + 1):
                 for r in range(B):
-                    for e in range(lanes):
+                    for e in range(W):
                         M[i, j, e] -= Y[s + r, 1 + i, e] * Y[s + r, 1 + j, e]
     for i in range(nf):
         for j in range(i):
-            for e in range(lanes):
+            for e in range(W):
                 M[j, i, e] = M[i, j, e]
-        for e in range(lanes):
+        for e in range(W):
             M[i, i, e] += 1.0
 
 
@@ -328,7 +313,6 @@ def _faces(G, starts, upos, Z, M, q):
     ``U = B[:, u]`` (face ``j`` is column ``upos[k, j]`` of body ``k``'s block rows, or
     absent there when negative), ``mu = Z[:, 0]`` and ``K^-1 U = Z[:, 1:]``.
     """
-    lanes = Z.shape[-1]
     nf = q.shape[0]
     M[:] = 0.0
     q[:] = 0.0
@@ -339,12 +323,12 @@ def _faces(G, starts, upos, Z, M, q):
                 continue
             s = starts[k]
             for r in range(B):
-                for e in range(lanes):
+                for e in range(W):
                     q[i, e] += G[B * k + r, p, e] * Z[s + r, 0, e]
                 for j in range(nf):
-                    for e in range(lanes):
+                    for e in range(W):
                         M[i, j, e] -= G[B * k + r, p, e] * Z[s + r, 1 + j, e]
-        for e in range(lanes):
+        for e in range(W):
             M[i, i, e] += 1.0
 
 
@@ -506,7 +490,6 @@ def _group(A, b, root, u, layout, params, ts, count, scratch, out):
     """The instants ``ts[:count]`` of :func:`least_norm` (``out``: its arrays)."""
     starts, own, n_own, sh_a, sh_b, n_sh, upos, first, ncols = layout
     G, L, H, Z, y, y1, v, w, M, q, Mr, qr, refine, lam, rscratch, lscratch = scratch
-    lanes = G.shape[-1]
     x, mu, lam_out, iterations, settled = out
     m, n, nf = A.shape[1], A.shape[2], len(u)
     _rows(A, root, ts, starts, own, n_own, G, v[0])
@@ -514,7 +497,7 @@ def _group(A, b, root, u, layout, params, ts, count, scratch, out):
     _rhs(G, b, ts, starts, upos, Z)
     _down(L, H, starts, Z, ncols)
     for i in range(m):
-        for e in range(lanes):
+        for e in range(W):
             y[i, 0, e] = Z[i, 0, e]
     _up(L, H, starts, y)
     any_refine = _inexact(G, own, n_own, starts, b, ts, y, v, w, params[1], refine)
@@ -530,7 +513,7 @@ def _group(A, b, root, u, layout, params, ts, count, scratch, out):
     _forces_of(Z, rscratch[0], L, H, starts, lam, refine, any_refine, y, y1)
     _times_Bt(G, own, n_own, starts, y, 0, v)
     for j in range(nf):
-        for e in range(lanes):
+        for e in range(W):
             v[u[j], e] += lam[j, e]
     for e in range(count):
         t = ts[e]
@@ -548,26 +531,25 @@ def _forces_of(Y, Z, L, H, starts, lam, refine, any_refine, y, y1):
     ``C^-T Y_0``) as ``y - C^-T (Y_1 lam)``, or where ``refine`` from the refined ``Z =
     K^-1 [b, U]`` as ``Z_0 - Z_1 lam``.
     """
-    lanes = y.shape[-1]
     m, nf = Y.shape[0], lam.shape[0]
     if any_refine:
         for i in range(m):
-            for e in range(lanes):
+            for e in range(W):
                 y1[i, 0, e] = 0.0
             for j in range(nf):
-                for e in range(lanes):
+                for e in range(W):
                     y1[i, 0, e] += Z[i, 1 + j, e] * lam[j, e]
-            for e in range(lanes):
+            for e in range(W):
                 if refine[e]:
                     y[i, 0, e] = Z[i, 0, e] - y1[i, 0, e]
     for i in range(m):
-        for e in range(lanes):
+        for e in range(W):
             y1[i, 0, e] = 0.0
         for j in range(nf):
-            for e in range(lanes):
+            for e in range(W):
                 y1[i, 0, e] += Y[i, 1 + j, e] * lam[j, e]
     _up(L, H, starts, y1)
     for i in range(m):
-        for e in range(lanes):
+        for e in range(W):
             if not (any_refine and refine[e]):
                 y[i, 0, e] -= y1[i, 0, e]
