@@ -382,8 +382,8 @@ def _run(library, dims, values, chosen: np.ndarray):
 
 def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     """Every instant of the batch in one call of the structure's generated solver; the
-    instants it does not solve, again with :data:`REFINED` (unless the caller chose
-    ``iter_ref_iters``): an instant's answer is still its own.
+    instants whose status is not "solved", again with :data:`REFINED` (unless the caller
+    chose ``iter_ref_iters``): an instant's answer is still its own.
 
     ``stages``: ``layout`` (the package's side: rows, patterns, entries), ``compile``
     (generation, compilation and loading when this process meets the structure first;
@@ -396,7 +396,7 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     library, compile_s = _library(dims, patterns)
     loaded = time.perf_counter()
     out = _run(library, dims, values, chosen)
-    again = np.flatnonzero(_statuses(out[4], out[5])[0] != "solved")
+    again = np.flatnonzero(out[4] != 1)  # not "solved" by the solver's own status
     if len(again) and "iter_ref_iters" not in options:
         refined = chosen.copy()
         refined[SETTINGS.index("iter_ref_iters")] = REFINED["iter_ref_iters"]
