@@ -54,23 +54,29 @@ SETTINGS = ("max_iters", "bisect_iters", "iter_ref_iters", "kkt_static_reg",
             "kkt_dynamic_reg", "abstol", "reltol", "abstol_inacc", "reltol_inacc")
 """Settings of the generated solver an option may set (the others keep its defaults)."""
 
-DEFAULTS = {"iter_ref_iters": 0}
+DEFAULTS = {"iter_ref_iters": 0, "bisect_iters": 7}
 """Settings that differ from the generated solver's own defaults (an option overrides
-them): no iterative refinement of the KKT solves. On the reduced ``min_max`` and
+them). No iterative refinement of the KKT solves: on the reduced ``min_max`` and
 ``socp_face`` (1001 instants each) it changed no status or iteration count and left the
 package's measures at the same levels (dual residual at the default tolerance 4.5e-10
 with it, 5.8e-10 without; at 1e-10 4e-13 and 3e-11, the gap unchanged), and it costs a
 fifth of the solve. Badly scaled cases lose more: on ``cardan hard``'s 89 deg case the
 worst dual residual of ``min_max`` is 7.2e-8 without it against 4.5e-9 with it (every
-instant still solved)."""
+instant still solved). Steps on a grid of 2^-7 instead of 2^-5 (free with :data:`STEP`:
+the grid no longer sets the number of passes): on the paper's 1001 instants 9.0
+iterations an instant instead of 10 on ``min_max`` and 5.3 instead of 6.1 on
+``socp_face`` (worst gap 4.3e-7 and 5.5e-7, every instant solved), the propshaft's
+``socp_face`` 97 of 101 instants solved instead of 87, its ``min_max`` 11.1 iterations
+instead of 11.6; on the paper's 1e6 N m hard case ``socp_face`` stalls at every
+instant (the step falls below 1e-8), which :data:`REFINED` then solves."""
 
-REFINED = {"iter_ref_iters": 1}
-"""The settings an instant that :data:`DEFAULTS` leave unsolved is solved again with
-(its iterations are added to the first attempt's). On ``cardan hard``'s windows (11
-instants a case) at tolerance 1e-8, two reduced ``min_max`` instants (``paper-fig15``
-``mass-1e6``, ``paper-slip`` ``torque-1e6``) stalled without refinement ("numerical
-error": the step fell below 1e-8 at a dual residual and gap below 1e-10); refined,
-both are solved."""
+REFINED = {"iter_ref_iters": 1, "bisect_iters": 5}
+"""The generated solver's own defaults, with which an instant that :data:`DEFAULTS`
+leave unsolved is solved again (its iterations are added to the first attempt's). On
+``cardan hard``'s windows (11 instants a case) at tolerance 1e-8, two reduced
+``min_max`` instants (``paper-fig15`` ``mass-1e6``, ``paper-slip`` ``torque-1e6``)
+stalled without refinement ("numerical error": the step fell below 1e-8 at a dual
+residual and gap below 1e-10); refined, both are solved."""
 
 STATUS = {1: "solved", 2: "inaccurate", 4: "inaccurate"}
 """Generated solver status -> ours; anything else is failed."""
@@ -399,7 +405,8 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     again = np.flatnonzero(out[4] != 1)  # not "solved" by the solver's own status
     if len(again) and "iter_ref_iters" not in options:
         refined = chosen.copy()
-        refined[SETTINGS.index("iter_ref_iters")] = REFINED["iter_ref_iters"]
+        for name, value in REFINED.items():
+            refined[SETTINGS.index(name)] = value
         first = out[3][again]
         retry = _run(library, dims, [np.take(v, again, axis=0) for v in values], refined)
         for mine, theirs in zip(out, retry):

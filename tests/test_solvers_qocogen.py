@@ -132,7 +132,8 @@ def test_unsolved_instants_are_solved_again_refined(fresh_cache, monkeypatch,
 
     def run(library, dims, values, chosen):
         out = real(library, dims, values, chosen)
-        calls.append((len(values[1]), chosen[qocogen_.SETTINGS.index("iter_ref_iters")]))
+        calls.append((len(values[1]), *(chosen[qocogen_.SETTINGS.index(name)]
+                                         for name in ("iter_ref_iters", "bisect_iters"))))
         if len(calls) == 1:
             out[4][1] = 3
         return out
@@ -143,11 +144,13 @@ def test_unsolved_instants_are_solved_again_refined(fresh_cache, monkeypatch,
     result = qocogen_.solve_batch(batch, **options)
     dims, patterns, values, _ = qocogen_._data(batch)
     alone = real(qocogen_._library(dims, patterns)[0], dims, [v[1:2] for v in values],
-                 qocogen_._options(None, {"iter_ref_iters": 1}))
+                 qocogen_._options(None, qocogen_.REFINED))
+    first = (3, qocogen_.DEFAULTS["iter_ref_iters"], qocogen_.DEFAULTS["bisect_iters"])
     if caller_sets_refinement:
-        assert calls == [(3, 0.0)] and result.status[1] == "failed"
+        assert calls == [first] and result.status[1] == "failed"
     else:
-        assert calls == [(3, 0.0), (1, 1.0)] and set(result.status) == {"solved"}
+        again = (1, qocogen_.REFINED["iter_ref_iters"], qocogen_.REFINED["bisect_iters"])
+        assert calls == [first, again] and set(result.status) == {"solved"}
         assert np.array_equal(result.z[1], alone[0][0])
         assert result.iterations[1] > alone[3][0]
 
