@@ -184,12 +184,12 @@ double cardan_boundary_step(double* u, double* Du, double f, Workspace* work) {
 }
 """
 """The generated solver's line search (appended to ``cone.c``, after :data:`PROTOTYPE`):
-QOCO's step, one pass over the cones instead of the bisection's five (each a pass that
-takes a square root per cone). The step is the bisection's (the same grid below the
-boundary), so the iterations are QOCO's: on the paper's 1001 instants the same
-iterations and answers to the bit, the generated solve 1.13
-times faster on the reduced ``min_max`` and 1.07 on ``socp_face``, the whole batch 1.09
-and 1.05 (best of nine interleaved). The step at the boundary itself (0.99 of it, up
+QOCO's step, one pass over the cones instead of one per halving of the bisection (each
+a pass that takes a square root per cone). The step is the bisection's (the same grid
+below the boundary), so the iterations are QOCO's: with its five halvings, on the
+paper's 1001 instants the same iterations and answers to the bit, the generated solve
+1.13 times faster on the reduced ``min_max`` and 1.07 on ``socp_face``, the whole batch
+1.09 and 1.05 (best of nine interleaved). The step at the boundary itself (0.99 of it, up
 to the bisection's largest) took 7% fewer iterations on ``min_max`` but stalled every
 ``socp_face`` instant of ``cardan hard``'s 1e6 N m case (step below 1e-8, gap 1e-5)."""
 
@@ -389,7 +389,7 @@ def _run(library, dims, values, chosen: np.ndarray):
 def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     """Every instant of the batch in one call of the structure's generated solver; the
     instants whose status is not "solved", again with :data:`REFINED` (unless the caller
-    chose ``iter_ref_iters``): an instant's answer is still its own.
+    chose one of those settings): an instant's answer is still its own.
 
     ``stages``: ``layout`` (the package's side: rows, patterns, entries), ``compile``
     (generation, compilation and loading when this process meets the structure first;
@@ -403,7 +403,7 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     loaded = time.perf_counter()
     out = _run(library, dims, values, chosen)
     again = np.flatnonzero(out[4] != 1)  # not "solved" by the solver's own status
-    if len(again) and "iter_ref_iters" not in options:
+    if len(again) and not set(REFINED) & set(options):
         refined = chosen.copy()
         for name, value in REFINED.items():
             refined[SETTINGS.index(name)] = value
