@@ -138,7 +138,10 @@ def _matches(members: bytes, bounds: bytes, width: int):
     sign = np.where(same.any(axis=1), 1.0, np.where(opposite.any(axis=1), -1.0, 0.0))
     partner = np.where(same.any(axis=1), same.argmax(axis=1), opposite.argmax(axis=1))
     found = np.flatnonzero(sign)
-    return found, partner[found], sign[found]
+    out = (found, partner[found], sign[found])
+    for array in out:
+        array.flags.writeable = False  # cached: shared by every call with these rows
+    return out
 
 
 def fold(A: np.ndarray, b: np.ndarray, cones) -> Folded | None:
