@@ -24,10 +24,10 @@ handed, one atomic count each way, and the integrator hands its scratch down as
 tuples of dozens of arrays: a few hundred counts a step, about as dear as the
 arithmetic of a Newton iteration. So the kernels the step calls many times
 (right-hand side, Newton iteration and solve, the Jacobian's and the factorization's
-parts) are inlined (``inline="always"``), leaving as calls only :func:`_step`,
-:func:`_attempt`, :func:`_factor` and :func:`_jacobian_into`, each made once a step or
-less: a right-hand side 1.3, a Newton solve 1.4, a Jacobian 1.2 times cheaper, the same
-numbers to the bit. Compiling takes longer (about 70 s of CPU instead of 40, once).
+parts, the step itself) are inlined (``inline="always"``), leaving as calls only
+:func:`_factor` and :func:`_jacobian_into`, made less than once a step: a right-hand
+side 1.3, a Newton solve 1.4, a Jacobian 1.2 times cheaper, the same numbers to the
+bit. Compiling takes longer (about 90 s of CPU instead of 40, once).
 
 Without numba the functions below still run (as plain Python, slowly); the simulation
 then uses the NumPy model and SciPy's integrators instead (:data:`HAVE_NUMBA`).
@@ -1297,7 +1297,7 @@ def _predict(d, order, alpha, gamma, atol, rtol, vec):
         scale[i] = atol[i] + rtol * abs(y_predict[i])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args, work):
     """SciPy's ``BDF._step_impl`` up to the accepted step: shrink the step until Newton
     converges (with a fresh Jacobian once per step) and the error test passes; returns
@@ -1356,7 +1356,7 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
         ints[I_EQUAL] = 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args, work):
     """One accepted step of SciPy's ``BDF``: :func:`_attempt`, then the differences
     updated and, after ``order + 1`` steps of one size, the order and step chosen
