@@ -322,3 +322,30 @@ def test_a_non_finite_answer_fails_but_keeps_the_solvers_word():
     record = finalize(problem, "stub", Outcome("solved", z))
     assert record.status == "failed" and record.solver_status == "solved"
     assert "NaN" in record.message
+
+
+def test_clarabel_reads_the_packages_csc_as_scipys():
+    """Clarabel takes a CSC matrix by its attributes: the package's light one (rows
+    sorted, explicit zeros dropped) must hand it the very arrays scipy's would, and
+    give the same answer to the bit."""
+    clarabel = pytest.importorskip("clarabel")
+    sparse = pytest.importorskip("scipy.sparse")
+    from cardan_forces.solvers import clarabel_
+
+    rng = np.random.default_rng(3)
+    dense = rng.normal(size=(7, 5)) * (rng.random((7, 5)) < 0.4)
+    light, reference = clarabel_._csc(dense), sparse.csc_matrix(dense)
+    for name in ("data", "indices", "indptr"):
+        assert np.array_equal(getattr(light, name), getattr(reference, name))
+    assert light.nnz == reference.nnz and light.shape == reference.shape
+    # min 1/2 |z|^2 + q'z s.t. dense z <= 1 (a nonnegative cone), both ways
+    q = rng.normal(size=5)
+    settings = clarabel.DefaultSettings()
+    settings.verbose = False
+    cones = [clarabel.NonnegativeConeT(7)]
+    ours = clarabel_._solver(clarabel, clarabel_._csc(np.eye(5)), q, light, np.ones(7),
+                             cones, settings).solve()
+    theirs = clarabel.DefaultSolver(sparse.csc_matrix(np.eye(5)), q, reference, np.ones(7),
+                                    cones, settings).solve()
+    assert str(ours.status) == "Solved"
+    assert np.array_equal(np.asarray(ours.x), np.asarray(theirs.x))
