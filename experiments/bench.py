@@ -66,8 +66,7 @@ def measure(op, backends: dict[str, list[str]], samples, ladder, budget_s: float
         setup[name] = prepared.build_s
         if isinstance(prepared.problems[0], Conic):
             conic.add(name)
-        with runs.frozen():
-            new, batched = runs.throughput(prepared, solvers, budget_s)
+        new, batched = runs.throughput(prepared, solvers, budget_s)
         rows += new
         stages.update({(name, solver): parts for solver, parts in batched.items()})
         found = runs.references(prepared, samples)

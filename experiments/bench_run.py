@@ -96,11 +96,12 @@ class Prepared:
 
 @contextlib.contextmanager
 def frozen():
-    """The objects alive now (the bench's prebuilt problems and stacks) left out of the
-    garbage collector's scans while the timed runs go (``gc.freeze``): a full
-    collection scanning them fell inside whichever instant allocated at the time,
-    up to eight times the checks' time of a run (one run each, socp_face with
-    clarabel). Garbage is still collected; they are put back after.
+    """The objects alive now (the bench's prebuilt problems and stacks, the rows of the
+    runs before) left out of the garbage collector's scans while a timed run goes
+    (``gc.freeze``): a full collection scanning them fell inside whichever instant or
+    check pass allocated at the time, 2-5 ms into a pass of 250-1000 instants (up to
+    eight times the checks' time of a run). Garbage is still collected; they are put
+    back after.
     """
     gc.freeze()
     try:
@@ -246,21 +247,24 @@ def baseline(solvers: list[str]) -> tuple[str, str] | None:
 def throughput(prepared: Prepared, solvers: list[str], budget_s: float):
     """Rows of every backend x mode on all instants, and the batched stage times.
     Per-instant runs stop after ``budget_s`` once they have :data:`LEAST_INSTANTS`,
-    except the paper's baseline (:func:`baseline`), which goes over every instant.
+    except the paper's baseline (:func:`baseline`), which goes over every instant. Each
+    run goes with everything alive before it :func:`frozen`.
     """
     rows, stages = [], {}
     full = baseline(solvers) if prepared.name == "paper" else None
     for solver in solvers:
         if _is_batched(solver):
-            new, stages[solver] = run_batched(prepared, solver)
+            with frozen():
+                new, stages[solver] = run_batched(prepared, solver)
             rows += new
             _report_progress(new)
             continue
         modes = ("cold", "warm") if get_backend(solver).warm_start else ("cold",)
         for mode in modes:
             limit = math.inf if (solver, mode) == full else budget_s
-            new = run_instants(prepared, solver, prepared.instants, mode=mode, budget_s=limit,
-                               least=LEAST_INSTANTS)
+            with frozen():
+                new = run_instants(prepared, solver, prepared.instants, mode=mode,
+                                   budget_s=limit, least=LEAST_INSTANTS)
             rows += new
             _report_progress(new)
     return rows, stages
