@@ -238,10 +238,19 @@ def baseline(solvers: list[str]) -> tuple[str, str] | None:
     backend (:data:`~cardan_forces.experiments.study.DEFAULT_BACKENDS`), warm-started
     where it can be (the paper's method as the paper runs it, the fair baseline).
     """
-    usable = [s for s in DEFAULT_BACKENDS["paper"] if s in solvers] or list(solvers)
-    if not usable:
+    chosen = _preferred("paper", solvers)
+    if chosen is None:
         return None
-    return usable[0], "warm" if get_backend(usable[0]).warm_start else "cold"
+    return chosen, "warm" if get_backend(chosen).warm_start else "cold"
+
+
+def _preferred(formulation: str, solvers: list[str]) -> str | None:
+    """The first of the formulation's default backends among ``solvers``
+    (:data:`~cardan_forces.experiments.study.DEFAULT_BACKENDS`), else the first of
+    ``solvers``; ``None`` when there are none.
+    """
+    return next((s for s in DEFAULT_BACKENDS.get(formulation, ()) if s in solvers),
+                solvers[0] if solvers else None)
 
 
 def throughput(prepared: Prepared, solvers: list[str], budget_s: float):
@@ -281,12 +290,9 @@ def _warm_up(prepared: Prepared, solvers: list[str]) -> None:
     pass over a formulation's code and arrays (cold code, fresh memory) cost its checks
     1.4-2x what the next pass did, on whichever backend came first.
     """
-    per_instant = [s for s in solvers if not _is_batched(s)]
-    if not per_instant:
-        return
-    chosen = next((s for s in DEFAULT_BACKENDS.get(prepared.name, ()) if s in per_instant),
-                  per_instant[0])
-    run_instants(prepared, chosen, prepared.instants[:WARM_UP_INSTANTS])
+    chosen = _preferred(prepared.name, [s for s in solvers if not _is_batched(s)])
+    if chosen is not None:
+        run_instants(prepared, chosen, prepared.instants[:WARM_UP_INSTANTS])
 
 
 def _report_progress(rows: list[dict]) -> None:
