@@ -72,9 +72,7 @@ class LeastNormBatch:
 
     ``A`` (T, m, n) are the operator's rows (dependent along the motion), ``weights``
     (T, n) the diagonal of ``W`` (``None``: the plain norm), ``signed`` the columns held
-    ``>= 0`` (empty for ``min_norm``), ``pattern`` (m, n) where ``A`` is nonzero at some
-    instant: the structure all instants share, found once when the batch is built
-    (default: from ``A``).
+    ``>= 0`` (empty for ``min_norm``).
     """
 
     formulation: str
@@ -84,11 +82,6 @@ class LeastNormBatch:
     weights: np.ndarray | None
     signed: np.ndarray
     checks: CheckBatch
-    pattern: np.ndarray | None = None
-
-    def __post_init__(self) -> None:
-        if self.pattern is None:
-            object.__setattr__(self, "pattern", np.any(self.A, axis=0))
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,7 @@ import time
 
 import numpy as np
 from cardan_forces.formulations.batch import LeastNormBatch
+from cardan_forces.formulations.problems import LastMade
 
 from .batch import BatchOutcome
 from .lcp_ import lemke
@@ -67,7 +68,7 @@ MAX_ITER = 30
 def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> BatchOutcome:
     """The batch's least norm (with signs where it has them), forces and multipliers."""
     x, mu, nu, iterations, fallback, stages = least_norm(batch.A, batch.b, batch.weights,
-                                                         batch.signed, max_iter, batch.pattern)
+                                                         batch.signed, max_iter, _pattern(batch))
     duals = np.concatenate([-mu, nu[:, np.flatnonzero(batch.signed)]], axis=1)
     T = len(x)
     messages = tuple(np.where(fallback, "Lemke fallback", "")) if fallback.any() else ()
@@ -168,6 +169,10 @@ def _signed(signed, n: int) -> np.ndarray:
 def structure(A: np.ndarray) -> np.ndarray:
     """Where ``A`` (T, m, n) is nonzero at some instant: (m, n) booleans."""
     return np.any(A, axis=0)
+
+
+_pattern = LastMade(lambda batch: structure(batch.A))
+"""A batch's :func:`structure`, found once for its support check and its solve."""
 
 
 def chain(A: np.ndarray) -> list[slice]:
@@ -322,12 +327,13 @@ def _lemke_fallback(M, q, lam, iterations, todo):
 
 def _chain_shaped(batch) -> bool:
     """Whether the batch's rows form a chain of bodies over all its instants: the
-    pattern the solve uses (``batch.pattern``, :func:`structure`), not one instant's,
+    pattern the solve uses (:func:`structure`, made once per batch), not one instant's,
     where a column that vanishes at that instant would hide a link. Asked at every
     solve: the layout made from the pattern (:func:`_layout`) is kept for the solve.
     """
     try:
-        _layout(batch.pattern, _signed(batch.signed, batch.pattern.shape[1]))
+        pattern = _pattern(batch)
+        _layout(pattern, _signed(batch.signed, pattern.shape[1]))
     except ValueError:
         return False
     return True

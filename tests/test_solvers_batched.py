@@ -127,7 +127,7 @@ def test_a_link_missing_at_one_instant_still_makes_a_chain():
     with pytest.raises(ValueError, match="chain"):
         nb.chain(A[0])
     batch = fbatch.LeastNormBatch("min_norm", np.arange(2), A, np.zeros((2, 18)), None,
-                                  np.zeros(2, bool), checks=None)  # pattern: from A
+                                  np.zeros(2, bool), checks=None)
     assert nb._chain_shaped(batch)
 
 
