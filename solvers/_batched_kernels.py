@@ -533,23 +533,29 @@ def _forces_of(Y, Z, L, H, starts, lam, refine, any_refine, y, y1):
     """
     m, nf = Y.shape[0], lam.shape[0]
     if any_refine:
+        _times_faces(Z, lam, y1)
         for i in range(m):
-            for e in range(W):
-                y1[i, 0, e] = 0.0
-            for j in range(nf):
-                for e in range(W):
-                    y1[i, 0, e] += Z[i, 1 + j, e] * lam[j, e]
             for e in range(W):
                 if refine[e]:
                     y[i, 0, e] = Z[i, 0, e] - y1[i, 0, e]
-    for i in range(m):
-        for e in range(W):
-            y1[i, 0, e] = 0.0
-        for j in range(nf):
-            for e in range(W):
-                y1[i, 0, e] += Y[i, 1 + j, e] * lam[j, e]
+    if not nf:  # no faces: Y_1 lam is zero, y stands
+        return
+    _times_faces(Y, lam, y1)
     _up(L, H, starts, y1)
     for i in range(m):
         for e in range(W):
             if not (any_refine and refine[e]):
                 y[i, 0, e] -= y1[i, 0, e]
+
+
+@njit(cache=True)
+def _times_faces(X, lam, out):
+    """``out = X[:, 1:] lam`` (m, 1, W): the face columns of ``X`` (m, 1 + nf, W) times
+    the faces' forces ``lam`` (nf, W), lane by lane.
+    """
+    for i in range(X.shape[0]):
+        for e in range(W):
+            out[i, 0, e] = 0.0
+        for j in range(lam.shape[0]):
+            for e in range(W):
+                out[i, 0, e] += X[i, 1 + j, e] * lam[j, e]
