@@ -28,7 +28,7 @@ from cardan_forces.formulations.problems import Conic
 from . import clarabel_, moreau_, qoco_, qocogen_
 from .batch import BatchOutcome
 from .conversions import Reduced, eliminate_equalities
-from .optimality import blocks
+from .optimality import blocks, cone_layout
 from .record import Outcome
 from .registry import Backend
 
@@ -101,13 +101,10 @@ class Folded:
 @functools.lru_cache(maxsize=64)
 def _candidates(cones) -> tuple[np.ndarray, np.ndarray]:
     """The rows of the nonnegative blocks of ``cones`` and the apex rows of its two-row
-    second-order cones (each member the row after it).
+    second-order cones (each member the row after it), read from :func:`cone_layout`.
     """
-    parts = blocks(cones)
-    nonneg = [r for kind, _, rows in parts if kind == "nonneg" for r in range(rows.start,
-                                                                               rows.stop)]
-    apexes = [rows.start for kind, size, rows in parts if kind == "soc" and size == 2]
-    return np.array(nonneg, int), np.array(apexes, int)
+    _, nonneg, apex, _, mask, _, _ = cone_layout(tuple(cones))
+    return nonneg, apex[mask.sum(axis=1) == 1]
 
 
 @functools.lru_cache(maxsize=64)
