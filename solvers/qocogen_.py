@@ -404,14 +404,11 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     out = _run(library, dims, values, chosen)
     again = np.flatnonzero(out[4] != 1)  # not "solved" by the solver's own status
     if len(again) and not set(REFINED) & set(options):
-        refined = chosen.copy()
-        for name, value in REFINED.items():
-            refined[SETTINGS.index(name)] = value
-        first = out[3][again]
-        retry = _run(library, dims, [np.take(v, again, axis=0) for v in values], refined)
+        retry = _run(library, dims, [np.take(v, again, axis=0) for v in values],
+                     _options(tol, options | REFINED))
+        np.add(retry[3], out[3][again], out=retry[3])  # the iterations of both attempts
         for mine, theirs in zip(out, retry):
             mine[again] = theirs
-        out[3][again] += first
     solved = time.perf_counter()
     x, y, z, iterations, codes, info = out
     duals = np.empty((len(x), len(eq) + len(cone)))
