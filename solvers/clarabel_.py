@@ -81,9 +81,10 @@ class Csc(NamedTuple):
 
 def _csc(dense: np.ndarray) -> Csc:
     """``dense`` as a CSC matrix of its nonzeros."""
-    nonzero = dense.T != 0
-    return Csc(dense.T[nonzero], np.nonzero(nonzero)[1],
-               np.concatenate(([0], np.cumsum(nonzero.sum(axis=1)))), int(nonzero.sum()),
+    columns = dense.T
+    nonzero = columns != 0
+    indptr = np.concatenate(([0], np.cumsum(nonzero.sum(axis=1))))
+    return Csc(columns[nonzero], np.nonzero(nonzero)[1], indptr, int(indptr[-1]),
                dense.shape)
 
 
