@@ -95,12 +95,25 @@ def _scipy(matrix: Csc):
     return spa.csc_matrix((matrix.data, matrix.indices, matrix.indptr), shape=matrix.shape)
 
 
+@functools.cache
+def _takes_light(clarabel) -> bool:
+    """Whether this Clarabel takes a :class:`Csc` (asked once, on a 1 x 1 problem)."""
+    one = _csc(np.ones((1, 1)))
+    settings_ = clarabel.DefaultSettings()
+    settings_.verbose = False
+    try:
+        clarabel.DefaultSolver(one, np.zeros(1), one, np.zeros(1),
+                               [clarabel.NonnegativeConeT(1)], settings_)
+    except (TypeError, AttributeError):
+        return False
+    return True
+
+
 def _solver(clarabel, P: Csc, q, A: Csc, b, cones, opts):
     """Clarabel's solver of these data; scipy's matrices where Clarabel asks for them."""
-    try:
-        return clarabel.DefaultSolver(P, q, A, b, cones, opts)
-    except (TypeError, AttributeError):
-        return clarabel.DefaultSolver(_scipy(P), q, _scipy(A), b, cones, opts)
+    if not _takes_light(clarabel):
+        P, A = _scipy(P), _scipy(A)
+    return clarabel.DefaultSolver(P, q, A, b, cones, opts)
 
 
 def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
