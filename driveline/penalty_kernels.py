@@ -988,31 +988,15 @@ def _lu6(a, pivots):
 @njit(cache=True, inline="always")
 def _lu6_solve(a, pivots, x):
     """``x <- a^-1 x`` from :func:`_lu6`'s factors, for every column of the (6, k)
-    ``x``.
+    ``x``: :func:`_lu6_solve_vector` of each (the columns do not mix).
     """
-    for k in range(6):
-        p = pivots[k]
-        if p != k:
-            for col in range(x.shape[1]):
-                x[k, col], x[p, col] = x[p, col], x[k, col]
     for col in range(x.shape[1]):
-        for i in range(1, 6):
-            total = x[i, col]
-            for j in range(i):
-                total -= a[i, j] * x[j, col]
-            x[i, col] = total
-        for i in range(5, -1, -1):
-            total = x[i, col]
-            for j in range(i + 1, 6):
-                total -= a[i, j] * x[j, col]
-            x[i, col] = total / a[i, i]
+        _lu6_solve_vector(a, pivots, x[:, col])
 
 
 @njit(cache=True, inline="always")
 def _lu6_solve_vector(a, pivots, x):
-    """:func:`_lu6_solve` for one vector ``x`` (6,): the same operations, in the same
-    order, on a contiguous row instead of a column of a 2-D view.
-    """
+    """``x <- a^-1 x`` from :func:`_lu6`'s factors for one vector ``x`` (6,)."""
     for k in range(6):
         p = pivots[k]
         if p != k:
@@ -1224,7 +1208,8 @@ def start(t0, y0, t_bound, atol, rtol, args):
     d = np.zeros((MAX_ORDER + 3, n))
     d[0], d[1] = y0, f0 * h
     ints[I_JEV] += 1
-    jac = jacobian(t0, y0, args[0], args[1], args[2], args[3], args[4], args[5])
+    jac = np.empty((n, n))
+    _jacobian_into(t0, y0, args, jac, linked, work[3], work[7])
     ints[I_JAC_CURRENT] = 1
     floats = np.array([t0, h, h, 1.0])
     m = 6 * nb
