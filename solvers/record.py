@@ -618,19 +618,23 @@ def _defaults(cls) -> tuple:
 def _instances(cls, columns: dict, T: int, shared: dict | None = None) -> list:
     """T instances of the frozen dataclass ``cls`` from ``columns`` (field -> T values)
     and ``shared`` (field -> the one value of every instance; fields in neither take
-    their defaults). Each instance's ``__dict__`` is filled at once instead of through
-    the frozen ``__init__``'s one ``object.__setattr__`` per field: a record costs 1 us
-    instead of 6, which was the largest part of the checks of a run. The values must
+    their defaults). Each instance's ``__dict__`` is filled directly instead of through
+    the frozen ``__init__``'s one ``object.__setattr__`` per field (6 us a record),
+    column by column (one loop per field over plain dicts: a 21-field record costs
+    0.9 us, against 2 us filled row by row from zipped columns). The values must
     already be of the fields' types (no ``__post_init__``); the instances compare,
     print and refuse assignment as any other.
     """
     shared = shared or {}
     shared = {**{name: make() for name, make in _defaults(cls)
                  if name not in columns and name not in shared}, **shared}
-    names, out = tuple(columns), list(map(object.__new__, itertools.repeat(cls, T)))
-    for values, row in zip(map(vars, out), zip(*columns.values())):
+    out = list(map(object.__new__, itertools.repeat(cls, T)))
+    dicts = list(map(vars, out))
+    for values in dicts:
         values.update(shared)
-        values.update(zip(names, row))
+    for name, column in columns.items():
+        for values, value in zip(dicts, column):
+            values[name] = value
     return out
 
 
