@@ -23,6 +23,7 @@ Classes:
 from __future__ import annotations
 
 import functools
+import operator
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -73,6 +74,8 @@ class ForceChecks:
     cones: tuple[SecondOrderCone, ...] = ()
 
     def __post_init__(self) -> None:
+        if type(self.names) is not tuple:  # a record carries them as they are
+            object.__setattr__(self, "names", tuple(self.names))
         A, b = np.asarray(self.A, float), np.asarray(self.b, float)
         if A.ndim != 2 or b.shape != (A.shape[0],):
             raise ProblemError(f"equilibrium shapes do not match: A {A.shape}, b {b.shape}")
@@ -164,12 +167,15 @@ def map_all(maps: list, Z: np.ndarray) -> np.ndarray | None:
     ``None`` where they do not: then each instant is mapped alone.
     """
     stacked = getattr(type(maps[0]), "stacked", None) if len(maps) else None
-    if stacked is None or any(type(f) is not type(maps[0]) for f in maps):
+    if stacked is None or len(set(map(type, maps))) != 1:
         return None
     try:
         return np.asarray(stacked(maps, Z), float)
     except (ValueError, IndexError):  # maps of other structures, points of other sizes
         return None
+
+
+_STRUCTURE, _SCALE = operator.attrgetter("n", "signed"), operator.attrgetter("scale")
 
 
 @dataclass(frozen=True)
@@ -195,9 +201,9 @@ class Scaled:
         maps share ``n`` and ``signed`` (instants of one structure).
         """
         first = maps[0]
-        if any(m.n != first.n or m.signed != first.signed for m in maps):
+        if len(set(map(_STRUCTURE, maps))) != 1:
             raise ValueError("the maps are of different structures")
-        scale = np.fromiter((m.scale for m in maps), float, len(maps))
+        scale = np.fromiter(map(_SCALE, maps), float, len(maps))
         return first._split(scale[:, None] * np.asarray(Z, float)[:, :first.n])
 
     def _split(self, x: np.ndarray) -> np.ndarray:

@@ -22,6 +22,7 @@ import enum
 import functools
 import itertools
 import math
+import operator
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import MISSING, dataclass, field, fields
@@ -408,7 +409,7 @@ class Stacks:
     def holds(self, problems) -> bool:
         """Whether these are the stacks of exactly ``problems`` (the same objects)."""
         return len(problems) == len(self.problems) and all(
-            p is q for p, q in zip(problems, self.problems))
+            map(operator.is_, problems, self.problems))
 
     def take(self, rows) -> Stacks:
         """The stacks of the problems at positions ``rows``."""
@@ -536,6 +537,8 @@ class _Started:
                 self.note(k, "ValueError: solver returned NaN or inf")
 
 
+_STATUS, _MESSAGE = operator.attrgetter("status"), operator.attrgetter("message")
+_TO_FORCES, _Z = operator.attrgetter("to_forces"), operator.attrgetter("z")
 _STATUS_OF = {**{s.value: s for s in Status}, **{s: s for s in Status}}
 """A status as an adapter gives it (the value or the member) -> :class:`Status`, one
 dict lookup (an enum call costs as much as the rest of an instant's start)."""
@@ -547,10 +550,14 @@ def _start_all(problems, outcomes, n: int | None = None) -> _Started:
     of forces of every problem, where one structure fixes it).
     """
     T = len(problems)
-    status = [_STATUS_OF.get(o.status) for o in outcomes]
-    started = _Started([], [], [None] * T, [o.message or "" for o in outcomes])
-    mapped = _stacked_forces(problems, outcomes, [k for k, s in enumerate(status)
-                                                  if s in _ANSWERED], n)
+    status = list(map(_STATUS_OF.get, map(_STATUS, outcomes)))
+    started = _Started([], [], [None] * T, [m or "" for m in map(_MESSAGE, outcomes)])
+    answered = [k for k, s in enumerate(status) if s in _ANSWERED]
+    mapped = _stacked_forces(problems, outcomes, answered, n)
+    if len(mapped) == T:  # every answer mapped at once: nothing to do per instant
+        started.x = list(mapped.values())
+        started.solver_status, started.status = status, list(status)
+        return started
     for k, first in enumerate(status):
         if first is None:
             status[k] = Status.FAILED
@@ -579,10 +586,11 @@ def _stacked_forces(problems, outcomes, rows: list, n: int | None) -> dict:
     if n is None or not rows:
         return {}
     try:
-        Z = np.array([outcomes[k].z for k in rows], float)
+        Z = np.array(list(map(_Z, map(outcomes.__getitem__, rows))), float)
     except (TypeError, ValueError):  # a missing or ragged answer: found and told per instant
         return {}
-    X = map_all([problems[k].to_forces for k in rows], Z) if Z.ndim == 2 else None
+    maps = list(map(_TO_FORCES, map(problems.__getitem__, rows)))
+    X = map_all(maps, Z) if Z.ndim == 2 else None
     return dict(zip(rows, X)) if X is not None and X.shape == (len(rows), n) else {}
 
 
@@ -663,23 +671,29 @@ def _records(problems, solver, outcomes, started: _Started, status, confirmed, a
         "gap": _floats(views.gap), "distance": distance[1]}, T)
     residuals = _instances(Residuals, {**residual, "reference": distance[0]}, T)
     extra = extra_setup_s if extra_setup_s is not None else [0.0] * T
-    z = [o.z for o in outcomes]
+    z, iterations, objective = (list(map(get, outcomes)) for get in (_Z, _ITERATIONS,
+                                                                      _OBJECTIVE))
     return _instances(Record, {
-        "formulation": [p.formulation for p in problems],
+        "formulation": list(map(_FORMULATION, problems)),
         "status": confirmed.tolist(),
         "x": started.x,
-        "names": [tuple(p.checks.names) for p in problems],
-        "iterations": [None if o.iterations is None else int(o.iterations) for o in outcomes],
-        "setup_s": [o.setup_s + e for o, e in zip(outcomes, extra)],
-        "solve_s": [o.solve_s for o in outcomes], "residuals": residuals,
+        "names": list(map(_NAMES, problems)),
+        "iterations": [v if v is None or type(v) is int else int(v) for v in iterations],
+        "setup_s": list(map(operator.add, map(_SETUP_S, outcomes), extra)),
+        "solve_s": list(map(_SOLVE_S, outcomes)), "residuals": residuals,
         "message": _messages(started, status, confirmed, found),
         "z": [v if v is None or type(v) is np.ndarray else np.asarray(v) for v in z],
-        "objective": [float(o.objective) if a and o.objective is not None else None
-                      for o, a in zip(outcomes, answered.tolist())],
+        "objective": [float(v) if a and v is not None else None
+                      for v, a in zip(objective, answered.tolist())],
         "optimality": optimality, "duals": views.duals.tolist(),
         "gap_kind": views.kinds.tolist(), "y": views.y,
         "solver_status": started.solver_status, "solver_optimality": views.solver}, T,
         {"solver": solver})
+
+
+_FORMULATION, _NAMES = operator.attrgetter("formulation"), operator.attrgetter("checks.names")
+_ITERATIONS, _OBJECTIVE = operator.attrgetter("iterations"), operator.attrgetter("objective")
+_SETUP_S, _SOLVE_S = operator.attrgetter("setup_s"), operator.attrgetter("solve_s")
 
 
 def _floats(values: np.ndarray) -> list:

@@ -25,6 +25,7 @@ import dataclasses
 import functools
 import importlib
 import importlib.metadata
+import operator
 import time
 import warnings
 from collections.abc import Callable
@@ -304,13 +305,16 @@ def check(pending: list[Pending], stacks: Stacks | None = None) -> list[Record]:
     """
     if not pending:
         return []
-    return finalize_all([p.problem for p in pending], pending[0].solver,
-                        [p.outcome for p in pending],
-                        references=[p.reference for p in pending],
-                        optimal_values=[p.optimal_value for p in pending],
-                        extra_setup_s=[p.convert_s for p in pending],
-                        received=[p.received for p in pending],
-                        elapsed_s=[p.elapsed_s for p in pending], stacks=stacks)
+    problems, outcomes, references, optimal_values, convert_s, received, elapsed_s = zip(
+        *map(_PENDING, pending))
+    return finalize_all(problems, pending[0].solver, outcomes, references=references,
+                        optimal_values=optimal_values, extra_setup_s=convert_s,
+                        received=received, elapsed_s=elapsed_s, stacks=stacks)
+
+
+_PENDING = operator.attrgetter("problem", "outcome", "reference", "optimal_value",
+                               "convert_s", "received", "elapsed_s")
+"""What :func:`check` reads of a :class:`Pending`, in :func:`finalize_all`'s order."""
 
 
 def solve(
