@@ -132,7 +132,8 @@ def residuals_batch(A: np.ndarray, b: np.ndarray, X: np.ndarray, unilateral, pai
     X = np.asarray(X, float)
     T = len(X)
     bad = ~np.all(np.isfinite(X), axis=1)
-    X = np.where(bad[:, None], 0.0, X)
+    if bad.any():
+        X = np.where(bad[:, None], 0.0, X)
     scale = np.maximum(np.linalg.norm(b, axis=-1), 1e-12)
     xu = X[:, np.asarray(unilateral, bool)]
     sign = np.maximum(0.0, -xu.min(axis=1, initial=np.inf)) if xu.shape[1] else np.zeros(T)

@@ -80,8 +80,30 @@ def times_P(P, z: np.ndarray) -> np.ndarray:
     return z @ P.T if P.ndim == 2 else (P @ z[:, :, None])[:, :, 0]
 
 
-def _inf(v: np.ndarray) -> np.ndarray:
-    return np.abs(v).max(axis=-1, initial=0.0)
+def inf_norm(v: np.ndarray) -> np.ndarray:
+    """``||v||_inf`` along the last axis (0 for none, NaN where ``v`` has a NaN), from
+    the largest and the least entry: two reductions that write no (T, n) temporary.
+    """
+    return np.maximum(v.max(axis=-1, initial=0.0), -v.min(axis=-1, initial=0.0))
+
+
+@functools.lru_cache(maxsize=64)
+def cone_spans(cones: tuple) -> tuple[tuple[slice, ...], tuple[slice, ...]]:
+    """The zero blocks and the nonnegative blocks of ``cones`` as row slices: a
+    violation read through them reads views, not gathered copies of the rows.
+    """
+    return tuple(tuple(rows for kind, _, rows in blocks(cones) if kind == wanted and
+                       rows.stop > rows.start) for wanted in ("zero", "nonneg"))
+
+
+def least(v: np.ndarray, spans) -> np.ndarray:
+    """``max(0, -min v)`` over the rows ``spans`` (slices) of each instant: how far the
+    entries that must be nonnegative go below zero.
+    """
+    worst = np.zeros(len(v))
+    for rows in spans:
+        worst = np.maximum(worst, -v[:, rows].min(axis=1))
+    return worst
 
 
 @functools.lru_cache(maxsize=64)
@@ -115,8 +137,8 @@ def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
     K* of the zero cone is free; the nonnegative and second-order cones are self-dual;
     the dual power cone is ``(u/a)^a (v/(1-a))^(1-a) >= |w|, u, v >= 0``.
     """
-    _, nonneg, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
-    worst = np.maximum(0.0, -y[:, nonneg]).max(axis=1, initial=0.0)
+    _, _, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
+    worst = least(y, cone_spans(tuple(cones))[1])
     if len(apex):
         spread = y[:, members] * mask
         spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))
@@ -146,6 +168,37 @@ def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[dict, P
     parts = Parts.of(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y), z,
                      y, dual_cone_violation(st.cones, y))
     return _combined(parts, st.q, y), parts
+
+
+def compiled_views(st: Stacked, z: np.ndarray, y: np.ndarray,
+                   check_dual_cone: bool) -> tuple[dict, dict] | None:
+    """Both views of the answers ``z`` with multipliers ``y`` to the stacked problems
+    ``st`` in one compiled pass (:mod:`._check_kernels`; the products ``Pz``, ``Az``,
+    ``A'y`` by NumPy): the package's ``{"dual", "gap", "objective"}`` (as
+    :func:`stacked_measures`) and the solver's ``{"primal", "dual", "gap"}`` (as
+    :func:`~.qp_measures.from_parts`, the dual cone checked with ``check_dual_cone``),
+    (T,) arrays; ``None`` where numba is not installed.
+    """
+    kernel = _views_kernel()
+    if kernel is None:
+        return None
+    c = np.ascontiguousarray
+    out = np.empty((len(z), 6))
+    kernel(c(z, float), c(y, float), c(st.q, float), c(st.b, float), c(times_P(st.P, z)),
+           c(st.Az(z)), c(st.Aty(y)), *cone_layout(tuple(st.cones)), bool(check_dual_cone),
+           out)
+    return ({"dual": out[:, 0], "gap": out[:, 1], "objective": out[:, 2]},
+            {"primal": out[:, 3], "dual": out[:, 4], "gap": out[:, 5]})
+
+
+@functools.cache
+def _views_kernel():
+    """The compiled kernel of :func:`compiled_views`, ``None`` without numba."""
+    try:
+        from ._check_kernels import views
+    except ImportError:  # numba is an optional extra: the NumPy path then
+        return None
+    return views
 
 
 def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
@@ -181,7 +234,9 @@ class Parts:
         measured, for a QP's multipliers).
         """
         bad = ~(np.isfinite(z).all(axis=1) & np.isfinite(y).all(axis=1))
-        return cls(Pz, Aty, dual_cone, _inf(Pz + q + Aty), np.einsum("ti,ti->t", z, Pz),
+        residual = Pz + q
+        residual += Aty
+        return cls(Pz, Aty, dual_cone, inf_norm(residual), np.einsum("ti,ti->t", z, Pz),
                    np.einsum("ti,ti->t", q, z), bty, bad)
 
     def take(self, rows) -> Parts:
@@ -192,8 +247,8 @@ class Parts:
 def _combined(parts: Parts, q, y) -> dict[str, np.ndarray]:
     """The package's measures (the module docstring's formulas) from their parts."""
     stationarity = parts.stationarity / np.maximum(
-        np.maximum(_inf(parts.Pz), _inf(q)), np.maximum(_inf(parts.Aty), TINY))
-    cone = parts.dual_cone / np.maximum(_inf(y), TINY)
+        np.maximum(inf_norm(parts.Pz), inf_norm(q)), np.maximum(inf_norm(parts.Aty), TINY))
+    cone = parts.dual_cone / np.maximum(inf_norm(y), TINY)
     primal = 0.5 * parts.quad + parts.linear
     dual_obj = -0.5 * parts.quad - parts.bty
     gap = np.abs(primal - dual_obj) / np.maximum(np.maximum(np.abs(primal), np.abs(dual_obj)),
@@ -226,7 +281,7 @@ def recover(P, q, A, b, cones, z) -> np.ndarray:
     z, b = np.asarray(z, float), np.asarray(b, float)
     A = np.asarray(A, float)
     s = b - A @ z
-    level = ACTIVE_RTOL * max(1.0, float(_inf(b)), float(_inf(A @ z)))
+    level = ACTIVE_RTOL * max(1.0, float(inf_norm(b)), float(inf_norm(A @ z)))
     columns, lower, owners = [], [], []  # owners: (rows, direction or None)
     for kind, alpha, rows in blocks(cones):
         block = s[rows]
@@ -246,7 +301,7 @@ def recover(P, q, A, b, cones, z) -> np.ndarray:
                       ** (1 - alpha) - abs(block[2]))
             if margin > level:
                 continue
-            normal = _normal(kind, alpha, block) if _inf(block) > level else None
+            normal = _normal(kind, alpha, block) if inf_norm(block) > level else None
             if normal is None:  # apex: every multiplier of the block, checked by K* later
                 for r in range(rows.start, rows.stop):
                     columns.append(A[r])

@@ -40,7 +40,15 @@ import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
 
 from .conversions import convert
-from .optimality import Parts, cone_layout, dual_cone_violation, times_P
+from .optimality import (
+    Parts,
+    cone_layout,
+    cone_spans,
+    dual_cone_violation,
+    inf_norm,
+    least,
+    times_P,
+)
 
 
 @dataclass(frozen=True)
@@ -79,9 +87,11 @@ def cone_violation(cones, s: np.ndarray) -> np.ndarray:
     zero rows, ``-s_i`` on nonnegative rows, ``||s_1:|| - s_0`` on a second-order block,
     ``|w| - u^a v^(1-a)`` (or a negative ``u, v``) on a power block.
     """
-    zero, nonneg, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
-    worst = np.abs(s[:, zero]).max(axis=1, initial=0.0)
-    worst = np.maximum(worst, (-s[:, nonneg]).max(axis=1, initial=0.0))
+    _, _, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
+    zeros, nonnegs = cone_spans(tuple(cones))
+    worst = least(s, nonnegs)
+    for rows in zeros:
+        worst = np.maximum(worst, inf_norm(s[:, rows]))
     if len(apex):
         spread = s[:, members] * mask
         spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))

@@ -18,6 +18,7 @@ kept in one place so that no caller judges a solve another way.
 
 from __future__ import annotations
 
+import collections
 import enum
 import functools
 import itertools
@@ -40,8 +41,8 @@ from cardan_forces.formulations.problems import (
 )
 
 from .optimality import (
-    Parts,
     Stacked,
+    compiled_views,
     conic_key,
     multipliers,
     stack_conic,
@@ -119,6 +120,8 @@ class _Measures(Mapping):
     instant).
     """
 
+    __slots__ = ()
+
     def __getitem__(self, key: str):
         value = getattr(self, key, None) if key in self._names() else None
         if value is None:
@@ -140,7 +143,7 @@ class _Measures(Mapping):
         return type(self)(**{name: float(value[k]) for name, value in self.items()})
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class Residuals(_Measures):
     """The package's residuals of an answer, relative to ``||b||`` (``ForceChecks``):
     ``equilibrium`` ``||Ax - b||``, ``sign`` (an end face pulling), ``complementarity``
@@ -169,7 +172,7 @@ class Residuals(_Measures):
         return np.max(np.array([getattr(self, k) for k in self.KEYS]), axis=0)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class Optimality(_Measures):
     """Optimality of an answer (:mod:`~.optimality`): ``primal`` (the worst residual),
     ``dual`` (stationarity and dual-cone violation), ``gap`` (duality gap, or objective
@@ -221,7 +224,7 @@ class Outcome:
     y: np.ndarray | None = None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Record:
     """One solver's answer to one problem, with residuals measured by the package.
 
@@ -504,9 +507,10 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     records = _records(problems, solver, outcomes, started, status, confirmed, answered,
                        found, distance, views, extra_setup_s)
     checks_s = (time.perf_counter() - began) / T if T else 0.0
-    for values, before in zip(map(vars, records),  # known once all are built
-                              elapsed_s if elapsed_s is not None else [0.0] * T):
-        values["checks_s"], values["wall_s"] = checks_s, before + checks_s
+    setters = _setters(Record)  # the times are known once all records are built
+    _fill(setters["checks_s"], records, itertools.repeat(checks_s, T))
+    _fill(setters["wall_s"], records, [before + checks_s for before in (
+        elapsed_s if elapsed_s is not None else [0.0] * T)])
     return records
 
 
@@ -624,39 +628,46 @@ def _defaults(cls) -> tuple:
 
 
 def _instances(cls, columns: dict, T: int, shared: dict | None = None) -> list:
-    """T instances of the frozen dataclass ``cls`` from ``columns`` (field -> T values)
-    and ``shared`` (field -> the one value of every instance; fields in neither take
-    their defaults). Each instance's ``__dict__`` is filled directly instead of through
-    the frozen ``__init__``'s one ``object.__setattr__`` per field (6 us a record),
-    column by column (one loop per field over plain dicts: a 21-field record costs
-    0.9 us, against 2 us filled row by row from zipped columns). The values must
-    already be of the fields' types (no ``__post_init__``); the instances compare,
-    print and refuse assignment as any other.
+    """T instances of the frozen, slotted dataclass ``cls`` from ``columns`` (field -> T
+    values) and ``shared`` (field -> the one value of every instance; fields in neither
+    take their defaults). Each field is filled for all instances at once by its slot's
+    setter, in C (``map`` drained by a ``deque``), instead of through the frozen
+    ``__init__``'s one ``object.__setattr__`` per field (6 us a record). Slots, not a
+    ``__dict__``: a record is 200 bytes instead of 1.3 kB, and a check pass over many
+    instants writes that much less memory. The values must already be of the fields'
+    types (no ``__post_init__``); the instances compare, print and refuse assignment
+    as any other.
     """
-    shared = shared or {}
-    shared = {**{name: make() for name, make in _defaults(cls)
-                 if name not in columns and name not in shared}, **shared}
+    shared, setters = shared or {}, _setters(cls)
     out = list(map(object.__new__, itertools.repeat(cls, T)))
-    dicts = list(map(vars, out))
-    for values in dicts:
-        values.update(shared)
+    for name, make in _defaults(cls):
+        if name not in columns:
+            value = shared[name] if name in shared else make()
+            _fill(setters[name], out, itertools.repeat(value, T))
     for name, column in columns.items():
-        for values, value in zip(dicts, column):
-            values[name] = value
+        _fill(setters[name], out, column)
     return out
+
+
+@functools.cache
+def _setters(cls) -> dict:
+    """The slot setter of each field of the slotted dataclass ``cls``."""
+    return {f.name: getattr(cls, f.name).__set__ for f in fields(cls)}
+
+
+def _fill(setter, instances: list, values) -> None:
+    """``setter(instance, value)`` for each pair, run in C."""
+    collections.deque(map(setter, instances, values), maxlen=0)
 
 
 def at_instants(records, t) -> list[Record]:
-    """Copies of ``records`` told the instants ``t`` (s) they answer (``Record.t``), each
-    made as :func:`_instances` makes them (``dataclasses.replace`` re-runs the frozen
+    """Copies of ``records`` told the instants ``t`` (s) they answer (``Record.t``), made
+    as :func:`_instances` makes them (``dataclasses.replace`` re-runs the frozen
     ``__init__``: 6 us a record).
     """
-    out, new = [], object.__new__
-    for record, instant in zip(records, t):
-        item = new(Record)
-        item.__dict__.update(record.__dict__, t=float(instant))
-        out.append(item)
-    return out
+    columns = {name: list(map(operator.attrgetter(name), records))
+               for name, _ in _defaults(Record) if name != "t"}
+    return _instances(Record, {**columns, "t": [float(v) for v in t]}, len(records))
 
 
 def _records(problems, solver, outcomes, started: _Started, status, confirmed, answered,
@@ -805,7 +816,7 @@ def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, receive
     chosen = [outcomes[k] for k in idx]
     z = np.array([o.z for o in chosen], float)
     y, given = multipliers(st, z, [o.y for o in chosen])
-    found, parts = stacked_measures(st, z, y)  # its parts serve both views
+    found, solver = _measured(st, z, y, given, isinstance(received[idx[0]], (LS, QP)))
     gap, kinds = found["gap"], np.full(len(idx), "duality", object)
     if not given.all():  # where the solver gave no multipliers, an objective gap
         best = np.array([np.nan if optimal_values[k] is None else optimal_values[k]
@@ -819,24 +830,36 @@ def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, receive
     views.dual[at], views.gap[at], views.kinds[at] = found["dual"], gap, kinds
     views.duals[at] = "solver" if given.all() else np.where(given, "solver", "recovered")
     _place(views.y, idx, list(y))
-    if given.any():
-        _solver_view(st, given, z, parts, isinstance(received[idx[0]], (LS, QP)),
-                     list(itertools.compress(idx, given.tolist())), views)
+    if solver is not None:
+        found = _instances(Optimality, {key: solver[key].tolist()
+                                        for key in ("primal", "dual", "gap")}, len(solver["gap"]))
+        _place(views.solver, list(itertools.compress(idx, given.tolist())), found)
 
 
-def _solver_view(st: Stacked, given, z, parts: Parts, as_qp: bool, idx: list,
-                 views: _Views) -> None:
-    """The solver's optimality (:func:`~.qp_measures.from_parts`) of the answers ``z``
-    whose multipliers the solver gave (``given``, at instants ``idx``), from the parts
-    of the package's view (``as_qp``: the backend received a QP or a least norm, whose
-    multipliers are not sign-checked).
+KERNEL_LEAST = 32
+"""Instants from which a check pass measures optimality through the compiled kernel
+(:func:`~.optimality.compiled_views`, where numba is installed). Below it the NumPy
+path's fixed cost is small, and a short pass (one ``solve``) never imports numba."""
+
+
+def _measured(st: Stacked, z, y, given, as_qp: bool) -> tuple[dict, dict | None]:
+    """The package's measures of the answers ``z`` with multipliers ``y``, and the
+    solver's (:func:`~.qp_measures.from_parts`) of those whose multipliers the solver
+    gave (``given``; ``None`` for none; ``as_qp``: the backend received a QP or a least
+    norm, whose multipliers are not sign-checked). Compiled from :data:`KERNEL_LEAST`
+    instants on, else NumPy's (one set of parts serving both views).
     """
+    both = (compiled_views(st, z, y, check_dual_cone=not as_qp)
+            if len(z) >= KERNEL_LEAST else None)
+    if both is not None:
+        found, solver = both
+        return found, ({k: v[given] for k, v in solver.items()} if given.any() else None)
+    found, parts = stacked_measures(st, z, y)
+    if not given.any():
+        return found, None
     if not given.all():
         st, z, parts = st.take(np.flatnonzero(given)), z[given], parts.take(given)
-    solver = from_parts(parts, st.b - st.Az(z), st.cones, check_dual_cone=not as_qp)
-    found = _instances(Optimality, {key: solver[key].tolist()
-                                    for key in ("primal", "dual", "gap")}, len(z))
-    _place(views.solver, idx, found)
+    return found, from_parts(parts, st.b - st.Az(z), st.cones, check_dual_cone=not as_qp)
 
 
 def _place(out: list, idx: list, values: list) -> None:
