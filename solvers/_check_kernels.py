@@ -6,11 +6,15 @@ docstrings, fused into one pass over the instants: each instant's parts (``||Pz 
 A'y||_inf``, ``z'Pz``, ``q'z``, ``b'y``, the dual cone's violation of ``y``, the primal
 cone's violation of ``s = b - Az``) are summed and compared in scalars, instead of the
 NumPy path's hundred-odd whole-array operations, each of which costs microseconds of
-dispatch and, right after a solver has run, of cold caches. The products ``P z``,
-``A z`` and ``A'y`` stay NumPy's (stacked matrix products, fast already).
+dispatch and, right after a solver has run, of cold caches. ``P z`` and the products
+of the rows shared by all instants stay NumPy's; a stacked (T, r, n) block of rows, the
+largest array the pass reads, gives ``A z`` and ``A'y`` in one sweep over its numbers
+(:func:`dense_products`), not one sweep each.
 
-Sums run in index order; NumPy's ``einsum`` may sum in another, so the two paths agree to
-a few units in the last place, not to the bit (the tests hold them to 1e-12 relative).
+Sums run in index order (a block's rows as :func:`dense_products` says); NumPy's
+``einsum`` and matrix products may sum in another, so the two paths agree to a few units
+in the last place, not to the bit (the tests hold them to 1e-9 relative, rounding of
+sums whose terms cancel included).
 A NaN propagates through every largest-of as through NumPy's ``maximum``. Compiling takes
 a few seconds, once: numba caches the machine code.
 """
@@ -121,3 +125,26 @@ def views(z, y, q, b, Pz, Az, Aty, zero, nonneg, apex, members, mask, pows, alph
         if bad:
             for c in (0, 1, 3, 4, 5):
                 out[t, c] = math.inf
+
+
+@njit(cache=True, fastmath={"reassoc", "contract"})
+def dense_products(block, z, y, row, Az, Aty):
+    """``Az[:, row:row + r] = B z`` and ``Aty += B'y[:, row:row + r]`` per instant for a
+    stacked block ``B`` (T, r, n) of rows, each number of ``B`` read once.
+
+    A row's sum may be reassociated (``fastmath`` reassoc and contract: the loop over a
+    row runs in vector instructions, 2.5x faster than in sequence, and beats NumPy's two
+    stacked products, 0.43 against 0.55 us an instant of ``compliance_hertz`` when
+    both are in cache); the order is the compiled loop's, the same for every instant
+    whatever the batch, as a matrix library's is.
+    """
+    r, n = block.shape[1], block.shape[2]
+    for t in range(block.shape[0]):
+        for i in range(r):
+            acc = 0.0
+            weight = y[t, row + i]
+            for j in range(n):
+                a = block[t, i, j]
+                acc += a * z[t, j]
+                Aty[t, j] += a * weight
+            Az[t, row + i] = acc

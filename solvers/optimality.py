@@ -179,26 +179,29 @@ def compiled_views(st: Stacked, z: np.ndarray, y: np.ndarray,
     :func:`~.qp_measures.from_parts`, the dual cone checked with ``check_dual_cone``),
     (T,) arrays; ``None`` where numba is not installed.
     """
-    kernel = _views_kernel()
-    if kernel is None:
+    kernels = _kernels()
+    if kernels is None:
         return None
+    views, both = kernels
     c = np.ascontiguousarray
-    out = np.empty((len(z), 6))
-    kernel(c(z, float), c(y, float), c(st.q, float), c(st.b, float), c(times_P(st.P, z)),
-           c(st.Az(z)), c(st.Aty(y)), *cone_layout(tuple(st.cones)), bool(check_dual_cone),
-           out)
+    z, y, out = c(z, float), c(y, float), np.empty((len(z), 6))
+    Az, Aty = st.products(z, y, lambda blk, *rest: both(c(blk, float), *rest))
+    views(z, y, c(st.q, float), c(st.b, float), c(times_P(st.P, z)), Az, Aty,
+          *cone_layout(tuple(st.cones)), bool(check_dual_cone), out)
     return ({"dual": out[:, 0], "gap": out[:, 1], "objective": out[:, 2]},
             {"primal": out[:, 3], "dual": out[:, 4], "gap": out[:, 5]})
 
 
 @functools.cache
-def _views_kernel():
-    """The compiled kernel of :func:`compiled_views`, ``None`` without numba."""
+def _kernels():
+    """The compiled kernels of :func:`compiled_views` (the views, a stacked block's two
+    products), ``None`` without numba.
+    """
     try:
-        from ._check_kernels import views
+        from ._check_kernels import dense_products, views
     except ImportError:  # numba is an optional extra: the NumPy path then
         return None
-    return views
+    return views, dense_products
 
 
 def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
@@ -473,6 +476,21 @@ def _times(blk, z: np.ndarray) -> np.ndarray:
     return blk[0] * z[:, blk[1]] if isinstance(blk, tuple) else times_P(blk, z)
 
 
+def _height(blk) -> int:
+    """A block's number of rows (shared, a dense stack, a pattern or a bound block)."""
+    return len(blk[1]) if isinstance(blk, tuple) else blk.shape[-2]
+
+
+def _add_transposed(blk, part: np.ndarray, out: np.ndarray) -> None:
+    """``out += B'part`` per instant for a block ``B`` of rows and its rows of ``y``."""
+    if isinstance(blk, Pattern):
+        out += blk.transposed_times(part)
+    elif isinstance(blk, np.ndarray):  # stacked products: 2x einsum's
+        out += part @ blk if blk.ndim == 2 else (part[:, None, :] @ blk)[:, 0]
+    else:
+        out[:, blk[1]] += blk[0] * part  # its columns are distinct
+
+
 def _at(blk, k):
     """Instant(s) ``k`` of a block of rows (shared, a dense stack or a pattern): a matrix
     for one, a block for many.
@@ -507,16 +525,27 @@ class Stacked:
         """``A'y`` per instant (T, n)."""
         out, row = np.zeros_like(self.q), 0
         for blk in self.blocks:
-            rows = len(blk[1]) if isinstance(blk, tuple) else blk.shape[-2]
-            part = y[:, row:row + rows]
-            if isinstance(blk, Pattern):
-                out += blk.transposed_times(part)
-            elif isinstance(blk, np.ndarray):  # stacked products: 2x einsum's
-                out += part @ blk if blk.ndim == 2 else (part[:, None, :] @ blk)[:, 0]
-            else:
-                out[:, blk[1]] += blk[0] * part  # its columns are distinct
+            rows = _height(blk)
+            _add_transposed(blk, y[:, row:row + rows], out)
             row += rows
         return out
+
+    def products(self, z: np.ndarray, y: np.ndarray, both=None) -> tuple:
+        """``(A z, A'y)`` per instant ((T, m), (T, n)); ``both(block, z, y, row, Az,
+        Aty)``, where given, takes a stacked (T, r, n) block's two products in one sweep
+        over its numbers (:func:`._check_kernels.dense_products`: the block is the
+        largest array a check pass reads, and read once it costs half).
+        """
+        Az, Aty, row = np.empty((len(z), self.b.shape[1])), np.zeros_like(self.q), 0
+        for blk in self.blocks:
+            rows = _height(blk)
+            if both is not None and isinstance(blk, np.ndarray) and blk.ndim == 3:
+                both(blk, z, y, row, Az, Aty)
+            else:
+                Az[:, row:row + rows] = _times(blk, z)
+                _add_transposed(blk, y[:, row:row + rows], Aty)
+            row += rows
+        return Az, Aty
 
     def A(self, k: int) -> np.ndarray:
         """Instant ``k``'s ``A`` (m, n), dense."""
