@@ -11,7 +11,8 @@ from .bench_metrics import PROFILES, SHIFT_S, TAUS, TIME_LIMIT_S, best_runs
 from .environment import json_number, machine, number_text, versions
 
 THROUGHPUT_COLUMNS = ("formulation", "solver", "mode", "instant", "t_s", "status", "time_s",
-                      "build_s", "convert_s", "solve_s", "checks_s", "iterations", "primal",
+                      "build_s", "convert_s", "solve_s", "checks_s", "checks_first_s",
+                      "iterations", "primal",
                       "dual", "gap", "distance", "equilibrium", "sign", "complementarity",
                       "cone")
 ACCURACY_COLUMNS = ("formulation", "solver", "tol", "instant", "t_s", "status", "time_s",

@@ -17,6 +17,7 @@ this module, so that each piece of that knowledge has one home:
 
 from __future__ import annotations
 
+import dataclasses
 import gc
 import math
 import time
@@ -93,6 +94,10 @@ class History:
     instants: tuple[int, ...] = ()
     wall_s: tuple[float, ...] = ()
     records: tuple[Record, ...] = field(default=(), repr=False)
+    checks_s: float | None = None
+    """The fastest of the check passes over the deferred answers, per instant (s), where
+    :func:`solve_over_time` ran more than one (``check_passes``); ``None`` otherwise.
+    The records' own ``checks_s`` is the first pass, the one the run's wall time holds."""
 
     @property
     def solved(self) -> int:
@@ -135,7 +140,7 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
                     restart: bool = False, budget_s: float = math.inf,
                     least: int = 1, references: dict | None = None,
                     progress: Callable[[str], None] | None = None,
-                    stacks: Stacks | None = None) -> History:
+                    stacks: Stacks | None = None, check_passes: int = 1) -> History:
     """``formulation`` solved with ``solver`` (default :func:`default_backend`) at
     ``instants`` of ``op`` (default all), in order.
 
@@ -146,8 +151,12 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     instants (at least one) are solved; ``references``: ``{i: (forces, optimal
     value)}`` for the records' distance and objective gap; ``stacks``:
     ``problem(i)``'s check data stacked beforehand at every instant ``i`` of ``op``
-    (:func:`~.record.stack_all`), so the checks do not stack each instant's matrices.
-    An exception becomes a ``failed`` record, never a crash.
+    (:func:`~.record.stack_all`), so the checks do not stack each instant's matrices;
+    ``check_passes``: times the deferred answers are checked (the records are the first
+    pass's; the fastest pass's time per instant is ``History.checks_s``, a benchmark's
+    measure of the checks' own cost: the pass is the same work each time, and other
+    processes only ever add time). An exception becomes a ``failed`` record, never a
+    crash.
     """
     picks = list(range(len(op.t)) if instants is None else instants)
     make = problem or (lambda i: FORMULATIONS[formulation](op, i))
@@ -168,14 +177,18 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
         previous = np.asarray(record.z, float) if answered else None
         if progress and (k + 1) % 200 == 0:
             progress(f"{formulation} ({solver}) {k + 1}/{len(picks)} instants")
-    records, walls = _checked(records, walls, stacks, picks)
-    return history_of(op, formulation, solver, picks[: len(records)], records, walls)
+    records, walls, fastest = _checked(records, walls, stacks, picks, check_passes)
+    history = history_of(op, formulation, solver, picks[: len(records)], records, walls)
+    return dataclasses.replace(history, checks_s=fastest) if check_passes > 1 else history
 
 
-def _checked(records: list, walls: list, stacks, picks) -> tuple[list[Record], list[float]]:
+def _checked(records: list, walls: list, stacks, picks,
+             passes: int = 1) -> tuple[list[Record], list[float], float | None]:
     """The deferred solves among ``records`` checked at once (:func:`check`), each
     instant's wall time with its share of the checks (``stacks``: the problems' data
-    stacked beforehand, one row per instant, taken at the checked ones' ``picks``).
+    stacked beforehand, one row per instant, taken at the checked ones' ``picks``), and
+    the fastest of ``passes`` checks of them per instant (``None`` where none was
+    deferred); the records and the wall times are the first pass's.
 
     The solves' young garbage is collected first (``gc.collect(1)``) and that time is
     the solves', spread over the instants: some backends leave hundreds of tracked
@@ -184,15 +197,19 @@ def _checked(records: list, walls: list, stacks, picks) -> tuple[list[Record], l
     """
     deferred = [k for k, r in enumerate(records) if isinstance(r, Pending)]
     if not deferred:
-        return records, walls
+        return records, walls, None
     began = time.perf_counter()
     gc.collect(1)
     garbage_s = (time.perf_counter() - began) / len(walls)
     rows = None if stacks is None else stacks.take([picks[k] for k in deferred])
-    found = dict(zip(deferred, check([records[k] for k in deferred], rows)))
+    pending = [records[k] for k in deferred]
+    checked = check(pending, rows)
+    fastest = min([checked[0].checks_s] + [check(pending, rows)[0].checks_s
+                                           for _ in range(passes - 1)])
+    found = dict(zip(deferred, checked))
     return ([found.get(k, r) for k, r in enumerate(records)],
             [w + garbage_s + (found[k].checks_s if k in found else 0.0)
-             for k, w in enumerate(walls)])
+             for k, w in enumerate(walls)], fastest)
 
 
 def _solve_one(op: Operator, formulation: str, make, i: int, solver: str, tol, initvals,

@@ -38,6 +38,18 @@ def test_a_problem_that_cannot_be_built_is_a_failed_instant(op):
     assert np.isinf(h.jumps()[1:]).all() and h.jumps()[0] == 0.0
 
 
+def test_repeated_check_passes_keep_the_first_pass_records(op):
+    """A benchmark's repeated checks change no record: the same statuses, forces and
+    measures as one pass; the fastest pass's time is the history's, not a record's."""
+    once = study.solve_over_time(op, "compliance_hertz")
+    thrice = study.solve_over_time(op, "compliance_hertz", check_passes=3)
+    assert once.checks_s is None and thrice.checks_s is not None and thrice.checks_s > 0
+    assert thrice.statuses == once.statuses and thrice.solved == 5
+    assert np.allclose(thrice.forces, once.forces, rtol=1e-9, atol=0.0)
+    for a, b in zip(once.records, thrice.records):
+        assert dict(a.optimality) == pytest.approx(dict(b.optimality), rel=1e-6, abs=1e-12)
+
+
 def test_a_budget_stops_a_run_only_once_it_has_its_least_instants(op):
     """A budget every solve exceeds: one instant by default, ``least`` when asked."""
     assert len(study.solve_over_time(op, "positive", budget_s=1e-12).records) == 1
