@@ -61,7 +61,7 @@ SPLIT = ("build_s", "convert_s", "solve_s", "checks_s")
 CHECK_PASSES = 3
 """Check passes over a per-instant throughput run's answers: a row's ``checks_s`` is the
 fastest (timeit's rule, as a batched run's time: the pass is the same work each time,
-and other processes only ever add time; one pass measured once read 13 us one run and
+and other processes only ever add time; one pass measured once read 14 us one run and
 27 the next for the same row), ``checks_first_s`` the first, cold after the solver's
 run, which the row's end-to-end ``time_s`` holds (its excess over the fastest is in the
 report's "other")."""
