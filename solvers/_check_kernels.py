@@ -39,46 +39,41 @@ def _larger(a, b):
     return a if (a > b or a != a) else b
 
 
-@njit(cache=True)
-def _dual_cone(y, nonneg, apex, members, mask, pows, alphas):
-    """Violation of ``y in K*`` of one instant (:func:`.optimality.dual_cone_violation`)."""
-    worst = 0.0
-    for i in nonneg:
-        worst = _larger(worst, -y[i])
-    for k in range(len(apex)):
-        spread = 0.0
-        for j in range(members.shape[1]):
-            v = y[members[k, j]] * mask[k, j]
-            spread += v * v
-        worst = _larger(worst, math.sqrt(spread) - y[apex[k]])
-    for k in range(len(alphas)):
-        a = alphas[k]
-        u, v, w = y[pows[k, 0]], y[pows[k, 1]], y[pows[k, 2]]
-        mean = (max(u, 0.0) / a) ** a * (max(v, 0.0) / (1.0 - a)) ** (1.0 - a)
-        negative = _larger(0.0, -min(u, v))
-        worst = _larger(worst, _larger(abs(w) - mean, negative))
-    return _larger(worst, 0.0)
+@njit(cache=True, inline="always")
+def _outside(v, k, apex, members, mask):
+    """``||v_members|| - v_apex`` of second-order block ``k`` (a self-dual cone: the
+    primal and the dual violation alike).
+    """
+    spread = 0.0
+    for j in range(members.shape[1]):
+        w = v[members[k, j]] * mask[k, j]
+        spread += w * w
+    return math.sqrt(spread) - v[apex[k]]
 
 
 @njit(cache=True)
-def _primal_cone(s, zero, nonneg, apex, members, mask, pows, alphas):
-    """Violation of ``s in K`` of one instant (:func:`.qp_measures.cone_violation`)."""
+def _violation(v, zero, nonneg, apex, members, mask, pows, alphas, dual):
+    """How far one instant's ``v`` is outside ``K`` (``dual`` False: the slack's, as
+    :func:`.qp_measures.cone_violation`) or ``K*`` (``dual`` True: the multipliers', as
+    :func:`.optimality.dual_cone_violation`; the zero cone's dual is free, the
+    nonnegative and second-order cones are self-dual, the power cone's dual scales
+    ``u, v`` by ``alpha, 1 - alpha``).
+    """
     worst = 0.0
-    for i in zero:
-        worst = _larger(worst, abs(s[i]))
+    if not dual:
+        for i in zero:
+            worst = _larger(worst, abs(v[i]))
     for i in nonneg:
-        worst = _larger(worst, -s[i])
+        worst = _larger(worst, -v[i])
     for k in range(len(apex)):
-        spread = 0.0
-        for j in range(members.shape[1]):
-            v = s[members[k, j]] * mask[k, j]
-            spread += v * v
-        worst = _larger(worst, math.sqrt(spread) - s[apex[k]])
+        worst = _larger(worst, _outside(v, k, apex, members, mask))
     for k in range(len(alphas)):
         a = alphas[k]
-        u, v, w = s[pows[k, 0]], s[pows[k, 1]], s[pows[k, 2]]
-        mean = max(u, 0.0) ** a * max(v, 0.0) ** (1.0 - a)
-        worst = _larger(worst, _larger(abs(w) - mean, -min(u, v)))
+        x, y, w = v[pows[k, 0]], v[pows[k, 1]], v[pows[k, 2]]
+        x, y = (max(x, 0.0), max(y, 0.0)) if not dual else (max(x, 0.0) / a,
+                                                              max(y, 0.0) / (1.0 - a))
+        low = -min(v[pows[k, 0]], v[pows[k, 1]])  # a negative u or v is outside both
+        worst = _larger(worst, _larger(abs(w) - x ** a * y ** (1.0 - a), low))
     return _larger(worst, 0.0)
 
 
@@ -111,7 +106,7 @@ def views(z, y, q, b, Pz, Az, Aty, zero, nonneg, apex, members, mask, pows, alph
             yn = _larger(yn, abs(y[t, j]))
             bty += b[t, j] * y[t, j]
             s[j] = b[t, j] - Az[t, j]
-        dual_cone = _dual_cone(y[t], nonneg, apex, members, mask, pows, alphas)
+        dual_cone = _violation(y[t], zero, nonneg, apex, members, mask, pows, alphas, True)
         primal = 0.5 * quad + linear
         dual_objective = -0.5 * quad - bty
         out[t, 0] = _larger(stationarity / _larger(_larger(pz, qn), _larger(aty, TINY)),
@@ -119,7 +114,7 @@ def views(z, y, q, b, Pz, Az, Aty, zero, nonneg, apex, members, mask, pows, alph
         out[t, 1] = abs(primal - dual_objective) / _larger(
             _larger(abs(primal), abs(dual_objective)), TINY)
         out[t, 2] = primal
-        out[t, 3] = _primal_cone(s, zero, nonneg, apex, members, mask, pows, alphas)
+        out[t, 3] = _violation(s, zero, nonneg, apex, members, mask, pows, alphas, False)
         out[t, 4] = _larger(stationarity, dual_cone) if check_dual_cone else stationarity
         out[t, 5] = abs(quad + linear + bty)
         if bad:
