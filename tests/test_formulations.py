@@ -299,6 +299,26 @@ def test_scaled_map_of_many_instants_equals_its_calls():
         Scaled.stacked([Scaled(1.0), Scaled(1.0, 3)], Z)
 
 
+def test_null_space_map_of_many_instants_equals_its_calls(paper):
+    """The LCP's ``x = x0 + N N_u' lam``: the stacked map gives each instant's call to
+    rounding, its forces hold equilibrium, and it refuses maps of two structures."""
+    from cardan_forces.formulations.convex import NullSpaceMap
+
+    op = build_operator(simulate(paper, [0.1, 0.3, 0.5]))
+    problems = [FORMULATIONS["lcp"](op, i) for i in range(3)]
+    maps = [p.to_forces for p in problems]
+    Z = np.random.default_rng(2).uniform(0.0, 50.0, (3, len(problems[0].q)))
+    X = NullSpaceMap.stacked(maps, Z)
+    for k, (m, problem) in enumerate(zip(maps, problems)):
+        scale = np.abs(X[k]).max()
+        assert np.allclose(X[k], m(Z[k]), rtol=0.0, atol=1e-14 * scale)
+        c = problem.checks
+        assert np.linalg.norm(c.A @ X[k] - c.b) <= 1e-9 * np.linalg.norm(c.b)
+    other = NullSpaceMap(maps[0].x0, maps[0].N, maps[0].unilateral[1:])
+    with pytest.raises(ValueError, match="structures"):
+        NullSpaceMap.stacked([maps[0], other], Z[:2, 1:])
+
+
 def test_hertz_compliance_full_form_holds_equilibrium_on_a_straight_propshaft():
     """A straight line leaves the end faces idle, at their cones' apex; Clarabel on the
     full conic form must still reach equilibrium there (a form that put the signed face
