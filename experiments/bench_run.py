@@ -195,8 +195,8 @@ def run_instants(prepared: Prepared, solver: str, instants, *, mode="cold", tol=
                  "solve_s": record.solve_s, "checks_s": record.checks_s}
         row = _row(prepared.name, solver, mode, i, t, record.status, wall, split,
                    record.residuals, record.optimality, record.iterations, record.message)
-        if history.checks_s is not None:  # the run's pass, as every row of it shares
-            row["checks_s"] = history.checks_s
+        if history.checks_s is not None:  # the run's pass, every row's share of it
+            row["checks_s"] = history.checks_s  # (a failed build's row: no solve to check)
         rows.append(row)
     return rows
 

@@ -6,10 +6,10 @@ docstrings, fused into one pass over the instants: each instant's parts (``||Pz 
 A'y||_inf``, ``z'Pz``, ``q'z``, ``b'y``, the dual cone's violation of ``y``, the primal
 cone's violation of ``s = b - Az``) are summed and compared in scalars, instead of the
 NumPy path's hundred-odd whole-array operations, each of which costs microseconds of
-dispatch and, right after a solver has run, of cold caches. ``P z`` and the products
-of the rows shared by all instants stay NumPy's; a stacked (T, r, n) block of rows, the
-largest array the pass reads, gives ``A z`` and ``A'y`` in one sweep over its numbers
-(:func:`dense_products`), not one sweep each.
+dispatch and, right after a solver has run, of cold caches. A stacked (T, r, n) block
+of rows, the largest array the pass reads, gives ``A z`` and ``A'y`` in one sweep over
+its numbers (:func:`dense_products`), not one sweep each; ``P z`` and the products of
+the other blocks (rows shared by all instants, sparse patterns, bounds) stay NumPy's.
 
 Sums run in index order (a block's rows as :func:`dense_products` says); NumPy's
 ``einsum`` and matrix products may sum in another, so the two paths agree to a few units
@@ -26,17 +26,17 @@ import math
 import numpy as np
 from numba import njit
 
-TINY = 1e-300
-"""Floor of a denominator, as :data:`.optimality.TINY`."""
-
-VIEWS = ("dual", "gap", "objective", "solver_primal", "solver_dual", "solver_gap")
-"""The columns of :func:`views`' output, in order."""
-
 
 @njit(cache=True, inline="always")
 def _larger(a, b):
     """``max(a, b)``, NaN if either is NaN (NumPy's ``maximum``)."""
     return a if (a > b or a != a) else b
+
+
+@njit(cache=True, inline="always")
+def _smaller(a, b):
+    """``min(a, b)``, NaN if either is NaN (NumPy's ``minimum``)."""
+    return a if (a < b or a != a) else b
 
 
 @njit(cache=True, inline="always")
@@ -69,21 +69,23 @@ def _violation(v, zero, nonneg, apex, members, mask, pows, alphas, dual):
         worst = _larger(worst, _outside(v, k, apex, members, mask))
     for k in range(len(alphas)):
         a = alphas[k]
-        x, y, w = v[pows[k, 0]], v[pows[k, 1]], v[pows[k, 2]]
-        x, y = (max(x, 0.0), max(y, 0.0)) if not dual else (max(x, 0.0) / a,
-                                                              max(y, 0.0) / (1.0 - a))
-        low = -min(v[pows[k, 0]], v[pows[k, 1]])  # a negative u or v is outside both
-        worst = _larger(worst, _larger(abs(w) - x ** a * y ** (1.0 - a), low))
+        u, w = _larger(v[pows[k, 0]], 0.0), _larger(v[pows[k, 1]], 0.0)
+        if dual:
+            u, w = u / a, w / (1.0 - a)
+        low = -_smaller(v[pows[k, 0]], v[pows[k, 1]])  # a negative u or v is outside both
+        worst = _larger(worst, _larger(abs(v[pows[k, 2]]) - u ** a * w ** (1.0 - a), low))
     return _larger(worst, 0.0)
 
 
 @njit(cache=True)
 def views(z, y, q, b, Pz, Az, Aty, zero, nonneg, apex, members, mask, pows, alphas,
-          check_dual_cone, out):
-    """Both views of T answers into ``out`` (T, 6), columns :data:`VIEWS`.
+          check_dual_cone, tiny, out):
+    """Both views of T answers into ``out`` (T, 6): the package's dual, gap and
+    objective, the solver's primal, dual and gap.
 
     ``z``, ``q``, ``Pz``, ``Aty`` (T, n); ``y``, ``b``, ``Az`` (T, m); the cone layout
-    of :func:`.optimality.cone_layout`; ``check_dual_cone``: the solver's dual residual
+    of :func:`.optimality.cone_layout`; ``tiny``: the floor of a denominator
+    (:data:`.optimality.TINY`); ``check_dual_cone``: the solver's dual residual
     counts the dual cone's violation (a conic problem; not a QP's, as qpbenchmark).
     An instant whose ``z`` or ``y`` is not finite gets ``inf`` in every measure but the
     objective.
@@ -109,10 +111,10 @@ def views(z, y, q, b, Pz, Az, Aty, zero, nonneg, apex, members, mask, pows, alph
         dual_cone = _violation(y[t], zero, nonneg, apex, members, mask, pows, alphas, True)
         primal = 0.5 * quad + linear
         dual_objective = -0.5 * quad - bty
-        out[t, 0] = _larger(stationarity / _larger(_larger(pz, qn), _larger(aty, TINY)),
-                            dual_cone / _larger(yn, TINY))
+        out[t, 0] = _larger(stationarity / _larger(_larger(pz, qn), _larger(aty, tiny)),
+                            dual_cone / _larger(yn, tiny))
         out[t, 1] = abs(primal - dual_objective) / _larger(
-            _larger(abs(primal), abs(dual_objective)), TINY)
+            _larger(abs(primal), abs(dual_objective)), tiny)
         out[t, 2] = primal
         out[t, 3] = _violation(s, zero, nonneg, apex, members, mask, pows, alphas, False)
         out[t, 4] = _larger(stationarity, dual_cone) if check_dual_cone else stationarity

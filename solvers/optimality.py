@@ -96,7 +96,7 @@ def cone_spans(cones: tuple) -> tuple[tuple[slice, ...], tuple[slice, ...]]:
                        rows.stop > rows.start) for wanted in ("zero", "nonneg"))
 
 
-def least(v: np.ndarray, spans) -> np.ndarray:
+def below_zero(v: np.ndarray, spans) -> np.ndarray:
     """``max(0, -min v)`` over the rows ``spans`` (slices) of each instant: how far the
     entries that must be nonnegative go below zero.
     """
@@ -138,7 +138,7 @@ def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
     the dual power cone is ``(u/a)^a (v/(1-a))^(1-a) >= |w|, u, v >= 0``.
     """
     _, _, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
-    worst = least(y, cone_spans(tuple(cones))[1])
+    worst = below_zero(y, cone_spans(tuple(cones))[1])
     if len(apex):
         spread = y[:, members] * mask
         spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))
@@ -173,8 +173,9 @@ def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[dict, P
 def compiled_views(st: Stacked, z: np.ndarray, y: np.ndarray,
                    check_dual_cone: bool) -> tuple[dict, dict] | None:
     """Both views of the answers ``z`` with multipliers ``y`` to the stacked problems
-    ``st`` in one compiled pass (:mod:`._check_kernels`; the products ``Pz``, ``Az``,
-    ``A'y`` by NumPy): the package's ``{"dual", "gap", "objective"}`` (as
+    ``st`` in one compiled pass (:mod:`._check_kernels`; ``A z`` and ``A'y`` of a
+    stacked block by its one sweep, :meth:`Stacked.products`, ``P z`` and the other
+    blocks' products by NumPy): the package's ``{"dual", "gap", "objective"}`` (as
     :func:`stacked_measures`) and the solver's ``{"primal", "dual", "gap"}`` (as
     :func:`~.qp_measures.from_parts`, the dual cone checked with ``check_dual_cone``),
     (T,) arrays; ``None`` where numba is not installed.
@@ -187,7 +188,7 @@ def compiled_views(st: Stacked, z: np.ndarray, y: np.ndarray,
     z, y, out = c(z, float), c(y, float), np.empty((len(z), 6))
     Az, Aty = st.products(z, y, lambda blk, *rest: both(c(blk, float), *rest))
     views(z, y, c(st.q, float), c(st.b, float), c(times_P(st.P, z)), Az, Aty,
-          *cone_layout(tuple(st.cones)), bool(check_dual_cone), out)
+          *cone_layout(tuple(st.cones)), bool(check_dual_cone), TINY, out)
     return ({"dual": out[:, 0], "gap": out[:, 1], "objective": out[:, 2]},
             {"primal": out[:, 3], "dual": out[:, 4], "gap": out[:, 5]})
 
@@ -454,7 +455,9 @@ def _block(stack: np.ndarray) -> np.ndarray | Pattern:
     faster dense), else a :class:`Pattern` (``compliance_hertz``: 15%, 4x faster).
     """
     nonzero = int(np.any(stack != 0, axis=0).sum())
-    return stack if 4 * nonzero >= stack.shape[1] * stack.shape[2] else Pattern.of(stack)
+    if 4 * nonzero >= stack.shape[1] * stack.shape[2]:
+        return np.ascontiguousarray(stack)  # a run of rows is a strided view: copied once
+    return Pattern.of(stack)
 
 
 def _blocks(stack: np.ndarray) -> tuple:
@@ -530,16 +533,17 @@ class Stacked:
             row += rows
         return out
 
-    def products(self, z: np.ndarray, y: np.ndarray, both=None) -> tuple:
-        """``(A z, A'y)`` per instant ((T, m), (T, n)); ``both(block, z, y, row, Az,
-        Aty)``, where given, takes a stacked (T, r, n) block's two products in one sweep
-        over its numbers (:func:`._check_kernels.dense_products`: the block is the
-        largest array a check pass reads, and read once it costs half).
+    def products(self, z: np.ndarray, y: np.ndarray, both) -> tuple:
+        """``(A z, A'y)`` per instant ((T, m), (T, n)), a stacked (T, r, n) block's two
+        by ``both(block, z, y, row, Az, Aty)`` in one sweep over its numbers
+        (:func:`._check_kernels.dense_products`: the block is the largest array a check
+        pass reads, and read once it costs half), the other blocks' as :meth:`Az` and
+        :meth:`Aty` take them.
         """
         Az, Aty, row = np.empty((len(z), self.b.shape[1])), np.zeros_like(self.q), 0
         for blk in self.blocks:
             rows = _height(blk)
-            if both is not None and isinstance(blk, np.ndarray) and blk.ndim == 3:
+            if isinstance(blk, np.ndarray) and blk.ndim == 3:
                 both(blk, z, y, row, Az, Aty)
             else:
                 Az[:, row:row + rows] = _times(blk, z)

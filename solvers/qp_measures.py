@@ -42,11 +42,11 @@ from cardan_forces.formulations.problems import LS, QP, Conic
 from .conversions import convert
 from .optimality import (
     Parts,
+    below_zero,
     cone_layout,
     cone_spans,
     dual_cone_violation,
     inf_norm,
-    least,
     times_P,
 )
 
@@ -89,7 +89,7 @@ def cone_violation(cones, s: np.ndarray) -> np.ndarray:
     """
     _, _, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
     zeros, nonnegs = cone_spans(tuple(cones))
-    worst = least(s, nonnegs)
+    worst = below_zero(s, nonnegs)
     for rows in zeros:
         worst = np.maximum(worst, inf_norm(s[:, rows]))
     if len(apex):

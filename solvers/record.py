@@ -543,6 +543,10 @@ class _Started:
 
 _STATUS, _MESSAGE = operator.attrgetter("status"), operator.attrgetter("message")
 _TO_FORCES, _Z = operator.attrgetter("to_forces"), operator.attrgetter("z")
+_FORMULATION, _NAMES = operator.attrgetter("formulation"), operator.attrgetter("checks.names")
+_ITERATIONS, _OBJECTIVE = operator.attrgetter("iterations"), operator.attrgetter("objective")
+_SETUP_S, _SOLVE_S = operator.attrgetter("setup_s"), operator.attrgetter("solve_s")
+"""What the check pass reads of the outcomes and the problems, each in one C call."""
 _STATUS_OF = {**{s.value: s for s in Status}, **{s: s for s in Status}}
 """A status as an adapter gives it (the value or the member) -> :class:`Status`, one
 dict lookup (an enum call costs as much as the rest of an instant's start)."""
@@ -634,9 +638,10 @@ def _instances(cls, columns: dict, T: int, shared: dict | None = None) -> list:
     setter, in C (``map`` drained by a ``deque``), instead of through the frozen
     ``__init__``'s one ``object.__setattr__`` per field (6 us a record). Slots, not a
     ``__dict__``: a record is 200 bytes instead of 1.3 kB, and a check pass over many
-    instants writes that much less memory. The values must already be of the fields'
-    types (no ``__post_init__``); the instances compare, print and refuse assignment
-    as any other.
+    instants writes that much less memory (so the types take no weak reference, have no
+    ``vars()``, and assigning a name that is no field raises ``TypeError``). The values
+    must already be of the fields' types (no ``__post_init__``); the instances compare,
+    print, pickle and refuse assignment to a field as any other.
     """
     shared, setters = shared or {}, _setters(cls)
     out = list(map(object.__new__, itertools.repeat(cls, T)))
@@ -665,6 +670,8 @@ def at_instants(records, t) -> list[Record]:
     as :func:`_instances` makes them (``dataclasses.replace`` re-runs the frozen
     ``__init__``: 6 us a record).
     """
+    if len(records) != len(t):
+        raise ValueError(f"{len(records)} records, {len(t)} instants")
     columns = {name: list(map(operator.attrgetter(name), records))
                for name, _ in _defaults(Record) if name != "t"}
     return _instances(Record, {**columns, "t": [float(v) for v in t]}, len(records))
@@ -700,11 +707,6 @@ def _records(problems, solver, outcomes, started: _Started, status, confirmed, a
         "gap_kind": views.kinds.tolist(), "y": views.y,
         "solver_status": started.solver_status, "solver_optimality": views.solver}, T,
         {"solver": solver})
-
-
-_FORMULATION, _NAMES = operator.attrgetter("formulation"), operator.attrgetter("checks.names")
-_ITERATIONS, _OBJECTIVE = operator.attrgetter("iterations"), operator.attrgetter("objective")
-_SETUP_S, _SOLVE_S = operator.attrgetter("setup_s"), operator.attrgetter("solve_s")
 
 
 def _floats(values: np.ndarray) -> list:
@@ -831,15 +833,19 @@ def _conic(problems, outcomes, idx: list, views: _Views, optimal_values, receive
     views.duals[at] = "solver" if given.all() else np.where(given, "solver", "recovered")
     _place(views.y, idx, list(y))
     if solver is not None:
-        found = _instances(Optimality, {key: solver[key].tolist()
-                                        for key in ("primal", "dual", "gap")}, len(solver["gap"]))
-        _place(views.solver, list(itertools.compress(idx, given.tolist())), found)
+        solver_views = _instances(Optimality, {key: solver[key].tolist() for key in
+                                               ("primal", "dual", "gap")}, len(solver["gap"]))
+        _place(views.solver, list(itertools.compress(idx, given.tolist())), solver_views)
 
 
 KERNEL_LEAST = 32
 """Instants from which a check pass measures optimality through the compiled kernel
 (:func:`~.optimality.compiled_views`, where numba is installed). Below it the NumPy
-path's fixed cost is small, and a short pass (one ``solve``) never imports numba."""
+path's fixed cost is small, and a short pass (one ``solve``) never loads the kernels
+(a process's first long pass does, from numba's cache: about 10 ms, counted in its
+``checks_s``; compiling them, once after installing, takes a few seconds). The two paths
+agree to rounding, not to the bit: a measure within rounding of :data:`ACCEPT` could be
+judged apart by a short and a long pass."""
 
 
 def _measured(st: Stacked, z, y, given, as_qp: bool) -> tuple[dict, dict | None]:

@@ -299,6 +299,11 @@ class Pending:
         return self.outcome.z
 
 
+_PENDING = operator.attrgetter("problem", "outcome", "reference", "optimal_value",
+                               "convert_s", "received", "elapsed_s")
+"""What :func:`check` reads of a :class:`Pending`, in :func:`finalize_all`'s order."""
+
+
 def check(pending: list[Pending], stacks: Stacks | None = None) -> list[Record]:
     """The package-judged records of deferred solves, as :func:`solve` returns them
     (``stacks``: their problems' data stacked beforehand, :func:`.record.stack_all`).
@@ -311,10 +316,6 @@ def check(pending: list[Pending], stacks: Stacks | None = None) -> list[Record]:
                         optimal_values=optimal_values, extra_setup_s=convert_s,
                         received=received, elapsed_s=elapsed_s, stacks=stacks)
 
-
-_PENDING = operator.attrgetter("problem", "outcome", "reference", "optimal_value",
-                               "convert_s", "received", "elapsed_s")
-"""What :func:`check` reads of a :class:`Pending`, in :func:`finalize_all`'s order."""
 
 
 def solve(

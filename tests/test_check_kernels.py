@@ -16,8 +16,8 @@ from cardan_forces.solvers.registry import solve_unchecked
 
 pytest.importorskip("numba")
 
-FORMULATIONS = ("min_norm", "positive", "compliance", "compliance_hertz", "min_max",
-                "socp_face")
+FORMULATIONS = ("min_norm", "min_norm_scaled", "positive", "compliance", "compliance_hertz",
+                "min_max", "socp_face")
 
 
 @pytest.fixture(scope="module")
