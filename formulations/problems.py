@@ -143,7 +143,8 @@ def residuals_batch(A: np.ndarray, b: np.ndarray, X: np.ndarray, unilateral, pai
     cone = np.zeros(T)
     if cones:
         apex, members, mask = _cone_arrays(tuple(cones), X.shape[1])
-        spread = np.sqrt(np.einsum("tkj,tkj->tk", X[:, members] * mask, X[:, members] * mask))
+        spread = X[:, members] * mask
+        spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))
         cone = np.maximum(0.0, (spread - X @ apex.T).max(axis=1))
     AX = X @ A.T if np.ndim(A) == 2 else (A @ X[:, :, None])[:, :, 0]
     out = {

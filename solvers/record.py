@@ -439,14 +439,15 @@ def stack_all(problems) -> Stacks | None:
                   np.array([p.checks.b for p in problems], float), conic)
 
 
-def _residuals(problems, X: list[np.ndarray], stacks: Stacks | None) -> dict[str, np.ndarray]:
-    """``ForceChecks.residuals`` of every answer, one ``residuals_batch`` per structure
-    (the one of ``stacks`` where given).
+def _residuals(problems, X, stacks: Stacks | None) -> dict[str, np.ndarray]:
+    """``ForceChecks.residuals`` of every answer (``X``: a list of T force vectors, or
+    their (T, n) array), one ``residuals_batch`` per structure (the one of ``stacks``
+    where given).
     """
     if stacks is not None:
         c = problems[0].checks
-        return residuals_batch(stacks.A, stacks.b, np.array(X), c.unilateral, c.pairs,
-                               c.cones)
+        return residuals_batch(stacks.A, stacks.b, np.asarray(X, float), c.unilateral,
+                               c.pairs, c.cones)
     out = {k: np.full(len(X), np.inf) for k in Residuals.KEYS}
     for idx in _groups(problems, _checks_key):
         c = problems[idx[0]].checks
@@ -491,7 +492,7 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     received = received if received is not None else problems
     stacks = stacks if stacks is not None and stacks.holds(problems) else None
     started = _start_all(problems, outcomes, None if stacks is None else stacks.A.shape[2])
-    found = _residuals(problems, started.x, stacks)
+    found = _residuals(problems, started.x if started.X is None else started.X, stacks)
     primal = np.array([found[key] for key in Residuals.KEYS]).max(axis=0)
     started.fail_nonfinite(np.flatnonzero(~np.isfinite(primal)).tolist())
     status = judge(started.status, primal)
@@ -518,7 +519,8 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
 class _Started:
     """Status, forces and notes of T outcomes before the checks (:func:`_start_all`):
     ``messages`` the outcomes' own, ``notes`` the notes of the instants the start added
-    one to (their message first), kept apart so the others cost nothing.
+    one to (their message first), kept apart so the others cost nothing; ``X``: the
+    forces as one (T, n) array where every answer was mapped at once (``x`` its rows).
     """
 
     solver_status: list
@@ -526,6 +528,7 @@ class _Started:
     x: list
     messages: list
     notes: dict = field(default_factory=dict)
+    X: np.ndarray | None = None
 
     def note(self, k: int, text: str) -> None:
         """Add ``text`` to instant ``k``'s notes."""
@@ -561,11 +564,12 @@ def _start_all(problems, outcomes, n: int | None = None) -> _Started:
     status = list(map(_STATUS_OF.get, map(_STATUS, outcomes)))
     started = _Started([], [], [None] * T, [m or "" for m in map(_MESSAGE, outcomes)])
     answered = [k for k, s in enumerate(status) if s in _ANSWERED]
-    mapped = _stacked_forces(problems, outcomes, answered, n)
-    if len(mapped) == T:  # every answer mapped at once: nothing to do per instant
-        started.x = list(mapped.values())
+    X = _stacked_forces(problems, outcomes, answered, n)
+    if X is not None and len(answered) == T:  # all mapped at once: nothing per instant
+        started.X, started.x = X, list(X)
         started.solver_status, started.status = status, list(status)
         return started
+    mapped = {} if X is None else dict(zip(answered, X))
     for k, first in enumerate(status):
         if first is None:
             status[k] = Status.FAILED
@@ -583,23 +587,23 @@ def _start_all(problems, outcomes, n: int | None = None) -> _Started:
     return started
 
 
-def _stacked_forces(problems, outcomes, rows: list, n: int | None) -> dict:
-    """The forces of the answers at ``rows`` by one call, ``{row: x}``, where their
+def _stacked_forces(problems, outcomes, rows: list, n: int | None) -> np.ndarray | None:
+    """The forces (len(rows), n) of the answers at ``rows`` by one call, where their
     problems' maps offer one: a ``to_forces`` whose type has ``stacked(maps, Z)`` (the
     points ``Z`` (T, n_z) of the instants of ``maps`` to their forces (T, n), as the
-    paper method's map: one vectorized pass instead of a call per instant). Empty
+    paper method's map: one vectorized pass instead of a call per instant). ``None``
     where they do not, or where it fails: then each instant is mapped alone, with its
     own error.
     """
     if n is None or not rows:
-        return {}
+        return None
     try:
         Z = np.array(list(map(_Z, map(outcomes.__getitem__, rows))), float)
     except (TypeError, ValueError):  # a missing or ragged answer: found and told per instant
-        return {}
+        return None
     maps = list(map(_TO_FORCES, map(problems.__getitem__, rows)))
     X = map_all(maps, Z) if Z.ndim == 2 else None
-    return dict(zip(rows, X)) if X is not None and X.shape == (len(rows), n) else {}
+    return X if X is not None and X.shape == (len(rows), n) else None
 
 
 def _distances(problems, X, references) -> tuple[list, list]:
