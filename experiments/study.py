@@ -179,7 +179,7 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
             progress(f"{formulation} ({solver}) {k + 1}/{len(picks)} instants")
     records, walls, fastest = _checked(records, walls, stacks, picks, check_passes)
     history = history_of(op, formulation, solver, picks[: len(records)], records, walls)
-    return dataclasses.replace(history, checks_s=fastest) if check_passes > 1 else history
+    return history if fastest is None else dataclasses.replace(history, checks_s=fastest)
 
 
 def _checked(records: list, walls: list, stacks, picks,
@@ -187,8 +187,8 @@ def _checked(records: list, walls: list, stacks, picks,
     """The deferred solves among ``records`` checked at once (:func:`check`), each
     instant's wall time with its share of the checks (``stacks``: the problems' data
     stacked beforehand, one row per instant, taken at the checked ones' ``picks``), and
-    the fastest of ``passes`` checks of them per instant (``None`` where none was
-    deferred); the records and the wall times are the first pass's.
+    the fastest of ``passes`` checks of them per instant (``None`` for one pass, or
+    where none was deferred); the records and the wall times are the first pass's.
 
     The solves' young garbage is collected first (``gc.collect(1)``) and that time is
     the solves', spread over the instants: some backends leave hundreds of tracked
@@ -204,8 +204,8 @@ def _checked(records: list, walls: list, stacks, picks,
     rows = None if stacks is None else stacks.take([picks[k] for k in deferred])
     pending = [records[k] for k in deferred]
     checked = check(pending, rows)
-    fastest = min([checked[0].checks_s] + [check(pending, rows)[0].checks_s
-                                           for _ in range(passes - 1)])
+    fastest = None if passes < 2 else min([checked[0].checks_s] + [
+        check(pending, rows)[0].checks_s for _ in range(passes - 1)])
     found = dict(zip(deferred, checked))
     return ([found.get(k, r) for k, r in enumerate(records)],
             [w + garbage_s + (found[k].checks_s if k in found else 0.0)

@@ -567,9 +567,19 @@ def _start_all(problems, outcomes, n: int | None = None) -> _Started:
     X = _stacked_forces(problems, outcomes, answered, n)
     if X is not None and len(answered) == T:  # all mapped at once: nothing per instant
         started.X, started.x = X, list(X)
-        started.solver_status, started.status = status, list(status)
-        return started
-    mapped = {} if X is None else dict(zip(answered, X))
+    else:
+        _start_each(problems, outcomes, status, started,
+                    {} if X is None else dict(zip(answered, X)), n)
+    started.solver_status, started.status = status, list(status)  # the judging turns status
+    return started
+
+
+def _start_each(problems, outcomes, status: list, started: _Started, mapped: dict,
+                n: int | None) -> None:
+    """:func:`_start_all` instant by instant: an unknown status becomes ``failed``, an
+    answer takes its forces from ``mapped`` (``{instant: x}``, those mapped at once) or
+    its own ``to_forces``, a missing answer NaN forces.
+    """
     for k, first in enumerate(status):
         if first is None:
             status[k] = Status.FAILED
@@ -583,8 +593,6 @@ def _start_all(problems, outcomes, n: int | None = None) -> _Started:
                 started.note(k, why)
     for k in [k for k, x in enumerate(started.x) if x is None]:
         started.x[k] = np.full(n or len(problems[k].checks.names), np.nan)
-    started.solver_status, started.status = status, list(status)  # the judging turns status
-    return started
 
 
 def _stacked_forces(problems, outcomes, rows: list, n: int | None) -> np.ndarray | None:

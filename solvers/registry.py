@@ -317,7 +317,6 @@ def check(pending: list[Pending], stacks: Stacks | None = None) -> list[Record]:
                         received=received, elapsed_s=elapsed_s, stacks=stacks)
 
 
-
 def solve(
     problem,
     solver: str,
