@@ -25,6 +25,7 @@ keeping every field rule beside the one reader keeps one home for scene validati
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from importlib import resources
 from pathlib import Path
@@ -224,6 +225,8 @@ class _Table:
         self.used.add(key)
         if key not in self.raw:
             if default is ...:
+                unread = [k for k in self.raw if isinstance(k, str) and k not in self.used]
+                self.misspelled(difflib.get_close_matches(key, unread, n=1, cutoff=0.8), key)
                 self.fail(key, "missing")
             return default
         return self.raw[key]
@@ -307,11 +310,21 @@ class _Table:
                            f"{_show(value)}")
         return [_Table(v, f"{self.where(key)}[{i}]", self.source) for i, v in enumerate(value)]
 
+    def misspelled(self, unknown: list[str], near: str | None) -> None:
+        """Fail on the first of ``unknown`` keys, naming the valid key ``near`` it is
+        closest to (if any): a typo is reported as the key written, not as a missing one.
+        """
+        if not unknown:
+            return
+        hint = (f" '{unknown[0]}' in {self.path or 'the scene'}; did you mean '{near}'?"
+                if near else "")
+        also = f" (also: {', '.join(unknown[1:])})" if len(unknown) > 1 else ""
+        self.fail(unknown[0], f"unknown key{hint}{also}")
+
     def done(self) -> None:
         unknown = sorted(set(self.raw) - self.used)
-        if unknown:
-            self.fail(unknown[0], "unknown key" + (f" (also: {', '.join(unknown[1:])})"
-                                                  if len(unknown) > 1 else ""))
+        near = difflib.get_close_matches(unknown[0], sorted(self.used), n=1) if unknown else []
+        self.misspelled(unknown, near[0] if near else None)
 
 
 def _torque(t: _Table) -> TorqueLaw:

@@ -222,3 +222,24 @@ def test_with_changes_validates_the_variant(paper):
     quiet = paper.with_changes(name="quiet", gravity_m_s2=(0.0, 0.0, 0.0))
     assert quiet.gravity_m_s2 == (0.0, 0.0, 0.0) and quiet.name == "quiet"
     assert dataclasses.replace(quiet, name=paper.name, gravity_m_s2=paper.gravity_m_s2) == paper
+
+
+@pytest.mark.parametrize(
+    "table,wrong,right",
+    [
+        ("shafts", "lenght_m", "length_m"),    # a required key: reported as the key written
+        ("joints", "yoke_phase_dg", "yoke_phase_deg"),
+    ],
+)
+def test_misspelled_key_names_itself_and_the_nearest_valid_key(paper_raw, table, wrong, right):
+    rows = paper_raw[table]
+    rows[0][wrong] = rows[0].pop(right)
+    with pytest.raises(SceneError) as err:
+        scene_from_dict({"extends": "paper", table: rows}, "s.toml")
+    assert f"unknown key '{wrong}' in {table}[0]; did you mean '{right}'?" in str(err.value)
+
+
+def test_misspelled_optional_top_level_key_is_named():
+    with pytest.raises(SceneError) as err:
+        scene_from_dict({"extends": "paper", "gravty_m_s2": [0.0, 0.0, -9.8]}, "s.toml")
+    assert "unknown key 'gravty_m_s2' in the scene; did you mean 'gravity_m_s2'?" in str(err.value)
