@@ -80,7 +80,7 @@ class _Parser(argparse.ArgumentParser):
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="cardan",
-        description="Reaction forces in drive shafts with two Cardan joints.",
+        description="Reaction forces in drive shafts with Cardan joints (two, three or more).",
     )
     p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
