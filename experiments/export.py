@@ -197,7 +197,7 @@ def add_parser(subparsers) -> None:
                    help=f"one formulation (repeatable); default {', '.join(QP_FORMULATIONS)}")
     p.add_argument("--instants", type=_count, default=INSTANTS,
                    help=f"evenly spaced instants per scene (default {INSTANTS})")
-    p.add_argument("--out", default="results/export", help="output folder")
+    p.add_argument("--out", default="results/export", help="output folder (default %(default)s)")
     p.add_argument("--name", dest="module", type=_module, default="cardan_qp",
                    help="name of the test-set module (default cardan_qp)")
     p.set_defaults(func=run)
