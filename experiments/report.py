@@ -401,7 +401,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("report", help="one scene's bearing and joint loads over time "
                               "with the rigid solution set (CSV, PNG, Markdown)")
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
-    p.add_argument("--out", default="results/report", help="output folder")
+    p.add_argument("--out", default="results/report", help="output folder (default %(default)s)")
     p.add_argument("--instants", type=_count, default=INSTANTS,
                    help=f"instants over the scene's window (default {INSTANTS})")
     p.add_argument("--format", type=format_list, default=("png",),
