@@ -1,5 +1,12 @@
 """numba's ``njit`` where numba is installed, else a decorator that leaves functions as
 they are (callers then use their NumPy paths; see :data:`HAVE_NUMBA`).
+
+The package's kernels compile with NumPy's error model: a division by zero gives an
+infinity or a NaN, as the NumPy reference does, instead of raising
+``ZeroDivisionError`` from inside compiled code. Whether a divisor is exactly zero can
+depend on the CPU numba compiles for (fused multiply-adds change the last bits), so a
+raise there would fail on one machine and not on another; the kernels' callers check
+their results for finite numbers and end with a failed status instead.
 """
 
 from __future__ import annotations
@@ -7,9 +14,14 @@ from __future__ import annotations
 import numpy as np
 
 try:
-    from numba import njit
+    import numba
 
     HAVE_NUMBA = True
+
+    def njit(*args, **kwargs):
+        """``numba.njit`` with NumPy's error model unless the caller sets one."""
+        kwargs.setdefault("error_model", "numpy")
+        return numba.njit(*args, **kwargs)
 except ImportError:
     HAVE_NUMBA = False
 

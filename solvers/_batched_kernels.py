@@ -28,7 +28,11 @@ takes about half a minute, once: numba caches the machine code.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..driveline.compiled import HAVE_NUMBA, njit
+
+if not HAVE_NUMBA:  # an optional extra: the callers take their NumPy paths
+    raise ImportError("numba is not installed")
 
 B = 6
 """Rows per body block."""

@@ -24,7 +24,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from ..driveline.compiled import HAVE_NUMBA, njit
+
+if not HAVE_NUMBA:  # an optional extra: the callers take their NumPy paths
+    raise ImportError("numba is not installed")
 
 
 @njit(cache=True, inline="always")
