@@ -15,17 +15,23 @@ Backends of other packages: :func:`register` adds one at run time, and a distrib
 that declares an entry point in the group :data:`ENTRY_POINTS` (pointing at a
 :class:`Backend`, a list of them, or a function returning either) has its backends
 registered when the registry first loads, so they appear in ``cardan solvers`` and
-every command without editing this package. A plugin that fails to load is left out
-and reported by :func:`plugin_errors`; it never breaks the registry.
+every command without editing this package. Such backends are untrusted
+(:mod:`.plugins`): one that fails to load (whatever it raises, ``SystemExit`` included)
+or declares what the registry cannot use is left out and reported by
+:func:`plugin_errors`; one whose ``supports``, ``solve`` or ``batch`` raises or answers
+what cannot be judged gives failed records naming the plugin. It never breaks the
+registry, nor the other backends' rows.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import importlib
 import importlib.metadata
 import operator
+import sys
 import time
 import warnings
 from collections.abc import Callable
@@ -34,10 +40,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import settings
-from .batch import BatchOutcome, BatchRecord, finalize_batch, supports_batch
+from . import plugins, settings
+from .batch import BatchOutcome, BatchRecord, finalize_batch
 from .conversions import convert, reachable
-from .record import Outcome, Record, Stacks, Status, finalize_all
+from .plugins import InvalidBackend, blame
+from .record import Outcome, Record, Stacks, Status, failed_record, finalize_all
 
 if TYPE_CHECKING:  # settings_profiles looks backends up here: a type-only import
     from .settings_profiles import Profile
@@ -166,16 +173,20 @@ def register(backend: Backend) -> Backend:
     """Add ``backend`` (a :class:`Backend`) to the registry, so :func:`solve`, every
     command and ``cardan solvers`` know it; returns it. Its ``solve`` receives a problem
     of one of its ``accepts`` classes and returns an :class:`Outcome`; the package
-    judges the answer as it judges its own backends'. A name already taken by another
-    backend is a ``ValueError`` (registering the same object again is harmless).
+    judges the answer as it judges its own backends'. A declaration the registry cannot
+    use (:func:`.plugins.validate`) or a name already taken by another backend is an
+    :class:`~.plugins.InvalidBackend` (a ``TypeError`` and a ``ValueError``) naming the
+    field; registering the same object again is harmless.
     """
     if not isinstance(backend, Backend):
-        raise TypeError(f"register() takes a Backend, not {type(backend).__name__}")
+        raise InvalidBackend(f"register() takes a Backend, not {type(backend).__name__}")
+    plugins.validate(backend)
     _load()
     if _CACHE.get(backend.name, backend) is not backend:
-        raise ValueError(f"backend {backend.name!r} is already registered")
+        raise InvalidBackend(f"backend {backend.name!r} is already registered")
     _CACHE[backend.name] = backend
     _KNOWN[backend.name] = backend.extra
+    plugins.ORIGINS.setdefault(backend.name, plugins.runtime_origin(backend))
     return backend
 
 
@@ -185,20 +196,61 @@ def plugin_errors() -> dict[str, str]:
     return dict(_PLUGIN_ERRORS)
 
 
-def _load_plugins() -> None:
-    """Register the backends every installed entry point of :data:`ENTRY_POINTS` gives;
-    one that raises, gives no backend or a taken name is recorded, not registered.
+def _load_plugins(points=None) -> None:
+    """Register the backends every entry point of :data:`ENTRY_POINTS` gives (``points``:
+    those to load, default the installed ones); one that raises anything but
+    ``KeyboardInterrupt`` (``SystemExit`` too), gives no backend, an invalid one or a
+    taken name is recorded in :func:`plugin_errors`, not registered. What a plugin
+    prints while it loads goes to stderr (``--json`` stays JSON on stdout).
     """
-    for point in importlib.metadata.entry_points(group=ENTRY_POINTS):
+    with contextlib.redirect_stdout(sys.stderr):
         try:
-            given = point.load()
-            if callable(given) and not isinstance(given, Backend):
-                given = given()
-            backends = [given] if isinstance(given, Backend) else list(given)
-            for backend in backends:
-                register(backend)
-        except Exception as exc:  # a broken plugin is reported, never fatal
-            _PLUGIN_ERRORS[f"{point.name} ({point.value})"] = f"{type(exc).__name__}: {exc}"
+            points = list(importlib.metadata.entry_points(group=ENTRY_POINTS)
+                          if points is None else points)
+        except Exception as exc:  # broken installed metadata: no plugins, said once
+            _PLUGIN_ERRORS[ENTRY_POINTS] = f"{type(exc).__name__}: {exc}"
+            points = []
+        for point in points:
+            _load_plugin(point)
+
+
+def _load_plugin(point) -> None:
+    """Register the backends of one entry point, each on its own (one bad backend does
+    not keep its siblings out); failures joined into its :func:`plugin_errors` entry.
+    """
+    label, why = f"{point.name} ({point.value})", []
+    try:
+        given = _given(point)
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a plugin's SystemExit ends no command
+        given, why = [], [f"{type(exc).__name__}: {exc}"]
+    for backend in given:
+        try:
+            register(backend)
+        except KeyboardInterrupt:
+            raise
+        except BaseException as exc:  # noqa: BLE001 - a Backend subclass runs its code
+            why.append(f"{type(exc).__name__}: {exc}")
+        else:
+            plugins.ORIGINS[backend.name] = plugins.plugin_origin(point)
+    if why:
+        _PLUGIN_ERRORS[label] = "; ".join(why)
+
+
+def _given(point) -> list:
+    """The backends an entry point gives: a :class:`Backend`, a list or tuple of them,
+    or a function returning either.
+    """
+    given = point.load()
+    if callable(given) and not isinstance(given, Backend):
+        given = given()
+    if isinstance(given, Backend):
+        return [given]
+    if isinstance(given, (list, tuple)):
+        return list(given)
+    raise InvalidBackend(f"it gives {type(given).__name__}, not a Backend, a list of them "
+                         "or a function returning either")
 
 
 def available() -> dict[str, Backend]:
@@ -251,6 +303,8 @@ def takes(name: str, problem) -> bool:
 def _takes(backend: Backend, problem, converted: dict) -> bool:
     """``backend`` solves ``problem``; ``converted``: the conversions made so far, by
     the classes they were made for (shared between backends that accept the same).
+    A ``supports`` that raises does not rule the backend out: its solve is then a
+    failed record that says why (:func:`solve_unchecked`).
     """
     if backend.solve is None or not reachable(type(problem), backend.accepts):
         return False
@@ -260,7 +314,17 @@ def _takes(backend: Backend, problem, converted: dict) -> bool:
             converted[key] = convert(problem, key)
         except Exception:  # a conversion that fails rules the backend out
             converted[key] = None
-    return converted[key] is not None and bool(backend.supports(converted[key]))
+    return converted[key] is not None and _supports(backend, converted[key]) is not False
+
+
+def _supports(backend: Backend, problem) -> bool | str:
+    """``backend.supports(problem)``, or why it could not say (what it raised)."""
+    try:
+        return bool(backend.supports(problem))
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:  # noqa: BLE001 - a plugin's fault is its record's
+        return blame(backend.name, f"supports() raised {type(exc).__name__}: {exc}")
 
 
 @dataclass(frozen=True)
@@ -312,9 +376,18 @@ def check(pending: list[Pending], stacks: Stacks | None = None) -> list[Record]:
         return []
     problems, outcomes, references, optimal_values, convert_s, received, elapsed_s = zip(
         *map(_PENDING, pending))
-    return finalize_all(problems, pending[0].solver, outcomes, references=references,
-                        optimal_values=optimal_values, extra_setup_s=convert_s,
-                        received=received, elapsed_s=elapsed_s, stacks=stacks)
+    try:
+        return finalize_all(problems, pending[0].solver, outcomes, references=references,
+                            optimal_values=optimal_values, extra_setup_s=convert_s,
+                            received=received, elapsed_s=elapsed_s, stacks=stacks)
+    except Exception as exc:
+        if pending[0].solver not in plugins.ORIGINS:
+            raise  # the package's own backends: a fault of the checks, not hidden
+        if len(pending) > 1:  # one answer the checks cannot read fails alone
+            return [record for p in pending for record in check([p])]
+        return [failed_record(problems[0], pending[0].solver, blame(
+            pending[0].solver, f"answer could not be checked: {type(exc).__name__}: {exc}"),
+            reference=references[0])]
 
 
 def solve(
@@ -349,7 +422,7 @@ def solve_unchecked(problem, solver: str, tol: float | None = None,
     """:func:`solve` without the checks: the backend's outcome, for :func:`check`."""
     backend = get(solver)
     if backend.solve is None or not reachable(type(problem), backend.accepts):
-        raise UnsupportedProblem(f"{solver} takes {[c.__name__ for c in backend.accepts]}, "
+        raise UnsupportedProblem(f"{solver} takes {_names(backend.accepts)}, "
                                  f"not {type(problem).__name__}")
     start = time.perf_counter()
 
@@ -357,28 +430,40 @@ def solve_unchecked(problem, solver: str, tol: float | None = None,
         return Pending(problem, solver, outcome, received, reference, optimal_value,
                        convert_s, time.perf_counter() - start)
 
+    def failed(message, received, convert_s=0.0):
+        elapsed = time.perf_counter() - start
+        return pending(Outcome(Status.FAILED, None, message=blame(solver, message),
+                               setup_s=convert_s, solve_s=elapsed - convert_s), received)
+
     try:
         converted = convert(problem, backend.accepts)
     except Exception as exc:
-        return pending(Outcome(Status.FAILED, None, setup_s=time.perf_counter() - start,
-                               message=f"conversion failed: {type(exc).__name__}: {exc}"),
-                       problem)
-    if not backend.supports(converted):
+        return failed(f"conversion failed: {type(exc).__name__}: {exc}", problem,
+                      time.perf_counter() - start)
+    supported = _supports(backend, converted)
+    if isinstance(supported, str):
+        return failed(supported, converted)
+    if not supported:
         raise UnsupportedProblem(f"{solver} does not support this {type(converted).__name__}")
     convert_s = time.perf_counter() - start
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             outcome = backend.solve(converted, tol=tol, initvals=initvals, **options)
-        except (KeyboardInterrupt, SystemExit):
+        except KeyboardInterrupt:
             raise
         except BaseException as exc:  # Rust panics (pyo3) derive from BaseException
-            elapsed = time.perf_counter() - start
-            return pending(Outcome(Status.FAILED, None, message=f"{type(exc).__name__}: {exc}",
-                                   setup_s=convert_s, solve_s=elapsed - convert_s), converted)
+            return failed(f"{type(exc).__name__}: {exc}", converted, convert_s)
+    if solver in plugins.ORIGINS and (why := plugins.outcome_fault(outcome)):
+        return failed(why, converted, convert_s)
     if caught:
         outcome = dataclasses.replace(outcome, message=with_warnings(outcome.message, caught))
     return pending(outcome, converted, convert_s)
+
+
+def _names(classes) -> str:
+    """Class names joined by "/" (``"QP/Conic"``)."""
+    return "/".join(c.__name__ for c in classes) or "no problem class"
 
 
 def with_warnings(message: str, caught) -> str:
@@ -390,8 +475,17 @@ def with_warnings(message: str, caught) -> str:
 
 
 def batch_backends(batch) -> list[str]:
-    """Names of the backends that solve ``batch`` (a formulation's batch) as one batch."""
-    return [b.name for b in available().values() if supports_batch(b, batch)]
+    """Names of the backends that solve ``batch`` (a formulation's batch) as one batch
+    (one whose ``supports`` raises included: its batch is then a failed one).
+    """
+    return [b.name for b in available().values() if _batches(b, batch) is not False]
+
+
+def _batches(backend: Backend, batch) -> bool | str:
+    """Whether ``backend`` solves ``batch`` as one batch, or why it could not say."""
+    if backend.batch is None or not isinstance(batch, backend.batch_accepts):
+        return False
+    return _supports(backend, batch)
 
 
 def solve_batch(batch, solver: str, tol: float | None = None,
@@ -400,17 +494,31 @@ def solve_batch(batch, solver: str, tol: float | None = None,
     all instants as arrays, judged as :func:`solve` judges one (failures are records).
     """
     backend = get(solver)
-    if not supports_batch(backend, batch):
+    supported = _batches(backend, batch)
+    if supported is False:
         raise UnsupportedProblem(f"{solver} does not solve a {type(batch).__name__} batch")
     T = len(batch.instants)
     start = time.perf_counter()
     try:
-        outcome = backend.batch(batch, tol=tol, **options)
-    except (KeyboardInterrupt, SystemExit):
+        outcome = (_failed_batch(supported, T, start) if isinstance(supported, str)
+                   else backend.batch(batch, tol=tol, **options))
+    except KeyboardInterrupt:
         raise
     except BaseException as exc:  # noqa: BLE001 - a failing solver is a failed batch
-        outcome = BatchOutcome(status=np.full(T, Status.FAILED, object), z=np.zeros((T, 0)),
-                               y=None, iterations=np.zeros(T, int), setup_s=0.0,
-                               solve_s=time.perf_counter() - start,
-                               messages=(f"{type(exc).__name__}: {exc}",) * T)
-    return finalize_batch(batch, solver, outcome, reference=reference)
+        outcome = _failed_batch(blame(solver, f"{type(exc).__name__}: {exc}"), T, start)
+    if solver in plugins.ORIGINS and (why := plugins.batch_fault(outcome, T)):
+        outcome = _failed_batch(blame(solver, why), T, start)
+    try:
+        return finalize_batch(batch, solver, outcome, reference=reference)
+    except Exception as exc:
+        if solver not in plugins.ORIGINS:
+            raise  # the package's own backends: a fault of the checks, not hidden
+        why = blame(solver, f"answer could not be checked: {type(exc).__name__}: {exc}")
+        return finalize_batch(batch, solver, _failed_batch(why, T, start), reference=reference)
+
+
+def _failed_batch(message: str, T: int, start: float) -> BatchOutcome:
+    """A batch of ``T`` failed instants, each with ``message``, begun at ``start``."""
+    return BatchOutcome(status=np.full(T, Status.FAILED, object), z=np.zeros((T, 0)), y=None,
+                        iterations=np.zeros(T, int), setup_s=0.0,
+                        solve_s=time.perf_counter() - start, messages=(message,) * T)

@@ -10,7 +10,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from cardan_forces.solvers import Status, registry, solve
+from cardan_forces.solvers import Status, plugins, registry, solve
 
 from cardan_forces import build_formulation, build_operator, load_scene, simulate
 from cardan_forces.cli import main
@@ -57,11 +57,20 @@ def plugin(tmp_path, monkeypatch):
     (info / "METADATA").write_text("Metadata-Version: 2.1\nName: fakeplugin\nVersion: 1.0\n")
     (info / "entry_points.txt").write_text(textwrap.dedent(ENTRY_POINTS))
     monkeypatch.syspath_prepend(str(tmp_path))
-    saved = [dict(d) for d in (registry._CACHE, registry._KNOWN, registry._PLUGIN_ERRORS)]
-    for d in (registry._CACHE, registry._KNOWN, registry._PLUGIN_ERRORS):
+    yield from _fresh_registry()
+
+
+REGISTRY = (registry._CACHE, registry._KNOWN, registry._PLUGIN_ERRORS, plugins.ORIGINS)
+"""What the registry holds of loaded and registered backends."""
+
+
+def _fresh_registry():
+    """Empty the registry (it loads afresh on first use); as before afterwards."""
+    saved = [dict(d) for d in REGISTRY]
+    for d in REGISTRY:
         d.clear()
     yield
-    for d, old in zip((registry._CACHE, registry._KNOWN, registry._PLUGIN_ERRORS), saved):
+    for d, old in zip(REGISTRY, saved):
         d.clear()
         d.update(old)
 
@@ -105,6 +114,7 @@ def test_register_at_run_time(plugin, op):
     assert registry.register(own) is own and registry.register(own) is own
     assert "my-lstsq" in registry.backends_for(build_formulation("min_norm", op, 0))
     with pytest.raises(ValueError, match="already registered"):
-        registry.register(registry.Backend(name="my-lstsq", family="mine", distributions=()))
+        registry.register(registry.Backend(name="my-lstsq", family="mine", distributions=(),
+                                           accepts=mine.accepts, solve=mine.solve))
     with pytest.raises(TypeError):
         registry.register("my-lstsq")
