@@ -38,6 +38,7 @@ from cardan_forces.experiments.images import format_list, save
 from cardan_forces.experiments.study import intervals as rigid_intervals
 from cardan_forces.experiments.study import value_range
 from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.solvers import UnsupportedProblem
 
 import cardan_forces as cf
 
@@ -103,13 +104,16 @@ class EngineStudy:
 
 
 def _formulation_forces(op, i: int) -> dict[str, np.ndarray]:
-    """Each formulation's forces at instant ``i`` (those some backend solves)."""
+    """Each formulation's forces at instant ``i`` (those some backend solves; a backend
+    that does not take the scene's problem, e.g. a QP solver given a friction cone, is
+    passed over for the next).
+    """
     out = {}
     for name, backends in BACKENDS.items():
         for backend in backends:
             try:
                 record = cf.solve(cf.build_formulation(name, op, i), backend)
-            except (cf.SolverNotFound, NotApplicable):
+            except (cf.SolverNotFound, NotApplicable, UnsupportedProblem):
                 continue
             if record.solved:
                 out[name] = np.asarray(record.x[:len(op.names)], float)
