@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .catalogue import read_rating, read_tolerances
 from .elements import check_elements
 from .scene import (
     BEARING_KINDS,
@@ -378,8 +379,11 @@ def _shaft(t: _Table) -> Shaft:
         if abs(offset) > length / 2:
             bt.fail("offset_m", f"bearing lies outside the shaft (|offset| > {length / 2} m), "
                                 f"got {offset:g}")
+        kind = bt.string("kind", "locating", choices=BEARING_KINDS)
+        rating = read_rating(bt.table("rating")) if "rating" in bt.raw else None
         bearings.append(Bearing(name=bt.string("name", name=True), offset_m=offset,
-                                kind=bt.string("kind", "locating", choices=BEARING_KINDS)))
+                                kind=kind, rating=rating))
+        bt.used.add("rating")
         bt.done()
     if len({b.name for b in bearings}) != len(bearings):
         t.fail("bearings", "bearing names must be unique on a shaft")
@@ -454,7 +458,7 @@ def scene_tables(scene: Scene) -> dict:
         if isinstance(value, (tuple, list)):
             return [plain(v) for v in value]
         if isinstance(value, dict):
-            return {k: plain(v) for k, v in value.items()}
+            return {k: plain(v) for k, v in value.items() if v is not None}
         return value
 
     return plain({
@@ -471,6 +475,7 @@ def scene_tables(scene: Scene) -> dict:
         "time": dataclasses.asdict(scene.time),
         "material": dataclasses.asdict(scene.material),
         "contact": dataclasses.asdict(scene.contact),
+        "tolerances": dataclasses.asdict(scene.tolerances) if scene.tolerances else None,
     })
 
 
@@ -601,7 +606,8 @@ def _fields(raw: dict, source: str) -> Scene:
         frame=frame, shafts=shafts, joints=joints, crosspin=crosspin,
         input_torque=input_torque, load_torque=load_torque,
         initial_angle_rad=initial[0], initial_speed_rad_s=initial[1],
-        time=time, material=material, contact=contact, source=source, slip_joints=slips)
+        time=time, material=material, contact=contact, source=source, slip_joints=slips,
+        tolerances=read_tolerances(top))
     top.done()
     for key, law in (("input", scene.input_torque), ("load", scene.load_torque)):
         periods = law.frequency_hz * (time.stop_s - time.start_s)

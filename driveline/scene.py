@@ -46,6 +46,7 @@ LIMITS = {
     "density_kg_m3": (1e-3, 1e5),
     "stiffness": (1e-3, 1e16),
     "ratio": (0.0, 1e3),
+    "force_N": (1e-3, 1e12),
     "number": (0.0, 1e15),
 }
 """Accepted magnitudes per kind of field, ``(least, most)``: a positive field must be at
@@ -89,7 +90,66 @@ BEARING_KINDS = ("locating", "floating")
 (the shaft slides through it axially)."""
 
 
+BEARING_TYPES = ("ball", "cylindrical_roller", "tapered_roller", "angular_contact_ball")
+"""Rolling-bearing types of a bearing's catalogue data (:class:`BearingRating`): ``ball``
+a radial (deep-groove) ball bearing and ``cylindrical_roller`` a radial roller bearing,
+both of nominal contact angle 0; ``tapered_roller`` and ``angular_contact_ball`` need
+their contact angle."""
+
+ANGULAR_TABLE_DEG = (20.0, 45.0)
+"""Contact angles (deg) of a single-row angular-contact ball bearing whose ``X``, ``Y``,
+``e`` the package takes from ISO 281:2007 Table 3 (rows 20 to 45 deg, interpolated
+between them); outside this range the scene gives ``X``, ``Y`` and ``e`` itself."""
+
+MAX_TAPER_DEG = 60.0
+"""Largest contact angle of a tapered roller bearing (catalogue bearings have 10-30 deg;
+beyond 60 deg it is a thrust bearing, which ISO 281 rates apart)."""
+
+
 # ---------------------------------------------------------------------------- data
+
+
+@dataclass(frozen=True)
+class BearingRating:
+    """A bearing's catalogue data for ISO 281's basic rating life (all optional in a
+    scene: a bearing without it has no rated life).
+
+    ``type`` one of :data:`BEARING_TYPES`; ``contact_angle_deg`` its nominal contact
+    angle alpha (deg, 0 for the radial types); ``C_N`` the basic dynamic and ``C0_N``
+    the basic static load rating (N). ``X``, ``Y``, ``e`` (dimensionless) are the
+    radial and axial factors of the equivalent dynamic load ``P = X Fr + Y Fa`` where
+    ``Fa / Fr > e`` (``P = Fr`` below it); ``None`` takes them from ISO 281's tables by
+    type and angle.
+    """
+
+    type: str
+    C_N: float
+    C0_N: float
+    contact_angle_deg: float = 0.0
+    X: float | None = None
+    Y: float | None = None
+    e: float | None = None
+
+    @property
+    def roller(self) -> bool:
+        """Roller bearings take the life exponent 10/3, ball bearings 3 (ISO 281)."""
+        return self.type.endswith("roller")
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Manufacturing and assembly tolerances, each the half-width of a uniform spread
+    about the nominal value (the worst-case reading of a drawing's +- tolerance).
+
+    ``bearing_seat_m``: each radial component of every bearing seat's position (m);
+    ``articulation_deg``: every joint's articulation angle (deg);
+    ``bearing_clearance_m``: every bearing's clearance about the scene's
+    ``contact.bearing_clearance_m`` (m; a clearance sampled below zero is zero).
+    """
+
+    bearing_seat_m: float = 0.0
+    articulation_deg: float = 0.0
+    bearing_clearance_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -99,12 +159,14 @@ class Bearing:
     ``offset_m`` is its position along the shaft axis from the shaft's centre, positive
     downstream (towards the output). ``kind`` (:data:`BEARING_KINDS`): ``locating``
     carries a force in any direction (3 components), ``floating`` only normal to the
-    shaft axis (2 components; the shaft slides through it).
+    shaft axis (2 components; the shaft slides through it). ``rating``: its catalogue
+    data (:class:`BearingRating`), if the scene gives it.
     """
 
     name: str
     offset_m: float
     kind: str = "locating"
+    rating: BearingRating | None = None
 
 
 @dataclass(frozen=True)
@@ -263,6 +325,7 @@ class Scene:
     contact: Contact
     source: str = "<memory>"
     slip_joints: tuple[SlipJoint, ...] = ()
+    tolerances: Tolerances | None = None
 
     def has(self, effect: str) -> bool:
         """Whether the scene calls for ``effect`` (one of :data:`EFFECTS`)."""

@@ -1,0 +1,82 @@
+"""Reading a bearing's catalogue data and a scene's tolerances: the optional fields
+that rate a bearing's life (ISO 281) and spread a line's geometry, each read through
+:mod:`.loading`'s table reader (type, finiteness and :data:`~.scene.LIMITS` checked
+where a field is read) and held to the rules below.
+"""
+
+from __future__ import annotations
+
+from .scene import (
+    ANGULAR_TABLE_DEG,
+    BEARING_TYPES,
+    MAX_ARTICULATION_DEG,
+    MAX_TAPER_DEG,
+    BearingRating,
+    Tolerances,
+)
+
+
+def read_rating(t) -> BearingRating:
+    """A bearing's catalogue data (:class:`~.scene.BearingRating`): type, ratings (N),
+    contact angle (deg) where the type has one, and ``X``, ``Y``, ``e`` all three or
+    none (then ISO 281's tables must cover the type and angle).
+    """
+    kind_of = t.string("type", choices=BEARING_TYPES)
+    rating = BearingRating(
+        type=kind_of, C_N=t.number("C_N", positive=True, kind="force_N"),
+        C0_N=t.number("C0_N", positive=True, kind="force_N"),
+        contact_angle_deg=_contact_angle(t, kind_of),
+        X=t.number("X", nonnegative=True, kind="ratio") if "X" in t.raw else None,
+        Y=t.number("Y", nonnegative=True, kind="ratio") if "Y" in t.raw else None,
+        e=t.number("e", positive=True, kind="ratio") if "e" in t.raw else None)
+    t.used.update(("X", "Y", "e"))
+    given = [k for k in ("X", "Y", "e") if getattr(rating, k) is not None]
+    if given and len(given) < 3:
+        t.fail(given[0], "give X, Y and e together, or none (ISO 281's tables then)")
+    lo, hi = ANGULAR_TABLE_DEG
+    if kind_of == "angular_contact_ball" and not given and \
+            not lo <= rating.contact_angle_deg <= hi:
+        t.fail("contact_angle_deg", f"ISO 281 Table 3's rows used here span {lo:g} to "
+               f"{hi:g} deg; give X, Y and e for {rating.contact_angle_deg:g} deg")
+    t.done()
+    return rating
+
+
+def _contact_angle(t, kind_of: str) -> float:
+    """The nominal contact angle (deg): 0 for the radial types (by definition), in
+    (0, 90) for angular-contact balls, in (0, :data:`~.scene.MAX_TAPER_DEG`] for tapered
+    rollers.
+    """
+    if kind_of in ("ball", "cylindrical_roller"):
+        if t.number("contact_angle_deg", 0.0, kind="angle_deg") != 0.0:
+            t.fail("contact_angle_deg", f"a {kind_of} bearing has contact angle 0 by "
+                   "definition; give 0 or none")
+        return 0.0
+    alpha = t.number("contact_angle_deg", positive=True, kind="angle_deg")
+    most = MAX_TAPER_DEG if kind_of == "tapered_roller" else 89.0
+    if alpha > most:
+        t.fail("contact_angle_deg", f"must be at most {most:g} deg for a {kind_of} "
+               f"bearing, got {alpha:g}")
+    return alpha
+
+
+def read_tolerances(top) -> Tolerances | None:
+    """The optional ``[tolerances]`` table (:class:`~.scene.Tolerances`): half-widths,
+    non-negative, an articulation's at most the largest angle (a study refuses samples
+    that would pass it; one that samples a clearance below zero takes it as zero).
+    """
+    if "tolerances" not in top.raw:
+        top.used.add("tolerances")
+        return None
+    tt = top.table("tolerances")
+    tol = Tolerances(
+        bearing_seat_m=tt.number("bearing_seat_m", 0.0, nonnegative=True, kind="length_m"),
+        articulation_deg=tt.number("articulation_deg", 0.0, nonnegative=True,
+                                   kind="angle_deg"),
+        bearing_clearance_m=tt.number("bearing_clearance_m", 0.0, nonnegative=True,
+                                      kind="length_m"))
+    if tol.articulation_deg > MAX_ARTICULATION_DEG:
+        tt.fail("articulation_deg", f"must be at most {MAX_ARTICULATION_DEG:g} deg, got "
+                f"{tol.articulation_deg:g}")
+    tt.done()
+    return tol
