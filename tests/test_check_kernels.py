@@ -14,6 +14,8 @@ from cardan_forces.solvers import qp_measures as Q
 from cardan_forces.solvers.record import KERNEL_LEAST, Outcome, finalize, finalize_all, stack_all
 from cardan_forces.solvers.registry import solve_unchecked
 
+pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
+
 pytest.importorskip("numba")
 
 FORMULATIONS = ("min_norm", "min_norm_scaled", "positive", "compliance", "compliance_hertz",

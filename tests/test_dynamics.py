@@ -11,6 +11,8 @@ from scipy.integrate import simpson
 
 from tests.conftest import variant
 
+pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
+
 
 @pytest.mark.parametrize("effects", [["inertia"], ["inertia", "gravity", "crosspin_inertia"]])
 def test_work_of_the_torques_equals_kinetic_energy(effects):

@@ -13,6 +13,8 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import contact_law, simulate_penalty
 from scipy.integrate import cumulative_trapezoid
 
+pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
+
 STOP_S = 0.2
 LATE_S = 0.1  # after the play has closed (~0.07 s from rest) and the first impacts
 

@@ -12,6 +12,8 @@ from cardan_forces.solvers.lcp_ import lemke
 from cardan_forces.solvers.optimality import objective_value
 from cardan_forces.solvers.registry import UnsupportedProblem, batch_backends, solve_batch
 
+pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
+
 
 @pytest.fixture(scope="module")
 def op(paper):
