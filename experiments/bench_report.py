@@ -130,19 +130,19 @@ def _shared_legend(fig, styles: dict, shown, extra=()) -> None:
     fig.tight_layout(rect=(0, min(0.4, (0.3 * rows + 0.2) / height), 1, 1))
 
 
-def _written(drawn, path: Path, formats, dpi: int) -> list[Path]:
+def _written(drawn, path: Path, formats) -> list[Path]:
     """A drawn ``(plt, fig)`` saved as ``path.<format>`` for each of ``formats``."""
     from .images import save
 
     plt, fig = drawn
-    written = save(fig, path.with_suffix(""), formats, dpi=dpi)
+    written = save(fig, path.with_suffix(""), formats)
     plt.close(fig)
     return written
 
 
 def plot_pareto(points: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
     """:func:`pareto_figure` written as ``path.<format>`` for each of ``formats``."""
-    return _written(pareto_figure(points, styles), path, formats, dpi=110)
+    return _written(pareto_figure(points, styles), path, formats)
 
 
 def pareto_figure(points: list[dict], styles=None):
@@ -180,7 +180,7 @@ def pareto_figure(points: list[dict], styles=None):
 
 def plot_profiles(profiles: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
     """:func:`profiles_figure` written as ``path.<format>`` for each of ``formats``."""
-    return _written(profiles_figure(profiles, styles), path, formats, dpi=100)
+    return _written(profiles_figure(profiles, styles), path, formats)
 
 
 def profiles_figure(profiles: list[dict], styles=None):

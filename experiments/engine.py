@@ -261,7 +261,7 @@ def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
     np.atleast_1d(axes)[0].legend(fontsize=7)
     np.atleast_1d(axes)[-1].set_xlabel("t (s)")
     fig.tight_layout()
-    paths = save(fig, stem, formats, dpi=120)
+    paths = save(fig, stem, formats)
     plt.close(fig)
     return paths
 

@@ -1,14 +1,29 @@
-"""Image files of the figure commands (``cardan repro``, ``cardan report``): the formats
-they write and the one way a figure is saved in each (``--format png,svg,pdf``).
+"""Image files of the figure commands (``cardan repro``, ``cardan report``, ``bench``,
+``engine``, ``secondary``): the formats they write, the one way a figure is saved in
+each (``--format png,svg,pdf``) and the print rules every figure keeps.
+
+Print rules: a figure's size (inches) is its printed size; no text on it is smaller
+than :data:`MIN_TEXT_PT`; a PNG is written at :data:`DPI` (vector formats are
+resolution-free); every panel has a title and axis labels with their unit in brackets
+(``[-]`` for a pure number); every legend entry names an artist visible in the figure;
+no legend sits over a panel's plotting area. :func:`problems` reads a drawn figure back
+against them.
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 from pathlib import Path
 
 FORMATS = ("png", "svg", "pdf")
 """Image formats a figure can be written in."""
+DPI = 150
+"""Resolution of a PNG (dots per inch of the figure's printed size)."""
+MIN_TEXT_PT = 8.0
+"""The smallest text on a figure (points at its printed size)."""
+UNIT = re.compile(r"\[[^\]]+\]")
+"""An axis label's unit: the text in brackets, as ``force [N]``."""
 
 
 def format_list(text: str) -> tuple[str, ...]:
@@ -24,9 +39,99 @@ def format_list(text: str) -> tuple[str, ...]:
     return words
 
 
-def save(fig, stem: Path, formats=("png",), dpi: int = 110) -> list[Path]:
-    """Write ``fig`` as ``stem.<format>`` for each of ``formats``; their paths."""
+def save(fig, stem: Path, formats=("png",)) -> list[Path]:
+    """Write ``fig`` as ``stem.<format>`` for each of ``formats`` (PNG at :data:`DPI`);
+    their paths.
+    """
     paths = [stem.with_suffix(f".{fmt}") for fmt in formats]
     for path in paths:
-        fig.savefig(path, dpi=dpi)
+        fig.savefig(path, dpi=DPI)
     return paths
+
+
+def problems(fig) -> list[str]:
+    """What in the drawn ``fig`` breaks the print rules (module doc), one line each;
+    empty when it keeps them all.
+    """
+    if not hasattr(fig.canvas, "get_renderer"):  # a closed pyplot figure: draw it again
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    found = _small_text(fig) + _unlabelled(fig)
+    renderer = fig.canvas.get_renderer()
+    areas = [ax.bbox for ax in fig.axes if ax.get_visible() and ax.axison]
+    for legend in fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]:
+        box = legend.get_window_extent(renderer)
+        if any(box.overlaps(area) for area in areas):
+            found.append("a legend sits over a panel's plotting area")
+        for text in legend.get_texts():
+            if not any(_shows(a) for a in _labelled(fig, text.get_text())):
+                found.append(f"legend entry {text.get_text()!r} has no visible artist")
+    return found
+
+
+def _small_text(fig) -> list[str]:
+    from matplotlib.text import Text
+
+    return [f"text {t.get_text()[:40]!r} at {t.get_fontsize():g} pt"
+            for t in fig.findobj(Text)
+            if t.get_visible() and t.get_text().strip() and t.get_fontsize() < MIN_TEXT_PT]
+
+
+def _unlabelled(fig) -> list[str]:
+    found = [] if fig.get_suptitle() else ["no figure title"]
+    for ax in fig.axes:
+        if not (ax.get_visible() and ax.axison and (ax.lines or ax.collections)):
+            continue
+        if not any(ax.get_title(loc=loc) for loc in ("left", "center", "right")):
+            found.append("a panel without a title")
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            if not UNIT.search(label):
+                found.append(f"axis label {label!r} without a unit in brackets")
+    return found
+
+
+def _labelled(fig, label: str) -> list:
+    return [a for ax in fig.axes for a in ax.lines + ax.collections if a.get_label() == label]
+
+
+def _shows(artist) -> bool:
+    """Whether ``artist`` (a line or a filled region) has something visible in its view."""
+    import numpy as np
+
+    if not artist.get_visible() or (artist.get_alpha() is not None and artist.get_alpha() <= 0):
+        return False
+    ax = artist.axes
+    if hasattr(artist, "get_xydata"):
+        if artist.get_linestyle() in ("None", "none", "") and artist.get_marker() in (
+                "None", "none", "", None):
+            return False
+        xy = np.asarray(artist.get_xydata(), float).reshape(-1, 2)
+    else:
+        paths = artist.get_paths()
+        xy = np.vstack([p.vertices for p in paths]) if paths else np.zeros((0, 2))
+    (x0, x1), (y0, y1) = sorted(ax.get_xlim()), sorted(ax.get_ylim())
+    inside = (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) & (xy[:, 1] <= y1)
+    return bool(inside.any())
+
+
+def coinciding(curves: dict, tol: float) -> list[tuple[str, ...]]:
+    """Groups (two or more names, in ``curves``' order) of curves that lie within ``tol``
+    of each other at every instant and are missing (NaN) at the same instants: drawn, they
+    would be one line. ``curves``: name -> values over the same instants.
+    """
+    import numpy as np
+
+    groups: list[list[str]] = []
+    for name, values in curves.items():
+        values = np.asarray(values, float)
+        for group in groups:
+            first = np.asarray(curves[group[0]], float)
+            same = np.isnan(first) == np.isnan(values)
+            if same.all() and np.all(np.abs(np.nan_to_num(first - values)) <= tol):
+                group.append(name)
+                break
+        else:
+            groups.append([name])
+    return [tuple(g) for g in groups if len(g) > 1]

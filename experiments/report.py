@@ -174,11 +174,6 @@ def _g(value: float) -> str:
 UNIT_AXIS = {"N": "force [N]", "N m": "moment [N m]"}
 """The y label of a panel by the unit of its components."""
 
-KIND_WORDS = {"bearing-locating": "locating bearing", "bearing-floating": "floating bearing",
-              "slip": "slip joint", "trunnion-radial": "trunnion, radial",
-              "end-face": "end face"}
-
-
 @dataclass(frozen=True)
 class Panel:
     """One panel: the components of one contact that share a unit (a slip joint's
@@ -192,7 +187,7 @@ class Panel:
 
     @property
     def title(self) -> str:
-        kind = KIND_WORDS.get(self.contact.kind, self.contact.kind)
+        kind = self.contact.element_kind.words(self.contact)
         split = len(set(self.contact.units)) > 1
         what = {"N": ", forces", "N m": ", moments"}[self.unit] if split else ""
         return f"{self.contact.name} ({kind}{what})"
@@ -307,7 +302,7 @@ def write_figure(op: Operator, h: dict[str, np.ndarray], stem: Path,
 
     with plt.rc_context(STYLE):
         fig = figure(op, h, overlay)
-        paths = save(fig, stem, formats, dpi=100)
+        paths = save(fig, stem, formats)
     plt.close(fig)
     return paths
 

@@ -150,7 +150,7 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
         ax.set_ylabel("force [N]")
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     fig.tight_layout()
-    paths = save(fig, out / "secondary", formats, dpi=110)
+    paths = save(fig, out / "secondary", formats)
     plt.close(fig)
     return [out / "secondary.csv", *paths]
 
