@@ -2,7 +2,6 @@
 
 import re
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 from cardan_forces.driveline.loading import load_scene
@@ -39,64 +38,6 @@ def test_sign_test_tells_a_coin_toss_from_a_bias():
     assert share == 0.8 and p < 1e-6 and rel == 0.05
     ties = repro._sign_test([np.zeros(2000)], scale, 20)
     assert ties[1] == 0 and ties[2] == 1.0
-
-
-def test_y_limits_follow_the_rigid_methods_not_the_spikes():
-    low, high = figures._limits([np.array([500.0, 520.0]), np.array([510.0, 530.0])])
-    assert 470 < low < 500 and 530 < high < 560  # margin: 5 % of the largest load
-    flat_low, flat_high = figures._limits([np.full(5, 100.0)])
-    assert flat_low < 100 < flat_high  # a flat line gets a margin, not a zero range
-
-
-def test_an_open_set_is_hatched_with_its_finite_bound_drawn():
-    t = np.linspace(0, 1, 11)
-    fig, ax = plt.subplots()
-    handles, note = figures._draw_set(ax, t, np.full(11, 10.0), np.full(11, np.inf), 0.0, 50.0)
-    assert "open above (100 % of 11 instants)" in note and "lower bound 10 to 10 N, dashed" \
-        in note
-    assert figures.SET_LABEL not in handles and figures.OPEN_LABEL in handles
-    line = handles[figures.BOUND_LABEL]
-    assert np.allclose(line.get_ydata(), 10.0)  # the finite bound, where it is drawn
-    _, note = figures._draw_set(ax, t, np.full(11, -90.0), np.full(11, np.inf), 0.0, 50.0)
-    assert "out of view" in note
-    plt.close(fig)
-
-
-def test_a_band_is_drawn_exactly_where_both_bounds_are_finite():
-    """Bounded on the first half (lo = t, hi = t + 2), open above on the second: the
-    shaded band spans [lo, hi] over the first half only, the rest is hatched to the edge."""
-    t = np.linspace(0, 1, 11)
-    lo, hi = t.copy(), np.where(t <= 0.5, t + 2.0, np.inf)
-    fig, ax = plt.subplots()
-    handles, note = figures._draw_set(ax, t, lo, hi, -1.0, 5.0)
-    band = np.vstack([p.vertices for p in handles[figures.SET_LABEL].get_paths()])
-    assert band[:, 0].min() == 0.0 and band[:, 0].max() == 0.5
-    for x in (0.0, 0.2, 0.5):
-        at = band[np.isclose(band[:, 0], x), 1]
-        assert np.isclose(at.min(), x) and np.isclose(at.max(), x + 2.0)
-    hatch = np.vstack([p.vertices for p in handles[figures.OPEN_LABEL].get_paths()])
-    assert np.isclose(hatch[:, 0].min(), 0.6) and np.isclose(hatch[:, 1].max(), 5.0)  # to the edge
-    assert "open above (45 % of 11 instants)" in note
-    plt.close(fig)
-
-
-def test_the_y_range_holds_every_bold_curve_and_only_raw_spikes_are_clipped():
-    """Rigid methods at 500-530 N, the penalty's average 244-742 N (Fig. 14(a)'s case),
-    raw spikes 0-1500 N: the axis holds the rigid curves and the average; the raw line
-    leaves it, and the panel says so."""
-    t = np.linspace(0, 5, 201)
-    avg = 493 + 249 * np.sin(t)
-    cols = {"t": t, "q_paper": 500 + 30 * (t / 5), "q_positive": np.full_like(t, 515.0),
-            "q_penalty": np.where(np.arange(201) % 20 == 0, 1500.0, avg) * (t > 0.01),
-            "q_penalty_avg": avg}
-    fig, ax = plt.subplots()
-    handles = figures._draw_panel(ax, cols, figures.Panel("q", "q", "N", ("paper", "positive")))
-    low, high = ax.get_ylim()
-    for name in ("q_paper", "q_positive", "q_penalty_avg"):
-        assert low < cols[name].min() and cols[name].max() < high
-    assert "raw penalty clipped (impacts): it spans 0 to 1500" in ax.get_title(loc="right")
-    assert figures.method_label("paper") in handles  # the paper's method, as computed here
-    plt.close(fig)
 
 
 def test_speed_smoothing_keeps_the_twice_per_revolution_fluctuation():
