@@ -1,12 +1,12 @@
 """Contact formulations: problems built from a driveline state (DESIGN §2).
 
 ``FORMULATIONS[name](op, i)`` builds the problem of formulation ``name`` at instant
-``i`` of the equilibrium operator ``op``.
+``i`` of the equilibrium operator ``op``; each entry is a
+:class:`~cardan_forces.formulations.registry.Formulation` record, the one place that
+says how the package uses that formulation.
 """
 
-from .convex import FORMULATIONS as _CONVEX
-from .paper import build_paper
+from .registry import FALLBACK, FORMULATIONS, Formulation, UnknownFormulation, formulation, where
 
-FORMULATIONS = {"paper": build_paper, **_CONVEX}
-
-__all__ = ["FORMULATIONS"]
+__all__ = ["FALLBACK", "FORMULATIONS", "Formulation", "UnknownFormulation", "formulation",
+           "where"]

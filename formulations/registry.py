@@ -1,0 +1,136 @@
+"""The formulation registry: one :class:`Formulation` record per contact formulation,
+the one place that says how its problem is built and how the package uses it (DESIGN
+§2). The study layer, the bench, the hard cases, sweeps, the paper's figures, reports
+and export read these records; none of them keeps a table of formulations of its own.
+
+``FORMULATIONS[name](op, i)`` builds formulation ``name``'s problem at instant ``i`` of
+the equilibrium operator ``op`` (a record is called as its builder is).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from .convex import (
+    compliance,
+    friction,
+    lcp,
+    min_max,
+    min_norm,
+    min_norm_scaled,
+    positive,
+    socp_face,
+)
+from .paper import build_paper
+from .problems import LCP, LS, NLS, QP, Conic
+
+FALLBACK = "clarabel"
+"""Tried after a formulation's own backends (a core dependency that takes every convex
+class)."""
+
+
+@dataclass(frozen=True)
+class Formulation:
+    """One contact formulation.
+
+    ``build(op, i)`` makes its problem, of one of the classes ``problem``; ``label`` names it in
+    figures and reports; ``physical``: its answer is a physical selection of the rigid
+    solution set (a contact force law the line could obey), else a comparison only;
+    ``backends``: the backends that solve it by default, best first (then
+    :data:`FALLBACK`, then any that takes it); ``least_norm_batch``: the stacked
+    least-norm batch (``numpy-batched``) takes it, and its batched runs are held to
+    ``target_rate`` instants per second by the bench; ``drawn``: drawn in the paper's
+    figures by default; ``beside_penalty``: compared with the penalty simulation on the
+    released line; ``job_cost``: relative CPU cost of a run over the whole time grid by
+    its default backend (the paper figures' worker queue starts the dearest first);
+    ``exported``: in the default export set (a QP that qpbenchmark takes).
+    """
+
+    name: str
+    build: Callable[..., object]
+    problem: tuple[type, ...]
+    label: str
+    physical: bool
+    backends: tuple[str, ...]
+    least_norm_batch: bool = False
+    target_rate: float | None = None
+    drawn: bool = False
+    beside_penalty: bool = False
+    job_cost: float = 1.0
+    exported: bool = False
+
+    def __call__(self, op, i: int):
+        """The problem at instant ``i`` of ``op``."""
+        return self.build(op, i)
+
+    @property
+    def exportable(self) -> bool:
+        """Its problems are QPs or conic problems (a solver-independent file form)."""
+        return all(issubclass(cls, (LS, QP, Conic)) for cls in self.problem)
+
+
+def _hertz(op, i: int):
+    """``compliance`` with Hertz's law (exponent 3/2 for the joints' line contacts)."""
+    return compliance(op, i, law="hertz")
+
+
+_DAQP_FIRST = ("qpsolvers-daqp", "clarabel")
+
+REGISTRY: tuple[Formulation, ...] = (
+    Formulation("paper", build_paper, (NLS,),
+                "the paper's method (as computed here; end faces at the rim, eqs. 33-36)",
+                physical=False, backends=("scipy-fsolve", "scipy-root-lm"), drawn=True,
+                job_cost=4.0),
+    Formulation("min_norm", min_norm, (LS,), "min_norm (least norm: end faces may pull)",
+                physical=False, backends=("numpy-kkt",), least_norm_batch=True,
+                target_rate=1e5, beside_penalty=True, job_cost=0.6, exported=True),
+    Formulation("min_norm_scaled", min_norm_scaled, (LS,),
+                "min_norm_scaled (least norm, moments per reference length)",
+                physical=False, backends=("numpy-kkt",), least_norm_batch=True),
+    Formulation("positive", positive, (QP,), "positive (least norm, end faces push)",
+                physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
+                target_rate=1e5, drawn=True, beside_penalty=True, exported=True),
+    Formulation("min_max", min_max, (Conic,),
+                "min_max (comparison only: both end faces of a pair may push)",
+                physical=False, backends=("clarabel",), drawn=True, job_cost=2.0),
+    Formulation("socp_face", socp_face, (Conic,),
+                "socp_face (end faces with a centre-of-pressure cone)",
+                physical=True, backends=("clarabel",)),
+    Formulation("lcp", lcp, (LCP,), "lcp (positive as a complementarity problem)",
+                physical=True, backends=("lcp-lemke",), least_norm_batch=True,
+                target_rate=1e5),
+    Formulation("friction", friction, (Conic,), "friction (positive with Coulomb friction)",
+                physical=True, backends=("clarabel",)),
+    Formulation("compliance", compliance, (QP, Conic), "compliance (linear contact stiffness)",
+                physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
+                target_rate=1e5, drawn=True, beside_penalty=True, job_cost=0.5,
+                exported=True),
+    Formulation("compliance_hertz", _hertz, (Conic,), "compliance_hertz (Hertz contact law)",
+                physical=True, backends=("clarabel",), beside_penalty=True, job_cost=2.7),
+)
+
+FORMULATIONS: dict[str, Formulation] = {f.name: f for f in REGISTRY}
+"""The formulations by name, in the order tables and figures list them."""
+
+
+class UnknownFormulation(KeyError):
+    """A formulation name the registry does not hold."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else "unknown formulation"
+
+
+def formulation(name: str) -> Formulation:
+    """The record of ``name``; :class:`UnknownFormulation` naming the known ones if none."""
+    try:
+        return FORMULATIONS[name]
+    except (KeyError, TypeError):
+        raise UnknownFormulation(f"unknown formulation {name!r}; known: "
+                                 f"{', '.join(FORMULATIONS)}") from None
+
+
+def where(**wanted) -> tuple[str, ...]:
+    """Names of the formulations whose fields equal ``wanted`` (e.g. ``drawn=True``)."""
+    return tuple(f.name for f in REGISTRY
+                 if all(getattr(f, key) == value for key, value in wanted.items()))
