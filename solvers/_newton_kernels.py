@@ -1,0 +1,455 @@
+"""Compiled Newton method of the ``newton`` family (numba, extra ``numba``).
+
+The same method as :func:`.newton_.newton_numpy`, its NumPy reference, one instant
+after the other (warm-started from the instant before where asked), with every array
+of an instant in scratch allocated once per call. Two places differ in how, not what:
+the left null space of ``E`` comes from the Cholesky factor of the nominal Hessian
+``H0`` (a pivot below ``NULL_RTOL`` of its diagonal entry marks a row dependent on the
+rows before it; its null vector solves the leading block, then the vectors are made
+orthonormal) where the reference takes ``H0``'s eigenvectors, and a warm start's fit
+of ``u`` to the deformations is weighted by ``H0``'s slopes where the reference takes
+plain least squares. Both span the same subspace and reach the same optimum.
+
+Nothing raises on numbers: non-finite data end with status 3, a factor that is not
+positive definite with status 4 (:data:`.newton_.REASONS`). No fastmath: every
+operation rounds as IEEE 754 says, so an instant's answer does not depend on the CPU
+numba compiles for beyond the last bits of fused multiply-adds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..driveline.compiled import HAVE_NUMBA, njit
+
+if not HAVE_NUMBA:  # an optional extra: the caller takes the NumPy reference
+    raise ImportError("numba is not installed")
+
+
+@njit(cache=True)
+def _contact(dg, w, signed, n, k, g):
+    """One contact at deformations ``dg`` (its first ``w`` entries): ``(r, slope, ratio,
+    s, norm)`` as :func:`.newton_.evaluate`'s.
+    """
+    norm = 0.0
+    for j in range(w):
+        norm += dg[j] * dg[j]
+    norm = np.sqrt(norm)
+    s = dg[0] if signed else norm
+    over = max(s - g, 0.0)
+    loaded = s > g or (n == 1.0 and s >= g)
+    r = (over / k) ** n if loaded else 0.0
+    slope = n * (over / k) ** (n - 1.0) / k if loaded else 0.0
+    ratio = r / s if s > 0 else slope
+    return r, slope, ratio, s, norm
+
+
+@njit(cache=True)
+def _unit(dg, w, signed, norm, out):
+    """The contact's direction into ``out`` (``[1]`` for a pushing column)."""
+    for j in range(w):
+        if signed:
+            out[j] = 1.0
+        elif norm > 0:
+            out[j] = dg[j] / norm
+        else:
+            out[j] = 0.0
+
+
+@njit(cache=True)
+def _state(E, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit):
+    """At ``u``: ``d = E'u``, the forces ``f``, per contact ``ratio``, ``slope`` and
+    ``Y_c = E_c unit_c`` (m, G).
+    """
+    m, nv = E.shape
+    for j in range(nv):
+        acc = 0.0
+        for i in range(m):
+            acc += E[i, j] * u[i]
+        d[j] = acc
+    for c in range(members.shape[0]):
+        w = 0
+        for j in range(members.shape[1]):
+            if mask[c, j] > 0:
+                dg[j] = d[members[c, j]]
+                w += 1
+        r, slope[c], ratio[c], s, norm = _contact(dg, w, signed[c], n[c], k[c], g[c])
+        _unit(dg, w, signed[c], norm, unit)
+        for i in range(m):
+            Y[i, c] = 0.0
+        for j in range(w):
+            col = members[c, j]
+            f[col] = r * unit[j]
+            for i in range(m):
+                Y[i, c] += E[i, col] * unit[j]
+
+
+@njit(cache=True)
+def _hessian(E, members, mask, ratio, slope, Y, shift, V, nk, rho, H):
+    """``H = sum_c E_c H_c E_c' + shift I + rho V V'`` (lower triangle and mirror)."""
+    m = E.shape[0]
+    for i in range(m):
+        for j in range(i + 1):
+            H[i, j] = 0.0
+    for c in range(members.shape[0]):
+        extra = slope[c] - ratio[c]
+        for p in range(members.shape[1]):
+            if mask[c, p] > 0:
+                col = members[c, p]
+                b = ratio[c]
+                if b != 0.0:
+                    for i in range(m):
+                        a = b * E[i, col]
+                        for j in range(i + 1):
+                            H[i, j] += a * E[j, col]
+        if extra != 0.0:
+            for i in range(m):
+                a = extra * Y[i, c]
+                for j in range(i + 1):
+                    H[i, j] += a * Y[j, c]
+    _finish(H, shift, V, nk, rho)
+
+
+@njit(cache=True)
+def _finish(H, shift, V, nk, rho):
+    """Add ``shift I + rho V V'`` to the lower triangle of ``H`` and mirror it."""
+    m = H.shape[0]
+    for i in range(m):
+        H[i, i] += shift
+        for j in range(i + 1):
+            for q in range(nk):
+                H[i, j] += rho * V[i, q] * V[j, q]
+            H[j, i] = H[i, j]
+
+
+@njit(cache=True)
+def _cholesky(H, L, dependent, rtol):
+    """Lower Cholesky factor of ``H`` into ``L``. With ``rtol > 0`` a pivot below ``rtol``
+    of its diagonal entry marks the row dependent (``dependent[p]``, its row and column
+    of ``L`` zero); with ``rtol = 0`` such a pivot is a failure. Returns whether it
+    succeeded (every pivot finite and positive, or marked).
+    """
+    m = H.shape[0]
+    for p in range(m):
+        dependent[p] = False
+        acc = H[p, p]
+        for q in range(p):
+            acc -= L[p, q] * L[p, q]
+        if rtol > 0 and acc <= rtol * H[p, p]:
+            dependent[p] = True
+            for j in range(m):
+                L[j, p] = 0.0
+                L[p, j] = 0.0
+            continue
+        if not acc > 0 or not np.isfinite(acc):
+            return False
+        L[p, p] = np.sqrt(acc)
+        for j in range(p + 1, m):
+            acc = H[j, p]
+            for q in range(p):
+                acc -= L[j, q] * L[p, q]
+            L[j, p] = acc / L[p, p]
+        for j in range(p):
+            L[j, p] = 0.0
+    return True
+
+
+@njit(cache=True)
+def _solve(L, rhs, x, dependent, upto):
+    """``x = (L L')^-1 rhs`` over the rows below ``upto`` not ``dependent``."""
+    for i in range(upto):
+        if dependent[i]:
+            x[i] = 0.0
+            continue
+        acc = rhs[i]
+        for q in range(i):
+            acc -= L[i, q] * x[q]
+        x[i] = acc / L[i, i]
+    for i in range(upto - 1, -1, -1):
+        if dependent[i]:
+            continue
+        acc = x[i]
+        for q in range(i + 1, upto):
+            acc -= L[q, i] * x[q]
+        x[i] = acc / L[i, i]
+
+
+@njit(cache=True)
+def _null_space(H0, L, dependent, V, rhs, x, rtol):
+    """Orthonormal null vectors of ``H0`` into ``V``'s first columns; returns their
+    count, or -1 where the factor fails. Each dependent row ``p`` gives ``v_p = 1``,
+    ``v_I = -H0_II^-1 H0_Ip`` over the independent rows before it.
+    """
+    m = H0.shape[0]
+    if not _cholesky(H0, L, dependent, rtol):
+        return -1
+    nk = 0
+    for p in range(m):
+        if not dependent[p]:
+            continue
+        for i in range(m):
+            rhs[i] = -H0[i, p]
+        _solve(L, rhs, x, dependent, p)
+        for i in range(m):
+            V[i, nk] = x[i] if i < p else 0.0
+        V[p, nk] = 1.0
+        for q in range(nk):  # modified Gram-Schmidt against the vectors before
+            dot = 0.0
+            for i in range(m):
+                dot += V[i, q] * V[i, nk]
+            for i in range(m):
+                V[i, nk] -= dot * V[i, q]
+        dot = 0.0
+        for i in range(m):
+            dot += V[i, nk] * V[i, nk]
+        for i in range(m):
+            V[i, nk] /= np.sqrt(dot)
+        nk += 1
+    return nk
+
+
+@njit(cache=True)
+def _project(v, V, nk):
+    """``v - V V'v`` in place."""
+    for q in range(nk):
+        dot = 0.0
+        for i in range(len(v)):
+            dot += V[i, q] * v[i]
+        for i in range(len(v)):
+            v[i] -= dot * V[i, q]
+
+
+@njit(cache=True)
+def _nominal(E, e, members, mask, n, k, H0):
+    """``H0`` (:func:`.newton_.nominal`) into ``H0``; returns ``rho``, its mean diagonal."""
+    m = E.shape[0]
+    F = 0.0
+    for i in range(m):
+        F += e[i] * e[i]
+    F = max(np.sqrt(F), 1e-300)
+    for i in range(m):
+        for j in range(i + 1):
+            H0[i, j] = 0.0
+    for c in range(members.shape[0]):
+        c0 = n[c] * F ** (1.0 - 1.0 / n[c]) / k[c]
+        for p in range(members.shape[1]):
+            if mask[c, p] > 0:
+                col = members[c, p]
+                for i in range(m):
+                    a = c0 * E[i, col]
+                    for j in range(i + 1):
+                        H0[i, j] += a * E[j, col]
+    trace = 0.0
+    for i in range(m):
+        trace += H0[i, i]
+        for j in range(i):
+            H0[j, i] = H0[i, j]
+    return max(trace / m, 1e-300)
+
+
+@njit(cache=True)
+def _slope(d, delta, t, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg, unit):
+    """``Phi``'s first and second derivative along ``du`` at ``u + t du``
+    (``delta = E'du``, ``e_du = e'du``).
+    """
+    first = -e_du
+    second = 0.0
+    for i in range(len(u)):
+        first += rho_soft * (u[i] + t * du[i]) * du[i]
+        second += rho_soft * du[i] * du[i]
+    for c in range(members.shape[0]):
+        w = 0
+        for j in range(members.shape[1]):
+            if mask[c, j] > 0:
+                dg[j] = d[members[c, j]] + t * delta[members[c, j]]
+                w += 1
+        r, slope, ratio, s, norm = _contact(dg, w, signed[c], n[c], k[c], g[c])
+        _unit(dg, w, signed[c], norm, unit)
+        along, length = 0.0, 0.0
+        for j in range(w):
+            dj = delta[members[c, j]]
+            along += unit[j] * dj
+            length += dj * dj
+        first += r * along
+        second += ratio * length + (slope - ratio) * along * along
+    return first, second
+
+
+@njit(cache=True)
+def _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg,
+                 unit, ls_rtol, ls_max):
+    """:func:`.newton_.line_search`: the exact step length (0 where the slope at 0 is
+    not negative).
+    """
+    start, _ = _slope(d, delta, 0.0, u, du, e_du, rho_soft, members, mask, signed, n, k,
+                      g, dg, unit)
+    if not start < 0:
+        return 0.0
+    lo, hi, t = 0.0, np.inf, 1.0
+    for _ in range(ls_max):
+        first, second = _slope(d, delta, t, u, du, e_du, rho_soft, members, mask, signed,
+                               n, k, g, dg, unit)
+        if abs(first) <= ls_rtol * abs(start):
+            return t
+        if first < 0:
+            lo = t
+        else:
+            hi = t
+        guess = t - first / second if second > 0 else np.inf
+        if not (lo < guess < hi):
+            guess = 2.0 * t if hi == np.inf else 0.5 * (lo + hi)
+        t = guess
+    return lo if hi == np.inf else 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _finite(E, e, k, g):
+    """Whether one instant's data are finite and its stiffnesses positive."""
+    for x in E.ravel():
+        if not np.isfinite(x):
+            return False
+    for x in e:
+        if not np.isfinite(x):
+            return False
+    for c in range(len(k)):
+        if not (np.isfinite(k[c]) and np.isfinite(g[c]) and k[c] > 0):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _fit(E, e, hint, members, mask, n, k, L, dependent, rhs, u):
+    """``u`` whose deformations fit ``hint`` in ``H0``'s weights: ``(E D0 E') u = E D0
+    hint`` through ``L`` (the factor of ``H0 + rho V V' + mu I``).
+    """
+    m = E.shape[0]
+    F = 0.0
+    for i in range(m):
+        F += e[i] * e[i]
+    F = max(np.sqrt(F), 1e-300)
+    for i in range(m):
+        rhs[i] = 0.0
+    for c in range(members.shape[0]):
+        c0 = n[c] * F ** (1.0 - 1.0 / n[c]) / k[c]
+        for p in range(members.shape[1]):
+            if mask[c, p] > 0:
+                col = members[c, p]
+                for i in range(m):
+                    rhs[i] += c0 * E[i, col] * hint[col]
+    _solve(L, rhs, u, dependent, m)
+
+
+@njit(cache=True)
+def _gradient(E, e, f, u, rho_soft, V, nk, grad):
+    """``(I - V V')(E f - e + rho_soft u)`` into ``grad``; returns its norm."""
+    m, nv = E.shape
+    for i in range(m):
+        acc = -e[i] + rho_soft * u[i]
+        for j in range(nv):
+            acc += E[i, j] * f[j]
+        grad[i] = acc
+    _project(grad, V, nk)
+    norm = 0.0
+    for i in range(m):
+        norm += grad[i] * grad[i]
+    return np.sqrt(norm)
+
+
+@njit(cache=True)
+def _instant(E, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, s, u):
+    """One instant into ``u``; returns ``(status, iterations)`` (``groups``: members,
+    mask, signed, n; ``s``: the scratch of :func:`newton`).
+    """
+    members, mask, signed, n = groups
+    H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, dg, unit = s
+    null_rtol, reg_rtol, ls_rtol, ls_max = params
+    m = E.shape[0]
+    if not _finite(E, e, k, g):
+        return 3, 0
+    rho = _nominal(E, e, members, mask, n, k, H0)
+    nk = _null_space(H0, L, dependent, V, rhs, du, null_rtol)
+    if nk < 0:
+        return 4, 0
+    rho_soft, shift = soften * rho, reg_rtol * rho
+    for i in range(m):  # the first step's matrix: H0 with the null space held out
+        for j in range(m):
+            H[i, j] = H0[i, j]
+    _finish(H, shift, V, nk, rho)
+    if not _cholesky(H, L, dependent, 0.0):
+        return 4, 0
+    for i in range(m):
+        u[i] = 0.0
+    if use_hint:
+        _fit(E, e, hint, members, mask, n, k, L, dependent, rhs, u)
+        _project(u, V, nk)
+    scale = 0.0
+    for i in range(m):
+        scale += e[i] * e[i]
+    scale = max(np.sqrt(scale), 1e-300)
+    for it in range(max_iter + 1):
+        _state(E, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit)
+        norm = _gradient(E, e, f, u, rho_soft, V, nk, grad)
+        if not np.isfinite(norm):
+            return 3, it
+        if norm <= tol * scale:
+            return 0, it
+        if it == max_iter:
+            break
+        if it > 0 or use_hint:
+            _hessian(E, members, mask, ratio, slope, Y, shift + rho_soft, V, nk, rho, H)
+            if not _cholesky(H, L, dependent, 0.0):
+                return 4, it
+        for i in range(m):
+            rhs[i] = -grad[i]
+        _solve(L, rhs, du, dependent, m)
+        t = _step(E, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol, ls_max)
+        if t == 0.0:
+            return 2, it
+    return 1, max_iter
+
+
+@njit(cache=True)
+def _step(E, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol, ls_max):
+    """The line search along ``du`` from ``u`` and the move; returns the length."""
+    members, mask, signed, n = groups
+    m, nv = E.shape
+    e_du = 0.0
+    for i in range(m):
+        e_du += e[i] * du[i]
+    for j in range(nv):
+        acc = 0.0
+        for i in range(m):
+            acc += E[i, j] * du[i]
+        delta[j] = acc
+    t = _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg,
+                     unit, ls_rtol, int(ls_max))
+    for i in range(m):
+        u[i] += t * du[i]
+    return t
+
+
+@njit(cache=True)
+def newton(E, e, members, mask, signed, n, k, g, d0, start, chain, tol, max_iter, soften,
+           params):
+    """:func:`.newton_.newton_numpy` compiled: ``(u, d, status, iterations)``."""
+    T, m, nv = E.shape
+    G, w = members.shape
+    scratch = (np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)),
+               np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
+               np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G), np.zeros(G),
+               np.zeros((m, G)), np.zeros(w), np.zeros(w))
+    u_out, d_out = np.zeros((T, m)), np.zeros((T, nv))
+    status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
+    groups = (members, mask, signed, n)
+    for i in range(T):
+        warm = chain and i > 0
+        hint = d_out[i - 1] if warm else d0[i]
+        status[i], iters[i] = _instant(E[i], e[i], groups, k[i], g[i], hint,
+                                       warm or start[i], tol, max_iter, soften, params,
+                                       scratch, u_out[i])
+        for j in range(nv):
+            acc = 0.0
+            for r in range(m):
+                acc += E[i, r, j] * u_out[i, r]
+            d_out[i, j] = acc
+    return u_out, d_out, status, iters
