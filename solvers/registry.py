@@ -50,7 +50,7 @@ if TYPE_CHECKING:  # settings_profiles looks backends up here: a type-only impor
     from .settings_profiles import Profile
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
-            "numpy_batched_", "moreau_", "reduced_")
+            "numpy_batched_", "moreau_", "reduced_", "newton_")
 """Adapter modules of this package, loaded lazily by :func:`available`."""
 
 
