@@ -18,6 +18,7 @@ this module, so that each piece of that knowledge has one home:
 from __future__ import annotations
 
 import dataclasses
+import functools
 import gc
 import math
 import time
@@ -31,8 +32,9 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.checks import Stacks
 from cardan_forces.solvers.ranging import HAVE_HIGHSPY, Ranges, ranges
-from cardan_forces.solvers.record import Stacks, at_instants
+from cardan_forces.solvers.record import Results
 from cardan_forces.solvers.registry import Pending, check, solve_unchecked, takes
 
 # ---------------------------------------------------------------------------- backends
@@ -81,8 +83,8 @@ class History:
     """One formulation solved by one backend over instants: forces ``(T, n)`` in the
     operator's names (N, N m), NaN where an instant was not ``solved``; the statuses;
     the solver's seconds (setup + solve, summed); each instant's wall time of the
-    package's ``solve`` (s); and the records (empty for a history that has none, the
-    penalty simulation's).
+    package's ``solve`` (s); and the run's :class:`~cardan_forces.solvers.record.Results`
+    (``None`` for a history that has none, the penalty simulation's).
     """
 
     formulation: str
@@ -93,11 +95,16 @@ class History:
     seconds: float
     instants: tuple[int, ...] = ()
     wall_s: tuple[float, ...] = ()
-    records: tuple[Record, ...] = field(default=(), repr=False)
+    results: Results | None = field(default=None, repr=False)
     checks_s: float | None = None
     """The fastest of the check passes over the deferred answers, per instant (s), where
     :func:`solve_over_time` ran more than one (``check_passes``); ``None`` otherwise.
-    The records' own ``checks_s`` is the first pass, the one the run's wall time holds."""
+    The results' own ``checks_s`` is the first pass, the one the run's wall time holds."""
+
+    @functools.cached_property
+    def records(self) -> tuple[Record, ...]:
+        """Each instant's record, made from :attr:`results` when first asked for."""
+        return () if self.results is None else tuple(self.results)
 
     @property
     def solved(self) -> int:
@@ -110,15 +117,20 @@ class History:
         return max(self.statuses, default=Status.FAILED)
 
     def answers(self) -> np.ndarray:
-        """Forces ``(T, n)`` of every record with an answer (``inaccurate`` too)."""
+        """Forces ``(T, n)`` of every instant with an answer (``inaccurate`` too)."""
         n = self.forces.shape[1]
-        return np.array([r.x[:n] if r.status.has_answer else np.full(n, np.nan)
-                         for r in self.records]).reshape(-1, n)
+        if self.results is None:
+            return np.zeros((0, n))
+        return np.array([x[:n] if s.has_answer else np.full(n, np.nan)
+                         for x, s in zip(self.results.x, self.results.status)]).reshape(-1, n)
 
     def worst(self, keys: Sequence[str]) -> dict[str, float]:
-        """The largest of each residual over the instants (``inf`` where one failed)."""
-        return {k: max((r.residuals.get(k, math.inf) for r in self.records), default=math.inf)
-                for k in keys}
+        """The largest of each residual over the instants (``inf`` where one failed or
+        has none of it).
+        """
+        found = self.results.residuals if self.results is not None else {}
+        return {k: float(np.nan_to_num(found[k], nan=math.inf).max(initial=-math.inf))
+                if k in found and len(found[k]) else math.inf for k in keys}
 
     def jumps(self) -> np.ndarray:
         """Per instant ``max_j |x_j(t_i) - x_j(t_{i-1})| / max_{i,j} |x_{i,j}|`` over the
@@ -177,18 +189,19 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
         previous = np.asarray(record.z, float) if answered else None
         if progress and (k + 1) % 200 == 0:
             progress(f"{formulation} ({solver}) {k + 1}/{len(picks)} instants")
-    records, walls, fastest = _checked(records, walls, stacks, picks, check_passes)
-    history = history_of(op, formulation, solver, picks[: len(records)], records, walls)
+    results, walls, fastest = _checked(records, walls, stacks, picks, check_passes)
+    history = history_of(op, formulation, solver, picks[: len(records)], results, walls)
     return history if fastest is None else dataclasses.replace(history, checks_s=fastest)
 
 
 def _checked(records: list, walls: list, stacks, picks,
-             passes: int = 1) -> tuple[list[Record], list[float], float | None]:
-    """The deferred solves among ``records`` checked at once (:func:`check`), each
-    instant's wall time with its share of the checks (``stacks``: the problems' data
-    stacked beforehand, one row per instant, taken at the checked ones' ``picks``), and
-    the fastest of ``passes`` checks of them per instant (``None`` for one pass, or
-    where none was deferred); the records and the wall times are the first pass's.
+             passes: int = 1) -> tuple[Results, list[float], float | None]:
+    """The deferred solves among ``records`` checked at once (:func:`check`), as the
+    run's results, each instant's wall time with its share of the checks (``stacks``:
+    the problems' data stacked beforehand, one row per instant, taken at the checked
+    ones' ``picks``), and the fastest of ``passes`` checks of them per instant (``None``
+    for one pass, or where none was deferred); the results and the wall times are the
+    first pass's.
 
     The solves' young garbage is collected first (``gc.collect(1)``) and that time is
     the solves', spread over the instants: some backends leave hundreds of tracked
@@ -197,19 +210,22 @@ def _checked(records: list, walls: list, stacks, picks,
     """
     deferred = [k for k, r in enumerate(records) if isinstance(r, Pending)]
     if not deferred:
-        return records, walls, None
+        return Results.of(records), walls, None
     began = time.perf_counter()
     gc.collect(1)
     garbage_s = (time.perf_counter() - began) / len(walls)
     rows = None if stacks is None else stacks.take([picks[k] for k in deferred])
     pending = [records[k] for k in deferred]
     checked = check(pending, rows)
-    fastest = None if passes < 2 else min([checked[0].checks_s] + [
-        check(pending, rows)[0].checks_s for _ in range(passes - 1)])
-    found = dict(zip(deferred, checked))
-    return ([found.get(k, r) for k, r in enumerate(records)],
-            [w + garbage_s + (found[k].checks_s if k in found else 0.0)
-             for k, w in enumerate(walls)], fastest)
+    fastest = None if passes < 2 else min([float(checked.checks_s[0])] + [
+        float(check(pending, rows).checks_s[0]) for _ in range(passes - 1)])
+    walls = [w + garbage_s for w in walls]
+    for k, checks_s in zip(deferred, checked.checks_s.tolist()):
+        walls[k] += checks_s
+    if len(deferred) < len(records):  # some were checked at once (a restart's): merged
+        found = dict(zip(deferred, checked))
+        checked = Results.of([found.get(k, r) for k, r in enumerate(records)])
+    return checked, walls, fastest
 
 
 def _solve_one(op: Operator, formulation: str, make, i: int, solver: str, tol, initvals,
@@ -237,20 +253,20 @@ def _failed(op: Operator, formulation: str, solver: str, exc: Exception) -> Reco
 
 
 def history_of(op: Operator, formulation: str, solver: str, instants: Sequence[int],
-               records: Sequence[Record], walls: Sequence[float] = ()) -> History:
-    """The :class:`History` of ``records`` solved at ``instants`` of ``op`` (each record
-    told its instant, ``Record.t``).
+               records: Results | Sequence[Record], walls: Sequence[float] = ()) -> History:
+    """The :class:`History` of the results (or the records) solved at ``instants`` of
+    ``op``, told their instants (``Results.t``).
     """
-    records = at_instants(records, np.asarray(op.t)[list(instants)])
+    t = np.asarray(op.t)[list(instants)]
+    results = (records if isinstance(records, Results) else Results.of(list(records))).at(t)
     n = len(op.names)
-    forces = np.full((len(records), n), np.nan)
-    for k, r in enumerate(records):
-        if r.solved:
-            forces[k] = r.x[:n]
-    return History(formulation, solver, np.asarray(op.t)[list(instants)], forces,
-                   tuple(r.status for r in records),
-                   float(sum(r.setup_s + r.solve_s for r in records)),
-                   tuple(int(i) for i in instants), tuple(walls), tuple(records))
+    forces = np.full((len(results), n), np.nan)
+    for k, (x, status) in enumerate(zip(results.x, results.status)):
+        if status is Status.SOLVED:
+            forces[k] = x[:n]
+    return History(formulation, solver, t, forces, tuple(results.status),
+                   float(np.sum(results.setup_s + results.solve_s)),
+                   tuple(int(i) for i in instants), tuple(walls), results)
 
 
 # ---------------------------------------------------------------------------- intervals

@@ -170,41 +170,6 @@ def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[dict, P
     return _combined(parts, st.q, y), parts
 
 
-def compiled_views(st: Stacked, z: np.ndarray, y: np.ndarray,
-                   check_dual_cone: bool) -> tuple[dict, dict] | None:
-    """Both views of the answers ``z`` with multipliers ``y`` to the stacked problems
-    ``st`` in one compiled pass (:mod:`._check_kernels`; ``A z`` and ``A'y`` of a
-    stacked block by its one sweep, :meth:`Stacked.products`, ``P z`` and the other
-    blocks' products by NumPy): the package's ``{"dual", "gap", "objective"}`` (as
-    :func:`stacked_measures`) and the solver's ``{"primal", "dual", "gap"}`` (as
-    :func:`~.qp_measures.from_parts`, the dual cone checked with ``check_dual_cone``),
-    (T,) arrays; ``None`` where numba is not installed.
-    """
-    kernels = _kernels()
-    if kernels is None:
-        return None
-    views, both = kernels
-    c = np.ascontiguousarray
-    z, y, out = c(z, float), c(y, float), np.empty((len(z), 6))
-    Az, Aty = st.products(z, y, both)  # stacked blocks are contiguous (:func:`_block`)
-    views(z, y, c(st.q, float), c(st.b, float), c(times_P(st.P, z)), Az, Aty,
-          *cone_layout(tuple(st.cones)), bool(check_dual_cone), TINY, out)
-    return ({"dual": out[:, 0], "gap": out[:, 1], "objective": out[:, 2]},
-            {"primal": out[:, 3], "dual": out[:, 4], "gap": out[:, 5]})
-
-
-@functools.cache
-def _kernels():
-    """The compiled kernels of :func:`compiled_views` (the views, a stacked block's two
-    products), ``None`` without numba.
-    """
-    try:
-        from ._check_kernels import dense_products, views
-    except ImportError:  # numba is an optional extra: the NumPy path then
-        return None
-    return views, dense_products
-
-
 def combine(Pz, q, Aty, bty, z, y, cone_violation) -> dict[str, np.ndarray]:
     """The measures from their parts (``P z``, ``q``, ``A'y``, ``b'y``, the dual-cone
     violation), for a backend whose problem form gives them more cheaply than
@@ -532,24 +497,6 @@ class Stacked:
             _add_transposed(blk, y[:, row:row + rows], out)
             row += rows
         return out
-
-    def products(self, z: np.ndarray, y: np.ndarray, both) -> tuple:
-        """``(A z, A'y)`` per instant ((T, m), (T, n)), a stacked (T, r, n) block's two
-        by ``both(block, z, y, row, Az, Aty)`` in one sweep over its numbers
-        (:func:`._check_kernels.dense_products`: the block is the largest array a check
-        pass reads, and read once it costs half), the other blocks' as :meth:`Az` and
-        :meth:`Aty` take them.
-        """
-        Az, Aty, row = np.empty((len(z), self.b.shape[1])), np.zeros_like(self.q), 0
-        for blk in self.blocks:
-            rows = _height(blk)
-            if isinstance(blk, np.ndarray) and blk.ndim == 3:
-                both(blk, z, y, row, Az, Aty)
-            else:
-                Az[:, row:row + rows] = _times(blk, z)
-                _add_transposed(blk, y[:, row:row + rows], Aty)
-            row += rows
-        return Az, Aty
 
     def A(self, k: int) -> np.ndarray:
         """Instant ``k``'s ``A`` (m, n), dense."""

@@ -1,22 +1,17 @@
-"""The compiled optimality views of a long check pass against the NumPy path they
-replace: the same package measures and solver measures on every conic formulation's
-answers (solver multipliers perturbed, so that the measures are well above rounding;
-a NaN and an inf answer among them), and the same records from one long pass as from
-each instant checked alone."""
+"""The check pass over a run of many instants against each instant checked alone: the
+same statuses and measures on every conic formulation's answers (solver multipliers
+perturbed, so that the measures are well above rounding; a NaN and an inf answer among
+them), by the same arithmetic whatever the run's length, and a run's columns read back
+as the records they hold."""
 
 import numpy as np
 import pytest
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.formulations import batch as fbatch
-from cardan_forces.solvers import optimality as O
-from cardan_forces.solvers import qp_measures as Q
-from cardan_forces.solvers.record import KERNEL_LEAST, Outcome, finalize, finalize_all, stack_all
+from cardan_forces.solvers.checks import finalize, finalize_all, stack_all
+from cardan_forces.solvers.record import Outcome, Results
 from cardan_forces.solvers.registry import solve_unchecked
-
-pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
-
-pytest.importorskip("numba")
 
 FORMULATIONS = ("min_norm", "min_norm_scaled", "positive", "compliance", "compliance_hertz",
                 "min_max", "socp_face")
@@ -24,7 +19,7 @@ FORMULATIONS = ("min_norm", "min_norm_scaled", "positive", "compliance", "compli
 
 @pytest.fixture(scope="module")
 def operator(paper):
-    return build_operator(simulate(paper, paper.time.instants()[:KERNEL_LEAST + 8]))
+    return build_operator(simulate(paper, paper.time.instants()[:40]))
 
 
 def _answers(op, name):
@@ -44,37 +39,10 @@ def _answers(op, name):
 
 
 @pytest.mark.parametrize("name", FORMULATIONS)
-def test_compiled_views_equal_the_numpy_views(operator, name):
-    problems, outcomes = _answers(operator, name)
-    st = stack_all(problems).conic
-    z = np.array([o.z for o in outcomes])
-    y, given = O.multipliers(st, z, [o.y for o in outcomes])
-    assert given.all()
-    numpy_view, parts = O.stacked_measures(st, z, y)
-    for check in (True, False):
-        package, solver = O.compiled_views(st, z, y, check_dual_cone=check)
-        theirs = Q.from_parts(parts, st.b - st.Az(z), st.cones, check_dual_cone=check)
-        good = np.isfinite(numpy_view["objective"])
-        scale = 1.0 + np.abs(numpy_view["objective"][good]).max()
-        for key in ("dual", "gap"):  # relative measures: rounding is 1e-16 of one
-            np.testing.assert_allclose(package[key], numpy_view[key], rtol=1e-9, atol=1e-13)
-        np.testing.assert_allclose(package["objective"][good],
-                                   numpy_view["objective"][good], rtol=1e-12)
-        for key in Q.MEASURES:  # absolute measures: rounding scales with the objective
-            np.testing.assert_allclose(solver[key], theirs[key], rtol=1e-9,
-                                       atol=1e-12 * scale)
-        assert np.all(np.isinf(solver["gap"][[3, 5]]))
-        assert np.all(np.isinf(package["dual"][[3, 5]]))
-    if name == "compliance_hertz":  # the power cones' branches are exercised
-        assert any(kind == "pow" for kind, _ in st.cones)
-    assert np.all(numpy_view["dual"][np.isfinite(numpy_view["dual"])] > 1e-8)
-
-
-@pytest.mark.parametrize("name", ("positive", "compliance_hertz", "socp_face"))
 def test_a_long_check_pass_gives_the_records_of_each_instant_alone(operator, name):
     problems, outcomes = _answers(operator, name)
-    assert len(problems) >= KERNEL_LEAST  # the pass goes through the compiled views
     together = finalize_all(problems, "hand", outcomes, stacks=stack_all(problems))
+    assert isinstance(together, Results) and len(together) == len(problems)
     for problem, outcome, record in zip(problems, outcomes, together):
         alone = finalize(problem, "hand", outcome)
         assert (record.status, record.duals) == (alone.status, alone.duals)
@@ -85,3 +53,25 @@ def test_a_long_check_pass_gives_the_records_of_each_instant_alone(operator, nam
             assert dict(record.solver_optimality) == pytest.approx(
                 dict(alone.solver_optimality), rel=1e-9, abs=1e-10)
     assert {r.status for r in together} >= {"solved", "failed"}
+    assert np.all(np.isinf(together.optimality.dual[[3, 5]]))
+
+
+@pytest.mark.parametrize("name", ("positive", "socp_face"))
+def test_a_runs_columns_are_the_columns_of_its_records(operator, name):
+    """``Results.of`` the records a run's columns give holds those columns again: the
+    per-instant record is a view of the columns, not a second account of the answer."""
+    problems, outcomes = _answers(operator, name)
+    results = finalize_all(problems, "hand", outcomes, references=[
+        None if k % 2 else np.zeros(len(p.checks.names)) for k, p in enumerate(problems)])
+    again = Results.of(list(results))
+    assert list(again.status) == list(results.status)
+    for key in ("primal", "dual", "gap", "distance"):
+        np.testing.assert_array_equal(getattr(again.optimality, key),
+                                      getattr(results.optimality, key))
+    for key in (*results.residuals.KEYS, "reference"):
+        np.testing.assert_array_equal(getattr(again.residuals, key),
+                                      getattr(results.residuals, key))
+    assert np.isnan(results.residuals.reference[1::2]).all()
+    assert results[1].residuals.reference is None and results[0].residuals.reference >= 0
+    for a, b in zip(again.x, results.x):
+        np.testing.assert_array_equal(a, b)

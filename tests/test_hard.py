@@ -11,6 +11,7 @@ import pytest
 from cardan_forces.driveline.loading import builtin_text
 from cardan_forces.experiments import hard, study
 from cardan_forces.solvers import Residuals, Status
+from cardan_forces.solvers.record import Results
 
 from cardan_forces.cli import main
 
@@ -127,8 +128,8 @@ def _with_equilibrium(run, value: float):
     records = [dataclasses.replace(r, residuals=dataclasses.replace(r.residuals,
                                                                     equilibrium=value))
                for r in run.records]
-    return dataclasses.replace(run, history=dataclasses.replace(run.history,
-                                                                records=tuple(records)))
+    return dataclasses.replace(run, history=dataclasses.replace(
+        run.history, results=Results.of(records)))
 
 
 def test_the_bar_follows_the_tolerance_asked_for(suite):
