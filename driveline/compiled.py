@@ -7,27 +7,91 @@ infinity or a NaN, as the NumPy reference does, instead of raising
 depend on the CPU numba compiles for (fused multiply-adds change the last bits), so a
 raise there would fail on one machine and not on another; the kernels' callers check
 their results for finite numbers and end with a failed status instead.
+
+A cache file numba cannot read (a disk that filled while it was written, a copy from
+another machine or numba) is removed and the kernel compiled again, with one warning,
+instead of ending the run in numba's unpickling error.
 """
 
 from __future__ import annotations
+
+import contextlib
+import os
+import warnings
 
 import numpy as np
 
 try:
     import numba
+    from numba.core.caching import FunctionCache
 
     HAVE_NUMBA = True
 
     def njit(*args, **kwargs):
-        """``numba.njit`` with NumPy's error model unless the caller sets one."""
+        """``numba.njit`` with NumPy's error model unless the caller sets one, and a
+        disk cache that rebuilds a file it cannot read (:class:`_RebuildingCache`).
+        """
         kwargs.setdefault("error_model", "numpy")
-        return numba.njit(*args, **kwargs)
+        made = numba.njit(*args, **kwargs)
+        if args and callable(args[0]):
+            return _rebuilding(made)
+        return lambda function: _rebuilding(made(function))
+
+    class _RebuildingCache(FunctionCache):
+        """numba's on-disk cache of one function, where a cache file that cannot be read
+        (cut short, overwritten, written by another numba: numba itself then ends the
+        call in ``EOFError``, ``UnpicklingError``, ``MemoryError`` or ``IndexError``) is
+        removed and counts as absent: the function compiles again and its cache is
+        written anew, with one warning per process.
+        """
+
+        def load_overload(self, sig, target_context):
+            try:
+                return super().load_overload(sig, target_context)
+            except Exception as exc:  # any unreadable file: rebuild it
+                _discard(self, exc)
+                return None
+
+        def save_overload(self, sig, data):
+            try:
+                super().save_overload(sig, data)
+            except Exception as exc:  # the compiled function still runs
+                _discard(self, exc)
+
 except ImportError:
     HAVE_NUMBA = False
 
     def njit(*args, **kwargs):
         """Leave a function as it is where numba is not installed."""
         return args[0] if args and callable(args[0]) else (lambda f: f)
+
+_WARNED: list[str] = []
+"""The cache files already reported as unreadable in this process (one warning)."""
+
+
+def _rebuilding(dispatcher):
+    """``dispatcher`` with its disk cache (if it has one) replaced by a
+    :class:`_RebuildingCache` of the same function.
+    """
+    if type(getattr(dispatcher, "_cache", None)) is FunctionCache:
+        dispatcher._cache = _RebuildingCache(dispatcher.py_func)
+    return dispatcher
+
+
+def _discard(cache, exc: Exception) -> None:
+    """Remove ``cache``'s index (numba then writes a new one, and its data files are
+    overwritten) and warn once per process that the cache is rebuilt and why.
+    """
+    index = getattr(getattr(cache, "_cache_file", None), "_index_path", None)
+    if index:
+        with contextlib.suppress(OSError):
+            os.unlink(index)
+    if not _WARNED:
+        warnings.warn(f"numba cache {index or cache}: unreadable ({type(exc).__name__}: "
+                      f"{exc}); removed, the kernels compile again and are cached anew",
+                      RuntimeWarning, stacklevel=3)
+    _WARNED.append(str(index))
+
 
 __all__ = ["HAVE_NUMBA", "harmonic", "harmonic_law", "njit"]
 

@@ -6,6 +6,7 @@ clean result.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from cardan_forces.experiments import engine
 
 import cardan_forces as cf
@@ -21,3 +22,55 @@ def test_engine_comparison_passes_over_backends_that_cannot_take_a_friction_cone
     forces = engine._formulation_forces(op, 0)
     x = forces["positive"]
     assert np.linalg.norm(op.A[0] @ x - op.b[0]) <= 1e-6 * np.linalg.norm(op.b[0])
+
+
+KERNEL = '''
+from cardan_forces.driveline.compiled import njit
+
+
+@njit(cache=True)
+def twice(x):
+    return 2.0 * x
+
+
+print(twice(21.0))
+'''
+
+
+def _run_kernel(folder, cache):
+    """Run a module with one cached kernel in a new process, its numba cache in
+    ``cache``: (exit code, stdout, stderr)."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(folder))
+    done = subprocess.run([sys.executable, "-c", "import kernel_module"], env=env,
+                          capture_output=True, text=True, timeout=300)
+    return done.returncode, done.stdout, done.stderr
+
+
+@pytest.mark.parametrize("suffix, corrupt", [
+    (".nbi", lambda text: b"\x80\x04garbage" + text[:7]),  # an unpickling error
+    (".nbi", lambda text: b"\x80\x04\x95" + b"\xff" * 8 + text[11:]),  # a huge length
+    (".nbc", lambda text: text[: len(text) // 2]),  # cut short: EOFError
+    (".nbc", lambda text: b""),  # empty
+], ids=["index-garbage", "index-huge-length", "data-cut-short", "data-empty"])
+def test_a_corrupted_numba_cache_file_is_rebuilt_with_one_warning(tmp_path, suffix, corrupt):
+    """A kernel's cache index or data file overwritten with bytes numba cannot read:
+    the next run computes the right answer (compiling again), warns once, and leaves
+    a cache the run after reads without a warning."""
+    pytest.importorskip("numba")
+    (tmp_path / "kernel_module.py").write_text(KERNEL)
+    cache = tmp_path / "numba_cache"
+    code, out, err = _run_kernel(tmp_path, cache)
+    assert (code, out.strip()) == (0, "42.0"), err
+    found = list(cache.rglob(f"*{suffix}"))
+    assert found, "numba wrote no cache file"
+    for path in found:
+        path.write_bytes(corrupt(path.read_bytes()))
+    code, out, err = _run_kernel(tmp_path, cache)
+    assert (code, out.strip()) == (0, "42.0"), err
+    assert "Traceback" not in err and err.count("compile again") == 1, err
+    code, out, err = _run_kernel(tmp_path, cache)
+    assert (code, out.strip(), err) == (0, "42.0", "")
