@@ -17,6 +17,13 @@ Chosen scenes x formulations x instants are written into one folder:
   size is ``alpha``: ``s_0^alpha s_1^(1-alpha) >= |s_2|``) — Clarabel's, SCS's and
   moreau's convention. ``names`` lists the problems.
 
+By default only the QPs are written (no conic file); ``--formulation min_max`` (etc.)
+adds the conic file. A formulation that is neither (``paper``, a nonlinear system;
+``lcp``, a complementarity problem) is refused before any work, as is a number of
+instants above the scene's time grid. Every file is written whole or not at all
+(:mod:`.files`); a conic file an earlier export of the same name left is removed when
+this export has no conic problem, so the folder holds one export.
+
 Problems are named ``<scene>_<formulation>_<instant:04d>`` (the instant's index on the
 scene's time grid); forces in N, moments in N·m, the unknowns in the order of the
 formulation's named forces.
@@ -25,21 +32,28 @@ formulation's named forces.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.scene import MAX_INSTANTS
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LS, QP, Conic
 from cardan_forces.solvers.conversions import convert
 
+from cardan_forces.commands import UsageError
+
+from . import files
+
 QP_FORMULATIONS = ("min_norm", "positive", "compliance")
 """Formulations exported by default (the ones qpbenchmark takes as QPs)."""
+EXPORTABLE = (*QP_FORMULATIONS, "min_norm_scaled", "socp_face", "min_max", "friction",
+              "compliance_hertz")
+"""Formulations whose problems are QPs or conic problems (the others are refused)."""
 INSTANTS = 50
 """Evenly spaced instants per scene by default."""
 QP_KEYS = ("P", "q", "A", "b", "G", "h", "lb", "ub")
@@ -93,21 +107,39 @@ def class_name(module: str) -> str:
 def collect(scenes, formulations, instants: int) -> dict[str, object]:
     """``{name: problem}`` of every scene x formulation at ``instants`` evenly spaced
     instants of the scene's time grid (a formulation a scene does not call for is left
-    out for that scene).
+    out for that scene). :class:`UsageError` for more instants than a scene's grid has
+    (every scene checked before any is simulated) and for a formulation whose problems
+    are neither a QP nor a conic problem.
     """
+    loaded = [load_scene(name) for name in scenes]
+    for scene in loaded:
+        available = len(scene.time.instants())
+        if instants > available:
+            raise UsageError(f"--instants {instants}: scene {scene.name} has {available} "
+                             "instants on its time grid; ask for at most as many")
     out = {}
-    for scene_name in scenes:
-        scene = load_scene(scene_name)
+    for scene in loaded:
         times = scene.time.instants()
         chosen = np.unique(np.linspace(0, len(times) - 1, instants).round().astype(int))
         op = build_operator(simulate(scene, times[:chosen[-1] + 1]))
         for formulation in formulations:
             try:
-                problems = fbatch.build_problems(op, formulation, chosen)
+                problems = fbatch.build_problems(op, formulation, chosen[:1])
             except NotApplicable:
                 continue
+            _exportable(formulation, problems[0])
+            problems = fbatch.build_problems(op, formulation, chosen)
             out |= {f"{scene.name}_{formulation}_{i:04d}": p for i, p in zip(chosen, problems)}
     return out
+
+
+def _exportable(formulation: str, problem) -> None:
+    """:class:`UsageError` unless ``problem`` is written as a QP or a conic problem."""
+    if as_qp(problem) is None and convert(problem, (Conic,)) is None:
+        raise UsageError(
+            f"--formulation {formulation}: its problems ({type(problem).__name__}) are "
+            "neither a QP nor a conic problem, which are the forms export writes; "
+            f"exportable: {', '.join(EXPORTABLE)}")
 
 
 def as_qp(problem) -> QP | None:
@@ -125,9 +157,9 @@ def write_qpbenchmark(folder: Path, module: str, qps: dict[str, QP], title: str)
             value = getattr(qp, key)
             if value is not None:
                 data[f"{name}/{key}"] = np.asarray(value, float)
-    np.savez(folder / f"{module}.npz", **data)
+    files.savez(folder / f"{module}.npz", **data)
     path = folder / f"{module}.py"
-    path.write_text(TEST_SET_MODULE.format(
+    files.write_text(path, TEST_SET_MODULE.format(
         module=module, cls=class_name(module), title=title,
         description=f"{len(qps)} QPs of drive-shaft reaction forces (cardan-forces)"))
     return path
@@ -142,11 +174,14 @@ def write_conic(path: Path, conics: dict[str, Conic]) -> None:
                  f"{name}/b": np.asarray(c.b, float),
                  f"{name}/cone_kinds": np.array([k for k, _ in c.cones]),
                  f"{name}/cone_sizes": np.array([float(s) for _, s in c.cones])}
-    np.savez(path, **data)
+    files.savez(path, **data)
 
 
 def export(folder: Path, problems: dict[str, object], module: str) -> dict[str, Path]:
-    """Split ``problems`` into QPs and conic problems and write both; the paths written."""
+    """Split ``problems`` into QPs and conic problems and write both; the paths written.
+    The files of the same ``module`` an earlier export left and this one does not
+    write (its test set, its conic file) are removed: the folder holds this export.
+    """
     folder.mkdir(parents=True, exist_ok=True)
     qps = {name: qp for name, p in problems.items() if (qp := as_qp(p)) is not None}
     conics = {name: convert(p, (Conic,)) for name, p in problems.items() if name not in qps}
@@ -158,6 +193,9 @@ def export(folder: Path, problems: dict[str, object], module: str) -> dict[str, 
     if conics:
         written["conic"] = folder / f"{module}_conic.npz"
         write_conic(written["conic"], conics)
+    for path in files.stale(folder, [*written.values(), folder / f"{module}.npz"],
+                            [f"{module}.py", f"{module}.npz", f"{module}_conic.npz"]):
+        path.unlink()
     return written
 
 
@@ -167,17 +205,26 @@ def run(args) -> int:
                        args.instants)
     if not problems:
         raise NotApplicable("none of the chosen formulations applies to the chosen scenes")
-    written = export(Path(args.out), problems, args.module)
+    folder = Path(args.out)
+    replaced = (folder / f"{args.module}.npz").exists() or \
+        (folder / f"{args.module}_conic.npz").exists()
+    written = export(folder, problems, args.module)
     for kind, path in written.items():
         print(f"{kind}: {path}")
-    print(f"cardan export: {len(problems)} problems", file=sys.stderr)
+    paths = [*written.values()]
+    if "qpbenchmark" in written:
+        paths.insert(1, folder / f"{args.module}.npz")
+    files.say_written(f"export ({len(problems)} problems)", paths, replaced)
     return 0
 
 
 def _count(text: str) -> int:
-    """A positive whole number (argparse type)."""
-    if not text.isdigit() or int(text) < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive whole number, got {text!r}")
+    """A whole number in [1, the most instants a scene's grid may have] (argparse type;
+    the scene's own grid is checked in :func:`collect`).
+    """
+    if not text.isdigit() or not 1 <= int(text) <= MAX_INSTANTS:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to {MAX_INSTANTS}, "
+                                         f"got {text!r}")
     return int(text)
 
 
@@ -190,11 +237,14 @@ def _module(text: str) -> str:
 
 def add_parser(subparsers) -> None:
     """Register ``cardan export`` on the command line's subparsers."""
-    p = subparsers.add_parser("export", help="write problems as a qpbenchmark test set and "
-                                             "conic NPZ")
+    p = subparsers.add_parser("export", help="write problems as files: the QPs as a "
+                              "qpbenchmark test set (default), conic formulations (e.g. "
+                              "--formulation min_max) as an NPZ in one standard conic form")
     p.add_argument("scene", nargs="*", help="built-in names or TOML paths (default paper)")
     p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
-                   help=f"one formulation (repeatable); default {', '.join(QP_FORMULATIONS)}")
+                   help="one formulation (repeatable) among "
+                        f"{', '.join(EXPORTABLE)}; default {', '.join(QP_FORMULATIONS)} "
+                        "(QPs only: no conic file)")
     p.add_argument("--instants", type=_count, default=INSTANTS,
                    help=f"evenly spaced instants per scene (default {INSTANTS})")
     p.add_argument("--out", default="results/export", help="output folder (default %(default)s)")

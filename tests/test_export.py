@@ -85,8 +85,13 @@ def test_qpbenchmark_runs_the_export_unchanged(exported, tmp_path):
 
 @pytest.mark.parametrize("argv, says", [
     (["--name", "1bad"], "Python identifier"),
-    (["--instants", "0"], "positive whole number"),
+    (["--instants", "0"], "whole number from 1 to"),
+    (["--instants", "1000000000000"], "whole number from 1 to"),
+    (["--instants", "1e20"], "whole number from 1 to"),
+    (["--instants", "5000"], "scene paper has 1001 instants"),
     (["--formulation", "friction"], "none of the chosen formulations"),
+    (["--formulation", "paper"], "neither a QP nor a conic problem"),
+    (["--formulation", "lcp"], "neither a QP nor a conic problem"),
 ])
 def test_bad_export_requests_are_one_line_and_exit_2(argv, says, tmp_path, capsys):
     from cardan_forces.cli import main
@@ -118,3 +123,45 @@ def test_a_solvers_warning_stays_with_its_row(exported, monkeypatch):
                                          "default")
     assert not escaped
     assert "maximum iterations reached" in row["message"]
+
+
+def test_a_failed_write_leaves_the_earlier_export_whole(tmp_path, monkeypatch):
+    """A write that fails half way (a full disk) removes its partial file and keeps the
+    earlier export readable; no temporary file is left beside it."""
+    import errno
+
+    from cardan_forces.experiments import files
+
+    problems = export.collect(["paper"], ["positive"], 2)
+    export.export(tmp_path, problems, "cardan_qp")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    real = np.savez
+
+    def disk_full(handle, **arrays):
+        real(handle, **arrays)  # the bytes are written, then the disk is full
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(np, "savez", disk_full)
+    with pytest.raises(OSError, match="No space"):
+        export.export(tmp_path, export.collect(["paper"], ["min_norm"], 3), "cardan_qp")
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+    with np.load(tmp_path / "cardan_qp.npz") as data:
+        assert sorted(data["names"]) == sorted(problems)
+    assert files.stale(tmp_path, [], ["*.part"]) == []
+
+
+def test_a_second_export_replaces_the_first_and_says_where(tmp_path, capsys):
+    """An export with no conic problem after one with them removes the earlier conic
+    file (the folder holds one export), and the run names its files on stderr."""
+    from cardan_forces.cli import main
+
+    assert main(["export", "--formulation", "min_max", "--formulation", "positive",
+                 "--instants", "2", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "cardan_qp_conic.npz").exists()
+    capsys.readouterr()
+    assert main(["export", "--instants", "3", "--out", str(tmp_path)]) == 0
+    err = capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cardan_qp.npz", "cardan_qp.py"]
+    assert str(tmp_path) in err and "replacing" in err and "9 problems" in err
+    with np.load(tmp_path / "cardan_qp.npz") as data:
+        assert len(data["names"]) == 9  # 3 formulations x 3 instants, nothing of the first
