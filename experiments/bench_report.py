@@ -7,6 +7,7 @@ import datetime
 import math
 from pathlib import Path
 
+from . import files
 from .bench_metrics import PROFILES, SHIFT_S, TAUS, TIME_LIMIT_S, best_runs
 from .bench_run import CHECK_PASSES
 from .environment import json_number, machine, number_text, versions
@@ -30,9 +31,10 @@ VIEW_COLUMNS = ("problem", "formulation", "solver", "setting", "found", "primal"
 
 def write_csv(path: Path, rows: list[dict], columns: tuple[str, ...]) -> None:
     """Long-format CSV with fixed ``columns`` (floats with 4 significant digits; an
-    empty cell where a number is missing or undefined).
+    empty cell where a number is missing or undefined), written whole or not at all
+    (:func:`.files.replacing`).
     """
-    with path.open("w", newline="") as handle:
+    with files.replacing(path, newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(columns)
         for r in rows:
