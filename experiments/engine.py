@@ -34,7 +34,7 @@ import numpy as np
 from cardan_forces.driveline import engine_mujoco
 from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
 from cardan_forces.experiments.environment import number_text
-from cardan_forces.experiments.images import format_list, save
+from cardan_forces.experiments.images import draw_set, format_list, save
 from cardan_forces.experiments.study import intervals as rigid_intervals
 from cardan_forces.experiments.study import value_range
 from cardan_forces.formulations.convex import NotApplicable
@@ -220,8 +220,10 @@ def _load_rows(op) -> dict[str, np.ndarray]:
     """
     bearings = op.bearings(0)
     matrices = [op.bearing_matrix(link) for link in bearings]  # rows (r1, r2, axis)
-    rows = {f"{link.element} in-plane": m[0] for link, m in zip(bearings, matrices)}
-    rows[f"{op.scene.shafts[0].name} axial (sum)"] = sum((m[2] for m in matrices),
+    rows = {f"({'abcdefgh'[k]}) bearing '{link.element}': radial load in the articulation "
+            "plane (r1, signed)": m[0] for k, (link, m) in enumerate(zip(bearings, matrices))}
+    rows[f"({'abcdefgh'[len(rows)]}) axial load of shaft '{op.scene.shafts[0].name}' (sum "
+         "over its bearings, signed)"] = sum((m[2] for m in matrices),
                                                          np.zeros(len(op.names)))
     return rows
 
@@ -232,9 +234,11 @@ def _band(op, c: np.ndarray, sampled: np.ndarray) -> np.ndarray:
 
 
 def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
-    """The engine's first-shaft bearing loads over time for :data:`FIGURE_SETTINGS`,
-    over the rigid band (shaded where both ends are finite; the title says otherwise),
-    saved as ``stem`` in each of ``formats``.
+    """The engine's first-shaft bearing loads over time for :data:`FIGURE_SETTINGS` over
+    the rigid set, drawn as ``cardan repro``'s figures draw it
+    (:func:`~cardan_forces.experiments.images.draw_set`: a band where both ends are
+    finite, the finite end with the open side marked, a set open on both sides said in
+    the panel), one legend below the panels; saved as ``stem`` in each of ``formats``.
     """
     import matplotlib
 
@@ -242,28 +246,54 @@ def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
     import matplotlib.pyplot as plt
 
     op, rows = result.op, _load_rows(result.op)
-    fig, axes = plt.subplots(len(rows), 1, figsize=(8, 2.6 * len(rows)), sharex=True)
-    for ax, (label, c) in zip(np.atleast_1d(axes), rows.items()):
-        band = _band(op, c, result.sampled)
-        finite = np.all(np.isfinite(band), axis=1)
-        ts = op.t[result.sampled]
-        if finite.any():
-            ax.fill_between(ts[finite], band[finite, 0], band[finite, 1], color="0.85",
-                            label="rigid set")
-            ax.plot(ts[finite], band[finite], "k.-", lw=0.6, ms=3)
-        for style, name in zip(("-", "--", ":"), FIGURE_SETTINGS):
-            if name in result.runs:
-                ax.plot(op.t, result.runs[name].forces @ c, style, label=f"MuJoCo: {name}")
-        open_share = 1 - finite.mean()
-        ax.set_title(label + (f" (rigid set unbounded at {open_share:.0%} of the sampled "
-                              "instants)" if open_share else ""), fontsize=9)
-        ax.set_ylabel("N")
-    np.atleast_1d(axes)[0].legend(fontsize=7)
-    np.atleast_1d(axes)[-1].set_xlabel("t (s)")
-    fig.tight_layout()
-    paths = save(fig, stem, formats)
+    with plt.rc_context(FIGURE_STYLE):
+        fig, axes = plt.subplots(len(rows), 1, figsize=(8, 2.7 * len(rows) + 1.2),
+                                 squeeze=False)
+        handles = {}
+        for ax, (label, c) in zip(axes[:, 0], rows.items()):
+            handles.update(_draw_load(ax, result, label, c))
+        fig.suptitle(f"MuJoCo's first-shaft bearing loads over the rigid set "
+                     f"({op.scene.name}; three softness settings)", fontsize=11)
+        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=2,
+                   frameon=False)
+        rows_in = 0.15 + 0.19 * -(-len(handles) // 2)
+        fig.tight_layout(rect=(0, rows_in / fig.get_figheight(), 1, 1))
+        paths = save(fig, stem, formats)
     plt.close(fig)
     return paths
+
+
+FIGURE_STYLE = {"font.size": 9.0, "axes.titlesize": 9.5, "xtick.labelsize": 8.0,
+                "ytick.labelsize": 8.0, "legend.fontsize": 8.5}
+"""Type sizes of the figure (pt at its printed size, 8 in wide), as ``cardan repro``'s."""
+
+
+def _draw_load(ax, result: EngineStudy, label: str, c: np.ndarray) -> dict:
+    """One panel: the load ``c'x`` of each figure setting (markers at staggered
+    instants) over its rigid set at the sampled instants; its legend handles.
+    """
+    op = result.op
+    band = _band(op, c, result.sampled)
+    handles, note = draw_set(ax, op.t[result.sampled], band[:, 0], band[:, 1], "N")
+    names = [n for n in FIGURE_SETTINGS if n in result.runs]
+    step = max(1, len(op.t) // 8)
+    curves = [result.runs[n].forces @ c for n in names]
+    for k, (name, values) in enumerate(zip(names, curves)):
+        handles[f"MuJoCo, {name}"], = ax.plot(
+            op.t, values, ("-", "--", "-.")[k % 3], color=f"C{k}", marker="osD"[k % 3], ms=4.5,
+            markevery=(k * step // len(names), step), zorder=3, label=f"MuJoCo, {name}")
+    held = np.concatenate([*curves, band[np.isfinite(band)]])
+    low, high = float(held.min()), float(held.max())
+    margin = max(0.1 * (high - low), 0.05 * max(abs(low), abs(high)), 1e-9)
+    ax.set_ylim(low - margin, high + margin)
+    if note:
+        ax.annotate(note, xy=(0, 1), xycoords="axes fraction", xytext=(0, 3),
+                    textcoords="offset points", va="bottom", fontsize=8, color="0.25")
+    ax.set_title(label, loc="left", pad=14 if note else 4)
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("force [N]")
+    ax.grid(alpha=0.3)
+    return handles
 
 
 def _g(value: float) -> str:

@@ -12,7 +12,7 @@ In each panel (:func:`draw_panel`):
 - the y axis holds every bold curve (the rigid methods and the smoothed penalty) and
   every finite bound of the rigid set, with a margin; only the raw penalty line may
   leave it, and the panel then says so with its range and unit;
-- behind them the rigid solution set (:func:`draw_set`): shaded where both bounds are
+- behind them the rigid solution set (:func:`images.draw_set`): shaded where both bounds are
   finite; where one side is open, the finite bound as a dashed line with triangles
   pointing to the open side; a set open on both sides (any value) is said in the panel.
 """
@@ -28,14 +28,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from cardan_forces.experiments.images import UNIT, coinciding, save  # noqa: E402
+from cardan_forces.experiments.images import UNIT, coinciding, draw_set, save, span_text  # noqa: E402, E501
 
 PENALTY = "penalty"
 """The method name of the penalty-contact simulation in histories and columns."""
-SET_COLOUR = "0.55"
-SET_LABEL = "rigid solution set (both bounds finite)"
-OPEN_ABOVE_LABEL = "lower bound of a rigid set open above (\u25b2: the open side)"
-OPEN_BELOW_LABEL = "upper bound of a rigid set open below (\u25bc: the open side)"
 MARKERS = "osD^vP"
 DASHES = ("-", "--", "-.", ":")
 COINCIDE = 0.005
@@ -192,19 +188,6 @@ def limits(curves: list[np.ndarray]) -> tuple[float, float]:
     return lo - margin, hi + margin
 
 
-def _number(value: float, scale: float) -> str:
-    """``value`` to 3 significant digits, round-off about zero (relative to ``scale``) as 0."""
-    return f"{value if abs(value) > 1e-9 * scale else 0.0:.3g}"
-
-
-def span_text(values: np.ndarray, unit: str) -> str:
-    """``a to b <unit>`` of finite ``values``, or one value where they print alike."""
-    lo, hi = float(np.min(values)), float(np.max(values))
-    scale = max(abs(lo), abs(hi))
-    a, b = _number(lo, scale), _number(hi, scale)
-    return f"{a} {unit}" if a == b else f"{a} to {b} {unit}"
-
-
 def clip_note(raw: np.ndarray, low: float, high: float, unit: str) -> str:
     """What the panel says when the raw penalty line leaves the drawn range: its range."""
     ok = np.isfinite(raw)
@@ -212,44 +195,3 @@ def clip_note(raw: np.ndarray, low: float, high: float, unit: str) -> str:
         return ""
     return (f"raw penalty (thin grey) clipped: it spans {span_text(raw[ok], unit)} "
             "(impacts); the axis holds the bold curves")
-
-
-def draw_set(ax, t, set_min, set_max, unit: str = "N") -> tuple[dict, str]:
-    """Draw the rigid solution set behind the curves: shaded (with its edges, so a set of
-    one value still shows) where both bounds are finite; where one side is open, the
-    finite bound dashed with triangles pointing to the open side. Returns the legend
-    handles and the panel's note: which sides are open, at how many instants, and the
-    finite bounds' span.
-    """
-    checked = ~(np.isnan(set_min) | np.isnan(set_max))
-    if not checked.any():
-        return {}, ""
-    lo, hi, tc = set_min[checked], set_max[checked], t[checked]
-    both = np.isfinite(lo) & np.isfinite(hi)
-    handles, notes, n = {}, [], int(checked.sum())
-    if both.any():
-        lo_b, hi_b = np.where(both, lo, np.nan), np.where(both, hi, np.nan)
-        handles[SET_LABEL] = ax.fill_between(tc, lo_b, hi_b, color=SET_COLOUR, alpha=0.35,
-                                             lw=0, zorder=0, label=SET_LABEL)
-        ax.plot(tc, lo_b, tc, hi_b, color=SET_COLOUR, lw=0.8, zorder=0.5)
-        single = both & (hi - lo <= 1e-6 * max(np.max(np.abs(hi[both])), 1e-9))
-        if single.any():  # a determinate quantity: the band is a line under the curves
-            notes.append(f"one value (determinate) {_share(int(single.sum()), n)}")
-    sides = ((lo, hi, "^", OPEN_ABOVE_LABEL, "open above", "lower"),
-             (hi, lo, "v", OPEN_BELOW_LABEL, "open below", "upper"))
-    for bound, other, marker, label, side, word in sides:
-        one = np.isfinite(bound) & ~np.isfinite(other)
-        if one.any():
-            handles[label], = ax.plot(tc, np.where(one, bound, np.nan), ls="--", lw=1.2,
-                                      color="0.25", marker=marker, ms=5.5, zorder=2,
-                                      markevery=(0, max(1, len(tc) // 10)), label=label)
-            notes.append(f"{side} {_share(int(one.sum()), n)}, {word} bound "
-                         f"{span_text(bound[one], unit)}")
-    free = ~np.isfinite(lo) & ~np.isfinite(hi)
-    if free.any():
-        notes.append(f"open above and below (any value) {_share(int(free.sum()), n)}")
-    return handles, "rigid set: " + "; ".join(notes) if notes else ""
-
-
-def _share(count: int, total: int) -> str:
-    return f"at all {total} instants" if count == total else f"at {count} of {total} instants"

@@ -84,7 +84,7 @@ def test_an_open_set_is_its_bound_and_the_open_side_not_a_hatched_panel(op, tmp_
     for ax in fig.axes[:len(labels)]:
         assert not [c for c in ax.collections if c.get_hatch()], "no hatching"
         bound = [line for line in ax.get_lines()
-                 if line.get_label() == figures_draw.OPEN_ABOVE_LABEL]
+                 if line.get_label() == images.OPEN_ABOVE_LABEL]
         assert bound and bound[0].get_marker() == "^"  # triangles point to the open side
         low, high = ax.get_ylim()
         assert low < 10.0 < high  # the finite bound in view
@@ -164,13 +164,13 @@ def test_a_band_is_drawn_exactly_where_both_bounds_are_finite():
     t = np.linspace(0, 1, 11)
     lo, hi = t.copy(), np.where(t <= 0.5, t + 2.0, np.inf)
     fig, ax = plt.subplots()
-    handles, note = figures_draw.draw_set(ax, t, lo, hi)
-    band = np.vstack([p.vertices for p in handles[figures_draw.SET_LABEL].get_paths()])
+    handles, note = images.draw_set(ax, t, lo, hi)
+    band = np.vstack([p.vertices for p in handles[images.SET_LABEL].get_paths()])
     assert band[:, 0].min() == 0.0 and band[:, 0].max() == 0.5
     for x in (0.0, 0.2, 0.5):
         at = band[np.isclose(band[:, 0], x), 1]
         assert np.isclose(at.min(), x) and np.isclose(at.max(), x + 2.0)
-    bound = handles[figures_draw.OPEN_ABOVE_LABEL]
+    bound = handles[images.OPEN_ABOVE_LABEL]
     y = np.asarray(bound.get_ydata(), float)
     assert np.isnan(y[t <= 0.5]).all() and np.allclose(y[t > 0.5], t[t > 0.5])
     assert "open above at 5 of 11 instants, lower bound 0.6 to 1 N" in note
