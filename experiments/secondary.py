@@ -47,7 +47,7 @@ from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import LIMITS, Scene, SceneError, TimeGrid, TorqueLaw
 from cardan_forces.experiments.environment import number_text
-from cardan_forces.experiments.images import format_list, save
+from cardan_forces.experiments.images import coinciding, format_list, save
 
 STEPS = 72
 """Instants per revolution (5 deg apart)."""
@@ -124,9 +124,12 @@ def handbook(torque: float, b1_deg: float, b2_deg: float, arrangement: str, a: f
 
 
 def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
-          out: Path, formats=("png",)) -> list[Path]:
+          out: Path, formats=("png",), handbook_marks: dict | None = None,
+          title: str = "") -> list[Path]:
     """``secondary.csv`` (long format) and the figure ``secondary.<format>`` (one panel
-    per case) for each of ``formats``.
+    per case, titled ``title``) for each of ``formats``; ``handbook_marks`` (case ->
+    load name -> ((angle deg, N), ...)): the closed forms, drawn as open markers over
+    the package's curves.
     """
     import matplotlib
 
@@ -141,18 +144,54 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
             for name, values in loads.items():
                 w.writerows([case, name, f"{q:.6g}", number_text(v, ".9g", "")]
                             for q, v in zip(angle_deg, values))
-    fig, axes = plt.subplots(len(results), 1, figsize=(10, 3 * len(results)), squeeze=False)
-    for ax, (case, loads) in zip(axes[:, 0], results.items()):
-        for name, values in loads.items():
-            ax.plot(angle_deg, values, label=name, ls="-" if "normal" in name else "--")
-        ax.set_title(f"bearing loads over one revolution: {case}")
-        ax.set_xlabel("input angle [deg]")
-        ax.set_ylabel("force [N]")
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    fig.tight_layout()
-    paths = save(fig, out / "secondary", formats)
+    with plt.rc_context(STYLE):
+        fig, axes = plt.subplots(len(results), 1, figsize=(10, 2.9 * len(results) + 0.7),
+                                 squeeze=False)
+        colours = {n: f"C{k}" for k, n in enumerate(dict.fromkeys(
+            n for loads in results.values() for n in loads))}
+        for k, (ax, (case, loads)) in enumerate(zip(axes[:, 0], results.items())):
+            _panel(ax, f"({'abcdefgh'[k]}) {case}", angle_deg, loads, colours,
+                   (handbook_marks or {}).get(case, {}))
+        fig.suptitle(title or "Bearing loads over one revolution", fontsize=11)
+        fig.tight_layout()
+        paths = save(fig, out / "secondary", formats)
     plt.close(fig)
     return [out / "secondary.csv", *paths]
+
+
+STYLE = {"font.size": 9.0, "axes.titlesize": 9.5, "xtick.labelsize": 8.0,
+         "ytick.labelsize": 8.0, "legend.fontsize": 8.0}
+"""Type sizes of the figure (pt at its printed size, 10 in wide)."""
+HANDBOOK_LABEL = "handbook closed form (0 and 90 deg)"
+
+
+def _panel(ax, title: str, angle_deg, loads: dict, colours: dict, marks: dict) -> None:
+    """One case: each load drawn once, loads that coincide over the revolution as one
+    line labelled with each of their names (found from the data), loads the rigid model
+    does not determine named in the title; the handbook's values as open circles.
+    """
+    drawn = {n: v for n, v in loads.items() if np.isfinite(v).any()}
+    scale = max((np.nanmax(np.abs(v)) for v in drawn.values()), default=1.0)
+    together = coinciding(drawn, 1e-6 * max(scale, 1.0))
+    hidden = {n for g in together for n in g[1:]}
+    for name, values in drawn.items():
+        if name in hidden:
+            continue
+        group = next((g for g in together if g[0] == name), (name,))
+        ax.plot(angle_deg, values, color=colours[name], ls="-" if "normal" in name else "--",
+                label=" = ".join(group))
+    for k, points in enumerate(marks.values()):
+        x, y = zip(*points)
+        ax.plot(x, y, ls="none", marker="o", ms=9, mfc="none", mew=1.6, color="k", zorder=5,
+                label=HANDBOOK_LABEL if k == 0 else "_")
+    missing = [n for n in loads if n not in drawn]
+    ax.set_title(title + (f"; not determinate: {', '.join(missing)}" if missing else ""),
+                 loc="left")
+    ax.set_xlabel("input angle [deg]")
+    ax.set_ylabel("bearing force [N]")
+    ax.set_xticks(np.arange(0, 361, 45))
+    ax.grid(alpha=0.3)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
 
 
 CASES = (("Z", (30.0, 30.0)), ("W", (30.0, 30.0)), ("Z", (10.0, 40.0)), ("W", (15.0, 25.0)))
@@ -163,16 +202,34 @@ def revolutions(base: str = "paper-slip", torque: float = 100.0, out: Path | Non
                 cases=CASES, formats=("png",)) -> dict[str, dict[str, np.ndarray]]:
     """Bearing loads over one revolution for each (arrangement, angles) case, by case
     name (``"Z 30/30 deg"``); with ``out``, also ``secondary.csv`` and the figure in
-    each of ``formats`` there.
+    each of ``formats`` there, the handbook's values over the package's curves.
     """
-    results = {}
+    results, marks = {}, {}
     for arrangement, angles in cases:
         scene = revolution_scene(base, arrangement, angles, torque)
         op = build_operator(simulate(scene))
-        results[_case_name(arrangement, angles)] = bearing_loads(op)
+        name = _case_name(arrangement, angles)
+        results[name] = bearing_loads(op)
+        marks[name] = handbook_points(scene, torque)
     if out is not None:
-        write(results, np.degrees(scene.time.instants()), Path(out), formats)
+        write(results, np.degrees(scene.time.instants()), Path(out), formats, marks,
+              f"Secondary-couple bearing loads over one revolution: scene {load_scene(base).name}, "
+              f"constant input torque {number_text(torque, 'g')} N m (quasi-static, no gravity)")
     return results
+
+
+def handbook_points(scene: Scene, torque: float) -> dict[str, tuple]:
+    """The handbook's values (:func:`handbook`) as the package names its loads: the
+    first shaft's bearings' ``normal`` loads (N) at input angles 0 and 90 deg, as
+    ``{load: ((0, N), (90, N))}``; ``scene`` a :func:`revolution_scene`.
+    """
+    first = scene.shafts[0]
+    near, far = sorted(first.bearings, key=lambda b: b.offset_m, reverse=True)
+    a, c = near.offset_m - far.offset_m, first.length_m / 2 - near.offset_m
+    angles = tuple(j.articulation_deg for j in scene.joints)
+    expect = handbook(torque, *angles, scene.arrangement, a, c, scene.shafts[1].length_m)
+    return {f"{first.name}.{b.name}.normal": ((0, expect[f"{key}_0"]), (90, expect[f"{key}_90"]))
+            for key, b in (("near", near), ("far", far))}
 
 
 def _case_name(arrangement: str, angles) -> str:
