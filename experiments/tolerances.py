@@ -1,0 +1,557 @@
+"""``cardan tolerances``: the loads a redundant line's manufacturing tolerances put into
+it, as a Monte Carlo over the scene's stated tolerances (:class:`~cardan_forces.
+driveline.scene.Tolerances`).
+
+Each sample draws, uniformly within the scene's half-widths, every bearing seat's radial
+offset ``delta`` (two components in its shaft's frame ``r1``, ``r2``, m), every joint's
+articulation and, where the scene calls for ``clearance``, every bearing's clearance,
+then solves :data:`RUN` (``compliance`` and ``compliance_hertz``) at ``--instants``
+instants of the scene's window. A seat offset is a misfit: it enters each problem's
+complementary energy as the work ``-delta . F`` of the bearing's force ``F`` through the
+imposed displacement (Menabrea with prescribed support movements), a signed term beside
+the clearance's ``gap ||F||``. The equations ``A x = b`` are unchanged by a misfit, so
+it moves only the indeterminate loads; an articulation changes the geometry (the
+sample's operator is built again), so it moves the determinate loads too.
+
+Answer: each load's (every contact's force magnitude and every rated bearing's ISO 281
+``P``) 5th, 50th and 95th percentiles over the samples at each instant, per formulation;
+each rated bearing's ``L10`` distribution (:mod:`cardan_forces.experiments.life`); how
+many sampled force components fell outside the nominal line's rigid interval (none can
+without an articulation tolerance). Samples are seeded one by one
+(``default_rng([seed, index])``), so any subset gives the same draws in any order.
+
+Runs in this process with a progress bar, or on a Dask cluster (``--scheduler``, the
+sweep's connection, :func:`~.sweep_exec.connect`). Every finished sample is appended to
+``samples.jsonl`` in ``--out`` in one flushed line (:mod:`.tolerance_store`): a rerun
+computes only the samples the file lacks, and a sample in it twice is read once.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import functools
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from cardan_forces.driveline import bearing_life as iso
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.scene import MAX_ARTICULATION_DEG, Scene, SceneError
+from cardan_forces.experiments import progress as bars
+from cardan_forces.experiments import tolerance_store as store
+from cardan_forces.experiments.environment import json_text, number_text
+from cardan_forces.experiments.images import format_list, save
+from cardan_forces.experiments.life import loads as bearing_loads
+from cardan_forces.experiments.life import rated
+from cardan_forces.experiments.study import interval_history, solve_over_time
+from cardan_forces.experiments.sweep_exec import connect
+from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations.convex import contact_laws
+from cardan_forces.formulations.problems import QP, Conic
+from threadpoolctl import threadpool_limits
+
+from cardan_forces.commands import UsageError
+
+RUN = ("compliance", "compliance_hertz")
+"""The formulations each sample solves."""
+
+INSTANTS = 11
+"""Instants per sample by default."""
+
+MAX_SAMPLES = 100_000
+"""Most samples a study takes."""
+
+MAX_SOLVES = 500_000
+"""Most problems a study solves (samples x instants x formulations), checked before any
+work: a study of this size keeps a few cores busy for hours."""
+
+QUANTILES = (5.0, 50.0, 95.0)
+"""Percentiles of each load's distribution."""
+
+INSIDE_RTOL = 1e-5
+"""A sampled component counts as outside its rigid interval when it passes an end by
+more than this times the instant's largest force (the solvers' acceptance is 1e-6)."""
+
+
+@dataclass(frozen=True)
+class Task:
+    """One sample of a study: the scene (a built-in name or a path), the study's seed,
+    the sample's index and the instants.
+    """
+
+    scene: str
+    seed: int
+    index: int
+    instants: int
+
+
+def scene_bearings(scene: Scene) -> list[str]:
+    """Every bearing as ``<shaft>.<bearing>``, in the scene's order (the draws' order)."""
+    return [f"{s.name}.{b.name}" for s in scene.shafts for b in s.bearings]
+
+
+def draws(scene: Scene, seed: int, index: int) -> dict[str, np.ndarray]:
+    """Sample ``index``'s deviations: ``seat`` (bearings, 2; m), ``articulation``
+    (joints; deg) and ``clearance`` (bearings; m, at least 0), uniform within the
+    scene's half-widths (zero without a ``[tolerances]`` table).
+    """
+    tol = scene.tolerances
+    rng = np.random.default_rng([seed, index])
+    nb, nj = len(scene_bearings(scene)), len(scene.joints)
+    seat = rng.uniform(-1.0, 1.0, (nb, 2)) * (tol.bearing_seat_m if tol else 0.0)
+    articulation = rng.uniform(-1.0, 1.0, nj) * (tol.articulation_deg if tol else 0.0)
+    spread = rng.uniform(-1.0, 1.0, nb) * (tol.bearing_clearance_m if tol else 0.0)
+    clearance = np.maximum(scene.contact.bearing_clearance_m + spread, 0.0)
+    return {"seat": seat, "articulation": articulation, "clearance": clearance}
+
+
+def check_size(scene: Scene, samples: int, instants: int) -> None:
+    """A study's size and its tolerances within bounds, before any work (ValueError)."""
+    if not 1 <= samples <= MAX_SAMPLES:
+        raise ValueError(f"--samples {samples}: must be in [1, {MAX_SAMPLES}]")
+    solves = samples * instants * len(RUN)
+    if solves > MAX_SOLVES:
+        raise ValueError(f"{samples} samples x {instants} instants x {len(RUN)} formulations "
+                         f"= {solves} solves; at most {MAX_SOLVES}")
+    tol = scene.tolerances
+    reach = max((abs(j.articulation_deg) for j in scene.joints), default=0.0) + \
+        (tol.articulation_deg if tol else 0.0)
+    if reach > MAX_ARTICULATION_DEG:
+        raise ValueError(f"scene {scene.name}: a joint's articulation plus its tolerance "
+                         f"reaches {reach:g} deg; at most {MAX_ARTICULATION_DEG:g}")
+
+
+# ---------------------------------------------------------------------------- one sample
+
+
+@functools.lru_cache(maxsize=4)
+def nominal(scene_spec: str, instants: int) -> tuple[Scene, Operator, dict, object]:
+    """The scene, its operator at ``instants`` instants over its window, each
+    formulation's problems and the rigid intervals, once per process.
+    """
+    scene = load_scene(scene_spec)
+    t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
+    op = build_operator(simulate(scene, t))
+    problems = {name: [FORMULATIONS[name](op, i) for i in range(len(t))] for name in RUN}
+    return scene, op, problems, interval_history(op)
+
+
+def sampled_operator(scene: Scene, op: Operator, articulation: np.ndarray) -> Operator:
+    """The operator of the line with each joint's articulation moved by ``articulation``
+    (deg), on the same instants; ``op`` itself when nothing moves.
+    """
+    if not np.any(articulation):
+        return op
+    joints = tuple(dataclasses.replace(j, articulation_deg=j.articulation_deg + float(d))
+                   for j, d in zip(scene.joints, articulation))
+    return build_operator(simulate(scene.with_changes(joints=joints), op.t))
+
+
+def misfit_vector(op: Operator, scene: Scene, seat: np.ndarray) -> np.ndarray:
+    """``d`` (n) with ``d . x = sum_b delta_b . F_b``: each bearing's seat offset (m, in
+    its shaft's ``r1``, ``r2``) against its radial force on the shaft (N).
+    """
+    index = {name: k for k, name in enumerate(scene_bearings(scene))}
+    d = np.zeros(len(op.names))
+    for c in op.bearings():
+        B = op.bearing_matrix(c)
+        d += seat[index[c.element], 0] * B[0] + seat[index[c.element], 1] * B[1]
+    return d
+
+
+def _load_vars(problem: Conic, n: int) -> dict[int, int]:
+    """Force column -> the unknown ``r_c >= ||f_c||`` of its contact, read from the
+    problem's second-order cones (apex row first).
+    """
+    out, row = {}, 0
+    for kind, size in problem.cones:
+        rows = 3 if kind == "pow" else int(size)
+        if kind == "soc":
+            load = int(np.flatnonzero(problem.A[row, n:])[0]) + n
+            for r in range(row + 1, row + rows):
+                out.update((int(j), load) for j in np.flatnonzero(problem.A[r, :n]))
+        row += rows
+    return out
+
+
+def misfit_problem(problem, op: Operator, d: np.ndarray, gaps: dict[int, float] | None):
+    """``problem`` (a compliance QP or conic) with the misfit's work ``-d . x`` (J) in
+    its objective and, in the conic form, each bearing column's contact clearance set to
+    ``gaps[column]`` (m). The objective's scale is read from a bearing's energy weight
+    (``1/(2k)`` of its law's stiffness ``k``, :func:`~cardan_forces.formulations.convex.
+    contact_laws`) as the formulation wrote it:
+    ``P_jj k / sb`` is the problem's objective per joule of complementary energy, per
+    unit of force ``sb``.
+    """
+    n, column = len(op.names), op.bearings()[0].columns[0]
+    k = next(law.stiffness for law in contact_laws(op) if column in law.columns)
+    sb = problem.to_forces.scale
+    if isinstance(problem, QP):
+        weight = problem.P[column, column] * k / sb
+        return dataclasses.replace(problem, q=problem.q - weight * d)
+    loads = _load_vars(problem, n)
+    weight = problem.P[loads[column], loads[column]] * k / sb
+    q = problem.q.copy()
+    q[:n] -= weight * d
+    for j, gap in (gaps or {}).items():
+        q[loads[j]] = weight * gap
+    return dataclasses.replace(problem, q=q)
+
+
+def _gap_columns(op: Operator, scene: Scene, clearance: np.ndarray) -> dict[int, float] | None:
+    """Each bearing column's sampled clearance (m), where the scene calls for
+    ``clearance`` (else the compliance problems have no gaps: ``None``).
+    """
+    if not scene.has("clearance"):
+        return None
+    index = {name: k for k, name in enumerate(scene_bearings(scene))}
+    return {j: float(clearance[index[c.element]]) for c in op.bearings() for j in c.columns}
+
+
+def run_sample(task: Task) -> dict:
+    """One sample's loads (JSON-ready): per formulation each load over the instants,
+    each rated bearing's ``L10`` (million revolutions), the instants solved and the
+    force components outside the nominal rigid interval. One BLAS thread (the problems
+    are small; a Dask worker's process is not the command's).
+    """
+    with threadpool_limits(limits=1):
+        scene, op0, problems, sets = nominal(task.scene, task.instants)
+        drawn = draws(scene, task.seed, task.index)
+        op = sampled_operator(scene, op0, drawn["articulation"])
+        d = misfit_vector(op, scene, drawn["seat"])
+        gaps = _gap_columns(op, scene, drawn["clearance"])
+        out = {"index": task.index, "loads": {}, "L10_Mrev": {}, "solved": {}, "outside": {}}
+        for name in RUN:
+            def make(i, name=name):
+                base = problems[name][i] if op is op0 else FORMULATIONS[name](op, i)
+                return misfit_problem(base, op, d, gaps)
+            history = solve_over_time(op, name, problem=make)
+            out["solved"][name] = history.solved
+            out["loads"][name] = sample_loads(op, history.forces)
+            out["L10_Mrev"][name] = sample_lives(op, history.forces)
+            out["outside"][name] = outside(history.forces, sets)
+    return out
+
+
+def sample_loads(op: Operator, forces: np.ndarray) -> dict[str, list[float]]:
+    """Every contact's force magnitude (N; N m never: a slip joint's mixed units are
+    left out) and every rated bearing's ``P`` (``P:<bearing>``, N), over the instants.
+    """
+    loads = {name: v.tolist() for name, v in op.contact_magnitudes(forces).items()}
+    for contact, rating in rated(op):
+        loads[f"P:{contact.element}"] = iso.equivalent_load(
+            rating, *bearing_loads(op, contact, forces)).tolist()
+    return loads
+
+
+def sample_lives(op: Operator, forces: np.ndarray) -> dict[str, float]:
+    """Each rated bearing's ``L10`` (million revolutions) over the sample's instants."""
+    revs = _revolutions(op.scene, tuple(op.t))
+    out = {}
+    for contact, rating in rated(op):
+        p = iso.equivalent_load(rating, *bearing_loads(op, contact, forces))
+        out[contact.element] = iso.rating_life(
+            rating, iso.mean_load(p, revs[contact.shaft], iso.exponent(rating)))
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _revolutions(scene: Scene, t: tuple[float, ...]) -> np.ndarray:
+    """Each shaft's revolutions over the stretch of each instant ``t`` (the operator
+    does not keep its motion: the scene's motion at those instants, once per process).
+    """
+    motion = simulate(scene, np.array(t))
+    return np.array([iso.revolutions(w, motion.t) for w in motion.omega])
+
+
+def outside(forces: np.ndarray, sets) -> int:
+    """How many (instant, component) values of ``forces`` (T, n) lie outside the rigid
+    set's interval ``sets`` by more than :data:`INSIDE_RTOL` of the instant's largest
+    force (an open end holds everything on its side; unsolved instants are not counted).
+    """
+    scale = INSIDE_RTOL * np.nanmax(np.abs(forces), axis=1, initial=1.0)[:, None]
+    with np.errstate(invalid="ignore"):
+        low = np.where(np.isnan(sets.min), -math.inf, sets.min) - scale
+        high = np.where(np.isnan(sets.max), math.inf, sets.max) + scale
+        bad = (forces < low) | (forces > high)
+    return int(bad.sum())
+
+
+# ---------------------------------------------------------------------------- a study
+
+
+def study_key(spec: str, scene: Scene, seed: int, instants: int) -> dict:
+    """What names a study in its store: a sample of another key is another study's."""
+    tol = dataclasses.asdict(scene.tolerances) if scene.tolerances else None
+    return {"scene": scene.name, "source": spec, "seed": seed, "instants": instants,
+            "formulations": list(RUN), "tolerances": tol,
+            "clearance": scene.has("clearance")}
+
+
+def _local(tasks: list[Task]):
+    """Each task run in this process, in order, with a progress bar: ``(task, sample)``,
+    or ``(task, error)`` for a sample that could not be made (retried by a rerun).
+    """
+    for task in bars.bar(tasks, "tolerances", unit="sample"):
+        try:
+            yield task, run_sample(task)
+        except (ValueError, ArithmeticError, RuntimeError) as exc:
+            yield task, exc
+
+
+def _dask(client, tasks: list[Task]):
+    """Each task run on the Dask cluster of ``client``: as :func:`_local`, in the order
+    they finish (a lost worker's samples come back as errors, retried by a rerun).
+    """
+    from dask.distributed import as_completed
+
+    futures = [client.submit(run_sample, task, pure=False) for task in tasks]
+    owner = {future.key: task for future, task in zip(futures, tasks)}
+    for future in as_completed(futures):
+        try:
+            yield owner[future.key], future.result()
+        except Exception as exc:  # a lost worker or a failed sample: retried next run
+            yield owner[future.key], exc
+
+
+def run_study(spec: str, samples: int, seed: int, instants: int, out: Path,
+              client=None, progress=None) -> tuple[dict, int]:
+    """Run the samples ``out``'s store lacks (locally, or on ``client``'s cluster),
+    append each as it finishes; the summary of samples ``0 .. samples - 1`` and how
+    many were lost this run.
+    """
+    scene = load_scene(spec)
+    check_size(scene, samples, instants)
+    key = study_key(spec, scene, seed, instants)
+    path = out / store.NAME
+    have = store.read(path, key)
+    todo = [Task(spec, seed, k, instants) for k in range(samples) if k not in have]
+    if progress:
+        progress(f"tolerances: {len(have)} samples stored, {len(todo)} to run "
+                 f"{'on ' + str(client.scheduler.address) if client else 'here'}")
+    lost = 0
+    with store.opened(path, key) as f:
+        for task, result in (_dask(client, todo) if client else _local(todo)):
+            if isinstance(result, Exception):
+                lost += 1
+                if progress:
+                    progress(f"tolerances: sample {task.index} lost: {result}")
+                continue
+            store.append(f, result)
+            have[task.index] = result
+    kept = [have[k] for k in range(samples) if k in have]
+    return summarize(spec, scene, instants, kept, samples), lost
+
+
+def _stack(samples: list[dict], form: str, part: str, names: list[str]) -> np.ndarray:
+    """The samples' ``part`` of ``form`` as floats (samples, names, ...); NaN for null."""
+    return np.array([[s[part][form].get(n) for n in names] for s in samples], dtype=float)
+
+
+def _quantiles(values: np.ndarray) -> dict[str, np.ndarray]:
+    """:data:`QUANTILES` over axis 0 (NaN where no sample has a value)."""
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an all-NaN column is NaN
+        found = np.nanpercentile(values, QUANTILES, axis=0) if len(values) else \
+            np.full((len(QUANTILES), *values.shape[1:]), np.nan)
+    return {f"P{q:g}": v for q, v in zip(QUANTILES, found)}
+
+
+def summarize(spec: str, scene: Scene, instants: int, samples: list[dict],
+              asked: int) -> dict:
+    """The study's answer (JSON-ready): per formulation each load's percentiles over
+    the samples at each instant beside the nominal line's value (no deviation), each
+    rated bearing's ``L10`` distribution, the instants solved and the components outside
+    the nominal rigid set.
+    """
+    _, op, _, _ = nominal(spec, instants)
+    out = {"scene": scene.name, "samples": asked, "stored": len(samples),
+           "t_s": op.t, "instants": instants, "quantiles": list(QUANTILES),
+           "tolerances": dataclasses.asdict(scene.tolerances) if scene.tolerances else None,
+           "notes": notes(scene), "loads": {}, "L10_Mrev": {}, "solved": {}, "outside": {}}
+    for form in RUN:
+        base = solve_over_time(op, form).forces
+        loads, lives = sample_loads(op, base), sample_lives(op, base)
+        names = list(loads)
+        bands = _quantiles(_stack(samples, form, "loads", names))
+        out["loads"][form] = {n: {**{k: v[j] for k, v in bands.items()}, "nominal": loads[n]}
+                              for j, n in enumerate(names)}
+        spread = _stack(samples, form, "L10_Mrev", list(lives))
+        out["L10_Mrev"][form] = {
+            b: {**{k: v[j] for k, v in _quantiles(spread).items()},
+                "min": float(np.nanmin(spread[:, j], initial=np.inf)),
+                "max": float(np.nanmax(spread[:, j], initial=-np.inf)), "nominal": lives[b]}
+            for j, b in enumerate(lives)}
+        out["solved"][form] = int(sum(s["solved"][form] for s in samples))
+        out["outside"][form] = int(sum(s["outside"][form] for s in samples))
+    return out
+
+
+def notes(scene: Scene) -> list[str]:
+    """What the reader must know of this scene's study, one sentence each."""
+    found = []
+    if scene.tolerances is None:
+        found.append("the scene states no tolerances: every sample is the nominal line")
+    elif scene.tolerances.bearing_clearance_m and not scene.has("clearance"):
+        found.append("the clearance tolerance is not used: the scene does not call for "
+                     "'clearance', so its compliance problems have no gaps")
+    if scene.tolerances and scene.tolerances.articulation_deg:
+        found.append("articulations vary: each sample's geometry, hence its rigid set, "
+                     "differs from the nominal line's; 'outside' counts components "
+                     "outside the nominal set")
+    return found
+
+
+# ---------------------------------------------------------------------------- output
+
+
+def write_csv(answer: dict, path: Path) -> None:
+    """Long format: one row per formulation, load and instant with its percentiles and
+    the nominal value (N); an empty cell where undefined.
+    """
+    keys = [f"P{q:g}" for q in QUANTILES] + ["nominal"]
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["t_s", "formulation", "load", *(f"{k}_N" for k in keys)])
+        for form, loads in answer["loads"].items():
+            for name, entry in loads.items():
+                for i, t in enumerate(answer["t_s"]):
+                    w.writerow([f"{t:.6g}", form, name,
+                                *(number_text(entry[k][i], ".7g", "") for k in keys)])
+
+
+def markdown(answer: dict) -> str:
+    """``tolerances.md``: the study, its notes and each bearing's ``L10`` distribution."""
+    lines = [f"# Tolerance study of scene {answer['scene']}", "",
+             f"{answer['stored']} of {answer['samples']} samples, {answer['instants']} "
+             f"instants each; tolerances (half-widths of uniform spreads): "
+             f"{answer['tolerances']}.", ""]
+    lines += [f"- {note}" for note in answer["notes"]]
+    for form in RUN:
+        lines += ["", f"## {form}", "", f"Instants solved: {answer['solved'][form]}; "
+                  f"components outside the nominal rigid set: {answer['outside'][form]}.",
+                  "", "| bearing | nominal L10 [Mrev] | P5 | P50 | P95 | least | greatest |",
+                  "|---|---|---|---|---|---|---|"]
+        for bearing, e in answer["L10_Mrev"][form].items():
+            cells = [e["nominal"], e["P5"], e["P50"], e["P95"], e["min"], e["max"]]
+            lines.append(f"| {bearing} | " +
+                         " | ".join(number_text(c, ".4g", "-") for c in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def figure(answer: dict):
+    """Each rated bearing's ``P`` over time: the compliance samples' 5-95 % band and
+    median, compliance_hertz's median, and the nominal line's value.
+    """
+    import matplotlib.pyplot as plt
+
+    names = [n for n in answer["loads"][RUN[0]] if n.startswith("P:")] or \
+        list(answer["loads"][RUN[0]])[:4]
+    cols = min(3, len(names))
+    rows = math.ceil(len(names) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.4 * cols, 2.9 * rows + 1.2),
+                             squeeze=False)
+    t = np.asarray(answer["t_s"])
+    for ax, name in zip(axes.ravel(), names):
+        lin, hz = answer["loads"][RUN[0]][name], answer["loads"][RUN[1]][name]
+        ax.fill_between(t, lin["P5"], lin["P95"], color="C0", alpha=0.3,
+                        label="compliance: 5-95 % of samples")
+        ax.plot(t, lin["P50"], color="C0", label="compliance: median")
+        ax.plot(t, hz["P50"], "--", color="C1", label="compliance_hertz: median")
+        ax.plot(t, lin["nominal"], ":", color="k", label="nominal line (compliance)")
+        ax.set_title(name.removeprefix("P:"), fontsize=9)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("P [N]" if name.startswith("P:") else "force [N]")
+    for ax in axes.ravel()[len(names):]:
+        ax.set_visible(False)
+    fig.suptitle(f"{answer['scene']}: equivalent bearing loads over {answer['stored']} "
+                 "tolerance samples", fontsize=10)
+    handles, labels = axes.ravel()[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
+    height = fig.get_size_inches()[1]
+    fig.subplots_adjust(bottom=1.0 / height, top=1 - 0.55 / height, hspace=0.6, wspace=0.35)
+    return fig
+
+
+def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
+    """``tolerances.csv``, ``tolerances.md`` and ``tolerances.<format>``; their paths."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(answer, out / "tolerances.csv")
+    (out / "tolerances.md").write_text(markdown(answer))
+    fig = figure(answer)
+    images = save(fig, out / "tolerances", formats)
+    plt.close(fig)
+    return [out / "tolerances.csv", out / "tolerances.md", *images]
+
+
+def _whole(least: int, most: int):
+    """An argparse type: a whole number in ``[least, most]``."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = least - 1
+        if not least <= value <= most:
+            raise argparse.ArgumentTypeError(f"expected a whole number in [{least}, {most}], "
+                                             f"got {text!r}")
+        return value
+    return parse
+
+
+def add_parser(subparsers) -> None:
+    """Register ``cardan tolerances``."""
+    p = subparsers.add_parser("tolerances", help="Monte Carlo of the loads the scene's "
+                              "tolerances put into the line (compliance and Hertz solves)")
+    p.add_argument("scene", help="built-in name or TOML path")
+    p.add_argument("--samples", type=_whole(1, MAX_SAMPLES), required=True,
+                   help=f"samples (at most {MAX_SAMPLES})")
+    p.add_argument("--instants", type=_whole(2, 2001), default=INSTANTS,
+                   help=f"instants over the scene's window (default {INSTANTS})")
+    p.add_argument("--seed", type=_whole(0, 2 ** 63 - 1), default=0,
+                   help="the study's seed (default 0); sample k draws from (seed, k)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help='run on this Dask scheduler (pip install -e ".[dask]")')
+    p.add_argument("--timeout", type=float, default=10.0,
+                   help="seconds to wait for the Dask scheduler (default 10)")
+    p.add_argument("--out", default="results/tolerances",
+                   help="output folder, and the samples' store (default %(default)s)")
+    p.add_argument("--format", type=format_list, default=("png",),
+                   help="comma-separated image formats (default png; any of png,svg,pdf)")
+    p.add_argument("--json", action="store_true",
+                   help="print the summary as strict JSON on stdout (the store is written)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """The study: 0 done, 1 when samples were lost (a rerun retries them), 2 bad input."""
+    if not (math.isfinite(args.timeout) and 0 < args.timeout <= 3600):
+        raise UsageError(f"--timeout {args.timeout}: must be in (0, 3600] s")
+    try:
+        load = load_scene(args.scene)
+        check_size(load, args.samples, args.instants)
+    except ValueError as err:
+        if isinstance(err, SceneError):
+            raise
+        raise UsageError(str(err)) from None
+    client = connect(args.scheduler, args.timeout) if args.scheduler else None
+    answer, lost = run_study(args.scene, args.samples, args.seed, args.instants,
+                             Path(args.out), client, bars.line)
+    if args.json:
+        print(json_text(answer))
+    else:
+        for path in write_outputs(answer, Path(args.out), args.format):
+            print(path)
+    if lost:
+        bars.line(f"tolerances: {lost} samples lost; run again to compute them")
+    return 1 if lost else 0
