@@ -33,6 +33,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from cardan_forces.commands import UsageError, progress
+from cardan_forces.commands import compile as compile_command
 from cardan_forces.commands import repro as repro_command
 from cardan_forces.commands import scene as scene_command
 from cardan_forces.commands import sets as sets_command
@@ -46,7 +47,7 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import SolverNotFound
 
 COMMANDS = (scene_command, sets_command, solvers_command, solve_command, repro_command,
-            bench, export, hard, sweep, report, secondary, engine)
+            bench, export, hard, sweep, report, secondary, engine, compile_command)
 """The command modules, in the order ``cardan --help`` lists them."""
 
 HEARTBEAT_S = 30.0

@@ -14,6 +14,9 @@ operator, so ``A x = b`` is consistent to round-off at every instant.
 Without the ``inertia`` effect the analysis is quasi-static: the input turns at the
 scene's initial speed, no d'Alembert term exists, and the load torque is the one
 that balances the input torque (power balance), reported in ``Motion.load_torque``.
+
+Its compiled kernels use NumPy's error model (:mod:`.compiled`): a bad number gives a
+NaN for the callers' finiteness checks, never an exception from compiled code.
 """
 
 from __future__ import annotations

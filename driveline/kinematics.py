@@ -9,6 +9,9 @@ eqs. (1)-(4) are tests of this construction, not its implementation.
 
 Everything is batched over instants: angles have shape ``(n_shafts, T)`` and
 vectors ``(n_joints, T, 3)``.
+
+Its compiled kernels use NumPy's error model (:mod:`.compiled`): a bad number gives a
+NaN for the callers' finiteness checks, never an exception from compiled code.
 """
 
 from __future__ import annotations

@@ -106,9 +106,11 @@ drivers are apart (:mod:`~cardan_forces.driveline.penalty_integrators`).
 
 from __future__ import annotations
 
+import sys
 import time as _time
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy import sparse
@@ -132,6 +134,9 @@ METHODS = {"BDF": BDF, "Radau": Radau, "LSODA": LSODA, COMPILED: None}
 """Integrators: SciPy's (stepped from Python or, LSODA, from Fortran, calling the
 right-hand side back through Python) and ``BDF-numba``, the same BDF as SciPy's
 compiled end to end around the compiled kernels (:mod:`penalty_kernels`)."""
+FALLBACK = "LSODA"
+"""The integrator of ``method="auto"`` without numba, and where the compiled one fails
+(its message then says both)."""
 KERNELS = ("numba", "numpy")
 """Right-hand sides: compiled (:mod:`penalty_kernels`) or the NumPy array model."""
 
@@ -673,8 +678,10 @@ def simulate_penalty(
     the unit of "c_max = 1 % of K" (module docstring). ``progress(t)`` is called every
     ``progress_every_s`` of simulated time. ``kernel``: ``numba`` (compiled, see
     :mod:`~cardan_forces.driveline.penalty_kernels`), ``numpy`` (the array model, no
-    compiler needed) or ``auto`` (numba where installed). A failed integration returns
-    ``status = -1`` and its message; it raises only for bad arguments.
+    compiler needed) or ``auto`` (numba where installed). With ``method="auto"`` a
+    failed compiled integration is run again by :data:`FALLBACK` (the message says
+    both). A failed integration returns ``status = -1`` and its message; it raises only
+    for bad arguments.
     """
     if not scene.has("penalty_dynamics"):
         raise ValueError(
@@ -691,8 +698,9 @@ def simulate_penalty(
     if kernel not in KERNELS or (kernel == "numba" and not kernels.HAVE_NUMBA):
         raise ValueError(f"kernel {kernel!r} not available; available: "
                          f"{', '.join(k for k in KERNELS if k != 'numba' or kernels.HAVE_NUMBA)}")
+    fallback = method == "auto" and kernel == "numba"
     if method == "auto":
-        method = COMPILED if kernel == "numba" else "LSODA"
+        method = COMPILED if kernel == "numba" else FALLBACK
     if method not in METHODS:
         raise ValueError(f"unknown method {method!r}; known: {', '.join(METHODS)}")
     if method == COMPILED and kernel != "numba":
@@ -705,23 +713,14 @@ def simulate_penalty(
     compile_s = _load_compiled(scene, kernel, method, damping_length_unit_m)
     start, cpu = _time.perf_counter(), _time.process_time()
     model = _Model(scene, damping_length_unit_m)
-    y0 = model.initial_state()
-    atol, step = model.tolerances(atol_m)
-    states = np.full((len(t), model.n_state), np.nan)
-    states[t == t0] = y0
-    status, message, counts = 0, "no motion asked for", (0, 0, 0, 0)
-    clock = {"rhs": np.nan, "jacobian": np.nan}
-    if t.max() > t0:
-        marks = Marks(progress, t0, float(t.max()), progress_every_s)
-        if method == COMPILED:
-            status, message, counts = run_compiled(model, t0, y0, t, atol, states, marks)
-        else:
-            clock = {"rhs": 0.0, "jacobian": 0.0}
-            fun, jac = timed(model, kernel, step, clock)
-            integrate = run_odeint if method == "LSODA" else run_stepped
-            status, message, counts = integrate(METHODS[method], fun, jac, t0, y0, t, atol,
-                                                states, marks)
-            counts = (*counts, model.n_calls)
+    run = _integrate(model, method, kernel, t, atol_m, progress, progress_every_s)
+    if run.status != 0 and fallback:
+        first = run.message
+        method = FALLBACK
+        run = _integrate(model, method, kernel, t, atol_m, progress, progress_every_s)
+        run.message = f"{COMPILED} failed ({first}); {FALLBACK}: {run.message}"
+    status, message, counts, clock, states = (run.status, run.message, run.counts,
+                                              run.clock, run.states)
     forces, omega, depth = _sample(model, states)
     return PenaltyResult(
         scene=scene, t=t, omega=omega, forces=forces, penetration=depth,
@@ -730,6 +729,42 @@ def simulate_penalty(
         kernel=kernel, rhs_s=clock["rhs"], jacobian_s=clock["jacobian"],
         cpu_s=_time.process_time() - cpu, compile_s=compile_s,
     )
+
+
+@dataclass
+class _Run:
+    """One integration's outcome: status (0 or -1), message, counts (steps, Jacobians,
+    LU factorizations, right-hand sides), the kernels' clocks and the sampled states.
+    """
+
+    status: int
+    message: str
+    counts: tuple
+    clock: dict
+    states: np.ndarray
+
+
+def _integrate(model: _Model, method: str, kernel: str, t: np.ndarray, atol_m: float,
+               progress, progress_every_s: float) -> _Run:
+    """Integrate ``model`` from the scene's start with ``method``, sampled at ``t``."""
+    t0 = model.scene.time.start_s
+    y0 = model.initial_state()
+    atol, step = model.tolerances(atol_m)
+    states = np.full((len(t), model.n_state), np.nan)
+    states[t == t0] = y0
+    clock = {"rhs": np.nan, "jacobian": np.nan}
+    if t.max() <= t0:
+        return _Run(0, "no motion asked for", (0, 0, 0, 0), clock, states)
+    marks = Marks(progress, t0, float(t.max()), progress_every_s)
+    if method == COMPILED:
+        status, message, counts = run_compiled(model, t0, y0, t, atol, states, marks)
+        return _Run(status, message, counts, clock, states)
+    clock = {"rhs": 0.0, "jacobian": 0.0}
+    fun, jac = timed(model, kernel, step, clock)
+    integrate = run_odeint if method == "LSODA" else run_stepped
+    status, message, counts = integrate(METHODS[method], fun, jac, t0, y0, t, atol, states,
+                                        marks)
+    return _Run(status, message, (*counts, model.n_calls), clock, states)
 
 
 def _load_compiled(scene: Scene, kernel: str, method: str, damping_length_unit_m: float
@@ -741,6 +776,7 @@ def _load_compiled(scene: Scene, kernel: str, method: str, damping_length_unit_m
     key = (kernel, method == COMPILED)
     if kernel != "numba" or key in _LOADED:
         return 0.0
+    _announce_compile()
     begin = _time.perf_counter()
     model = _Model(scene, damping_length_unit_m)
     y0, t0 = model.initial_state(), scene.time.start_s
@@ -756,6 +792,35 @@ def _load_compiled(scene: Scene, kernel: str, method: str, damping_length_unit_m
 
 
 _LOADED: set[tuple[str, bool]] = set()
+
+
+def _announce_compile() -> None:
+    """Say on stderr, before the first compilation, that the penalty simulation's
+    kernels are compiled now (once per installation and CPU, cached by numba), since the
+    run is silent meanwhile. Silent where numba's cache already holds the integrator.
+    """
+    index = _cache_index()
+    if index is None or index.exists():
+        return
+    print(f"cardan: compiling the penalty simulation's kernels with numba for this CPU "
+          f"(once; a few minutes on a small machine; cached in {index.parent}; "
+          f"'cardan compile' does it ahead)", file=sys.stderr, flush=True)
+
+
+def _cache_index() -> Path | None:
+    """The cache index file numba keeps of the compiled integrator, ``None`` where this numba
+    does not say (its cache's layout is not public API).
+    """
+    try:
+        return Path(kernels.advance._cache._cache_file._index_path)
+    except AttributeError:
+        return None
+
+
+def cache_folder() -> str:
+    """Where numba caches the penalty simulation's kernels (for messages)."""
+    index = _cache_index()
+    return str(index.parent) if index is not None else "numba's cache folder"
 
 
 def _sample(model: _Model, states: np.ndarray):

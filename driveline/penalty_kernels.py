@@ -29,6 +29,10 @@ parts, the step itself) are inlined (``inline="always"``), leaving as calls only
 side 1.3, a Newton solve 1.4, a Jacobian 1.2 times cheaper, the same numbers to the
 bit. Compiling takes longer (about 90 s of CPU instead of 40, once).
 
+**Numbers, not exceptions.** Compiled with NumPy's error model (:mod:`.compiled`): a
+division by zero gives an infinity or a NaN, and the integrator ends with a failed
+status and its reason, as SciPy's does; it never raises from compiled code.
+
 Without numba the functions below still run (as plain Python, slowly); the simulation
 then uses the NumPy model and SciPy's integrators instead (:data:`HAVE_NUMBA`).
 
