@@ -8,9 +8,10 @@ its driving yoke by a hinge about ``e1``, the next shaft on the pin by a hinge a
 axis (frictionless). Masses and inertias are the scene's (a shaft's transverse moments
 ``J1``, ``J3`` along ``r1``, ``r2``; a segment takes its length share of all three, as
 the operator does of the axial one). Every bearing is an equality constraint to the
-ground: a locating one a ``connect`` at the bearing point (3 rows), a floating one a
-``connect`` to a carrier body that slides along the shaft's axis on the ground (its
-weight compensated), so that it carries no axial force but the carrier's inertia. The
+ground, as its kind writes it (:meth:`~.elements.bearing.BearingKind.mjcf`): a
+locating one a ``connect`` at the bearing point (3 rows), a floating one a ``connect``
+to a carrier body that slides along the shaft's axis on the ground (its weight
+compensated), so that it carries no axial force but the carrier's inertia. The
 bearings close the loop, so the model is redundant exactly as the rigid one is: two
 axial splits and, without a slip joint, the loop's self-stress. A hinge has no end-face
 split: the end-face pairs of the rigid model are resolved as the package resolves them,
@@ -49,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .elements import shaft_segments
+from .elements.base import mjcf_numbers as _vec
 from .equilibrium import Operator, body_references
 from .kinematics import kinematics, rest_geometry
 from .scene import Scene
@@ -222,10 +224,6 @@ def _pin(scene: Scene, geo, kin, j: int, index: int) -> _Body:
                  now @ np.diag(moments) @ now.T)
 
 
-def _vec(v) -> str:
-    return " ".join(f"{float(c):.17g}" for c in np.ravel(v))
-
-
 def _quat(rot: np.ndarray) -> np.ndarray:
     quat = np.zeros(4)
     _mujoco().mju_mat2Quat(quat, np.ascontiguousarray(rot).ravel())
@@ -269,18 +267,12 @@ def build_mjcf(op: Operator, softness: Softness = Softness()) -> str:
     for link, (point, axis) in _bearings(op):
         shaft = scene.shafts[link.shaft].name
         body = next(b for b in chain if b.index == link.body)
-        anchor = body.rot.T @ (point - body.pos)
-        other = "world"
-        if link.kind == "bearing-floating":
-            other = f"carrier.{link.name}"
-            mass = body.mass
-            carriers.append(
-                f'<body name="{other}" pos="{_vec(point)}" gravcomp="1">'
-                f'<joint type="slide" axis="{_vec(axis)}"/><inertial pos="0 0 0" '
-                f'mass="{mass:.17g}" diaginertia="{_vec(np.full(3, mass * 1e-2))}"/></body>')
-        equalities.append(f'<connect name="{link.name}" body1="{names[chain.index(body)]}" '
-                          f'body2="{other}" anchor="{_vec(anchor)}" '
-                          f'solref="{softness.solref(shaft)}" solimp="{softness.solimp}"/>')
+        soft = f'solref="{softness.solref(shaft)}" solimp="{softness.solimp}"'
+        carrier, equality = link.element_kind.mjcf(
+            link, names[chain.index(body)], body.rot.T @ (point - body.pos), point, axis,
+            body.mass, soft)
+        carriers.append(carrier)
+        equalities.append(equality)
     gravity = scene.gravity_m_s2 if scene.has("gravity") else (0.0, 0.0, 0.0)
     return (f'<mujoco model="{scene.name}"><compiler angle="radian"/>'
             f'<option timestep="{_timestep(op, softness):.17g}" integrator="RK4" '
@@ -325,7 +317,7 @@ def _groups(op: Operator, chain: list[_Body]):
     """
     out = [("bearing", link, e) for e, (link, _) in enumerate(_bearings(op))]
     pairs: dict[tuple[int, int | None], list] = {}
-    for link in op.of_kind("trunnion-radial", "end-face", "slip"):
+    for link in (c for c in op.contacts if c.other is not None):
         pairs.setdefault((link.body, link.other), []).append(link)
     position = {b.index: p for p, b in enumerate(chain)}
     for (body, other), links in pairs.items():
@@ -364,7 +356,7 @@ def _read(mj, model, data, op: Operator, i: int, chain, groups, refs):
         y = np.linalg.lstsq(block, w, rcond=None)[0]
         misfit = max(misfit, float(np.max(np.abs(block @ y - w))))
         x[cols] = y
-    for a, b in op.pairs:  # an end-face pair: complementary on its net push along +axis
+    for a, b in op.pairs:  # a pair (end faces, ...): complementary on its net push
         net = x[b] - x[a]
         x[a], x[b] = max(-net, 0.0), max(net, 0.0)
     return x, misfit

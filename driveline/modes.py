@@ -3,13 +3,14 @@ release that removes it (DESIGN §1, modes).
 
 Found from the operator's structure, not fitted to the numbers:
 
-- **end-face pair**: pushing both end faces of one trunnion pair equally (their
-  columns are opposite): ``e_a + e_b``. Complementarity (only one face of a pair can
-  touch, paper eqs. 39, 46) resolves it; no release is needed.
-- **axial split**: equal and opposite axial forces in two locating bearings of one
-  shaft body (``s`` in the first bearing's components, ``-s`` in the next one's):
-  ``n - 1`` per body with ``n`` locating bearings. Released by making one of them
-  floating.
+- **pairs**: pushing both of a pair of opposite unilateral columns equally,
+  ``e_a + e_b``, named by the kind that made them (an **end-face pair**: both end
+  faces of one trunnion pair). Complementarity (only one face of a pair can touch,
+  paper eqs. 39, 46) resolves it; no release is needed.
+- **axial split**: equal and opposite axial forces in two locating bearings (whose
+  kind carries axial force both ways) of one shaft body (``s`` in the first
+  bearing's components, ``-s`` in the next one's): ``n - 1`` per body with ``n``
+  locating bearings. Released by making one of them floating.
 - **closed loop**: what remains of the null space, its orthogonal complement of the
   two kinds above: a self-stress running around a loop of bodies through the ground
   (in the paper's line: an axial force in the intermediate shaft through both
@@ -17,7 +18,7 @@ Found from the operator's structure, not fitted to the numbers:
   loop (or by floating every bearing that closes it); :func:`loop_releases` finds
   which single releases remove one.
 
-The count of all three kinds equals the nullity (checked, :class:`ModeError`).
+The count of all the kinds equals the nullity (checked, :class:`ModeError`).
 """
 
 from __future__ import annotations
@@ -53,15 +54,16 @@ class Mode:
 
 
 def structural_modes(op: Operator, i: int) -> list[Mode]:
-    """End-face pair and axial split modes at instant ``i`` (unit vectors)."""
+    """Pair and axial split modes at instant ``i`` (unit vectors)."""
     n = len(op.names)
     modes = []
+    link_of = {c: link for link in op.contacts for c in link.columns}
     for a, b in op.pairs:
         v = np.zeros(n)
         v[[a, b]] = 1.0 / np.sqrt(2.0)
-        modes.append(Mode("end-face pair", f"both end faces {op.names[a]} and {op.names[b]} "
-                          "pushing equally", (op.names[a], op.names[b]),
-                          "none needed: complementarity (only one face touches)", v))
+        named = link_of[a].element_kind.pair_mode(link_of[a], link_of[b])
+        modes.append(Mode(named.kind, named.description, (op.names[a], op.names[b]),
+                          named.release, v))
     for body, group in _locating_by_body(op).items():
         axis = op.shaft_frames[op.bodies[body].shaft, 2]
         for first, second in zip(group, group[1:]):
@@ -78,8 +80,9 @@ def structural_modes(op: Operator, i: int) -> list[Mode]:
 
 def _locating_by_body(op: Operator) -> dict:
     by: dict[int, list] = {}
-    for c in op.of_kind("bearing-locating"):
-        by.setdefault(c.body, []).append(c)
+    for c in op.bearings():
+        if c.element_kind.locates:
+            by.setdefault(c.body, []).append(c)
     return {k: v for k, v in by.items() if len(v) > 1}
 
 
@@ -139,6 +142,8 @@ def _chain(body, index: int) -> tuple[int, int]:
 
 
 def counts(modes: list[Mode]) -> dict[str, int]:
-    """How many modes of each kind."""
-    return {kind: sum(m.kind == kind for m in modes)
-            for kind in ("end-face pair", "axial split", "closed loop")}
+    """How many modes of each kind: every pair kind present, axial splits and closed
+    loops (those two always, as the ones a release removes).
+    """
+    kinds = dict.fromkeys([m.kind for m in modes] + ["axial split", "closed loop"])
+    return {kind: sum(m.kind == kind for m in modes) for kind in kinds}

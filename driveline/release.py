@@ -1,13 +1,12 @@
 """Releases: the design changes that remove a redundancy of the rigid model.
 
-Two kinds, the ways real drive lines avoid redundant constraints:
+Each element kind offers its own (:mod:`.elements`; the kinds' modules say what each
+does), the ways real drive lines avoid redundant constraints; those of the built-in
+kinds:
 
-- ``floating``: make a locating bearing floating (it keeps its radial support and
-  lets the shaft slide through it axially);
-- ``slip``: put a frictionless slip (spline) joint in a shaft, at its centre (or, if a
-  bearing sits there, midway between the centre and the nearest bearing downstream),
-  pitch radius :data:`SLIP_PITCH_RADIUS_M` (it enters only with friction or the
-  compliance formulation's spline stiffness).
+- ``float:<shaft>.<bearing>``: make a locating bearing floating (it keeps its radial
+  support and lets the shaft slide through it axially);
+- ``slip:<shaft>``: put a frictionless slip (spline) joint in a shaft.
 
 Neither changes the 1-DOF motion: the kinematics and the reduced inertia are those
 of the shafts, which turn as before; so a released operator is built on the same
@@ -30,71 +29,36 @@ import numpy as np
 from .determinacy import Determinacy, determinacy, holding
 from .dynamics import Motion
 from .elements import check_elements
+from .elements.base import Release
+from .elements.registry import BEARING_KINDS, RELEASES
 from .equilibrium import Operator, build_operator
 from .modes import Mode, counts, name_modes
-from .scene import Scene, SceneError, SlipJoint
+from .scene import Scene, SceneError
 from .support import check_loads
 
-SLIP_PITCH_RADIUS_M = 0.02
-"""Pitch radius of a spline a release adds (m; an assumption, see the module doc)."""
-
-
-@dataclass(frozen=True)
-class Release:
-    """One release: ``kind`` ``floating`` (``shaft``, ``bearing``) or ``slip`` (``shaft``)."""
-
-    kind: str
-    shaft: str
-    bearing: str = ""
-
-    @property
-    def label(self) -> str:
-        """The release as typed on the command line: ``float:<shaft>.<bearing>`` or
-        ``slip:<shaft>``.
-        """
-        return f"float:{self.shaft}.{self.bearing}" if self.kind == "floating" \
-            else f"slip:{self.shaft}"
-
-    @property
-    def words(self) -> str:
-        return (f"make bearing {self.shaft}.{self.bearing} floating" if self.kind == "floating"
-                else f"add a slip joint in shaft {self.shaft}")
-
-    def to_json(self) -> dict:
-        return {"release": self.label, "description": self.words}
+__all__ = ["Release", "parse_release", "candidates", "released_scene", "advise"]
 
 
 def parse_release(text: str, scene: Scene) -> Release:
-    """``float:<shaft>.<bearing>`` or ``slip:<shaft>``, checked against ``scene``."""
-    kind, _, target = text.partition(":")
-    shafts = {s.name: s for s in scene.shafts}
-    if kind == "slip" and target in shafts:
-        return Release("slip", target)
-    if kind == "float":
-        shaft, _, bearing = target.partition(".")
-        if shaft in shafts and bearing in {b.name for b in shafts[shaft].bearings}:
-            return Release("floating", shaft, bearing)
-    raise SceneError(f"release {text!r}: expected float:<shaft>.<bearing> or slip:<shaft> "
-                     f"with names of scene {scene.name!r}")
+    """``<prefix>:<target>`` (``float:<shaft>.<bearing>``, ``slip:<shaft>``, as the
+    kinds offer them), checked against ``scene``.
+    """
+    prefix, _, target = text.partition(":")
+    for kind in RELEASES.values():
+        if kind.release_form.partition(":")[0] == prefix:
+            found = kind.parse_release(target, scene)
+            if found is not None:
+                return found
+    forms = " or ".join(k.release_form for k in RELEASES.values())
+    raise SceneError(f"release {text!r}: expected {forms} with names of scene "
+                     f"{scene.name!r}")
 
 
 def candidates(scene: Scene) -> list[Release]:
-    """Every single release the scene admits: each locating bearing floating, a slip joint
-    in each shaft that has none (slips first: a slip removes loops).
+    """Every single release the scene admits, as its kinds offer them (slips first: a
+    slip removes loops; then each locating bearing floating).
     """
-    slipped = {s.shaft for s in scene.slip_joints}
-    out = [Release("slip", s.name) for s in scene.shafts if s.name not in slipped]
-    out += [Release("floating", s.name, b.name) for s in scene.shafts for b in s.bearings
-            if b.kind == "locating"]
-    return out
-
-
-def _slip_offset(shaft) -> float:
-    taken = sorted(b.offset_m for b in shaft.bearings)
-    if all(abs(o) > 1e-9 for o in taken):
-        return 0.0
-    above = [o for o in taken if o > 1e-9] + [shaft.length_m / 2]
-    return 0.5 * above[0]
+    return [r for kind in RELEASES.values() for r in kind.releases(scene)]
 
 
 def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) -> Scene:
@@ -116,15 +80,7 @@ def _variant(scene: Scene, releases) -> Scene:
     """
     shafts, slips = list(scene.shafts), list(scene.slip_joints)
     for r in releases:
-        k = [s.name for s in shafts].index(r.shaft)
-        if r.kind == "floating":
-            bearings = tuple(dataclasses.replace(b, kind="floating") if b.name == r.bearing
-                             else b for b in shafts[k].bearings)
-            shafts[k] = dataclasses.replace(shafts[k], bearings=bearings)
-        elif all(s.shaft != r.shaft for s in slips):
-            slips.append(SlipJoint(name=f"slip_{r.shaft}", shaft=r.shaft,
-                                   offset_m=_slip_offset(shafts[k]),
-                                   pitch_radius_m=SLIP_PITCH_RADIUS_M))
+        r.offered_by.apply_release(r, shafts, slips)
     order = {s.name: k for k, s in enumerate(shafts)}
     slips.sort(key=lambda s: order[s.shaft])
     labels = ", ".join(r.label for r in releases) or "none"
@@ -191,7 +147,7 @@ def search_size(scene: Scene) -> int:
 
 @dataclass(frozen=True)
 class Advice:
-    """The smallest release set that leaves only end-face pair modes, verified.
+    """The smallest release set that leaves only pair modes (end-face pairs, ...), verified.
 
     ``modes``/``released_modes`` and ``determinacy``/``released`` before and after at
     the same instant; ``alternatives``: other sets of the same size that also work;
@@ -306,21 +262,21 @@ def _valid_set(scene: Scene, releases) -> bool:
 
 
 def _preference(scene: Scene, releases) -> tuple[int, int, int]:
-    """Smaller is better: shafts with two or more bearings left without a locating one
-    (a design keeps one per such shaft; a lone centre bearing may float), slip joints
-    added (a floating bearing is the cheaper release), of them those in shafts with
-    bearings (real lines put the spline in a propshaft).
+    """Smaller is better: shafts with two or more bearings that all let it slide
+    (a design keeps one locating bearing per such shaft; a lone centre bearing may
+    float), elements added (a slip joint: a floating bearing is the cheaper release),
+    of them those in shafts with bearings (real lines put the spline in a propshaft).
     """
     shafts = {s.name: s for s in scene.shafts}
-    slips = [r for r in releases if r.kind == "slip"]
-    return (sum(len(s.bearings) > 1 and all(b.kind == "floating" for b in s.bearings)
+    slips = [r for r in releases if r.offered_by.adds_joint]
+    return (sum(len(s.bearings) > 1 and all(BEARING_KINDS[b.kind].slides for b in s.bearings)
                 for s in scene.shafts),
             len(slips), sum(bool(shafts[r.shaft].bearings) for r in slips))
 
 
 def advise(motion: Motion, i: int) -> Advice:
     """Try release sets of growing size (at most :data:`MAX_RELEASES`) until one leaves
-    only end-face pair modes; among those of the smallest size prefer by
+    only pair modes; among those of the smallest size prefer by
     :func:`_preference`, then the first in :func:`candidates` order. Each set is
     verified by re-running determinacy on the released line at instant ``i`` (the
     search builds every operator at that instant alone, :func:`at_instant`); the sets
@@ -363,4 +319,4 @@ def advise(motion: Motion, i: int) -> Advice:
                           alternatives=tuple(f[1] for f in kept if f[1] != combo),
                           tried=tried)
     raise SceneError(f"scene {motion.scene.name!r}: no set of up to {MAX_RELEASES} releases "
-                     "leaves only end-face pair modes")
+                     "leaves only pair modes (end-face pairs, ...)")

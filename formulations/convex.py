@@ -31,8 +31,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.determinacy import RANK_RTOL, determinacy
+from cardan_forces.driveline.elements.base import Law
 from cardan_forces.driveline.equilibrium import Operator
 
 from .problems import LCP, LS, QP, Conic, ForceChecks, Scaled, SecondOrderCone
@@ -149,18 +149,11 @@ def _minus_identity_rows(columns, n: int) -> np.ndarray:
 
 
 def contacts(op: Operator) -> list[list[int]]:
-    """Column groups that form one contact force: a bearing, a radial trunnion force, an
-    end face, a slip joint's shear force (its moments and axial force apart, since they
-    are not one vector): from the operator's structure.
+    """Column groups that form one contact force (a bearing, a radial trunnion force, an
+    end face, a slip joint's shear force, its moments and axial force apart since they
+    are not one vector): each contact's kind says, by its laws' groups.
     """
-    groups = []
-    for c in op.contacts:
-        if c.kind == "slip":
-            groups.append(list(c.columns[:2]))
-            groups.extend([list(c.columns[2:4]), [c.columns[4]], *[[k] for k in c.columns[5:]]])
-        else:
-            groups.append(list(c.columns))
-    return groups
+    return [list(law.columns) for law in contact_laws(op)]
 
 
 def min_norm(op: Operator, i: int) -> LS:
@@ -285,18 +278,8 @@ def socp_face(op: Operator, i: int) -> Conic:
     a pair would buy moment capacity that the axial clearance does not allow (only one
     face of a pair can touch), so the face idle in the least-norm answer is held at 0.
     """
-    frames = _pin_frames(op, i)
-    extra = []
-    for face in op.of_kind("end-face"):
-        j, rt = face.columns[0], op.scene.joints[face.joint].rt_m
-        members = []
-        for comp in _normal_components(face.trunnion):
-            col = np.zeros(op.A.shape[1])
-            col[op.body_rows(face.body)] = frames[comp][face.joint]
-            col[op.body_rows(face.other)] = -frames[comp][face.joint]
-            members.append((f"{face.name}.m_{comp}", col, 1.0 / rt ** 2))
-        extra.append((members, lambda idx, j=j, rt=rt:
-                      SecondOrderCone(apex=j, members=idx, scale=rt)))
+    extra = [(members, _cone(spec)) for c in op.contacts
+             for members, spec in c.element_kind.rim_moments(op, i, c)]
     return _extended(op, i, extra, "socp_face",
                      idle=_idle_faces(op, determinacy(op, i).min_norm))
 
@@ -323,36 +306,16 @@ def friction(op: Operator, i: int) -> Conic:
                             "'friction'")
     mu = scene.contact.friction_coefficient
     frameless = determinacy(op, i).min_norm
-    frames = _pin_frames(op, i)
-    radial_of = {(c.joint, c.trunnion, c.side): c for c in op.of_kind("trunnion-radial")}
-    extra = []
-    for face in op.of_kind("end-face"):
-        j, joint = face.columns[0], scene.joints[face.joint]
-        axis, comps = face.trunnion, _normal_components(face.trunnion)
-        radial = radial_of[(face.joint, face.trunnion, face.side)]
-        members = []
-        for comp, column in zip(comps, radial.columns):
-            # the radial column of the same trunnion, moved from hs to ht along the axis
-            col = op.A[i][:, column].copy()
-            arm = face.side * (joint.ht_m - joint.hs_m) * np.cross(frames[axis][face.joint],
-                                                                  frames[comp][face.joint])
-            col[op.body_rows(face.body)] += arm
-            col[op.body_rows(face.other)] -= arm
-            members.append((f"{face.name}.t_{comp}", col, 1.0))
-        extra.append((members, lambda idx, j=j: SecondOrderCone(apex=j, members=idx,
-                                                                  scale=mu)))
-        # axial friction of the radial contact on this trunnion: a force along the axis
-        # through the axis, the same line as the end face's (opposite) push
-        radial_cols = list(radial.columns)
-        normal = frameless[radial_cols]
-        norm = np.linalg.norm(normal)
-        normal = normal / norm if norm > 0 else np.zeros(2)
-        along = -face.side * op.A[i][:, j]
-        extra.append(([(f"{radial.name}.t_{axis}", along, 1.0)],
-                      lambda idx, cols=radial_cols, w=mu * normal: SecondOrderCone(
-                          apex=cols[0], members=idx, scale=w[0],
-                          apex_terms=((cols[1], w[1]),))))
+    extra = [(members, _cone(spec)) for c in op.contacts
+             for members, spec in c.element_kind.friction_forces(op, i, c, frameless, mu)]
     return _extended(op, i, extra, "friction", idle=_idle_faces(op, frameless))
+
+
+def _cone(spec: dict):
+    """The cone maker of :func:`_extended` from a kind's cone ``spec`` (apex, scale,
+    apex terms): its members are the new unknowns' indices.
+    """
+    return lambda idx: SecondOrderCone(members=idx, **spec)
 
 
 class NotApplicable(ValueError):
@@ -421,17 +384,6 @@ def _held(idle, cones) -> list[int]:
                    for k in c.members]
 
 
-def _pin_frames(op: Operator, i: int) -> dict[str, np.ndarray]:
-    """Cross-pin frames (joints, 3) at instant ``i``: the operator's ``pin_frames``."""
-    frames = op.pin_frames[:, i]
-    return {"e1": frames[:, 0], "e2": frames[:, 1], "e3": frames[:, 2]}
-
-
-def _normal_components(trunnion: str) -> tuple[str, str]:
-    """The pin-frame directions normal to a trunnion axis, in the operator's order."""
-    return ("e2", "e3") if trunnion == "e1" else ("e3", "e1")
-
-
 FORMULATIONS = {
     "min_norm": min_norm,
     "min_norm_scaled": min_norm_scaled,
@@ -444,37 +396,13 @@ FORMULATIONS = {
 """Builders by name: ``FORMULATIONS[name](op, i) -> problem``."""
 
 
-SLIP_LENGTH_M = 1.0
-"""Length that turns the bearing stiffness (N/m) into a slip joint's bending and torsion
-stiffness (N m/rad), as ``min_norm_scaled`` measures moments over 1 m."""
-
-
-def contact_laws(op: Operator) -> list[tuple[list[int], float, float]]:
-    """Per contact group (:func:`contacts`): (columns, Hertz K (N/m^n) or a linear k
-    (N/m; N m/rad for a slip joint's moments), gap (m)).
-
-    Bearings: the scene's bearing stiffness and clearance. Slip joints: taken as stiff
-    as a bearing, ``k`` for the shear and axial force and ``k * (1 m)^2`` for bending
-    and torque, without gap: an assumption (the spline's own compliance is not
-    modelled; its components are determinate in the built-in scenes, so the choice
-    changes no answer there, and a stiffer spline would only worsen the conditioning).
+def contact_laws(op: Operator) -> list[Law]:
+    """Every contact force (a group of columns) with its compliance law, in column
+    order, as each contact's kind gives them (:meth:`~cardan_forces.driveline.elements.
+    base.ElementKind.laws`): bearings and slip joints linear, the Cardan joints' contacts
+    Hertz (eqs. 76-77), each kind's module saying why.
     """
-    scene = op.scene
-    k_b, gap_b = scene.contact.bearing_stiffness_N_m, scene.contact.bearing_clearance_m
-    laws = []
-    for c in op.contacts:
-        if c.kind.startswith("bearing-"):
-            laws.append((list(c.columns), k_b, gap_b))
-        elif c.kind == "slip":
-            laws.append((list(c.columns[:2]), k_b, 0.0))
-            laws.append((list(c.columns[2:4]), k_b * SLIP_LENGTH_M ** 2, 0.0))
-            laws.append(([c.columns[4]], k_b * SLIP_LENGTH_M ** 2, 0.0))
-            laws.extend(([k], k_b, 0.0) for k in c.columns[5:])
-        else:
-            joint = scene.joints[c.joint]
-            gap = joint.axial_clearance_m if c.kind == "end-face" else joint.radial_clearance_m
-            laws.append((list(c.columns), hertz_stiffness(scene, joint), gap))
-    return laws
+    return [law for c in op.contacts for law in c.element_kind.laws(c, op.scene)]
 
 
 def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None = None):
@@ -501,10 +429,11 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     scene = op.scene
     use_gaps = scene.has("clearance") if clearance is None else clearance
     n_exp, d_ref = scene.contact.exponent, scene.contact.damping_full_depth_m
-    laws = contact_laws(op)
+    given = contact_laws(op)
+    laws = [(list(law.columns), law.stiffness, law.gap_m) for law in given]
+    is_bearing = [not law.hertz for law in given]  # a linear law
     A, b = equalities(op, i)
     m, n = A.shape
-    is_bearing = [_linear(op, g[0]) for g, _, _ in laws]
     name = "compliance" if law == "linear" else "compliance_hertz"
     sb = _load_scale(b)
     b = b / sb
@@ -587,12 +516,6 @@ def _contact_energies(scene, laws, is_bearing, power, use_gaps, sb, n, out):
         else:
             P[load, load] = sb / (k if bearing else k * d_ref ** (n_exp - 1.0))
     return P, q
-
-
-def _linear(op: Operator, column: int) -> bool:
-    """Whether a column's contact has a linear law (bearings, slip joints), not Hertz."""
-    kind = next(c.kind for c in op.contacts if column in c.columns)
-    return kind.startswith("bearing-") or kind == "slip"
 
 
 FORMULATIONS["compliance"] = compliance

@@ -154,7 +154,7 @@ def _structure(op: Operator, scene: Scene) -> tuple[_Layout, tuple]:
 
     n_rows = A.shape[0]
     sides, joint_of, cos_at, sin_at, rim_t, rim_f, rim_r, fb = [], [], [], [], [], [], [], []
-    yokes = {(c.joint, c.trunnion): (c.body, c.other) for c in op.of_kind("end-face")}
+    yokes = {(c.joint, c.trunnion): (c.body, c.other) for c in op.contacts if c.trunnion}
     for j, joint in enumerate(scene.joints):
         contact = op.joint_contacts(j)  # by the paper's labels F1 ... F8
         theta = {t: add(f"{joint.name}.theta{t}") for t in (1, 2, 5, 6)}
@@ -205,13 +205,13 @@ def applies(op: Operator) -> None:
     slip joint, and as many polar unknowns as equations (2 per bearing + 1 per shaft
     with bearings + 12 per joint = 6 per body + 2 per joint; 34 for the paper's line).
     """
-    kinds = {c.kind for c in op.contacts}
-    if "slip" in kinds or "bearing-floating" in kinds:
+    others = sorted({c.element_kind.words(c) for c in op.contacts if not c.element_kind.paper})
+    if others:
         raise NotApplicable(
             "the paper's method (34 polar unknowns, eqs. 49-62) does not apply to scenes "
-            "with slip joints or floating bearings: it writes every bearing as locating "
-            "and every joint as a cross-pin")
-    bearings = op.of_kind("bearing-locating")
+            f"with elements it does not write ({', '.join(others)}): it writes every "
+            "bearing as locating and every joint as a cross-pin")
+    bearings = op.bearings()
     unknowns = 2 * len(bearings) + len({c.shaft for c in bearings}) + 12 * len(op.scene.joints)
     equations = op.A.shape[1] + 2 * len(op.scene.joints)
     if unknowns != equations:

@@ -1,5 +1,5 @@
-"""Typed elements of a real drive line: shaft segments cut by slip joints, and the
-checks that every part of the line is held (DESIGN §1).
+"""Shaft bodies of a real drive line: shaft segments cut by slip joints, and the checks
+that every part of the line is held (DESIGN §1).
 
 A slip joint cuts its shaft into two coaxial **segments**, ``<shaft>.upstream`` and
 ``<shaft>.downstream``, each a rigid body of the equilibrium operator with the shaft's
@@ -9,14 +9,16 @@ without a slip joint is one body named after the shaft. The 1-DOF motion is the 
 
 Bad layouts raise :class:`~cardan_forces.driveline.scene.SceneError`:
 
-- a slip joint whose segment has no neighbour: neither a Cardan joint at its end nor a
-  bearing on it, so nothing but the spline holds it;
+- an element its kind refuses (:meth:`~.base.ElementKind.check`), e.g. a slip joint
+  whose segment has no neighbour: neither a Cardan joint at its end nor a bearing on
+  it, so nothing but the spline holds it;
 - a line that can slide as a whole (or a part of it between slip joints): its
   bearings are all floating along a common direction, no locating bearing holds it.
-  Checked by the translations the bearings, joints and splines allow (a small null
-  space): a floating bearing on a shaft with axis ``a`` stops translations normal to
-  ``a``, a locating one all, a Cardan joint makes its two shafts translate together,
-  a frictionless spline lets its segments slide relative to each other along ``a``.
+  Checked by the translations the elements allow (a small null space), each kind
+  saying what it stops: a floating bearing on a shaft with axis ``a`` stops
+  translations normal to ``a``, a locating one all, a Cardan joint makes its two
+  shafts translate together, a frictionless spline lets its segments slide relative
+  to each other along ``a``.
 """
 
 from __future__ import annotations
@@ -25,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .determinacy import left_null_space
-from .kinematics import rest_geometry
-from .scene import Scene, SceneError
+from ..determinacy import left_null_space
+from ..kinematics import rest_geometry
+from ..scene import Scene, SceneError
 
 
 @dataclass(frozen=True)
@@ -74,20 +76,14 @@ def segment_of(segments: list[Segment], shaft: int, offset_m: float) -> int:
 
 
 def check_elements(scene: Scene) -> None:
-    """Refuse slip joints with an unheld segment and lines free to slide (module doc)."""
-    segments = shaft_segments(scene)
-    last = len(scene.shafts) - 1
-    for slip in scene.slip_joints:
-        k = [s.name for s in scene.shafts].index(slip.shaft)
-        shaft = scene.shafts[k]
-        for side, has_joint, sign in (("upstream", k > 0, -1.0), ("downstream", k < last, 1.0)):
-            if not has_joint and not any(sign * (b.offset_m - slip.offset_m) > 0
-                                         for b in shaft.bearings):
-                raise SceneError(
-                    f"scene {scene.source}: slip joint {slip.name!r} on shaft {shaft.name!r}: "
-                    f"its {side} segment has no neighbour (no Cardan joint at its end, no "
-                    "bearing on it): nothing but the spline would hold it")
-    free = sliding_bodies(scene, segments)
+    """Refuse elements their kinds refuse (a slip joint with an unheld segment, ...) and
+    lines free to slide (module doc).
+    """
+    from .registry import scene_elements
+
+    for kind, element, shaft, _ in scene_elements(scene):
+        kind.check(element, shaft, scene)
+    free = sliding_bodies(scene)
     if free:
         raise SceneError(
             f"scene {scene.source}: no axial support: {', '.join(free)} can slide along "
@@ -96,35 +92,22 @@ def check_elements(scene: Scene) -> None:
 
 
 def sliding_bodies(scene: Scene, segments: list[Segment] | None = None) -> list[str]:
-    """Names of the shaft bodies that some rigid translation allowed by the bearings,
-    joints and splines moves (empty when the line is held).
+    """Names of the shaft bodies that some rigid translation allowed by the elements
+    (each kind's :meth:`~.base.ElementKind.holds`) moves (empty when the line is held).
     """
+    from .registry import scene_elements
+
     segments = shaft_segments(scene) if segments is None else segments
     axes = rest_geometry(scene).axes
     n = 3 * len(segments)
     rows = []
-
-    def block(g: int, matrix: np.ndarray, h: int | None = None) -> np.ndarray:
-        row = np.zeros((3, n))
-        row[:, 3 * g: 3 * g + 3] = matrix
-        if h is not None:
-            row[:, 3 * h: 3 * h + 3] = -matrix
-        return row
-
-    for k, shaft in enumerate(scene.shafts):
-        normal = np.eye(3) - np.outer(axes[k], axes[k])
-        for bearing in shaft.bearings:
-            g = segment_of(segments, k, bearing.offset_m)
-            rows.append(block(g, np.eye(3) if bearing.kind == "locating" else normal))
-        parts = [g for g, s in enumerate(segments) if s.shaft == k]
-        if len(parts) == 2:
-            slip = next(s for s in scene.slip_joints if s.shaft == shaft.name)
-            rows.append(block(parts[0], np.eye(3) if slip.friction_coefficient > 0 else normal,
-                              parts[1]))
-    for j in range(len(scene.joints)):
-        a = max(g for g, s in enumerate(segments) if s.shaft == j)
-        b = min(g for g, s in enumerate(segments) if s.shaft == j + 1)
-        rows.append(block(a, np.eye(3), b))
+    for kind, element, shaft, _ in scene_elements(scene):
+        for g, matrix, h in kind.holds(element, shaft, segments, axes):
+            row = np.zeros((3, n))
+            row[:, 3 * g: 3 * g + 3] = matrix
+            if h is not None:
+                row[:, 3 * h: 3 * h + 3] = -matrix
+            rows.append(row)
     matrix = np.vstack(rows) if rows else np.zeros((1, n))
     null = left_null_space(matrix.T)  # the translations allowed, n x free
     if not null.shape[1]:

@@ -1,0 +1,298 @@
+"""What every element kind is: the protocol :class:`ElementKind`, and the records the
+equilibrium operator is made of (bodies, links, columns).
+
+The model is Drake's SAP constraints (``multibody/contact_solvers/sap/
+sap_constraint.h``): each kind of constraint is one class in its own file that owns
+its constraint function, Jacobian, cost and projection. Here a kind (a locating
+bearing, a Cardan joint, ...) owns, for its elements of a scene:
+
+- its scene fields and their checks (:meth:`ElementKind.check`; bearing kinds read
+  their table, :class:`~.bearing.BearingKind`);
+- the translations it stops (:meth:`ElementKind.holds`, the line's sliding check);
+- its bodies and its columns of ``A`` with their names (:meth:`ElementKind.add_links`),
+  hence its rows of the equilibrium operator, and the unilateral pairs that
+  complementarity resolves (:meth:`ElementKind.pairs`);
+- its contact laws: the compliance energy's (:meth:`ElementKind.laws`) and the
+  penalty model's (:meth:`ElementKind.penalty`);
+- its MJCF (bearing kinds), its releases, its labels (:meth:`ElementKind.words`).
+
+Every method has a default that means "this kind adds nothing here", so a kind writes
+only what it has. The modules that build and read operators iterate over the links and
+ask their kind (:attr:`Link.element_kind`); none of them names a kind.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..scene import Scene
+
+
+def mjcf_numbers(values) -> str:
+    """Numbers as an MJCF attribute: space-separated, every digit kept."""
+    return " ".join(f"{float(c):.17g}" for c in np.ravel(values))
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body of the operator, rows ``6 * index .. 6 * index + 6``.
+
+    ``kind``: ``shaft`` (a whole shaft), ``segment`` (part of a shaft cut by a slip
+    joint) or ``pin`` (a cross-pin). ``shaft``: the scene's shaft index (shaft bodies),
+    ``joint``: the scene's joint index (pins).
+    """
+
+    name: str
+    kind: str
+    shaft: int | None = None
+    joint: int | None = None
+
+
+@dataclass(frozen=True)
+class Link:
+    """One contact: its force components (``columns`` of ``A``) act on ``body`` and the
+    opposite on ``other`` (``None``: the ground).
+
+    ``kind`` names what the contact is (a key of :data:`~.registry.LINK_KINDS`; its
+    :class:`ElementKind` is :attr:`element_kind`); ``element`` the scene element it
+    belongs to (``<shaft>.<bearing>``, a joint's or a slip joint's name); ``frame`` the
+    frame of its components: ``global``, ``shaft`` (``r1, r2``, axis) or ``pin`` (``e1,
+    e2, e3``); ``components`` their directions in it, ``units`` theirs (``N`` or
+    ``N m``). ``label``: its name within its element (a bearing's name; ``F1`` ...
+    ``F8`` of a joint; empty for a slip joint). Trunnion contacts also carry the joint,
+    the trunnion axis (``e1`` driving, ``e2`` driven) and the side (+1 at
+    ``+hs``/``+ht``).
+    """
+
+    name: str
+    kind: str
+    columns: tuple[int, ...]
+    body: int
+    other: int | None
+    element: str
+    frame: str
+    components: tuple[str, ...]
+    shaft: int | None = None
+    joint: int | None = None
+    trunnion: str = ""
+    side: float = 0.0
+    label: str = ""
+    units: tuple[str, ...] = ()
+
+    def column(self, component: str) -> int:
+        """Column of ``A`` of one of its components (e.g. ``e2``, ``r1``, ``torque``)."""
+        return self.columns[self.components.index(component)]
+
+    @property
+    def element_kind(self) -> ElementKind:
+        """The kind that made this contact and knows its laws."""
+        from .registry import LINK_KINDS
+
+        return LINK_KINDS[self.kind]
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column while assembling: a force at ``point`` along ``direction`` (or a pure
+    moment about ``direction``, ``point`` None) on ``body``, the opposite on ``other``;
+    ``unilateral``: a push, >= 0.
+    """
+
+    name: str
+    body: int
+    other: int | None
+    point: np.ndarray | None
+    direction: np.ndarray
+    unilateral: bool = False
+
+
+@dataclass
+class Layout:
+    """The operator while its kinds add to it: the scene, its rest geometry ``geo``,
+    kinematics ``kin`` and shaft ``frames`` (rows ``r1, r2, axis`` per shaft), the shaft
+    bodies ``segments``; the bodies, links and columns made so far.
+    """
+
+    scene: Scene
+    geo: object
+    kin: object
+    segments: list
+    frames: np.ndarray
+    bodies: list[Body] = field(default_factory=list)
+    links: list[Link] = field(default_factory=list)
+    columns: list[Column] = field(default_factory=list)
+
+    def add_body(self, body: Body) -> int:
+        """Append a body; its index."""
+        self.bodies.append(body)
+        return len(self.bodies) - 1
+
+    def add(self, columns: list[Column], **link) -> None:
+        """Append a link (its fields but ``columns``) and its columns."""
+        first = len(self.columns)
+        self.columns.extend(columns)
+        self.links.append(Link(columns=tuple(range(first, len(self.columns))), **link))
+
+    def segment(self, shaft: int, offset_m: float) -> int:
+        """Index of the body of shaft ``shaft`` (scene index) holding ``offset_m``."""
+        from .segments import segment_of
+
+        return segment_of(self.segments, shaft, offset_m)
+
+
+@dataclass(frozen=True)
+class Law:
+    """A compliance law of one contact force (``columns``, one vector): stiffness
+    ``stiffness`` (N/m^n; N m/rad for a moment), gap ``gap_m`` (m) before it carries;
+    ``hertz``: ``f = K d^n`` with the scene's exponent ``n`` (else linear, ``n = 1``).
+    """
+
+    columns: tuple[int, ...]
+    stiffness: float
+    gap_m: float
+    hertz: bool = False
+
+
+@dataclass(frozen=True)
+class Release:
+    """One release, a design change that removes a redundancy: ``kind`` names it (the
+    :attr:`ElementKind.release_name` of the kind that offers it), ``shaft`` and
+    ``bearing`` where it applies (:mod:`..release`).
+    """
+
+    kind: str
+    shaft: str
+    bearing: str = ""
+
+    @property
+    def offered_by(self) -> ElementKind:
+        from .registry import RELEASES
+
+        return RELEASES[self.kind]
+
+    @property
+    def label(self) -> str:
+        """The release as typed on the command line (``float:<shaft>.<bearing>``, ...)."""
+        return self.offered_by.release_label(self)
+
+    @property
+    def words(self) -> str:
+        return self.offered_by.release_words(self)
+
+    def to_json(self) -> dict:
+        return {"release": self.label, "description": self.words}
+
+
+@dataclass(frozen=True)
+class PairMode:
+    """How a pair of opposite unilateral columns is named as a null-space mode."""
+
+    kind: str
+    description: str
+    release: str
+
+
+class ElementKind:
+    """An element kind of a drive line (module doc); subclasses override what they have.
+
+    ``link_kinds``: the :attr:`Link.kind` values its links take (one per kind of contact
+    it makes); ``locates``: it carries axial force both ways (a shaft body with two
+    such has an axial split); ``slides``: its shaft slides through it axially;
+    ``paper``: the paper's polar method takes it (eqs. 11-14 for bearings, 33-46 for
+    joints).
+
+    A kind that offers a release names it ``release_name`` (``release_form``: how it is
+    typed; ``release_rank``: the advisor tries lower ranks first; ``adds_joint``: the
+    release adds an element, a dearer design change than changing one).
+    """
+
+    link_kinds: tuple[str, ...] = ()
+    locates: bool = False
+    slides: bool = False
+    paper: bool = False
+    release_name: str = ""
+    release_form: str = ""
+    release_rank: int = 0
+    adds_joint: bool = False
+
+    def check(self, element, shaft: int, scene: Scene) -> None:
+        """Raise :class:`~.scene.SceneError` where ``element`` cannot be used in
+        ``scene`` (beyond its own fields).
+        """
+
+    def holds(self, element, shaft: int, segments: list, axes: np.ndarray) -> list:
+        """The rigid translations it stops: ``(body, matrix, other)`` rows, ``matrix``
+        (3, 3) the directions stopped on ``body`` relative to ``other`` (None: ground).
+        """
+        return []
+
+    def add_links(self, element, shaft: int, index: int, layout: Layout) -> None:
+        """Add its bodies, links and columns to ``layout`` (``shaft``: the scene index
+        of its shaft, the upstream one for a joint; ``index``: its own in its list).
+        """
+        raise NotImplementedError
+
+    def pairs(self, links: list[Link]) -> list[tuple[int, int]]:
+        """Pairs of opposite unilateral columns among its ``links``: only one of each
+        pushes (complementarity).
+        """
+        return []
+
+    def pair_mode(self, link: Link, other: Link) -> PairMode:
+        """The null-space mode of one of its pairs (both pushing equally)."""
+        raise NotImplementedError
+
+    def friction(self, link: Link, scene: Scene):
+        """Its bounded friction force (a slip joint's
+        :class:`~.slip.SlipFriction`), None without one.
+        """
+        return None
+
+    def laws(self, link: Link, scene: Scene) -> list[Law]:
+        """Its contact forces (column groups) with their compliance laws, in column
+        order; the groups are also the contact forces ``min_max`` bounds.
+        """
+        return [Law(link.columns, scene.contact.bearing_stiffness_N_m, 0.0)]
+
+    def penalty(self, link: Link, rows) -> None:
+        """Add its penalty contacts (eqs. 75-78) through ``rows`` (the penalty
+        model's :class:`~..penalty.ContactRows`).
+        """
+        raise NotImplementedError
+
+    def words(self, link: Link) -> str:
+        """What the contact is, in words (figure titles, reports)."""
+        return link.kind
+
+    # ------------------------------------------------------------ releases
+
+    def releases(self, scene: Scene) -> list[Release]:
+        """The single releases it offers on ``scene``, in the advisor's order."""
+        return []
+
+    def parse_release(self, target: str, scene: Scene) -> Release | None:
+        """Its release from the text after ``<prefix>:``, None if ``target`` names none."""
+        return None
+
+    def release_label(self, release: Release) -> str:
+        raise NotImplementedError
+
+    def release_words(self, release: Release) -> str:
+        raise NotImplementedError
+
+    def apply_release(self, release: Release, shafts: list, slips: list) -> None:
+        """Apply ``release`` to a scene's ``shafts`` and ``slip_joints`` (lists, in place)."""
+        raise NotImplementedError
+
+    # ------------------------------------------------------------ formulations
+
+    def rim_moments(self, op, i: int, link: Link) -> list:
+        """Extra unknowns of ``socp_face`` (moments an end face carries), none here."""
+        return []
+
+    def friction_forces(self, op, i: int, link: Link, frameless: np.ndarray, mu: float
+                        ) -> list:
+        """Extra unknowns of ``friction`` (Coulomb forces in joints), none here."""
+        return []

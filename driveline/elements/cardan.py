@@ -1,0 +1,177 @@
+"""The Cardan (universal, Hooke) joint: a cross-pin body between the end of one shaft
+and the start of the next, held in each yoke by two trunnions in their bores and two
+end faces.
+
+Links (forces on the pin, the opposite on the yoke's shaft body), in the pin's own
+frame ``(e1, e2, e3)``, ``e1`` the driving trunnion axis, ``e2`` the driven one,
+``e3 = e1 x e2``:
+
+- ``<joint>.F1.e2``, ``<joint>.F1.e3``: radial force on the driving trunnion at
+  ``+hs e1``; ``F2`` the same at ``-hs e1``; ``<joint>.F3`` >= 0 the end-face push
+  along ``-e1`` at ``+ht e1``; ``F4`` >= 0 along ``+e1`` at ``-ht e1``;
+- ``F5`` (``.e3``, ``.e1``) at ``+hs e2``, ``F6`` at ``-hs e2``, ``F7`` >= 0 along
+  ``-e2`` at ``+ht e2``, ``F8`` >= 0 along ``+e2`` at ``-ht e2``: the driven yoke's.
+
+A radial force acts through the trunnion axis, so it enters linearly (the paper's
+contact angle is a change of variables); an end-face force acts on the trunnion axis.
+The two end faces of one trunnion pair are opposite columns: only one touches (the
+paper's eqs. 39, 46), a pair complementarity resolves.
+
+Contact laws: Hertz, ``K`` of the paper's eqs. 76-77
+(:func:`~..contact.hertz_stiffness`, one per joint), the scene's exponent; gaps the
+radial clearance ``rb - rs`` in a bore and the axial one ``hb - ht`` at an end face.
+The penalty model (eqs. 75-78): the trunnion point at ``+-hs`` in its bore (the yoke's
+axis through the joint centre), and the trunnion end beyond the housing bottom at
+``hb``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..contact import hertz_stiffness
+from ..scene import Joint, Scene
+from .base import Body, Column, ElementKind, Law, Layout, Link, PairMode
+
+RADIAL, FACE = "trunnion-radial", "end-face"
+
+
+def normal_components(trunnion: str) -> tuple[str, str]:
+    """The pin-frame directions normal to a trunnion axis, in the operator's order."""
+    return ("e2", "e3") if trunnion == "e1" else ("e3", "e1")
+
+
+def _yokes(segments: list, joint: int) -> tuple[int, int]:
+    """The shaft bodies either side of joint ``joint``: the upstream shaft's last
+    segment, the downstream shaft's first.
+    """
+    return (max(g for g, s in enumerate(segments) if s.shaft == joint),
+            min(g for g, s in enumerate(segments) if s.shaft == joint + 1))
+
+
+class Cardan(ElementKind):
+    """The Cardan joint kind (module doc)."""
+
+    link_kinds = (RADIAL, FACE)
+    paper = True
+
+    def holds(self, element: Joint, shaft, segments, axes):
+        a, b = _yokes(segments, shaft)
+        return [(a, np.eye(3), b)]
+
+    def add_links(self, element: Joint, shaft: int, index: int, layout: Layout) -> None:
+        j, geo, kin = index, layout.geo, layout.kin
+        pin = layout.add_body(Body(f"{element.name}.pin", "pin", joint=j))
+        centre = geo.joint_centres[j]
+        e = {"e1": kin.e1[j], "e2": kin.e2[j], "e3": kin.e3[j]}
+        up, down = _yokes(layout.segments, j)
+        sides = ((up, "e1", ("F1", "F2", "F3", "F4")), (down, "e2", ("F5", "F6", "F7", "F8")))
+        for yoke, trunnion, (fa, fb, fc, fd) in sides:
+            axis, radial = e[trunnion], normal_components(trunnion)
+            common = dict(body=pin, other=yoke, element=element.name, frame="pin", joint=j,
+                          trunnion=trunnion)
+            for label, sign in ((fa, 1.0), (fb, -1.0)):
+                name = f"{element.name}.{label}"
+                point = centre + sign * element.hs_m * axis
+                layout.add([Column(f"{name}.{c}", pin, yoke, point, e[c]) for c in radial],
+                           name=name, kind=RADIAL, components=radial, side=sign,
+                           label=label, units=("N", "N"), **common)
+            for label, sign in ((fc, 1.0), (fd, -1.0)):
+                name = f"{element.name}.{label}"
+                layout.add([Column(name, pin, yoke, centre + sign * element.ht_m * axis,
+                                   -sign * axis, True)],
+                           name=name, kind=FACE,
+                           components=(f"{'-' if sign > 0 else '+'}{trunnion}",),
+                           side=sign, label=label, units=("N",), **common)
+
+    def pairs(self, links: list[Link]) -> list[tuple[int, int]]:
+        """Per joint and trunnion axis (``e1`` then ``e2``), its two end faces."""
+        faces = {(c.joint, c.trunnion, c.side): c.columns[0] for c in links if c.kind == FACE}
+        joints = sorted({c.joint for c in links})
+        return [(faces[(j, tr, 1.0)], faces[(j, tr, -1.0)]) for j in joints for tr in ("e1", "e2")]
+
+    def pair_mode(self, link: Link, other: Link) -> PairMode:
+        return PairMode("end-face pair", f"both end faces {link.name} and {other.name} "
+                        "pushing equally", "none needed: complementarity (only one face "
+                        "touches)")
+
+    def laws(self, link: Link, scene: Scene) -> list[Law]:
+        joint = scene.joints[link.joint]
+        gap = joint.axial_clearance_m if link.kind == FACE else joint.radial_clearance_m
+        return [Law(link.columns, hertz_stiffness(scene, joint), gap, hertz=True)]
+
+    def penalty(self, link: Link, rows) -> None:
+        op, joint = rows.op, rows.scene.joints[link.joint]
+        hertz = rows.hertz(joint)
+        point, centre = op.points[0, link.columns[0]], rows.centre(link.body)
+        if link.kind == RADIAL:
+            axis = op.pin_frames[link.joint, 0, "e1 e2".split().index(link.trunnion)]
+            rows.add(link, point, axis, centre, axis, joint.radial_clearance_m, True, hertz)
+        else:
+            axis = -op.directions[0, link.columns[0]]
+            rows.add(link, point, axis, centre, axis, joint.hb_m, False, hertz)
+
+    def words(self, link: Link) -> str:
+        return "trunnion, radial" if link.kind == RADIAL else "end face"
+
+    # ------------------------------------------------------------ convex extensions
+
+    def rim_moments(self, op, i: int, link: Link) -> list:
+        """An end face's moment normal to its trunnion axis inside its centre-of-pressure
+        cone ``||m|| <= rt f`` (the paper's rim contact, eqs. 33-36, 42-43, made convex):
+        ``[(members, cone)]``, members ``(name, column of A, weight)``, the cone's
+        ``apex`` and ``scale``; none for a radial contact.
+        """
+        if link.kind != FACE:
+            return []
+        rt, frames = op.scene.joints[link.joint].rt_m, op.pin_frames[link.joint, i]
+        members = []
+        for comp in normal_components(link.trunnion):
+            direction = frames["e1 e2 e3".split().index(comp)]
+            col = np.zeros(op.A.shape[1])
+            col[op.body_rows(link.body)] = direction
+            col[op.body_rows(link.other)] = -direction
+            members.append((f"{link.name}.m_{comp}", col, 1.0 / rt ** 2))
+        return [(members, dict(apex=link.columns[0], scale=rt))]
+
+    def friction_forces(self, op, i: int, link: Link, frameless: np.ndarray, mu: float
+                        ) -> list:
+        """Coulomb friction at an end face and on its trunnion's radial contact (the
+        ``friction`` formulation's terms, as :meth:`rim_moments` gives its moments).
+
+        - the face: a tangential force ``t`` in the face plane at the face centre,
+          ``||t|| <= mu f``;
+        - the radial contact on the same trunnion side: a force along the trunnion axis
+          ``a``, ``|a| <= mu n0 . r`` with ``n0`` the direction of the frictionless
+          least-norm radial force ``frameless``: Coulomb's cone about that normal, an
+          inner approximation of ``|a| <= mu ||r||`` (which is not convex).
+        """
+        if link.kind != FACE:
+            return []
+        joint, j = op.scene.joints[link.joint], link.columns[0]
+        frames = op.pin_frames[link.joint, i]
+        axis_dir = frames["e1 e2".split().index(link.trunnion)]
+        radial = next(c for c in op.contacts if c.kind == RADIAL and (c.joint, c.trunnion,
+                      c.side) == (link.joint, link.trunnion, link.side))
+        members = []
+        for comp, column in zip(normal_components(link.trunnion), radial.columns):
+            # the radial column of the same trunnion, moved from hs to ht along the axis
+            col = op.A[i][:, column].copy()
+            comp_dir = frames["e1 e2 e3".split().index(comp)]
+            arm = link.side * (joint.ht_m - joint.hs_m) * np.cross(axis_dir, comp_dir)
+            col[op.body_rows(link.body)] += arm
+            col[op.body_rows(link.other)] -= arm
+            members.append((f"{link.name}.t_{comp}", col, 1.0))
+        # axial friction of the radial contact: a force along the axis through the axis,
+        # the same line as the end face's (opposite) push
+        cols = list(radial.columns)
+        normal = frameless[cols]
+        norm = np.linalg.norm(normal)
+        w = mu * (normal / norm if norm > 0 else np.zeros(2))
+        along = -link.side * op.A[i][:, j]
+        return [(members, dict(apex=j, scale=mu)),
+                ([(f"{radial.name}.t_{link.trunnion}", along, 1.0)],
+                 dict(apex=cols[0], scale=w[0], apex_terms=((cols[1], w[1]),)))]
+
+
+KIND = Cardan()
