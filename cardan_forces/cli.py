@@ -41,13 +41,24 @@ from cardan_forces.commands import solve as solve_command
 from cardan_forces.commands import solvers as solvers_command
 from cardan_forces.driveline.dynamics import DynamicsError
 from cardan_forces.driveline.scene import LIMITS, SceneError
-from cardan_forces.experiments import bench, engine, export, hard, report, secondary, sweep
+from cardan_forces.experiments import (
+    bench,
+    engine,
+    export,
+    hard,
+    life,
+    report,
+    secondary,
+    sweep,
+    tolerances,
+)
 from cardan_forces.experiments import progress as progress_bars
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import SolverNotFound
 
 COMMANDS = (scene_command, sets_command, solvers_command, solve_command, repro_command,
-            bench, export, hard, sweep, report, secondary, engine, compile_command)
+            bench, export, hard, sweep, report, secondary, engine, compile_command, life,
+            tolerances)
 """The command modules, in the order ``cardan --help`` lists them."""
 
 HEARTBEAT_S = 30.0
