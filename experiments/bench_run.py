@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from cardan_forces.experiments.progress import line
-from cardan_forces.experiments.study import DEFAULT_BACKENDS, solve_over_time
+from cardan_forces.experiments.study import solve_over_time
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
@@ -129,7 +129,7 @@ def prepare(op, name: str, instants) -> Prepared:
 def batch_kind(solver: str, prepared: Prepared) -> str | None:
     """Which batch of the formulation the batched backend ``solver`` takes, if any."""
     accepts = get_backend(solver).batch_accepts
-    if fbatch.LeastNormBatch in accepts and prepared.name in fbatch.LEAST_NORM:
+    if fbatch.LeastNormBatch in accepts and FORMULATIONS[prepared.name].least_norm_batch:
         return "least_norm"
     return "conic" if fbatch.ConicBatch in accepts else None
 
@@ -137,9 +137,11 @@ def batch_kind(solver: str, prepared: Prepared) -> str | None:
 def plan(op, formulations=None, solvers=None, quick=False) -> dict[str, list[str]]:
     """Backends per formulation: per-instant ones that take its problem, then batched
     ones that take its batch; limited to ``solvers`` if given, to :data:`QUICK_SOLVERS`
-    when ``quick``. Without ``formulations``, every one the scene calls for.
+    when ``quick``. Without ``formulations``, every one the scene calls for. A
+    formulation no chosen backend takes is left out (and said so); if that leaves none,
+    :class:`NotApplicable` names the backends that would take each, before any solve.
     """
-    out = {}
+    out, usable = {}, {}
     wanted = QUICK_SOLVERS if quick and solvers is None else solvers
     for name in formulations or FORMULATIONS:
         try:
@@ -148,8 +150,16 @@ def plan(op, formulations=None, solvers=None, quick=False) -> dict[str, list[str
             if formulations:
                 raise
             continue
-        usable = backends_for(problems[0]) + _batched(op, name, problems)
-        out[name] = usable if wanted is None else [s for s in usable if s in wanted]
+        usable[name] = backends_for(problems[0]) + _batched(op, name, problems)
+        out[name] = usable[name] if wanted is None else [s for s in usable[name] if s in wanted]
+    left = [name for name, chosen in out.items() if not chosen]
+    if left and len(left) == len(out):
+        raise NotApplicable(f"no chosen backend ({', '.join(wanted)}) takes " + "; ".join(
+            f"{name} (backends that do: {', '.join(usable[name]) or 'none here'})"
+            for name in left))
+    for name in left:
+        progress(f"bench: {name} left out: none of {', '.join(wanted)} takes it")
+        del out[name]
     return out
 
 
@@ -247,7 +257,7 @@ def _is_batched(solver: str) -> bool:
 
 def baseline(solvers: list[str]) -> tuple[str, str] | None:
     """The paper's run that goes over every instant, ``(backend, mode)``: its default
-    backend (:data:`~cardan_forces.experiments.study.DEFAULT_BACKENDS`), warm-started
+    backend (its :class:`~cardan_forces.formulations.Formulation`'s), warm-started
     where it can be (the paper's method as the paper runs it, the fair baseline).
     """
     chosen = _preferred("paper", solvers)
@@ -258,10 +268,10 @@ def baseline(solvers: list[str]) -> tuple[str, str] | None:
 
 def _preferred(formulation: str, solvers: list[str]) -> str | None:
     """The first of the formulation's default backends among ``solvers``
-    (:data:`~cardan_forces.experiments.study.DEFAULT_BACKENDS`), else the first of
+    (:class:`~cardan_forces.formulations.Formulation`'s ``backends``), else the first of
     ``solvers``; ``None`` when there are none.
     """
-    return next((s for s in DEFAULT_BACKENDS.get(formulation, ()) if s in solvers),
+    return next((s for s in FORMULATIONS[formulation].backends if s in solvers),
                 solvers[0] if solvers else None)
 
 
