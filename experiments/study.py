@@ -5,7 +5,8 @@ Every experiment (``bench``, ``hard``, ``sweep``, ``report``) and the paper's fi
 this module, so that each piece of that knowledge has one home:
 
 - :func:`default_backend`: which backend solves a formulation when none is asked for
-  (:data:`DEFAULT_BACKENDS`, then :data:`FALLBACK`, then any backend that takes it), so
+  (the formulation record's ``backends``, then ``FALLBACK``, then any backend that takes
+  it; :mod:`cardan_forces.formulations.registry`), so
   a missing optional package changes the backend, never the outcome;
 - :func:`solve_over_time`: one formulation with one backend at every instant, as one
   :class:`History` (a package-judged record per instant);
@@ -28,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.equilibrium import Operator
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import FALLBACK, FORMULATIONS
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
@@ -39,33 +40,17 @@ from cardan_forces.solvers.registry import Pending, check, solve_unchecked, take
 
 # ---------------------------------------------------------------------------- backends
 
-DEFAULT_BACKENDS: dict[str, tuple[str, ...]] = {
-    "paper": ("scipy-fsolve", "scipy-root-lm"),
-    "min_norm": ("numpy-kkt",),
-    "min_norm_scaled": ("numpy-kkt",),
-    "positive": ("qpsolvers-daqp", "clarabel"),
-    "compliance": ("qpsolvers-daqp", "clarabel"),
-    "compliance_hertz": ("clarabel",),
-    "min_max": ("clarabel",),
-    "socp_face": ("clarabel",),
-    "lcp": ("lcp-lemke",),
-}
-"""Formulation -> the backends that draw it by default, best first (the only such table)."""
-
-FALLBACK = "clarabel"
-"""Tried after a formulation's own list (a core dependency that takes every convex class)."""
-
-
 class NoBackend(ValueError):
     """No installed backend takes a formulation's problem."""
 
 
 def default_backend(formulation: str, problem, wanted: Sequence[str] | None = None) -> str:
     """The backend that solves ``problem`` (of ``formulation``): the first of ``wanted``
-    (default :data:`DEFAULT_BACKENDS`, then :data:`FALLBACK`, then any) that is installed
+    (default: the formulation's own, then :data:`FALLBACK`, then any) that is installed
     and takes it; :class:`NoBackend` if none does.
     """
-    order = list(wanted) if wanted else [*DEFAULT_BACKENDS.get(formulation, ()), FALLBACK]
+    own = FORMULATIONS[formulation].backends if formulation in FORMULATIONS else ()
+    order = list(wanted) if wanted else [*own, FALLBACK]
     chosen = next((s for s in order if takes(s, problem)), None)  # loads only these
     if chosen is None and not wanted:
         chosen = next(iter(backends_for(problem)), None)

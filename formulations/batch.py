@@ -25,10 +25,6 @@ import numpy as np
 from . import FORMULATIONS
 from .problems import LS, QP, Conic, ForceChecks, residuals_batch
 
-LEAST_NORM = ("min_norm", "min_norm_scaled", "positive", "lcp", "compliance")
-"""Formulations that are a diagonal least norm on ``A x = b`` (``compliance`` only
-where it is a QP with a diagonal ``P``: linear law, no gaps)."""
-
 
 @dataclass(frozen=True)
 class CheckBatch:
@@ -120,7 +116,7 @@ def least_norm_batch(op, formulation: str, instants=None) -> LeastNormBatch:
     """The least-norm family as one stacked problem (``ValueError`` for the others)."""
     instants = _instants(op, instants)
     first = FORMULATIONS[formulation](op, int(instants[0]))
-    if formulation not in LEAST_NORM or not _diagonal_qp(formulation, first):
+    if not FORMULATIONS[formulation].least_norm_batch or not _diagonal_qp(formulation, first):
         raise ValueError(f"{formulation!r} is not a diagonal least norm on this scene")
     A, b = op.A[instants], op.b[instants]
     if formulation == "min_norm_scaled":  # reference length 1 m: moment rows unchanged

@@ -166,7 +166,7 @@ def test_default_backend_falls_back_when_its_first_choice_is_absent(monkeypatch,
     from cardan_forces.solvers import available, backends_for
 
     op = build_operator(simulate(paper, [0.1, 0.2]))
-    first = study.DEFAULT_BACKENDS["positive"][0]
+    first = FORMULATIONS["positive"].backends[0]
     _hide(monkeypatch, first)
     problem = FORMULATIONS["positive"](op, 0)
     chosen = study.default_backend("positive", problem)

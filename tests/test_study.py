@@ -71,7 +71,7 @@ def test_the_default_backend_is_the_first_of_its_list_that_takes_the_problem(op,
 
     problem = FORMULATIONS[formulation](op, 1)
     usable = backends_for(problem)
-    order = [*study.DEFAULT_BACKENDS[formulation], study.FALLBACK, *usable]
+    order = [*FORMULATIONS[formulation].backends, study.FALLBACK, *usable]
     assert study.default_backend(formulation, problem) == next(s for s in order if s in usable)
     with pytest.raises(study.NoBackend):
         study.default_backend(formulation, problem, wanted=["no-such-backend"])
