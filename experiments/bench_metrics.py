@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers import Status
 from cardan_forces.solvers.qp_measures import SETTINGS, SHIFT_S, TIME_LIMIT_S
 
@@ -40,8 +41,6 @@ TAUS = np.logspace(0.0, 3.0, 61)
 """The profile's abscissa: time ratio to the fastest successful backend, 1 to 1000."""
 
 
-TARGET_RATES = {"min_norm": 1e5, "positive": 1e5, "lcp": 1e5, "compliance": 1e5}
-"""Instants per second wanted from the batched runs of these formulations."""
 PAPER_RATIO = 20.0
 """Wanted speed-up of every conic formulation's best run over the paper's method."""
 GLUE_SHARE = 0.25
@@ -52,6 +51,13 @@ WALL_S = 180.0
 CHECKS_S = 20e-6
 """Largest time of the checks per instant (residuals, both optimality views and the
 record), in every run, per instant or batched."""
+
+
+def _target_rates() -> dict[str, float]:
+    """Instants per second wanted from the batched runs of each formulation that has a
+    target (:class:`~cardan_forces.formulations.Formulation`'s ``target_rate``).
+    """
+    return {f.name: f.target_rate for f in FORMULATIONS.values() if f.target_rate}
 
 
 def shifted_geometric_mean(values, shift: float = SHIFT_S) -> float:
@@ -251,7 +257,7 @@ def targets(summary: list[dict], success_rows: list[dict], conic: set[str],
     paper = max((e for e in summary if e["formulation"] == "paper"),
                 key=lambda e: e["instants_per_s"], default=None)
     out = []
-    for name, wanted in TARGET_RATES.items():
+    for name, wanted in _target_rates().items():
         runs = [e for e in summary if e["formulation"] == name and e["mode"] == "batched"]
         run = max(runs, key=lambda e: e["instants_per_s"], default=None)
         out.append(_target(f"{name} batched instants/s", run and run["instants_per_s"],

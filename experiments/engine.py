@@ -37,6 +37,7 @@ from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import draw_set, format_list, save
 from cardan_forces.experiments.study import intervals as rigid_intervals
 from cardan_forces.experiments.study import value_range
+from cardan_forces.formulations import FALLBACK, FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import UnsupportedProblem
 
@@ -58,18 +59,6 @@ SETTINGS = (
 
 FIGURE_SETTINGS = ("default", "output bearings 4x softer", "input bearings 4x softer")
 
-BACKENDS = {
-    "min_norm": ("numpy-kkt",),
-    "min_norm_scaled": ("numpy-kkt",),
-    "positive": ("qpsolvers-daqp", "qpsolvers-clarabel", "cvxpy-clarabel"),
-    "compliance": ("qpsolvers-daqp", "qpsolvers-clarabel", "cvxpy-clarabel"),
-    "min_max": ("clarabel", "cvxpy-clarabel"),
-    "socp_face": ("clarabel", "cvxpy-clarabel"),
-    "compliance_hertz": ("clarabel", "cvxpy-clarabel"),
-}
-"""Formulations the engine is set against, each with its backends in order of
-preference (the first present that solves). The paper's NLS is left out: its answer
-is wherever its root finder lands."""
 
 INSIDE_RTOL = 1e-6
 
@@ -104,13 +93,17 @@ class EngineStudy:
 
 
 def _formulation_forces(op, i: int) -> dict[str, np.ndarray]:
-    """Each formulation's forces at instant ``i`` (those some backend solves; a backend
-    that does not take the scene's problem, e.g. a QP solver given a friction cone, is
-    passed over for the next).
+    """Each convex formulation's forces at instant ``i`` (those some backend solves: its
+    default backends, then the fallback; one that does not take the scene's problem,
+    e.g. a QP solver given a friction cone, is passed over for the next). The paper's
+    NLS and the LCP are left out: the first lands wherever its root finder does, the
+    second is ``positive``'s answer again.
     """
     out = {}
-    for name, backends in BACKENDS.items():
-        for backend in backends:
+    for name, formulation in FORMULATIONS.items():
+        if not formulation.exportable:
+            continue
+        for backend in (*formulation.backends, FALLBACK):
             try:
                 record = cf.solve(cf.build_formulation(name, op, i), backend)
             except (cf.SolverNotFound, NotApplicable, UnsupportedProblem):

@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import functools
 import time
-from typing import NamedTuple
 
 import numpy as np
 from cardan_forces.formulations.batch import LeastNormBatch
@@ -64,42 +63,6 @@ than the null space has directions)."""
 
 MAX_ITER = 30
 """Active-set steps before an instant falls back to Lemke."""
-
-
-class Params(NamedTuple):
-    """The compiled least norm's tolerances (:func:`._batched_kernels.least_norm`)."""
-
-    gram_rtol: float
-    refine_rtol: float
-    max_iter: int
-    lcp_rtol: float
-    lcp_delta: float
-
-
-class Layout(NamedTuple):
-    """The compiled kernel's view of the rows' nonzero pattern (:func:`_make_layout`),
-    body blocks in chain order (``nb`` bodies, ``nf`` signed columns, the faces).
-    """
-
-    starts: np.ndarray
-    """(nb,) each body block's first row."""
-    own: np.ndarray
-    """(nb, p) the columns touching each body, zero-padded."""
-    n_own: np.ndarray
-    """(nb,) how many columns touch each body."""
-    sh_a: np.ndarray
-    """(nb - 1, s) the positions in ``own[k]`` of the columns touching bodies ``k`` and
-    ``k + 1``, zero-padded."""
-    sh_b: np.ndarray
-    """(nb - 1, s) their positions in ``own[k + 1]``."""
-    n_sh: np.ndarray
-    """(nb - 1,) how many columns each neighbouring pair shares."""
-    upos: np.ndarray
-    """(nb, nf) the position of face ``j`` in ``own[k]``, -1 where absent."""
-    first: np.ndarray
-    """(nf,) the first body each face touches (the faces sorted by it)."""
-    ncols: np.ndarray
-    """(nb,) one plus the number of faces touching bodies up to ``k``."""
 
 
 def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> BatchOutcome:
@@ -138,7 +101,7 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     u, layout = _layout(structure(A) if pattern is None else pattern, u)
     x, mu, lam, iterations, settled = compiled(
         np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u,
-        layout, Params(GRAM_RTOL, REFINE_RTOL, int(max_iter), LCP_RTOL, LCP_DELTA))
+        layout, (GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA))
     nu = np.zeros((T, n))
     nu[:, u] = lam if w is None else lam * root[:, u]
     stages = {"compiled": time.perf_counter() - clock}
@@ -265,14 +228,19 @@ def _layout(pattern: np.ndarray, u: np.ndarray):
 
 @functools.lru_cache(maxsize=8)
 def _layout_of(shape: tuple, pattern: bytes, u: bytes):
-    return _make_layout(np.frombuffer(pattern, bool).reshape(shape),
-                        np.frombuffer(u, np.int64))
+    u, *layout = _make_layout(np.frombuffer(pattern, bool).reshape(shape),
+                              np.frombuffer(u, np.int64))
+    return u, tuple(layout)
 
 
-def _make_layout(pattern: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, Layout]:
+def _make_layout(pattern: np.ndarray, u: np.ndarray):
     """The compiled kernel's view of the rows' nonzero ``pattern`` (m, n) (see
     :func:`._batched_kernels.least_norm`): the signed columns ``u`` sorted by the first
-    body they touch along the chain, and the :class:`Layout` of the bodies.
+    body they touch along the chain, the bodies' first rows in chain order, per body the
+    columns touching it (padded, and counted), per neighbouring pair the positions of
+    the columns touching both in each body's list (padded, and counted), per body the
+    position of each signed column in its list (-1: absent), each signed column's first
+    body and per body one plus the number of signed columns touching it or an earlier one.
     """
     blocks = chain(pattern)
     touch = np.any(pattern.reshape(-1, 6, pattern.shape[1]), axis=1)[
@@ -287,10 +255,9 @@ def _make_layout(pattern: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, Layout
     upos = np.array([[w.get(int(c), -1) for c in u] for w in where], np.int64).reshape(
         len(own), len(u))
     ncols = 1 + np.searchsorted(first, np.arange(len(blocks)), side="right")
-    (own, n_own), (sh_b, n_sh) = _padded(own), _padded(sh_b)
-    return u, Layout(np.array([k.start for k in blocks], np.int64), own, n_own,
-                     _padded(sh_a)[0], sh_b, n_sh, upos, first.astype(np.int64),
-                     ncols.astype(np.int64))
+    return (u, np.array([k.start for k in blocks], np.int64), *_padded(own),
+            _padded(sh_a)[0], *_padded(sh_b), upos, first.astype(np.int64),
+            ncols.astype(np.int64))
 
 
 def _padded(lists) -> tuple[np.ndarray, np.ndarray]:

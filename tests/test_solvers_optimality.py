@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 from cardan_forces.formulations.problems import LP, QP, Conic, ForceChecks
 from cardan_forces.solvers import ACCEPT, Backend, Optimality, available, registry, solve
-from cardan_forces.solvers.checks import finalize
 from cardan_forces.solvers.optimality import measures, recover, unique_optimum
-from cardan_forces.solvers.record import Outcome, confirm
+from cardan_forces.solvers.record import Outcome, confirm, finalize
 from cardan_forces.solvers.reference_problems import references
 
 
@@ -231,7 +230,7 @@ def test_checks_of_many_instants_at_once_equal_each_instant_alone():
     """finalize_all stacks problems per structure (bounds as rows never written out);
     every record must equal the one finalize gives for its instant alone, for QPs with
     bounds, a second-order cone, answers without multipliers (recovered) or with NaN."""
-    from cardan_forces.solvers.checks import finalize_all
+    from cardan_forces.solvers.record import finalize_all
 
     rng = np.random.default_rng(3)
     problems, outcomes, refs = [], [], []
@@ -260,7 +259,7 @@ def test_checks_with_stacks_built_beforehand_equal_the_checks_without():
     """finalize_all with the problems' data stacked once (stack_all, taken at some rows)
     gives the records it gives stacking itself, answered or not (a NaN answer, a
     recovered multiplier); stacks of other problems are ignored, not misread."""
-    from cardan_forces.solvers.checks import finalize_all, stack_all
+    from cardan_forces.solvers.record import finalize_all, stack_all
 
     rng = np.random.default_rng(5)
     for pick in (0, 1):
@@ -362,7 +361,7 @@ def test_a_map_that_offers_its_stacked_form_maps_a_run_at_once_as_one_at_a_time(
     """Forces of a run whose maps offer ``stacked`` come from one call and equal the
     per-instant map's; an answer it cannot take (none given) falls back to the
     per-instant map, which names the failure."""
-    from cardan_forces.solvers.checks import finalize_all, stack_all
+    from cardan_forces.solvers.record import finalize_all, stack_all
 
     problems = [QP(checks=_checks(np.ones((1, 3)), [1.0 + k], [True] * 3), formulation="ref",
                    to_forces=_Halved(), P=np.eye(3), q=np.zeros(3), A=np.ones((1, 3)),
