@@ -16,8 +16,9 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LastMade, map_all
 
-from .optimality import combine, multipliers, stacked_batch, stacked_measures, unique_optimum
+from .optimality import combine, multipliers, stacked_measures, unique_optimum
 from .record import Optimality, Record, Residuals, Status, confirm, judge
+from .stacking import stacked_batch
 
 
 @dataclass(frozen=True)
@@ -142,7 +143,7 @@ def _optimality(batch, outcome: BatchOutcome, x: np.ndarray, answered, primal):
 
 _stacked = LastMade(lambda batch: stacked_batch(batch.P, batch.q, batch.A, batch.b,
                                                 batch.cones))
-"""A conic batch's :func:`~.optimality.stacked_batch` form, made once per batch (a bench
+"""A conic batch's :func:`~.stacking.stacked_batch` form, made once per batch (a bench
 judges one batch many times; finding its patterns costs a pass)."""
 
 

@@ -18,14 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP, map_all, residuals_batch
 
-from .optimality import (
-    Stacked,
-    conic_key,
-    multipliers,
-    stack_conic,
-    stacked_measures,
-    unique_optimum,
-)
+from .optimality import multipliers, stacked_measures, unique_optimum
 from .qp_measures import MEASURES, from_parts
 from .record import (
     ACCEPT,
@@ -39,6 +32,7 @@ from .record import (
     judge,
     statuses,
 )
+from .stacking import Stacked, conic_key, stack_conic
 
 
 def failed_record(
@@ -295,7 +289,7 @@ def _checks_key(problem) -> tuple:
 class Stacks:
     """The data the checks of T problems of one structure read, stacked once
     (:func:`stack_all`): the force checks' ``A`` (T, m, n) and ``b`` (T, m), and the
-    problems' conic form (:class:`~.optimality.Stacked`, ``None`` for an LCP or a
+    problems' conic form (:class:`~.stacking.Stacked`, ``None`` for an LCP or a
     nonlinear system; its ``P`` (n, n) where the same at every instant). A caller that
     checks the same problems again (a bench running several backends over one
     formulation's instants) hands them to :func:`finalize_all` instead of having each

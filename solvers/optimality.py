@@ -46,12 +46,13 @@ All functions take a batch: ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m), ``z`` (
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, fields
 
 import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
 
 from .conversions import convert
+from .stacking import Stacked, stacked_batch, times_P
 
 ACTIVE_RTOL = 1e-7
 """A constraint counts as active when its slack is below this, relative to
@@ -68,16 +69,6 @@ def blocks(cones) -> list[tuple[str, float, slice]]:
         out.append((kind, size, slice(row, row + rows)))
         row += rows
     return out
-
-
-def times_P(P, z: np.ndarray) -> np.ndarray:
-    """``P z`` per instant (T, n): ``P`` ``None``, (n, n), (T, n, n) or a :class:`Pattern`."""
-    if P is None:
-        return np.zeros_like(z)
-    if isinstance(P, Pattern):
-        return P.times(z)
-    P = np.asarray(P, float)
-    return z @ P.T if P.ndim == 2 else (P @ z[:, :, None])[:, :, 0]
 
 
 def inf_norm(v: np.ndarray) -> np.ndarray:
@@ -131,24 +122,28 @@ def cone_layout(cones: tuple) -> tuple:
             members, mask, np.array(pows, int).reshape(-1, 3), np.array(alphas))
 
 
-def dual_cone_violation(cones, y: np.ndarray) -> np.ndarray:
-    """Distance-like violation of ``y in K*`` per instant (absolute, (T,)).
-
-    K* of the zero cone is free; the nonnegative and second-order cones are self-dual;
-    the dual power cone is ``(u/a)^a (v/(1-a))^(1-a) >= |w|, u, v >= 0``.
+def cone_violation(cones, v: np.ndarray, dual: bool = False) -> np.ndarray:
+    """How far each instant's ``v`` (T, m) is outside the cone ``K`` of ``cones`` (a
+    slack ``s = b - A z``), or with ``dual`` outside its dual ``K*`` (multipliers
+    ``y``): absolute, (T,), >= 0. ``|v_i|`` on zero rows (their dual is free); ``-v_i``
+    on nonnegative rows and ``||v_1:|| - v_0`` on a second-order block (both cones are
+    self-dual); on a power block ``|w| - u^a x^(1-a)``, or a negative ``u`` or ``x``
+    (its dual: ``(u/a)^a (x/(1-a))^(1-a) >= |w|``).
     """
+    zeros, nonnegs = cone_spans(tuple(cones))
     _, _, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
-    worst = below_zero(y, cone_spans(tuple(cones))[1])
+    worst = below_zero(v, nonnegs)
+    for rows in () if dual else zeros:
+        worst = np.maximum(worst, inf_norm(v[:, rows]))
     if len(apex):
-        spread = y[:, members] * mask
+        spread = v[:, members] * mask
         spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))
-        worst = np.maximum(worst, (spread - y[:, apex]).max(axis=1))
+        worst = np.maximum(worst, (spread - v[:, apex]).max(axis=1))
     if len(pows):
-        u, v, w = (np.maximum(y[:, pows[:, 0]], 0.0), np.maximum(y[:, pows[:, 1]], 0.0),
-                   y[:, pows[:, 2]])
-        mean = (u / alphas) ** alphas * (v / (1.0 - alphas)) ** (1.0 - alphas)
-        negative = np.maximum(0.0, -np.minimum(y[:, pows[:, 0]], y[:, pows[:, 1]]))
-        worst = np.maximum(worst, np.maximum(np.abs(w) - mean, negative).max(axis=1))
+        u, x, w = v[:, pows[:, 0]], v[:, pows[:, 1]], v[:, pows[:, 2]]
+        su, sx = (alphas, 1.0 - alphas) if dual else (1.0, 1.0)
+        mean = (np.maximum(u, 0.0) / su) ** alphas * (np.maximum(x, 0.0) / sx) ** (1.0 - alphas)
+        worst = np.maximum(worst, np.maximum(np.abs(w) - mean, -np.minimum(u, x)).max(axis=1))
     return np.maximum(worst, 0.0)
 
 
@@ -166,7 +161,7 @@ def stacked_measures(st: Stacked, z: np.ndarray, y: np.ndarray) -> tuple[dict, P
     same, :func:`~.qp_measures.from_parts`, so each is computed once).
     """
     parts = Parts.of(times_P(st.P, z), st.q, st.Aty(y), np.einsum("tm,tm->t", st.b, y), z,
-                     y, dual_cone_violation(st.cones, y))
+                     y, cone_violation(st.cones, y, dual=True))
     return _combined(parts, st.q, y), parts
 
 
@@ -305,17 +300,6 @@ def multipliers(st: Stacked, z: np.ndarray, given: list) -> tuple[np.ndarray, np
     return y, np.array(mask, bool)
 
 
-def stacked_batch(P, q, A, b, cones) -> Stacked:
-    """A batch's stacked arrays (``P`` (n, n), (T, n, n) or ``None``; ``A`` (T, m, n)) as
-    a :class:`Stacked`, its products run as the per-instant checks run them
-    (:func:`_blocks`; a per-instant ``P`` as its :class:`Pattern`).
-    """
-    if P is not None and np.ndim(P) == 3:
-        P = _one_or_pattern(np.asarray(P, float))
-    return Stacked(P, np.asarray(q, float), np.asarray(b, float), tuple(cones),
-                   _blocks(np.asarray(A, float)))
-
-
 def unique_optimum(problem) -> bool:
     """Whether the problem's optimum is one point, known from its data: a least norm
     (positive weights) or a positive definite ``P`` (strictly convex objective).
@@ -341,251 +325,3 @@ def objective_value(problem, z) -> float | None:
         return None
     z = np.asarray(z, float)
     return float(0.5 * z @ times_P(conic.P, z[None])[0] + np.asarray(conic.q, float) @ z)
-
-
-def _stack(problems, name: str) -> np.ndarray:
-    return np.array([getattr(p, name) for p in problems], float)
-
-
-def _shared_P(problems) -> np.ndarray | Pattern:
-    """``P`` (n, n) when every problem holds the same matrix, else a :class:`Pattern`."""
-    first = problems[0].P
-    if all(p.P is first for p in problems):
-        return np.asarray(first, float)
-    return _one_or_pattern(_stack(problems, "P"))
-
-
-def _one_or_pattern(stack: np.ndarray) -> np.ndarray | Pattern:
-    """A (T, n, n) stack as its one matrix where every instant's is the same, else as a
-    :class:`Pattern`.
-    """
-    return stack[0] if np.all(stack == stack[0]) else Pattern.of(stack)
-
-
-@dataclass(frozen=True)
-class Pattern:
-    """T matrices of one shape with one sparsity pattern (the union of their nonzeros):
-    ``values`` (T, nnz) at ``rows``, ``cols`` of a ``shape`` matrix. A stacked problem's
-    ``A`` and ``P`` are mostly zeros (a cone block touches a few forces), so products
-    over the instants cost T x nnz instead of T x rows x columns.
-    """
-
-    values: np.ndarray
-    rows: np.ndarray
-    cols: np.ndarray
-    shape: tuple[int, int]
-    sums: tuple = field(default=(), repr=False, compare=False)
-    """Sparse 0/1 matrices summing the products into rows, and into columns (made
-    once per pattern, shared by the patterns :meth:`take` makes)."""
-
-    def __post_init__(self) -> None:
-        if not self.sums:
-            from scipy.sparse import csr_matrix
-
-            ones, k = np.ones(len(self.rows)), np.arange(len(self.rows))
-            object.__setattr__(self, "sums", (
-                csr_matrix((ones, (self.rows, k)), shape=(self.shape[0], len(k))),
-                csr_matrix((ones, (self.cols, k)), shape=(self.shape[1], len(k)))))
-
-    @classmethod
-    def of(cls, dense: np.ndarray) -> Pattern:
-        """The pattern of a (T, r, n) stack."""
-        rows, cols = np.nonzero(np.any(dense != 0, axis=0))
-        return cls(dense[:, rows, cols], rows, cols, dense.shape[1:])
-
-    def times(self, v: np.ndarray) -> np.ndarray:
-        """``M_t v_t`` per instant (T, r) for ``v`` (T, n), row-major as a dense
-        product's (a sum over a row rounds by the row's layout).
-        """
-        return np.ascontiguousarray((self.sums[0] @ (self.values * v[:, self.cols]).T).T)
-
-    def transposed_times(self, v: np.ndarray) -> np.ndarray:
-        """``M_t' v_t`` per instant (T, n) for ``v`` (T, r), row-major."""
-        return np.ascontiguousarray((self.sums[1] @ (self.values * v[:, self.rows]).T).T)
-
-    def dense(self, k: int) -> np.ndarray:
-        """Instant ``k``'s matrix."""
-        out = np.zeros(self.shape)
-        out[self.rows, self.cols] = self.values[k]
-        return out
-
-    def take(self, idx: np.ndarray) -> Pattern:
-        """The instants ``idx``."""
-        return Pattern(self.values[idx], self.rows, self.cols, self.shape, self.sums)
-
-
-def _block(stack: np.ndarray) -> np.ndarray | Pattern:
-    """A (T, r, n) stack of constraint rows as the products over it run fastest: dense
-    where at least a quarter of its entries can be nonzero (``socp_face``: 46%, 1.3x
-    faster dense), else a :class:`Pattern` (``compliance_hertz``: 15%, 4x faster).
-    """
-    nonzero = int(np.any(stack != 0, axis=0).sum())
-    if 4 * nonzero >= stack.shape[1] * stack.shape[2]:
-        return np.ascontiguousarray(stack)  # a run of rows is a strided view: copied once
-    return Pattern.of(stack)
-
-
-def _blocks(stack: np.ndarray) -> tuple:
-    """A (T, r, n) stack of constraint rows as blocks in row order: each run of rows
-    that are the same at every instant as their one (r', n) matrix (a cone's rows: one
-    product serves all instants), each other run as :func:`_block` makes it. A conic
-    form's cone rows are most of its rows and rarely change with the instant, so the
-    stacked products read only the rows that do (a third of ``min_max``'s).
-    """
-    same = (np.all(stack == stack[:1], axis=(0, 2)) if len(stack)
-            else np.zeros(stack.shape[1], bool)).tolist()
-    starts = [r for r in range(len(same)) if r == 0 or same[r] != same[r - 1]]
-    return tuple(stack[0, a:b] if same[a] else _block(stack[:, a:b])
-                 for a, b in zip(starts, starts[1:] + [len(same)]))
-
-
-def _times(blk, z: np.ndarray) -> np.ndarray:
-    """A block's rows times ``z`` per instant: a bound block, shared, dense or a pattern."""
-    return blk[0] * z[:, blk[1]] if isinstance(blk, tuple) else times_P(blk, z)
-
-
-def _height(blk) -> int:
-    """A block's number of rows (shared, a dense stack, a pattern or a bound block)."""
-    return len(blk[1]) if isinstance(blk, tuple) else blk.shape[-2]
-
-
-def _add_transposed(blk, part: np.ndarray, out: np.ndarray) -> None:
-    """``out += B'part`` per instant for a block ``B`` of rows and its rows of ``y``."""
-    if isinstance(blk, Pattern):
-        out += blk.transposed_times(part)
-    elif isinstance(blk, np.ndarray):  # stacked products: 2x einsum's
-        out += part @ blk if blk.ndim == 2 else (part[:, None, :] @ blk)[:, 0]
-    else:
-        out[:, blk[1]] += blk[0] * part  # its columns are distinct
-
-
-def _at(blk, k):
-    """Instant(s) ``k`` of a block of rows (shared, a dense stack or a pattern): a matrix
-    for one, a block for many.
-    """
-    if isinstance(blk, Pattern):
-        return blk.dense(k) if np.ndim(k) == 0 else blk.take(k)
-    return blk if blk.ndim == 2 else blk[k]
-
-
-@dataclass(frozen=True)
-class Stacked:
-    """T problems of one structure in Clarabel's standard form, stacked: ``P`` (n, n)
-    when shared, a :class:`Pattern`, (T, n, n) (a batch's) or ``None``; ``q`` (T, n),
-    ``b`` (T, m), ``cones``; the rows of ``A`` as ``blocks`` in row order, each rows
-    shared by all instants (r, n), a dense (T, r, n) stack, a :class:`Pattern`
-    (:func:`_blocks`) or a bound block ``(sign, columns)`` (rows ``sign * e_j'``, a QP's
-    finite bounds), so bounds are never written out as identity rows.
-    """
-
-    P: np.ndarray | Pattern | None
-    q: np.ndarray
-    b: np.ndarray
-    cones: tuple
-    blocks: tuple
-
-    def Az(self, z: np.ndarray) -> np.ndarray:
-        """``A z`` per instant (T, m)."""
-        return np.concatenate([_times(blk, z) for blk in self.blocks]
-                              + [np.zeros((len(z), 0))], axis=1)
-
-    def Aty(self, y: np.ndarray) -> np.ndarray:
-        """``A'y`` per instant (T, n)."""
-        out, row = np.zeros_like(self.q), 0
-        for blk in self.blocks:
-            rows = _height(blk)
-            _add_transposed(blk, y[:, row:row + rows], out)
-            row += rows
-        return out
-
-    def A(self, k: int) -> np.ndarray:
-        """Instant ``k``'s ``A`` (m, n), dense."""
-        n = self.q.shape[1]
-        return np.vstack([np.zeros((0, n))] + [
-            blk[0] * np.eye(n)[blk[1]] if isinstance(blk, tuple) else _at(blk, k)
-            for blk in self.blocks])
-
-    def take(self, rows: np.ndarray) -> Stacked:
-        """The instants ``rows`` of the stack."""
-        P = self.P if self.P is None or np.ndim(self.P) == 2 else _at(self.P, rows)
-        return Stacked(P, self.q[rows], self.b[rows], self.cones,
-                       tuple(blk if isinstance(blk, tuple) else _at(blk, rows)
-                             for blk in self.blocks))
-
-    def Pk(self, k: int) -> np.ndarray | None:
-        """Instant ``k``'s ``P``."""
-        return self.P if self.P is None or np.ndim(self.P) == 2 else _at(self.P, k)
-
-
-def _stack_qp(problems) -> Stacked | None:
-    """:meth:`QP.as_conic` of T QPs of one structure at once (``None`` when their
-    bounds are finite in different places, so their conic forms differ in rows).
-    """
-    first = problems[0]
-    blocks, rhs, cones, ineq = [], [], [], None
-    if first.A is not None:
-        blocks += _blocks(_stack(problems, "A"))
-        rhs.append(_stack(problems, "b"))
-        cones.append(("zero", len(first.b)))
-    if first.G is not None:
-        blocks += _blocks(_stack(problems, "G"))
-        rhs.append(_stack(problems, "h"))
-        ineq = len(first.h)
-    for name, sign in (("lb", -1.0), ("ub", 1.0)):
-        if getattr(first, name) is not None:
-            bounds = _stack(problems, name)
-            keep = np.isfinite(bounds[0])
-            if not np.array_equal(np.isfinite(bounds), np.broadcast_to(keep, bounds.shape)):
-                return None
-            blocks.append((sign, np.flatnonzero(keep)))
-            rhs.append(sign * bounds[:, keep])
-            ineq = (ineq or 0) + int(keep.sum())
-    if ineq is not None:
-        cones.append(("nonneg", ineq))
-    b = np.concatenate(rhs, axis=1) if rhs else np.zeros((len(problems), 0))
-    return Stacked(_shared_P(problems), _stack(problems, "q"), b, tuple(cones), tuple(blocks))
-
-
-def _stack_ls(problems) -> Stacked:
-    """``LS.as_qp().as_conic()`` of T least norms of one structure at once."""
-    T, (m, n) = len(problems), np.shape(problems[0].A)
-    weights = (np.ones((T, n)) if problems[0].weights is None
-               else _stack(problems, "weights"))
-    diagonal = np.arange(n)
-    P = (np.diag(weights[0]) if np.all(weights == weights[0])
-         else Pattern(weights, diagonal, diagonal, (n, n)))
-    return Stacked(P, np.zeros((T, n)), _stack(problems, "b"), (("zero", m),),
-                   _blocks(_stack(problems, "A")))
-
-
-def conic_key(problem) -> tuple | None:
-    """What T problems must share to be stacked by :func:`stack_conic` (``None``: no
-    conic form).
-    """
-    if isinstance(problem, QP):
-        return (QP, problem.n, *(None if (v := getattr(problem, k)) is None else np.shape(v)
-                                 for k in ("A", "G")),
-                problem.lb is None, problem.ub is None)
-    if isinstance(problem, LS):
-        return LS, np.shape(problem.A), problem.weights is None
-    if isinstance(problem, Conic):
-        return Conic, np.shape(problem.A), tuple(problem.cones), problem.P is None
-    conic = convert(problem, (Conic,))
-    return None if conic is None else (type(problem), *conic_key(conic)[1:])
-
-
-def stack_conic(problems) -> Stacked:
-    """T problems of one :func:`conic_key` in Clarabel's standard form, stacked
-    (:class:`Stacked`): the same numbers as ``convert(problem, (Conic,))`` per instant,
-    without building T problems where the problems' own data stack (least norms, QPs
-    whose bounds are finite in the same places).
-    """
-    if isinstance(problems[0], LS):
-        return _stack_ls(problems)
-    stacked = _stack_qp(problems) if isinstance(problems[0], QP) else None
-    if stacked is not None:
-        return stacked
-    conics = [convert(p, (Conic,)) for p in problems]
-    P = None if conics[0].P is None else _shared_P(conics)
-    return Stacked(P, _stack(conics, "q"), _stack(conics, "b"), conics[0].cones,
-                   _blocks(_stack(conics, "A")))

@@ -40,15 +40,8 @@ import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
 
 from .conversions import convert
-from .optimality import (
-    Parts,
-    below_zero,
-    cone_layout,
-    cone_spans,
-    dual_cone_violation,
-    inf_norm,
-    times_P,
-)
+from .optimality import Parts, cone_violation
+from .stacking import times_P
 
 
 @dataclass(frozen=True)
@@ -82,34 +75,14 @@ SETTINGS = {s.name: s for s in (
 MEASURES = ("primal", "dual", "gap")
 
 
-def cone_violation(cones, s: np.ndarray) -> np.ndarray:
-    """``s in K`` violated by how much, per instant ((T,), absolute, >= 0): ``|s_i|`` on
-    zero rows, ``-s_i`` on nonnegative rows, ``||s_1:|| - s_0`` on a second-order block,
-    ``|w| - u^a v^(1-a)`` (or a negative ``u, v``) on a power block.
-    """
-    _, _, apex, members, mask, pows, alphas = cone_layout(tuple(cones))
-    zeros, nonnegs = cone_spans(tuple(cones))
-    worst = below_zero(s, nonnegs)
-    for rows in zeros:
-        worst = np.maximum(worst, inf_norm(s[:, rows]))
-    if len(apex):
-        spread = s[:, members] * mask
-        spread = np.sqrt(np.einsum("tkj,tkj->tk", spread, spread))
-        worst = np.maximum(worst, (spread - s[:, apex]).max(axis=1))
-    if len(pows):
-        u, v, w = s[:, pows[:, 0]], s[:, pows[:, 1]], s[:, pows[:, 2]]
-        mean = np.maximum(u, 0.0) ** alphas * np.maximum(v, 0.0) ** (1.0 - alphas)
-        worst = np.maximum(worst, np.maximum(np.abs(w) - mean, -np.minimum(u, v)).max(axis=1))
-    return np.maximum(worst, 0.0)
-
-
 def conic_residuals(P, q, A, b, cones, z, y, *, check_dual_cone: bool) -> dict:
     """Absolute primal, dual and gap of answers to a conic problem, per instant.
 
     Answers ``z`` with multipliers ``y`` (Clarabel's convention ``Pz + q + A'y = 0``) to
     ``min 1/2 z'Pz + q'z s.t. Az + s = b, s in K``; ``(T,)`` arrays:
 
-    - ``primal = dist-like violation of b - Az in K`` (:func:`cone_violation`);
+    - ``primal = dist-like violation of b - Az in K``
+      (:func:`~.optimality.cone_violation`);
     - ``dual = ||Pz + q + A'y||_inf``, and the dual cone's violation of ``y`` when
       ``check_dual_cone`` (conic problems; not for a QP, as qpbenchmark);
     - ``gap = |z'Pz + q'z + b'y|``.
@@ -133,7 +106,7 @@ def residuals_from(Pz, q, Az, Aty, b, cones, z, y, *, check_dual_cone: bool) -> 
     z, y, b, q = (np.asarray(v, float) for v in (z, y, b, q))
     with np.errstate(invalid="ignore", over="ignore"):
         parts = Parts.of(Pz, q, Aty, np.einsum("tm,tm->t", b, y), z, y,
-                         dual_cone_violation(cones, y) if check_dual_cone else None)
+                         cone_violation(cones, y, dual=True) if check_dual_cone else None)
     return from_parts(parts, b - Az, cones, check_dual_cone=check_dual_cone)
 
 

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from cardan_forces.formulations.problems import LP, QP, Conic, ForceChecks
 from cardan_forces.solvers import ACCEPT, Backend, Optimality, available, registry, solve
+from cardan_forces.solvers.checks import finalize
 from cardan_forces.solvers.optimality import measures, recover, unique_optimum
-from cardan_forces.solvers.record import Outcome, confirm, finalize
+from cardan_forces.solvers.record import Outcome, confirm
 from cardan_forces.solvers.reference_problems import references
 
 
@@ -230,7 +231,7 @@ def test_checks_of_many_instants_at_once_equal_each_instant_alone():
     """finalize_all stacks problems per structure (bounds as rows never written out);
     every record must equal the one finalize gives for its instant alone, for QPs with
     bounds, a second-order cone, answers without multipliers (recovered) or with NaN."""
-    from cardan_forces.solvers.record import finalize_all
+    from cardan_forces.solvers.checks import finalize_all
 
     rng = np.random.default_rng(3)
     problems, outcomes, refs = [], [], []
@@ -259,7 +260,7 @@ def test_checks_with_stacks_built_beforehand_equal_the_checks_without():
     """finalize_all with the problems' data stacked once (stack_all, taken at some rows)
     gives the records it gives stacking itself, answered or not (a NaN answer, a
     recovered multiplier); stacks of other problems are ignored, not misread."""
-    from cardan_forces.solvers.record import finalize_all, stack_all
+    from cardan_forces.solvers.checks import finalize_all, stack_all
 
     rng = np.random.default_rng(5)
     for pick in (0, 1):
@@ -294,7 +295,7 @@ def test_checks_with_stacks_built_beforehand_equal_the_checks_without():
 
 
 def test_stacked_conic_form_equals_each_conversion():
-    from cardan_forces.solvers.optimality import stack_conic
+    from cardan_forces.solvers.stacking import stack_conic
 
     problems = [_variants(k)[0] for k in range(3)]
     stacked = stack_conic(problems)
@@ -312,7 +313,7 @@ def test_stacked_conic_form_equals_each_conversion():
 def test_rows_shared_by_every_instant_are_kept_once_and_give_each_instants_products():
     """Rows the same at every instant (a cone's) are one matrix, the others a stack, in
     row order; products, an instant's A and a subset of instants equal the dense ones."""
-    from cardan_forces.solvers.optimality import stacked_batch
+    from cardan_forces.solvers.stacking import stacked_batch
 
     rng = np.random.default_rng(1)
     T, m, n = 4, 7, 3
@@ -361,7 +362,7 @@ def test_a_map_that_offers_its_stacked_form_maps_a_run_at_once_as_one_at_a_time(
     """Forces of a run whose maps offer ``stacked`` come from one call and equal the
     per-instant map's; an answer it cannot take (none given) falls back to the
     per-instant map, which names the failure."""
-    from cardan_forces.solvers.record import finalize_all, stack_all
+    from cardan_forces.solvers.checks import finalize_all, stack_all
 
     problems = [QP(checks=_checks(np.ones((1, 3)), [1.0 + k], [True] * 3), formulation="ref",
                    to_forces=_Halved(), P=np.eye(3), q=np.zeros(3), A=np.ones((1, 3)),
@@ -379,3 +380,21 @@ def test_a_map_that_offers_its_stacked_form_maps_a_run_at_once_as_one_at_a_time(
     assert _Halved.calls == 0
     assert [r.status for r in mixed] == ["solved", "failed", "solved"]
     assert "solver returned no solution" in mixed[1].message
+
+
+def test_one_cone_violation_for_the_slack_and_the_multipliers():
+    """K and K* by one formula: a zero row counts in K and is free in K*; a power cone's
+    point on the boundary of K (``|w| = u^a x^(1-a)``) or of K* (``|w| = (u/a)^a
+    (x/(1-a))^(1-a)``) is inside, and ``w`` beyond it by ``d`` is outside by ``d``."""
+    from cardan_forces.solvers.optimality import cone_violation
+
+    a, u, x, d = 0.3, 2.0, 5.0, 0.25
+    cones = (("zero", 1), ("pow", a))
+    on_K, on_dual = u ** a * x ** (1 - a), (u / a) ** a * (x / (1 - a)) ** (1 - a)
+    v = np.array([[-0.5, u, x, -on_K], [-0.5, u, x, on_K + d], [0.0, u, x, on_dual + d],
+                  [0.0, u, x, -on_dual]])
+    assert cone_violation(cones, v) == pytest.approx([0.5, 0.5, on_dual + d - on_K,
+                                                      on_dual - on_K])
+    assert cone_violation(cones, v[2:], dual=True) == pytest.approx([d, 0.0], abs=1e-12)
+    assert cone_violation(cones, v[:2, :] * [1, 1, 1, 0], dual=True) == pytest.approx(
+        [0.0, 0.0])
