@@ -37,7 +37,25 @@ from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.formulations.convex import NotApplicable
 
 INSTANTS = 41
-"""Instants of the report by default (each costs two LPs per component)."""
+"""The fewest instants of the report by default (each costs two LPs per component)."""
+PER_PERIOD = 10
+"""Instants per period of the fastest periodic load by default: the intermediate
+shaft's twice-per-revolution fluctuation at the input's highest speed (fewer alias it
+into zig-zags)."""
+
+
+def default_instants(scene) -> int:
+    """Instants that resolve ``scene``'s fastest periodic load: :data:`PER_PERIOD` per
+    period of the twice-per-revolution fluctuation (period ``pi / omega_max``, the
+    input's highest speed in rad/s on the scene's own grid), at least :data:`INSTANTS`,
+    at most the scene's grid.
+    """
+    grid = scene.time.instants()
+    omega = float(np.max(np.abs(simulate(scene, grid).omega[0])))
+    span = float(grid[-1] - grid[0])
+    wanted = math.ceil(PER_PERIOD * span * omega / math.pi) + 1
+    return int(min(len(grid), max(INSTANTS, wanted)))
+
 
 SELECTION = "positive"
 """The formulation drawn as lines, by the study layer's default backend."""
@@ -176,31 +194,66 @@ UNIT_AXIS = {"N": "force [N]", "N m": "moment [N m]"}
 
 @dataclass(frozen=True)
 class Panel:
-    """One panel: the components of one contact that share a unit (a slip joint's
-    forces, N, and moments, N m, get one each, so a 2500 N m torque does not flatten a
-    shear of tens of newtons).
+    """One panel: components of one contact that share a unit (a slip joint's forces, N,
+    and moments, N m, get one each, so a 2500 N m torque does not flatten a shear of tens
+    of newtons) and a scale (:data:`SCALE_GROUP`: a bearing's 560 N vertical load does
+    not flatten its few-newton horizontal ones). ``split``: the contact's components of
+    this unit span several panels, so the title names them.
     """
 
     contact: Link
     unit: str
     columns: tuple[int, ...]
+    names: tuple[str, ...] = ()
+    split: bool = False
 
     @property
     def title(self) -> str:
         kind = self.contact.element_kind.words(self.contact)
-        split = len(set(self.contact.units)) > 1
-        what = {"N": ", forces", "N m": ", moments"}[self.unit] if split else ""
-        return f"{self.contact.name} ({kind}{what})"
+        what = {"N": "forces", "N m": "moments"}[self.unit] \
+            if len(set(self.contact.units)) > 1 else ""
+        return (f"{self.contact.name} ({kind}{', ' + what if what else ''})"
+                + (f": {', '.join(self.names)}" if self.split else ""))
 
 
-def panels(op: Operator) -> list[Panel]:
-    """The report's panels, contact by contact, one per unit of its components."""
+SCALE_GROUP = 10.0
+"""Components of one panel span at most this factor in their largest magnitude (of the
+value and finite ends); a smaller one goes to a panel of its own scale (a component
+below 1e-6 of the panel's largest counts as zero and stays)."""
+
+
+def panels(op: Operator, h: dict[str, np.ndarray] | None = None) -> list[Panel]:
+    """The report's panels, contact by contact, one per unit of its components and, with
+    the histories ``h``, per scale group (:data:`SCALE_GROUP`).
+    """
     out = []
     for c in op.contacts:
         units = c.units or ("N",) * len(c.columns)
         for unit in dict.fromkeys(units):
-            out.append(Panel(c, unit, tuple(j for j, u in zip(c.columns, units) if u == unit)))
+            columns = [j for j, u in zip(c.columns, units) if u == unit]
+            groups = _scale_groups(h, columns) if h is not None else [columns]
+            for group in groups:
+                out.append(Panel(c, unit, tuple(group),
+                                 tuple(op.names[j][len(c.name) + 1:] for j in group),
+                                 len(groups) > 1))
     return out
+
+
+def _scale_groups(h: dict[str, np.ndarray], columns: list[int]) -> list[list[int]]:
+    """``columns`` in groups whose largest magnitudes lie within :data:`SCALE_GROUP`."""
+    size = {j: max(float(np.nanmax(np.abs(np.where(np.isfinite(h[k][:, j]), h[k][:, j],
+                                                        np.nan)), initial=0.0))
+                   for k in ("value", "min", "max")) for j in columns}
+    top = max(size.values(), default=0.0)
+    groups: list[list[int]] = []
+    for j in sorted(columns, key=lambda j: -size[j]):
+        if groups and size[j] <= 1e-6 * top:  # zero: drawn as well beside any scale
+            groups[0].append(j)
+        elif groups and size[j] * SCALE_GROUP >= size[groups[-1][0]]:
+            groups[-1].append(j)
+        else:
+            groups.append([j])
+    return sorted(sorted(g) for g in groups)
 
 
 def set_words(lo: np.ndarray, hi: np.ndarray, determinate: np.ndarray) -> str:
@@ -225,45 +278,54 @@ def set_words(lo: np.ndarray, hi: np.ndarray, determinate: np.ndarray) -> str:
                                   if k)
 
 
+BOTH_OPEN_MARK = "$\\updownarrow$"
+"""The marker along a component whose set is open on both sides (any value)."""
+
+
 def _draw(ax, op: Operator, h: dict[str, np.ndarray], panel: Panel,
           engine_forces: np.ndarray | None = None) -> None:
     """One panel: each component's selected value as a line, its rigid set in the same
     colour: shaded where both ends are finite; where one side is open, the finite end
-    dashed and hatched from it to the axis edge on the open side; ``engine_forces``
-    (T, n), where given, as open circles in the same colour. The y range holds the
-    lines and every finite end. Grid and tick labels come from :data:`STYLE`.
+    dashed with triangles pointing to the open side; where both are, double arrows along
+    the line; ``engine_forces`` (T, n), where given, as open circles in the same colour.
+    The y range holds the lines and every finite end; the legend sits below the panel.
     """
-    parts = []
+    held = []
+    step = max(1, len(op.t) // 10)
     for k, j in enumerate(panel.columns):
-        lo, hi = h["min"][:, j], h["max"][:, j]
+        lo, hi, value = h["min"][:, j], h["max"][:, j], h["value"][:, j]
         both = np.isfinite(lo) & np.isfinite(hi)
+        free = ~np.isfinite(lo) & ~np.isfinite(hi) & ~h["determinate"][:, j]
         name = op.names[j][len(panel.contact.name) + 1:] or "force"
-        ax.plot(op.t, h["value"][:, j], lw=1.4, color=f"C{k}", zorder=3,
-                label=f"{name}: {set_words(lo, hi, h['determinate'][:, j])}")
+        words = set_words(lo, hi, h["determinate"][:, j])
+        ax.plot(op.t, value, lw=1.4, color=f"C{k}", zorder=3,
+                label=f"{name}: {words}" + (" (\u2195 on the line)" if free.any() else ""))
+        if free.any():
+            ax.plot(op.t, np.where(free, value, np.nan), ls="none", marker=BOTH_OPEN_MARK,
+                    ms=10, color=f"C{k}", markevery=(k * step // len(panel.columns), step),
+                    zorder=3)
         ax.fill_between(op.t, np.where(both, lo, np.nan), np.where(both, hi, np.nan),
                         color=f"C{k}", alpha=0.2, lw=0, zorder=1)
-        parts.append((f"C{k}", both, lo, hi, h["value"][:, j]))
+        for bound, other, marker in ((lo, hi, "^"), (hi, lo, "v")):  # open above: ^
+            one = np.where(np.isfinite(bound) & ~np.isfinite(other), bound, np.nan)
+            if np.isfinite(one).any():
+                ax.plot(op.t, one, ls="--", lw=1.1, color=f"C{k}", marker=marker, ms=5,
+                        markevery=(0, step), zorder=2)
+        held += [lo, hi, value]
         if engine_forces is not None:
             ax.plot(op.t, engine_forces[:, j], ls="none", marker="o", ms=4.5, mfc="none",
-                    mew=1.1, color=f"C{k}", zorder=4)
-            parts[-1] += (engine_forces[:, j],)
-    if engine_forces is not None:
-        ax.plot([], [], ls="none", marker="o", mfc="none", color="0.3",
-                label="MuJoCo, default softness")
-    low, high = _limits([v for _, _, *curves in parts for v in curves])
-    for colour, both, lo, hi, *_ in parts:
-        for bound, edge in ((lo, high), (hi, low)):  # a finite lower end: open above
-            one_sided = np.where(np.isfinite(bound) & ~both, bound, np.nan)
-            if np.isfinite(one_sided).any():
-                ax.plot(op.t, one_sided, ls="--", lw=1.1, color=colour, zorder=2)
-                ax.fill_between(op.t, one_sided, np.where(np.isfinite(one_sided), edge, np.nan),
-                                facecolor="none", edgecolor=colour, hatch="///", alpha=0.25,
-                                lw=0, zorder=0)
-    ax.set_ylim(low, high)
+                    mew=1.1, color=f"C{k}", zorder=4,
+                    label=ENGINE_LABEL if k == 0 else "_")
+            held.append(engine_forces[:, j])
+    ax.set_ylim(*_limits(held))
     ax.set_title(panel.title, fontsize=9, y=1.0)  # placed, not searched for: no top ticks
-    ax.set_xlabel("time t [s]", fontsize=8)
-    ax.set_ylabel(UNIT_AXIS.get(panel.unit, f"[{panel.unit}]"), fontsize=8)
-    ax.legend(fontsize=6.5, loc="best", framealpha=0.85)
+    ax.set_xlabel("time t [s]", fontsize=8.5)
+    ax.set_ylabel(UNIT_AXIS.get(panel.unit, f"[{panel.unit}]"), fontsize=8.5)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(-0.02, -LEGEND_DROP_IN / PANEL_IN[1]),
+              frameon=False, borderaxespad=0.0, handlelength=1.6)
+
+
+ENGINE_LABEL = "MuJoCo, default softness (open circles, each component's colour)"
 
 
 def _limits(curves: list[np.ndarray]) -> tuple[float, float]:
@@ -278,16 +340,21 @@ def _limits(curves: list[np.ndarray]) -> tuple[float, float]:
     return low - margin, high + margin
 
 
-STYLE = {"axes.grid": True, "grid.alpha": 0.3, "xtick.labelsize": 7, "ytick.labelsize": 7}
+STYLE = {"axes.grid": True, "grid.alpha": 0.3, "xtick.labelsize": 8, "ytick.labelsize": 8}
 """Matplotlib settings of the report's figure: each tick is made with them, instead of
 every tick of 60 axes restyled after it is made."""
 
-MARGINS_IN = {"left": 0.75, "right": 0.15, "bottom": 0.5, "top": 0.45, "line": 0.2,
-              "wspace": 0.9, "hspace": 0.8}
+MARGINS_IN = {"left": 0.75, "right": 0.2, "top": 0.45, "line": 0.2,
+              "wspace": 0.9, "hspace": 0.85, "entry": 0.19}
 """The figure's margins and the gaps between panels (inches): room for the tick labels
-and axis labels at the report's font sizes, and ``line`` per line of the suptitle above
-``top`` (a fixed layout: a constrained one measured every panel's text twice and took
-a third of the figure's time)."""
+and axis labels at the report's font sizes, ``entry`` more below each row per entry of
+the longest legend below a panel, and ``line`` per line of the suptitle above ``top``
+(a fixed layout: a constrained one measured every panel's text twice and took a third
+of the figure's time)."""
+PANEL_IN = (4.0, 2.1)
+"""A panel's plotting area (inches, its printed size)."""
+LEGEND_DROP_IN = 0.42
+"""How far below a panel its legend starts (inches): under the axis label."""
 
 
 def write_figure(op: Operator, h: dict[str, np.ndarray], stem: Path,
@@ -313,36 +380,43 @@ def figure(op: Operator, h: dict[str, np.ndarray], overlay: EngineOverlay | None
     """
     import matplotlib.pyplot as plt
 
-    grid = panels(op)
+    grid = panels(op, h)
     cols = min(4, len(grid))
     rows = math.ceil(len(grid) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.1 * rows + 0.8),
-                             squeeze=False)
+    m = MARGINS_IN
+    below = m["entry"] * max(len(p.columns) + (overlay is not None) for p in grid)
+    size = (m["left"] + m["right"] + cols * PANEL_IN[0] + (cols - 1) * m["wspace"],
+            m["top"] + 2 * m["line"] + rows * (PANEL_IN[1] + m["hspace"] + below))
+    fig, axes = plt.subplots(rows, cols, figsize=size, squeeze=False)
     for ax, panel in zip(axes.ravel(), grid):
         _draw(ax, op, h, panel, None if overlay is None else overlay.forces)
     for ax in axes.ravel()[len(grid):]:
         ax.set_visible(False)
     title = fig.suptitle(
-        f"{op.scene.name}: the {SELECTION} selection (lines) and the rigid solution set "
-        "of each component (same colour): shaded where both ends are finite,\nthe "
-        "finite end dashed where one side is open; each legend says per component "
-        "whether it is determinate or which side of its set is open"
+        f"{op.scene.name}: contact forces over time, the {SELECTION} selection (lines) and "
+        "the rigid solution set of each component (same colour): shaded where both ends "
+        "are finite,\nthe finite end dashed with triangles to the open side where one "
+        "side is open, double arrows on the line where both are (any value); each panel "
+        "its own scale"
         + ("; MuJoCo's forces as open circles (default softness, after its settling)"
            if overlay is not None else ""), fontsize=10, va="top")
-    _place(fig, rows, cols, title)
+    _place(fig, rows, cols, title, below)
     return fig
 
 
-def _place(fig, rows: int, cols: int, title) -> None:
-    """Panels and suptitle at :data:`MARGINS_IN` of a figure of ``rows`` x ``cols``."""
+def _place(fig, rows: int, cols: int, title, below: float) -> None:
+    """Panels and suptitle at :data:`MARGINS_IN` of a figure of ``rows`` x ``cols``,
+    ``below`` inches more under each row for its legends.
+    """
     width, height = fig.get_size_inches()
     m = MARGINS_IN
     top = m["top"] + m["line"] * (title.get_text().count("\n") + 1)
+    gap = m["hspace"] + below
     panel_w = (width - m["left"] - m["right"] - (cols - 1) * m["wspace"]) / cols
-    panel_h = (height - m["bottom"] - top - (rows - 1) * m["hspace"]) / rows
+    panel_h = (height - gap - top - (rows - 1) * gap) / rows
     fig.subplots_adjust(left=m["left"] / width, right=1 - m["right"] / width,
-                        bottom=m["bottom"] / height, top=1 - top / height,
-                        wspace=m["wspace"] / panel_w, hspace=m["hspace"] / panel_h)
+                        bottom=gap / height, top=1 - top / height,
+                        wspace=m["wspace"] / panel_w, hspace=gap / panel_h)
     title.set_y(1 - 0.1 / height)
 
 
@@ -367,14 +441,16 @@ def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path,
     path.write_text("\n".join(lines) + "\n")
 
 
-def run_report(scene_spec: str, out: Path, instants: int = INSTANTS,
+def run_report(scene_spec: str, out: Path, instants: int | None = None,
                progress=None, formats=("png",), with_engine: bool = False) -> list[Path]:
     """Write ``report.csv``, ``report.<format>`` for each of ``formats`` and
     ``report.md`` for one scene into ``out``; their paths. ``with_engine``: MuJoCo
-    beside the rigid set (refused before any work where it does not apply).
+    beside the rigid set (refused before any work where it does not apply);
+    ``instants``: default :func:`default_instants`.
     """
     scene = load_scene(scene_spec)
     version = check_engine(scene) if with_engine else None
+    instants = instants or default_instants(scene)
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
     motion = simulate(scene, t)
     op = build_operator(motion)
@@ -397,8 +473,10 @@ def add_parser(subparsers) -> None:
                               "with the rigid solution set (CSV, PNG, Markdown)")
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     p.add_argument("--out", default="results/report", help="output folder (default %(default)s)")
-    p.add_argument("--instants", type=_count, default=INSTANTS,
-                   help=f"instants over the scene's window (default {INSTANTS})")
+    p.add_argument("--instants", type=_count, default=None,
+                   help=f"instants over the scene's window (default: {PER_PERIOD} per period "
+                   "of the intermediate shaft's twice-per-revolution fluctuation at the "
+                   f"input's highest speed, at least {INSTANTS}, at most the scene's grid)")
     p.add_argument("--format", type=format_list, default=("png",),
                    help="comma-separated image formats (default png; any of png,svg,pdf)")
     p.add_argument("--engine", action="store_true",

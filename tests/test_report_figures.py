@@ -13,7 +13,7 @@ import pytest  # noqa: E402
 from cardan_forces.driveline.dynamics import simulate  # noqa: E402
 from cardan_forces.driveline.equilibrium import build_operator  # noqa: E402
 from cardan_forces.driveline.loading import load_scene  # noqa: E402
-from cardan_forces.experiments import report  # noqa: E402
+from cardan_forces.experiments import images, report  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.text import Text  # noqa: E402
 
@@ -85,11 +85,12 @@ def test_band_where_both_ends_are_finite_and_the_finite_end_where_one_side_is_op
     dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
     ends = [np.asarray(line.get_ydata(), float) for line in dashed]
     assert any(np.allclose(e, 5.0) for e in ends), "the finite end of the open set"
-    hatched = [v for v in regions if np.isclose(v[:, 1].min(), 5.0)
-               and np.isclose(v[:, 1].max(), high)]
-    assert hatched, "open above: hatched from the finite end to the axis edge"
+    assert not [c for c in ax.collections if c.get_hatch()], "no hatched panel"
+    assert [line.get_marker() for line in dashed] == ["^"]  # triangles to the open side
+    arrows = [line for line in ax.get_lines() if line.get_marker() == report.BOTH_OPEN_MARK]
+    assert len(arrows) == 1 and arrows[0].get_color() == "C2"  # z: any value, marked
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert labels == ["x: bounded", "y: open above", "z: open below and above"]
+    assert labels == ["x: bounded", "y: open above", "z: open below and above (\u2195 on the line)"]
     plt.close(fig)
 
 
@@ -99,7 +100,8 @@ def test_a_determinate_component_is_not_called_unbounded(op):
     fig, ax = plt.subplots()
     report._draw(ax, op, _histories(op, {x: (0.0, NAN, NAN)}), panel)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert labels == ["x: open below and above", "y: determinate", "z: determinate"]
+    assert labels == ["x: open below and above (\u2195 on the line)", "y: determinate",
+                      "z: determinate"]
     assert "unbounded" not in ax.get_title() and "open" not in ax.get_title()
     plt.close(fig)
 
@@ -159,14 +161,14 @@ def test_engine_forces_are_drawn_in_each_component_s_colour_and_held_by_the_rang
     forces[:, y] = 3.0
     fig, ax = plt.subplots()
     report._draw(ax, op, h, panel, forces)
-    marked = [line for line in ax.get_lines() if line.get_marker() == "o" and len(line.get_xdata())]
+    marked = [line for line in ax.get_lines() if line.get_marker() == "o"]
     assert len(marked) == 3
     solid = {line.get_color() for line in ax.get_lines() if line.get_linestyle() == "-"}
     for line, j in zip(marked, (x, y, z)):
         assert np.array_equal(np.asarray(line.get_ydata(), float), forces[:, j], equal_nan=True)
         assert line.get_color() in solid
     assert ax.get_ylim()[1] > 500
-    assert "MuJoCo, default softness" in [t.get_text() for t in ax.get_legend().get_texts()]
+    assert report.ENGINE_LABEL in [t.get_text() for t in ax.get_legend().get_texts()]
     plt.close(fig)
 
 
@@ -185,3 +187,40 @@ def test_engine_refused_in_one_line_before_any_work(tmp_path, capsys, monkeypatc
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("cardan: error:") and words in err[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_the_report_figure_keeps_the_print_rules(op, monkeypatch):
+    """Titles, units, 8 pt type, every legend entry visible and off the data: on
+    propshaft's contacts with a bounded, an open and a both-open component."""
+    panel = _panel(op, "bearing.gearbox.rear")
+    x, y, z = panel.columns
+    h = _histories(op, {x: (0.0, -50.0, 80.0), y: (10.0, 5.0, NAN), z: (3.0, NAN, NAN)})
+    with plt.rc_context(report.STYLE):
+        fig = report.figure(op, h)
+    assert images.problems(fig) == []
+    plt.close(fig)
+
+
+def test_components_of_different_scales_get_panels_of_their_own(op):
+    """A bearing's 21 kN component does not share an axis with one of a few newtons; a
+    component at zero stays with the large one."""
+    panel = _panel(op, "bearing.gearbox.rear")
+    x, y, z = panel.columns
+    h = _histories(op, {x: (21000.0, 20000.0, 22000.0), y: (3.0, 1.0, 5.0)})
+    split = [p for p in report.panels(op, h) if p.contact.name == "bearing.gearbox.rear"]
+    assert sorted(p.columns for p in split) == sorted([(x, z), (y,)])
+    assert all(p.split and ", ".join(p.names) in p.title for p in split)
+    assert sorted(j for p in report.panels(op, h) for j in p.columns) == list(range(len(op.names)))
+
+
+@pytest.mark.parametrize("scene", ["paper", "propshaft"])
+def test_default_instants_resolve_the_twice_per_revolution_fluctuation(scene):
+    """At least 10 instants per period pi / omega_max of the intermediate shaft's
+    fluctuation, or the whole grid."""
+    s = load_scene(scene)
+    grid = s.time.instants()
+    n = report.default_instants(s)
+    omega = np.max(np.abs(simulate(s, grid).omega[0]))
+    per_period = (n - 1) / (grid[-1] - grid[0]) * np.pi / omega
+    assert per_period >= 10 or n == len(grid)
+    assert report.INSTANTS <= n <= len(grid)
