@@ -87,16 +87,21 @@ def stale(folder: Path | str, written: Iterable[Path | str],
     return sorted(p for p in found if p.resolve() not in mine)
 
 
-def say_written(command: str, paths: Iterable[Path | str], replaced: bool = False) -> None:
+def say_written(command: str, paths: Iterable[Path | str], replaced: bool = False,
+                removed: Iterable[Path | str] = (), note: str = "") -> None:
     """One line on stderr naming where ``command`` wrote (its folder when every path
-    shares one) and whether it replaced an earlier run's files. Not silenced by
+    shares one), whether it replaced an earlier run's files, which files of an earlier
+    run it ``removed``, and a ``note`` (e.g. what a resumed run found). Not silenced by
     ``--quiet``: it is the run's outcome, not its progress.
     """
-    paths = [Path(p) for p in paths]
+    paths, removed = [Path(p) for p in paths], [Path(p) for p in removed]
     if not paths:
         return
     folders = {p.parent for p in paths}
     where = f"{folders.pop()}/ ({', '.join(p.name for p in paths)})" if len(folders) == 1 \
         else ", ".join(str(p) for p in paths)
     again = " (replacing the earlier run's files)" if replaced else ""
-    print(f"cardan {command}: wrote {where}{again}", file=sys.stderr)
+    gone = f"; removed an earlier run's {', '.join(p.name for p in removed)}" if removed \
+        else ""
+    note = f"; {note}" if note else ""
+    print(f"cardan {command}: wrote {where}{again}{gone}{note}", file=sys.stderr)

@@ -39,9 +39,9 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Status
 from cardan_forces.solvers import get as get_backend
 
-from . import progress, sweep_exec
+from . import files, progress, sweep_exec
 from .sweep_point import KEY, PEAKS, Point, Row, SweepError, point_scene, run_point, variant
-from .sweep_store import COLUMNS, FORMATS, append, key_of, read_rows, spell
+from .sweep_store import COLUMNS, FORMATS, append, key_of, locked, read_rows, spell
 
 __all__ = ["COLUMNS", "KEY", "PEAKS", "Point", "Row", "SweepError", "plan", "point_scene",
            "run_point", "sweep"]
@@ -231,13 +231,20 @@ class SweepResult:
 
 
 def sweep(study: Study, out: Path, workers: int, client=None,
-          progress: Callable[[str], None] | None = None) -> SweepResult:
+          progress: Callable[[str], None] | None = None,
+          no_workers_s: float = sweep_exec.NO_WORKERS_S) -> SweepResult:
     """Compute the rows of ``study`` that ``out/sweep.csv`` lacks, appending each point's
     rows as it finishes; ``client``: a Dask client (``None``: a process pool of
-    ``workers``).
+    ``workers``), given up after ``no_workers_s`` s without a worker.
     """
     out.mkdir(parents=True, exist_ok=True)
-    path = out / "sweep.csv"
+    with locked(out):
+        return _sweep(study, out / "sweep.csv", workers, client, progress, no_workers_s)
+
+
+def _sweep(study: Study, path: Path, workers: int, client, progress, no_workers_s: float
+           ) -> SweepResult:
+    """:func:`sweep` with the folder held."""
     done = {key_of(r) for r in read_rows(path)}
     tasks = []
     for angle, amplitude in study.points():
@@ -257,7 +264,7 @@ def sweep(study: Study, out: Path, workers: int, client=None,
         f"from {path}, {len(tasks)} to run on {backend}")
     start, lost = time.perf_counter(), []
     if tasks:
-        lost = _run(tasks, path, workers, client, say, resumed, n_points)
+        lost = _run(tasks, path, workers, client, say, resumed, n_points, no_workers_s)
     wanted = {key: i for i, key in enumerate(k for p in study.points() for k in study.keys(*p))}
     rows = sorted((r for r in read_rows(path) if key_of(r) in wanted),
                   key=lambda r: wanted[key_of(r)])
@@ -266,11 +273,11 @@ def sweep(study: Study, out: Path, workers: int, client=None,
 
 
 def _run(tasks: list[Point], path: Path, workers: int, client, say, resumed: int,
-         n_points: int) -> list[str]:
+         n_points: int, no_workers_s: float) -> list[str]:
     """Run ``tasks``, appending rows to ``path``; the points lost to dead workers."""
     start, lost, costs_s = time.perf_counter(), [], []
     results = sweep_exec.pool(tasks, workers) if client is None else \
-        sweep_exec.dask(client, tasks)
+        sweep_exec.dask(client, tasks, no_workers_s)
     with closing(results), open(path, "a", newline="", encoding="utf-8") as f:
         if f.tell() == 0:
             append(f, [], header=True)
@@ -343,7 +350,7 @@ def write_md(result: SweepResult, study: Study, path: Path) -> None:
     lines += ["", "## Rows not solved at every instant", ""]
     lines += [f"- {r.angle_deg:g} deg, {r.amplitude_N_m:g} N m, {r.formulation} "
               f"({r.solver}): {r.status}, {r.message}" for r in failed] or ["none"]
-    path.write_text("\n".join([*lines, ""]))
+    files.write_text(path, "\n".join([*lines, ""]))
 
 
 def _settings(study: Study) -> str:
@@ -397,8 +404,10 @@ def add_parser(subparsers) -> None:
                    help="local worker processes (default: one per CPU; not with --scheduler)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help='run on this Dask scheduler instead (pip install -e ".[dask]")')
-    p.add_argument("--timeout", type=float, default=10.0,
-                   help="seconds to wait for the Dask scheduler (default 10)")
+    p.add_argument("--timeout", type=float, default=sweep_exec.NO_WORKERS_S,
+                   help="seconds to wait for the Dask scheduler, and for a worker when the "
+                        "scheduler has none left (then the run ends, keeping its rows; "
+                        "default %(default)g)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON")
     p.set_defaults(func=run)
 
@@ -415,7 +424,7 @@ def run(args) -> int:
         return 2
     try:
         result = sweep(study, Path(args.out), args.workers, client,
-                       progress=progress.line)
+                       progress=progress.line, no_workers_s=args.timeout)
     except SweepError as err:
         print(f"cardan: error: {' '.join(str(err).split())}", file=sys.stderr)
         return 2
@@ -423,8 +432,7 @@ def run(args) -> int:
         if client is not None:
             client.close()
     write_md(result, study, Path(args.out) / "sweep.md")
-    for message in result.lost:
-        print(f"sweep: lost {message}", file=sys.stderr)
+    _say_lost(result.lost)
     if args.json:
         print(json_text({"settings": _settings(study), "backend": result.backend,
                          "cost": costs(result.rows),
@@ -437,4 +445,23 @@ def run(args) -> int:
         width = {k: max(len(r[k]) for r in table) for k in SHOWN}
         for r in table:
             print(" ".join(r[k].rjust(width[k]) for k in SHOWN))
+    files.say_written("sweep", [Path(args.out) / "sweep.csv", Path(args.out) / "sweep.md"],
+                      note=f"resumed: {result.resumed} point(s) were there, "
+                           f"{result.computed} computed now" if result.resumed else "")
     return 1 if result.lost else 0
+
+
+def _say_lost(lost: tuple[str, ...], listed: int = 5) -> None:
+    """The points lost to this run on stderr: each, or past ``listed`` of them the
+    reasons with their counts (a cluster that lost its workers loses every point alike).
+    """
+    if len(lost) <= listed:
+        for message in lost:
+            print(f"sweep: lost {message}", file=sys.stderr)
+        return
+    reasons: dict[str, int] = {}
+    for message in lost:
+        reason = message.split(": ", 1)[-1]
+        reasons[reason] = reasons.get(reason, 0) + 1
+    for reason, count in reasons.items():
+        print(f"sweep: lost {count} point(s): {reason}", file=sys.stderr)

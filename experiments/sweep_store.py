@@ -10,6 +10,7 @@ field's type) is refused with one line naming it, never half-read.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
 import io
@@ -20,6 +21,7 @@ import numpy as np
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.solvers import Status
 
+from . import files
 from .sweep_point import KEY, Row, SweepError
 
 COLUMNS = tuple(f.name for f in dataclasses.fields(Row))
@@ -75,8 +77,9 @@ def parse(record: dict[str, str]) -> Row:
 
 def read_rows(path: Path) -> list[Row]:
     """The rows of an existing ``sweep.csv`` (none if absent). A line cut short by a
-    killed sweep is dropped and the file rewritten without it; anything else that is not
-    a sweep CSV is a :class:`StoreError`.
+    killed sweep, and a second row of a key already stored (the first is kept), are
+    dropped and the file rewritten without them; anything else that is not a sweep CSV
+    is a :class:`StoreError`.
     """
     if not path.exists():
         return []
@@ -91,16 +94,39 @@ def read_rows(path: Path) -> list[Row]:
         if reader.fieldnames is not None and tuple(reader.fieldnames) != COLUMNS:
             raise StoreError(f"{path} was written with other columns; choose another --out")
         records = [r for r in reader if None not in r and None not in r.values()]
-        rows = [parse(r) for r in records]
+        unique: dict[tuple[str, ...], Row] = {}
+        for row in map(parse, records):
+            unique.setdefault(key_of(row), row)
+        rows = list(unique.values())
     except (csv.Error, ValueError) as err:
         if isinstance(err, StoreError):
             raise
         raise StoreError(f"{path}, line {reader.line_num}: not a sweep row ({err}); choose "
                          "another --out or remove it") from None
     if whole != text or len(rows) != whole.count("\n") - 1:
-        with open(path, "w", newline="", encoding="utf-8") as f:
+        with files.replacing(path, newline="") as f:
             append(f, rows, header=True)
     return rows
+
+
+@contextlib.contextmanager
+def locked(folder: Path):
+    """Hold ``folder``'s sweep for this process (an advisory lock on ``.sweep.lock``
+    where the system has ``flock``): a second sweep into the same folder while one runs
+    is a :class:`StoreError` instead of a second writer computing the same rows.
+    """
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    with open(folder / ".sweep.lock", "a") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise StoreError(f"another cardan sweep is writing into {folder}; wait for it "
+                             "to end (a rerun then resumes) or choose another --out") from None
+        yield
 
 
 def append(f, rows: list[Row], header: bool = False) -> None:

@@ -278,3 +278,106 @@ def test_the_plan_itself_holds_the_scene_limits(extra):
     sweep.add_parser(parser.add_subparsers())
     with pytest.raises(sweep.SweepError):
         sweep.plan(parser.parse_args(["sweep", "--formulation", "min_norm", *extra]))
+
+
+def test_duplicated_rows_are_stored_and_printed_once(base, tmp_path, capsys):
+    """A CSV holding every row twice (as two writers would leave it): the rerun computes
+    nothing, keeps one row per key in the file and in its answer, and says it resumed."""
+    out = tmp_path / "twice"
+    shutil.copytree(base, out)
+    lines = (out / "sweep.csv").read_text().splitlines(keepends=True)
+    (out / "sweep.csv").write_text(lines[0] + "".join(lines[1:] * 2))
+    assert main([*ARGS, "--out", str(out), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert "2 resumed" in captured.err and "0 to run" in captured.err
+    assert "resumed: 2 point(s) were there, 0 computed now" in captured.err
+    assert len(json.loads(captured.out)["rows"]) == 4
+    assert (out / "sweep.csv").read_text() == "".join(lines)
+
+
+def test_a_sweep_into_a_folder_another_sweep_writes_is_refused(base, tmp_path, capsys):
+    """While one sweep holds a folder, a second into it is one line and exit 2, and the
+    stored rows are untouched."""
+    from cardan_forces.experiments.sweep_store import locked
+
+    out = tmp_path / "busy"
+    shutil.copytree(base, out)
+    before = (out / "sweep.csv").read_bytes()
+    with locked(out):
+        assert main([*ARGS, "--angle", "10", "--out", str(out)]) == 2
+    assert "another cardan sweep is writing into" in capsys.readouterr().err
+    assert (out / "sweep.csv").read_bytes() == before
+
+
+def _children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    fields = f.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != "Z":
+                found.append(int(entry))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_killed_sweep_leaves_no_worker_running(tmp_path):
+    """SIGKILL to the sweep (no cleanup runs) while its two workers compute: the
+    workers end too, instead of computing points nobody will store."""
+    args = ["sweep", "--angle", "5:20:4", "--instants", "6000", "--formulation", "min_max",
+            "--workers", "2", "--out", str(tmp_path), "--quiet"]
+    proc = subprocess.Popen([sys.executable, "-m", "cardan_forces.cli", *args],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 240
+        workers = []
+        while len(workers) < 2 and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+            workers = _children(proc.pid)
+        assert len(workers) >= 2, "the sweep started no workers"
+        time.sleep(1.0)  # the workers have started their points
+        proc.kill()
+        proc.wait(timeout=30)
+        deadline = time.monotonic() + 10
+        while any(map(_alive, workers)) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not any(map(_alive, workers))
+    finally:
+        proc.kill()
+        for pid in workers if "workers" in locals() else ():
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
+
+
+def test_a_dask_run_without_workers_ends_after_the_timeout_keeping_its_rows(base, tmp_path,
+                                                                           capsys):
+    """A scheduler with no worker (all gone): the run ends after --timeout with one line
+    per reason, exit 1, and the rows stored before are kept for a rerun."""
+    distributed = pytest.importorskip("distributed")
+    out = tmp_path / "gone"
+    shutil.copytree(base, out)
+    before = rows(out)
+    with distributed.LocalCluster(n_workers=0, processes=False,
+                                  dashboard_address=None) as cluster:
+        started = time.monotonic()
+        code = main([*ARGS, "--angle", "10", "--angle", "20", "--out", str(out),
+                     "--scheduler", cluster.scheduler_address, "--timeout", "1"])
+        took = time.monotonic() - started
+    err = capsys.readouterr().err
+    assert code == 1 and "Traceback" not in err
+    assert "has had no worker for 1 s" in err
+    assert took < 60
+    assert rows(out) == before  # nothing lost, nothing added
