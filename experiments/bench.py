@@ -49,7 +49,7 @@ from . import bench_metrics as metrics
 from . import bench_report as out
 from . import bench_run as runs
 from . import export as exporting
-from . import progress
+from . import files, progress
 from . import qpbench_harness as harness
 from .images import FORMATS, format_list
 
@@ -147,12 +147,17 @@ def run(args) -> int:
                       sorted({s for v in backends.values() for s in v}), folder,
                       args.harness == "qpbenchmark")
     results = evaluate(measured, ladder, time.perf_counter() - started)
-    _write(folder, results, {
+    replaced = (folder / "bench_throughput.csv").exists()
+    written = _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
         "budget_s": args.budget_s, "samples": len(samples), "ladder": ladder,
         "quick": args.quick, "simulate_s": simulated - started, "operator_s": operator_s,
         "wall_s": time.perf_counter() - started}, args.format)
-    runs.progress(f"bench: wrote {folder} in {time.perf_counter() - started:.0f} s")
+    removed = files.stale(folder, written, [f"{stem}.{f}" for stem in FIGURES for f in FORMATS])
+    for path in removed:  # an earlier run's figure in another format: not this run's
+        path.unlink()
+    runs.progress(f"bench: done in {time.perf_counter() - started:.0f} s")
+    files.say_written("bench", written, replaced, removed)
     if args.json:
         print(json_text(out.json_object(results)))
     else:
@@ -162,17 +167,27 @@ def run(args) -> int:
     return 0
 
 
-def _write(folder: Path, results: dict, settings: dict, formats=("png",)) -> None:
-    out.write_csv(folder / "bench_throughput.csv", results["rows"], out.THROUGHPUT_COLUMNS)
-    out.write_csv(folder / "bench_accuracy.csv", results["acc_rows"], out.ACCURACY_COLUMNS)
-    out.write_csv(folder / "bench_profiles.csv", out.profile_rows(results["profiles"]),
-                  out.PROFILE_COLUMNS)
-    out.write_csv(folder / "bench_views.csv", results["view_rows"], out.VIEW_COLUMNS)
+FIGURES = ("bench_pareto", "bench_profiles")
+"""The figures' names (without format) in the output folder."""
+
+
+def _write(folder: Path, results: dict, settings: dict, formats=("png",)) -> list[Path]:
+    """Every output of the run into ``folder``, each replacing the file of an earlier
+    run whole (:mod:`.files`); the paths written.
+    """
+    tables = {"bench_throughput.csv": (results["rows"], out.THROUGHPUT_COLUMNS),
+              "bench_accuracy.csv": (results["acc_rows"], out.ACCURACY_COLUMNS),
+              "bench_profiles.csv": (out.profile_rows(results["profiles"]),
+                                     out.PROFILE_COLUMNS),
+              "bench_views.csv": (results["view_rows"], out.VIEW_COLUMNS)}
+    for name, (rows, columns) in tables.items():
+        out.write_csv(folder / name, rows, columns)
     styles = out.backend_styles([p["solver"] for p in results["points"]]
                                 + [p["solver"] for p in results["profiles"]])
-    out.plot_pareto(results["points"], folder / "bench_pareto", formats, styles)
-    out.plot_profiles(results["profiles"], folder / "bench_profiles", formats, styles)
-    (folder / "report.md").write_text(out.report(results, settings))
+    images = out.plot_pareto(results["points"], folder / FIGURES[0], formats, styles)
+    images += out.plot_profiles(results["profiles"], folder / FIGURES[1], formats, styles)
+    report = files.write_text(folder / "report.md", out.report(results, settings))
+    return [*(folder / name for name in tables), *images, report]
 
 
 def _seconds(text: str) -> float:

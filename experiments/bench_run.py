@@ -137,9 +137,11 @@ def batch_kind(solver: str, prepared: Prepared) -> str | None:
 def plan(op, formulations=None, solvers=None, quick=False) -> dict[str, list[str]]:
     """Backends per formulation: per-instant ones that take its problem, then batched
     ones that take its batch; limited to ``solvers`` if given, to :data:`QUICK_SOLVERS`
-    when ``quick``. Without ``formulations``, every one the scene calls for.
+    when ``quick``. Without ``formulations``, every one the scene calls for. A
+    formulation no chosen backend takes is left out (and said so); if that leaves none,
+    :class:`NotApplicable` names the backends that would take each, before any solve.
     """
-    out = {}
+    out, usable = {}, {}
     wanted = QUICK_SOLVERS if quick and solvers is None else solvers
     for name in formulations or FORMULATIONS:
         try:
@@ -148,8 +150,16 @@ def plan(op, formulations=None, solvers=None, quick=False) -> dict[str, list[str
             if formulations:
                 raise
             continue
-        usable = backends_for(problems[0]) + _batched(op, name, problems)
-        out[name] = usable if wanted is None else [s for s in usable if s in wanted]
+        usable[name] = backends_for(problems[0]) + _batched(op, name, problems)
+        out[name] = usable[name] if wanted is None else [s for s in usable[name] if s in wanted]
+    left = [name for name, chosen in out.items() if not chosen]
+    if left and len(left) == len(out):
+        raise NotApplicable(f"no chosen backend ({', '.join(wanted)}) takes " + "; ".join(
+            f"{name} (backends that do: {', '.join(usable[name]) or 'none here'})"
+            for name in left))
+    for name in left:
+        progress(f"bench: {name} left out: none of {', '.join(wanted)} takes it")
+        del out[name]
     return out
 
 

@@ -265,3 +265,36 @@ def test_a_budget_that_is_not_a_positive_number_is_refused(budget, capsys):
         _args("--budget-s", budget)
     assert stop.value.code == 2
     assert "positive number of seconds" in capsys.readouterr().err
+
+
+def test_a_backend_that_takes_none_of_the_formulations_is_refused_up_front(tmp_path, capsys):
+    """A chosen backend that takes none of the chosen formulations: one line naming the
+    backends that would, exit 2, nothing written (not a crash drawing empty figures)."""
+    from cardan_forces.cli import main
+
+    assert main(["bench", "--quick", "--formulation", "positive", "--solver", "numpy-kkt",
+                 "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("cardan: error: no chosen backend (numpy-kkt) takes positive")
+    assert "clarabel" in err[-1]
+    assert not list(tmp_path.glob("bench_*"))
+
+
+def test_a_second_run_replaces_the_first_and_says_so(tmp_path, capsys):
+    """Two runs into one folder: the second's CSV holds its own rows alone (one per
+    instant of each formulation x backend x mode it printed), an earlier run's figure in
+    another format is removed, and stderr says where and that it replaced."""
+    from cardan_forces.cli import main
+
+    argv = ["bench", "--quick", "--formulation", "min_norm", "--solver", "numpy-kkt",
+            "--out", str(tmp_path), "--quiet"]
+    assert main([*argv, "--format", "svg"]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--json"]) == 0
+    captured = capsys.readouterr()
+    printed = json.loads(captured.out)["throughput"]
+    rows = _read(tmp_path / "bench_throughput.csv")
+    assert len(rows) == len(printed) * bench_run.QUICK_INSTANTS
+    assert not list(tmp_path.glob("*.svg")) and (tmp_path / "bench_pareto.png").exists()
+    assert str(tmp_path) in captured.err and "replacing" in captured.err
+    assert "bench_pareto.svg" in captured.err
