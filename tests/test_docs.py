@@ -171,3 +171,12 @@ def test_the_constants_the_explanations_state():
     op = cf.build_operator(cf.simulate(cf.load_scene("paper")))
     paper = cf.build_formulation("paper", op, 100)
     assert len(paper.unknown_names) == 34 and "34 polar unknowns" in text
+
+
+def test_every_method_of_an_element_kind_is_in_its_how_to(gen):
+    from cardan_forces.driveline.elements.base import ElementKind
+
+    page = _page(gen, "how-to/element.md")
+    for name, member in vars(ElementKind).items():
+        if callable(member) and not name.startswith("_"):
+            assert f"| `{name}(" in page, name
