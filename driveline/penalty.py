@@ -11,6 +11,9 @@ of the paper's eqs. 75-78,
 with ``d`` the penetration beyond the clearance and ``d'`` its rate; a contact only
 pushes (``f >= 0``). The contacts:
 
+Each contact is added by its element's kind (:mod:`.elements`; the kinds' modules
+hold these laws); those of the built-in kinds:
+
 - **trunnion in its bore** (4 per cross-pin): ``d`` = distance of the trunnion's axis
   point at ``±hs`` from the yoke's bore axis, measured in the trunnion's cross-section,
   minus ``rb - rs``; the force acts along that offset, normal to the trunnion axis,
@@ -26,7 +29,7 @@ pushes (``f >= 0``). The contacts:
 - **slip joint** (frictionless spline between the two segments of its shaft): shear and
   bending by two radial contacts without clearance a pitch radius either side of the
   joint, torque by two teeth at the pitch radius; no axial contact; linear, as stiff as
-  a bearing (:func:`_contact_rows`).
+  a bearing (:mod:`.elements.slip`).
 
 Every contact is built from the equilibrium operator's links (where each column acts,
 along what), so the bodies are the operator's (a shaft cut by a slip joint is two
@@ -301,77 +304,63 @@ class _Contacts:
     c_max: np.ndarray
 
 
-SPLINE_STIFFNESS_FACTOR = 1.0
-"""A slip joint's spline is as stiff as a bearing (``bearing_stiffness_N_m``) per
-contact: the scenes give no spline stiffness, and any stiffness far above the shafts'
-loads over the play leaves the rigid model's loads."""
+class ContactRows:
+    """The penalty contacts (rows of :class:`_Contacts`) while each link's kind adds its
+    own (:meth:`~.elements.base.ElementKind.penalty`): geometry from the operator's
+    columns (where each acts, along what), the law from the kind.
+
+    ``scene``, ``op``: the model's; :meth:`law` the eqs. 75-78 parameters of a
+    stiffness (:meth:`hertz` of a joint's Hertz contacts); :meth:`add` one contact of a
+    link between its two bodies (the ground for ``other`` None); :meth:`centre` a
+    body's rest centre. ``parts[k]``: the contacts of link ``k``.
+    """
+
+    def __init__(self, model: _Model, damping_length_unit_m: float):
+        self.model, self.scene, self.op = model, model.scene, model.operator
+        self.unit = damping_length_unit_m
+        self.rows: list[tuple] = []
+        self.parts: list[list[int]] = []
+
+    def law(self, stiffness: float, exponent: float = 1.0) -> tuple[float, float, float]:
+        """``(K, n, c_max)``: ``c_max`` the scene's fraction of ``K`` read in the
+        damping length unit (module doc).
+        """
+        c = self.scene.contact.damping_fraction_of_stiffness * stiffness
+        return stiffness, exponent, c * self.unit ** (exponent - 1.0)
+
+    def hertz(self, joint) -> tuple[float, float, float]:
+        """:meth:`law` of a joint's Hertz contacts: ``K`` of eqs. 76-77, the scene's
+        exponent.
+        """
+        return self.law(hertz_stiffness(self.scene, joint), self.scene.contact.exponent)
+
+    def centre(self, body: int) -> np.ndarray:
+        return self.model.rest_centre[body]
+
+    def add(self, link, point_a, axis_a, point_b, axis_b, offset, radial, law) -> None:
+        """One contact of ``link``: ``point_a``/``axis_a`` on its body, ``point_b``/
+        ``axis_b`` on the other (global, at the start), as :class:`_Contacts` reads them.
+        """
+        model = self.model
+        a = link.body
+        b = model.n_bodies if link.other is None else link.other
+        self.rows.append((a, b, model.local(a, point_a), model.local(a, vector=axis_a),
+                          model.local(b, point_b), model.local(b, vector=axis_b), offset,
+                          radial, *law))
+        self.parts[-1].append(len(self.rows) - 1)
 
 
 def _contact_rows(model: _Model, damping_length_unit_m: float):
-    """The penalty contacts (rows of :class:`_Contacts`) of every link of the operator.
-
-    Built at the start; returned with, per link, the indices of its contacts. Geometry
-    comes from the
-    operator's columns (where each acts, along what); only the contact law is this
-    model's:
-
-    - a bearing: radially with the bearing clearance; a locating one also axially both
-      ways (two faces); linear, ``bearing_stiffness_N_m``;
-    - a trunnion's radial contact: the trunnion point at ``±hs`` in its bore (the yoke's
-      axis through the joint centre), radial clearance ``rb - rs``; an end face: the
-      trunnion end beyond the housing bottom at ``hb``; Hertz (eqs. 76-77);
-    - a slip joint (frictionless): two radial contacts without clearance at one pitch
-      radius either side of the joint along the axis (shear and bending) and two teeth
-      at the pitch radius, each a face both ways along the tangent (torque); no axial
-      contact, the spline slides; linear, as stiff as a bearing.
+    """The penalty contacts of every link of the operator, each added by the link's kind
+    (its module says which contacts and which law: bearings linear with the bearing
+    clearance, a Cardan joint's trunnions and end faces Hertz, eqs. 76-77, a slip
+    joint's spline linear); returned with, per link, the indices of its contacts.
     """
-    scene, op, nb = model.scene, model.operator, model.n_bodies
-    ct = scene.contact
-
-    def law(stiffness: float, exponent: float) -> tuple[float, float, float]:
-        c = ct.damping_fraction_of_stiffness * stiffness
-        return stiffness, exponent, c * damping_length_unit_m ** (exponent - 1.0)
-
-    rows, parts = [], []
-
-    def add(a, b, point_a, axis_a, point_b, axis_b, offset, radial, contact_law):
-        rows.append((a, b, model.local(a, point_a), model.local(a, vector=axis_a),
-                     model.local(b, point_b), model.local(b, vector=axis_b), offset, radial,
-                     *contact_law))
-        parts[-1].append(len(rows) - 1)
-
-    linear = law(ct.bearing_stiffness_N_m, 1.0)
-    spline = law(SPLINE_STIFFNESS_FACTOR * ct.bearing_stiffness_N_m, 1.0)
-    for link in op.contacts:
-        parts.append([])
-        point = op.points[0, link.columns[0]]
-        a, b = link.body, nb if link.other is None else link.other
-        if link.kind.startswith("bearing"):
-            axis, gap = op.shaft_frames[link.shaft, 2], ct.bearing_clearance_m
-            add(a, b, point, axis, point, axis, gap, True, linear)
-            if link.kind == "bearing-locating":
-                for sign in (1.0, -1.0):
-                    add(a, b, point, sign * axis, point, sign * axis, gap, False, linear)
-        elif link.kind == "slip":
-            r1, _, axis = op.shaft_frames[link.shaft]
-            reach = next(s for s in scene.slip_joints if s.name == link.element).pitch_radius_m
-            for sign in (1.0, -1.0):
-                ring = point + sign * reach * axis
-                add(a, b, ring, axis, ring, axis, 0.0, True, spline)
-                tooth, tangent = point + sign * reach * r1, sign * np.cross(axis, r1)
-                for face in (1.0, -1.0):
-                    add(a, b, tooth, face * tangent, tooth, face * tangent, 0.0, False, spline)
-        else:  # a trunnion's contact: in its bore (radial) or on its end face
-            joint = scene.joints[link.joint]
-            hertz = law(hertz_stiffness(scene, joint), ct.exponent)
-            centre = model.rest_centre[a]
-            if link.kind == "trunnion-radial":
-                axis = op.pin_frames[link.joint, 0, "e1 e2".split().index(link.trunnion)]
-                add(a, b, point, axis, centre, axis, joint.radial_clearance_m, True, hertz)
-            else:
-                axis = -op.directions[0, link.columns[0]]
-                add(a, b, point, axis, centre, axis, joint.hb_m, False, hertz)
-    return rows, parts
+    rows = ContactRows(model, damping_length_unit_m)
+    for link in model.operator.contacts:
+        rows.parts.append([])
+        link.element_kind.penalty(link, rows)
+    return rows.rows, rows.parts
 
 
 class _Model:
