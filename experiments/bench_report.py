@@ -80,33 +80,36 @@ def _figure(panels: int, cols: int = 3):
 
     cols = max(1, min(cols, panels))
     rows = math.ceil(panels / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(5 * cols, 4 * rows + 0.6), squeeze=False)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows + 1.4), squeeze=False)
     for ax in axes.flat[panels:]:
         ax.set_visible(False)
     return plt, fig, axes
 
 
 def _log_ticks(ax, axis: str) -> None:
-    """Labels on a log axis that never overlap: the 1-2-5 values over less than two
-    decades (the limits widened to the nearest of them), the decades otherwise; no labels
-    on the minor ticks.
+    """Labels on a log axis that never overlap, the limits the data's with a margin of
+    8 % of their span in log (at least 0.05 decade): plain numbers at a few even steps
+    over less than a factor of 6 (where the 1-2-5 values may hold fewer than two), the
+    1-2-5 values over less than two decades, the decades otherwise; no labels on the
+    minor ticks.
     """
     from matplotlib import ticker
 
     which = ax.xaxis if axis == "x" else ax.yaxis
-    low, high = ax.get_xlim() if axis == "x" else ax.get_ylim()
-    if not (0 < low < high and math.isfinite(high)):
+    low, high = ax.dataLim.intervalx if axis == "x" else ax.dataLim.intervaly
+    if not (0 < low <= high and math.isfinite(high)):
         return
-    narrow = math.log10(high / low) < 2.0
-    subs = (1.0, 2.0, 5.0) if narrow else (1.0,)
-    if narrow:
-        steps = [m * 10.0 ** e for e in range(math.floor(math.log10(low)) - 1,
-                                               math.ceil(math.log10(high)) + 1) for m in subs]
-        low = max((v for v in steps if v <= low * (1 + 1e-9)), default=low)
-        high = min((v for v in steps if v >= high * (1 - 1e-9)), default=high)
-        (ax.set_xlim if axis == "x" else ax.set_ylim)(low, high)
-    which.set_major_locator(ticker.LogLocator(base=10.0, subs=subs, numticks=12))
-    which.set_major_formatter(ticker.LogFormatterSciNotation(labelOnlyBase=False))
+    pad = max(0.08 * math.log10(high / low), 0.05)
+    low, high = low / 10 ** pad, high * 10 ** pad
+    (ax.set_xlim if axis == "x" else ax.set_ylim)(low, high)
+    decades = math.log10(high / low)
+    if decades < math.log10(6.0):
+        which.set_major_locator(ticker.MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]))
+        which.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:.2g}"))
+    else:
+        subs = (1.0, 2.0, 5.0) if decades < 2.0 else (1.0,)
+        which.set_major_locator(ticker.LogLocator(base=10.0, subs=subs, numticks=12))
+        which.set_major_formatter(ticker.LogFormatterSciNotation(labelOnlyBase=False))
     which.set_minor_formatter(ticker.NullFormatter())
 
 
@@ -116,18 +119,20 @@ def _empty(ax, words: str) -> None:
             fontsize=10, color="0.3")
 
 
-def _shared_legend(fig, styles: dict, shown, extra=()) -> None:
-    """One legend for the whole figure under its panels: each backend drawn in it, with
-    its colour and marker, then ``extra`` (label, line style) entries.
+def _shared_legend(fig, styles: dict, shown, title: str, extra=()) -> None:
+    """The figure's ``title`` above its panels and one legend under them: each backend
+    drawn, with its colour and marker, then ``extra`` (label, line style) entries, each
+    the label of a line drawn in the panels.
     """
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=styles[s][0], marker=styles[s][1], ls="-", lw=1.0,
+    handles = [Line2D([], [], color=styles[s][0], marker=styles[s][1], ls=":", lw=1.0,
                       label=s) for s in sorted(set(shown))]
     handles += [Line2D([], [], color="k", ls=ls, lw=1.2, label=label) for label, ls in extra]
-    cols = min(6, max(1, len(handles)))
+    cols = min(5, max(1, len(handles)))
     rows = math.ceil(len(handles) / cols)
     height = fig.get_figheight()
+    fig.suptitle(title, fontsize=11)
     fig.legend(handles=handles, loc="lower center", ncol=cols, fontsize=9, frameon=False)
     fig.tight_layout(rect=(0, min(0.4, (0.3 * rows + 0.2) / height), 1, 1))
 
@@ -142,16 +147,24 @@ def _written(drawn, path: Path, formats) -> list[Path]:
     return written
 
 
-def plot_pareto(points: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
+def plot_pareto(points: list[dict], path: Path, formats=("png",), styles=None,
+                scene: str = "") -> list[Path]:
     """:func:`pareto_figure` written as ``path.<format>`` for each of ``formats``."""
-    return _written(pareto_figure(points, styles), path, formats)
+    return _written(pareto_figure(points, styles, scene), path, formats)
 
 
-def pareto_figure(points: list[dict], styles=None):
+FRONT = "Pareto front (no answer both faster and more accurate)"
+ERROR_FLOOR = 1e-17
+"""A worst optimality measure of exactly 0 is drawn here (a log axis has no 0)."""
+
+
+def pareto_figure(points: list[dict], styles=None, scene: str = ""):
     """Log-log time per instant vs worst optimality measure, one panel per formulation,
     each backend in its colour and marker (:func:`backend_styles`, one legend for all
-    panels; each line labelled with its backend), the front as a step line; 0 is drawn
-    at 1e-17; a panel without an answer says so. Returns pyplot and the figure.
+    panels; each line labelled with its backend), its points (one per tolerance
+    setting) joined by a dotted line in time order, the front as a step line; 0 is
+    drawn at :data:`ERROR_FLOOR`; a panel without an answer says so. ``scene``: named in
+    the title. Returns pyplot and the figure.
     """
     styles = styles or backend_styles(p["solver"] for p in points)
     names = list(dict.fromkeys(p["formulation"] for p in points))
@@ -162,34 +175,43 @@ def pareto_figure(points: list[dict], styles=None):
         for solver in dict.fromkeys(p["solver"] for p in mine):
             pts = sorted((p for p in mine if p["solver"] == solver), key=lambda p: p["time_s"])
             colour, marker = styles[solver]
-            ax.plot([p["time_s"] for p in pts], [max(p["error"], 1e-17) for p in pts],
+            ax.plot([p["time_s"] for p in pts], [max(p["error"], ERROR_FLOOR) for p in pts],
                     marker=marker, color=colour, ls=":", lw=0.8, label=solver)
             shown.add(solver)
         front = sorted((p for p in mine if p["front"]), key=lambda p: p["time_s"])
         if front:
-            ax.step([p["time_s"] for p in front], [max(p["error"], 1e-17) for p in front],
-                    "k-", where="post", lw=1.2)
-        ax.set(xscale="log", yscale="log", title=name, xlabel="time per instant (s)",
-               ylabel="worst optimality measure")
+            ax.step([p["time_s"] for p in front], [max(p["error"], ERROR_FLOOR) for p in front],
+                    "k-", where="post", lw=1.2, label=FRONT)
+        ax.set(xscale="log", yscale="log", title=name, xlabel="time per instant [s]",
+               ylabel="worst optimality measure [-]")
         if mine:
             _log_ticks(ax, "x")
             _log_ticks(ax, "y")
         else:
             _empty(ax, EMPTY_PARETO)
-    _shared_legend(fig, styles, shown, [("front", "-")])
+    _shared_legend(fig, styles, shown, _title(
+        "Time against accuracy per formulation", scene,
+        "each point one tolerance setting of a backend, dotted lines join a backend's "
+        f"settings in time order; an exact 0 is drawn at {ERROR_FLOOR:g}"), [(FRONT, "-")])
     return plt, fig
 
 
-def plot_profiles(profiles: list[dict], path: Path, formats=("png",), styles=None) -> list[Path]:
+def _title(what: str, scene: str, how: str) -> str:
+    return f"{what}{f' (scene {scene})' if scene else ''}\n{how}"
+
+
+def plot_profiles(profiles: list[dict], path: Path, formats=("png",), styles=None,
+                  scene: str = "") -> list[Path]:
     """:func:`profiles_figure` written as ``path.<format>`` for each of ``formats``."""
-    return _written(profiles_figure(profiles, styles), path, formats)
+    return _written(profiles_figure(profiles, styles, scene), path, formats)
 
 
-def profiles_figure(profiles: list[dict], styles=None):
+def profiles_figure(profiles: list[dict], styles=None, scene: str = ""):
     """Dolan-Moré curves on the solver's time, one panel per formulation x profile,
     each backend in its colour and marker (one legend for all panels; each line
-    labelled with its backend); a panel where no solve reached the level says so.
-    Returns pyplot and the figure.
+    labelled with its backend); the y axis a little beyond 0 and 1, so a curve at
+    either is not hidden by the frame; a panel where no solve reached the level says so
+    and draws nothing. ``scene``: named in the title. Returns pyplot and the figure.
     """
     profiles = [p for p in profiles if p["clock"] == "solver"]
     styles = styles or backend_styles(p["solver"] for p in profiles)
@@ -198,17 +220,22 @@ def profiles_figure(profiles: list[dict], styles=None):
     shown = set()
     for ax, (formulation, name) in zip(axes.flat, panels):
         curves = [p for p in profiles if (p["formulation"], p["profile"]) == (formulation, name)]
-        for p in curves:
+        reached = any(max(p["curve"]) > 0 for p in curves)
+        for p in curves if reached else ():
             colour, marker = styles[p["solver"]]
             ax.step(TAUS, p["curve"], where="post", lw=1.0, color=colour, marker=marker,
-                    markevery=10, ms=4, label=p["solver"])
+                    markevery=10, ms=4, label=p["solver"], clip_on=False)
             shown.add(p["solver"])
         level = next(p["level"] for p in profiles if p["profile"] == name)
-        ax.set(xscale="log", ylim=(-0.02, 1.02), title=f"{formulation}, {name} ({level:g})",
-               xlabel="tau (solver time / fastest)", ylabel="share of instants")
-        if not any(max(p["curve"]) > 0 for p in curves):
+        ax.set(xscale="log", xlim=(TAUS[0], TAUS[-1]), ylim=(-0.06, 1.06),
+               title=f"{formulation}, {name} ({level:g})",
+               xlabel="tau: solver time / fastest [-]", ylabel="share of instants [-]")
+        if not reached:
             _empty(ax, EMPTY_PROFILE)
-    _shared_legend(fig, styles, shown)
+    _shared_legend(fig, styles, shown, _title(
+        "Performance profiles on the solver's time", scene,
+        "share of instants a backend solves to the panel's level within tau times the "
+        "fastest backend's time"))
     return plt, fig
 
 

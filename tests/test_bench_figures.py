@@ -101,3 +101,38 @@ def test_tick_labels_do_not_overlap(low, high):
             for one, two in itertools.combinations(boxes, 2):
                 assert not one.overlaps(two)
     plt.close(fig)
+
+
+def test_both_figures_keep_the_print_rules_and_name_the_scene():
+    from cardan_forces.experiments import images
+
+    points = [_point("a", "x", 1.4e-2, 2e-6), _point("a", "x", 2.3e-2, 0.0, True),
+              _point("a", "y", 1.9e-2, 1e-15, True), _point("b", "x", 1e-3, math.nan)]
+    profiles = [_profile("a", "high", "x", np.ones_like(TAUS)),
+                _profile("a", "high", "y", np.zeros_like(TAUS)),
+                _profile("b", "high", "x", np.zeros_like(TAUS))]
+    for make, data in ((bench_report.pareto_figure, points),
+                       (bench_report.profiles_figure, profiles)):
+        plt, fig = make(data, None, "paper")
+        assert images.problems(fig) == []
+        assert "(scene paper)" in fig.get_suptitle()
+        plt.close(fig)
+
+
+def test_points_fill_their_axis_and_curves_at_0_and_1_stay_in_view():
+    """A formulation's points between 1.4e-2 and 2.3e-2 s span most of the x axis (not
+    squeezed at one edge of a widened one); profile curves at exactly 0 and 1 lie
+    inside the frame; a panel no solve reached draws no line."""
+    points = [_point("a", "x", 1.4e-2, 1e-6), _point("a", "x", 2.3e-2, 1e-15, True)]
+    plt, fig = bench_report.pareto_figure(points)
+    low, high = fig.axes[0].get_xlim()
+    assert math.log10(2.3e-2 / 1.4e-2) / math.log10(high / low) > 0.6
+    plt.close(fig)
+    profiles = [_profile("a", "high", "x", np.ones_like(TAUS)),
+                _profile("a", "high", "y", np.zeros_like(TAUS)),
+                _profile("b", "high", "x", np.zeros_like(TAUS))]
+    plt, fig = bench_report.profiles_figure(profiles)
+    low, high = fig.axes[0].get_ylim()
+    assert low < 0.0 and 1.0 < high
+    assert len(fig.axes[0].get_lines()) == 2 and not fig.axes[1].get_lines()
+    plt.close(fig)
