@@ -180,3 +180,31 @@ def test_every_method_of_an_element_kind_is_in_its_how_to(gen):
     for name, member in vars(ElementKind).items():
         if callable(member) and not name.startswith("_"):
             assert f"| `{name}(" in page, name
+
+
+def _python_blocks(page: str) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", (DOCS / page).read_text(), flags=re.S)
+
+
+def test_the_plugin_example_solves_a_least_norm_problem():
+    namespace: dict = {}
+    exec(compile(_python_blocks("how-to/backend.md")[0], "backend.md", "exec"), namespace)
+    (backend,) = namespace["backends"]()
+    op = cf.build_operator(cf.simulate(cf.load_scene("paper")))
+    problem = cf.build_formulation("min_norm", op, 100)
+    assert isinstance(problem, backend.accepts)
+    outcome = backend.solve(problem)
+    residual = problem.A @ outcome.z - problem.b
+    assert outcome.status == "solved"
+    assert float(abs(residual).max()) <= 1e-9 * float(abs(problem.b).max())
+
+
+def test_the_formulation_how_to_quotes_the_source():
+    import inspect
+
+    from cardan_forces.formulations import convex
+
+    quoted = re.search(r"```python\n(.*?)```", (DOCS / "how-to/formulation.md").read_text(),
+                       flags=re.S).group(1)
+    source = " ".join(inspect.getsource(convex.min_norm).split())
+    assert " ".join(quoted.split()) in source
