@@ -9,9 +9,11 @@ residuals, with its optimality measured from the problem data (typed: :class:`St
 :class:`Residuals`, :class:`Optimality`); solver failures are
 records, never exceptions. :func:`solve_batch` solves all instants of a formulation's
 batch (``cardan_forces.formulations.batch``) with a batched backend. :func:`register`
-adds a backend of one's own (or an entry point in the group ``cardan_forces.solvers``).
+adds a backend of one's own (or an entry point in the group ``cardan_forces.solvers``),
+validated when registered (:class:`InvalidBackend` names the field it refuses).
 """
 
+from .plugins import InvalidBackend
 from .record import ACCEPT, Optimality, Outcome, Record, Residuals, Status, failed_record
 from .registry import (
     Backend,
@@ -31,6 +33,7 @@ from .registry import (
 __all__ = [
     "ACCEPT",
     "Backend",
+    "InvalidBackend",
     "Optimality",
     "Outcome",
     "Record",

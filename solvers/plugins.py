@@ -90,16 +90,15 @@ def _callable_faults(b):
 
 def _setting_faults(b):
     """Tolerance parameters, their floor, warm start and the qpbenchmark profile."""
-    from .settings_profiles import Profile  # it imports the registry: looked up late
-
     if not _tuple_of(b.tolerances, str):
         yield f"tolerances must be a tuple of the solver's parameter names, not {b.tolerances!r}"
     if not _real(b.smallest_tol) or not math.isfinite(b.smallest_tol) or b.smallest_tol < 0:
         yield f"smallest_tol must be a finite number >= 0, not {b.smallest_tol!r}"
     if not isinstance(b.warm_start, bool):
         yield f"warm_start must be True or False, not {b.warm_start!r}"
-    if b.qpbenchmark is not None and not isinstance(b.qpbenchmark, Profile):
-        yield f"qpbenchmark must be None or a Profile, not {b.qpbenchmark!r}"
+    if b.qpbenchmark is not None and not callable(getattr(b.qpbenchmark, "options", None)):
+        yield (f"qpbenchmark must be None or a settings_profiles.Profile (what the harness "
+               f"calls is its options(setting)), not {b.qpbenchmark!r}")
 
 
 def _tuple_of(value, cls) -> bool:
@@ -112,11 +111,14 @@ def _real(value) -> bool:
 
 def outcome_fault(outcome) -> str:
     """Why a registered backend's ``outcome`` cannot be judged ("" when it can): not an
-    :class:`~.record.Outcome`, or fields the checks cannot read (``z``, ``y`` not one
-    row of numbers; a message that is no str; times that are no numbers).
+    :class:`~.record.Outcome`, or fields the checks cannot read (a status that is no
+    str, ``z``, ``y`` not one row of numbers, a message that is no str, times that are
+    no numbers). A str status the package does not know is judged ``failed`` later.
     """
     if not isinstance(outcome, Outcome):
         return f"solve returned {type(outcome).__name__}, not an Outcome"
+    if not isinstance(outcome.status, str):
+        return f"Outcome.status is {outcome.status!r}, not a Status or its value (str)"
     for field in ("z", "y"):
         why = _row_fault(getattr(outcome, field))
         if why:
@@ -157,19 +159,23 @@ def _row_fault(value) -> str:
 
 
 def blame(solver: str, message: str) -> str:
-    """``message`` with where backend ``solver`` comes from, when it is not the package's."""
+    """``message`` after where backend ``solver`` comes from, when it is not the
+    package's (first: a table that shortens the reason keeps whose fault it is).
+    """
     origin = ORIGINS.get(solver)
-    return message if origin is None else f"{message} [{origin}]"
+    return message if origin is None else f"{origin}: {message}"
 
 
 def plugin_origin(point) -> str:
-    """The words that name an entry point's plugin: its distribution and the entry point."""
+    """The plugin's name: the distribution that declares the entry point, and the entry
+    point (``cardan solvers`` reports what it points at).
+    """
     dist = getattr(point, "dist", None)
-    named = f"plugin {dist.name} {dist.version}, " if dist is not None else "plugin "
-    return f"{named}entry point {point.name} = {point.value}"
+    return (f"plugin {dist.name} ({point.name})" if dist is not None
+            else f"plugin entry point {point.name}")
 
 
 def runtime_origin(backend) -> str:
     """The words that name a backend registered at run time: the module of its solve."""
     given = backend.solve if backend.solve is not None else backend.batch
-    return f"registered at run time from {getattr(given, '__module__', None) or '?'}"
+    return f"registered from {getattr(given, '__module__', None) or '?'}"

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import plugins, settings
-from .batch import BatchOutcome, BatchRecord, finalize_batch
+from .batch import BatchOutcome, BatchRecord, ConicBatch, finalize_batch
 from .conversions import convert, reachable
 from .plugins import InvalidBackend, blame
 from .record import Outcome, Record, Stacks, Status, failed_record, finalize_all
@@ -500,25 +500,31 @@ def solve_batch(batch, solver: str, tol: float | None = None,
     T = len(batch.instants)
     start = time.perf_counter()
     try:
-        outcome = (_failed_batch(supported, T, start) if isinstance(supported, str)
+        outcome = (_failed_batch(supported, batch, start) if isinstance(supported, str)
                    else backend.batch(batch, tol=tol, **options))
     except KeyboardInterrupt:
         raise
     except BaseException as exc:  # noqa: BLE001 - a failing solver is a failed batch
-        outcome = _failed_batch(blame(solver, f"{type(exc).__name__}: {exc}"), T, start)
+        outcome = _failed_batch(blame(solver, f"{type(exc).__name__}: {exc}"), batch, start)
     if solver in plugins.ORIGINS and (why := plugins.batch_fault(outcome, T)):
-        outcome = _failed_batch(blame(solver, why), T, start)
+        outcome = _failed_batch(blame(solver, why), batch, start)
     try:
         return finalize_batch(batch, solver, outcome, reference=reference)
     except Exception as exc:
         if solver not in plugins.ORIGINS:
             raise  # the package's own backends: a fault of the checks, not hidden
         why = blame(solver, f"answer could not be checked: {type(exc).__name__}: {exc}")
-        return finalize_batch(batch, solver, _failed_batch(why, T, start), reference=reference)
+        return finalize_batch(batch, solver, _failed_batch(why, batch, start),
+                              reference=reference)
 
 
-def _failed_batch(message: str, T: int, start: float) -> BatchOutcome:
-    """A batch of ``T`` failed instants, each with ``message``, begun at ``start``."""
-    return BatchOutcome(status=np.full(T, Status.FAILED, object), z=np.zeros((T, 0)), y=None,
-                        iterations=np.zeros(T, int), setup_s=0.0,
-                        solve_s=time.perf_counter() - start, messages=(message,) * T)
+def _failed_batch(message: str, batch, start: float) -> BatchOutcome:
+    """``batch``'s instants all failed, each with ``message``, begun at ``start``; the
+    variable NaN in the batch's own width (the forces of a :class:`LeastNormBatch`).
+    """
+    T = len(batch.instants)
+    width = batch.q.shape[1] if isinstance(batch, ConicBatch) else len(batch.checks.names)
+    return BatchOutcome(status=np.full(T, Status.FAILED, object),
+                        z=np.full((T, width), np.nan), y=None, iterations=np.zeros(T, int),
+                        setup_s=0.0, solve_s=time.perf_counter() - start,
+                        messages=(message,) * T)
