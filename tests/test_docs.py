@@ -208,3 +208,25 @@ def test_the_formulation_how_to_quotes_the_source():
                        flags=re.S).group(1)
     source = " ".join(inspect.getsource(convex.min_norm).split())
     assert " ".join(quoted.split()) in source
+
+
+def _cardan_lines() -> list[tuple[str, str]]:
+    """Every ``cardan ...`` command in a code block of the README or the docs."""
+    found = []
+    for path in [ROOT / "README.md", ROOT / "CONTRIBUTING.md", *sorted(DOCS.rglob("*.md"))]:
+        for block in re.findall(r"```[a-z]*\n(.*?)```", path.read_text(), flags=re.S):
+            for line in block.replace("\\\n", " ").splitlines():
+                line = line.split("#", 1)[0].split(">", 1)[0].split("||", 1)[0].strip()
+                if line.startswith("cardan ") and "..." not in line:
+                    found.append((path.name, line))
+    return found
+
+
+def test_every_command_shown_in_the_docs_parses():
+    import shlex
+
+    lines = _cardan_lines()
+    assert len(lines) > 20
+    for page, line in lines:
+        args = cli._parser().parse_args(shlex.split(line)[1:])  # UsageError if not
+        assert args.command, (page, line)
