@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..driveline.compiled import HAVE_NUMBA, njit
+from ._batched_state import ActiveSetScratch, Answers, Group, LcpScratch, Refinement
 
 if not HAVE_NUMBA:  # an optional extra: the callers take their NumPy paths
     raise ImportError("numba is not installed")
@@ -43,6 +44,8 @@ doubles; a group's arrays, about 0.6 MB on ``paper``, fit a 1 MB second-level ca
 
 TINY = float(np.finfo(float).tiny)
 """Smallest normal double: the floor of ``||b||`` in the refinement test."""
+
+
 
 @njit(cache=True)
 def _rows(A, root, ts, starts, own, n_own, G, scale):
@@ -256,26 +259,27 @@ def _inexact(G, own, n_own, starts, b, ts, y, v, w, rtol, out):
 
 
 @njit(cache=True)
-def _refined(G, own, n_own, starts, L, H, upos, b, ts, Y, scratch):
-    """``Z = K^-1 [b, U]`` (m, 1 + k, W), the first array of ``scratch``, from ``Y = C^-1
-    [b, U]``, with one step of iterative refinement on the exact ``B B'``: ``Z += K^-1
-    (R - B B' Z)``.
+def _refined(g: Group, layout, b, ts):
+    """``K^-1 [b, U]`` (m, 1 + nf, W) into ``g.refined.Z`` from ``g.Z = C^-1 [b, U]``,
+    with one step of iterative refinement on the exact ``B B'``: ``Z += K^-1 (R - B B'
+    Z)``.
     """
-    Z, R, dZ, v, w, every = scratch
-    m, r = Z.shape[0], Z.shape[1]
-    _rhs(G, b, ts, starts, upos, R)
-    Z[:] = Y
-    _up(L, H, starts, Z)
-    for c in range(r):
-        _times_Bt(G, own, n_own, starts, Z, c, v)
-        _times_B(G, own, n_own, starts, v, w)
+    r = g.refined
+    Z, R, dZ = r.Z, r.R, r.dZ
+    m, nc = Z.shape[0], Z.shape[1]
+    _rhs(g.G, b, ts, layout.starts, layout.upos, R)
+    Z[:] = g.Z
+    _up(g.L, g.H, layout.starts, Z)
+    for c in range(nc):
+        _times_Bt(g.G, layout.own, layout.n_own, layout.starts, Z, c, r.v)
+        _times_B(g.G, layout.own, layout.n_own, layout.starts, r.v, r.w)
         for i in range(m):
             for e in range(W):
-                dZ[i, c, e] = R[i, c, e] - w[i, e]
-    _down(L, H, starts, dZ, every)
-    _up(L, H, starts, dZ)
+                dZ[i, c, e] = R[i, c, e] - r.w[i, e]
+    _down(g.L, g.H, layout.starts, dZ, r.every)
+    _up(g.L, g.H, layout.starts, dZ)
     for i in range(m):
-        for c in range(r):
+        for c in range(nc):
             for e in range(W):
                 Z[i, c, e] += dZ[i, c, e]
 
@@ -374,34 +378,39 @@ def _solve_pinned(M, q, pinned, lam, delta, S, idx):
 
 
 @njit(cache=True)
-def _lcp(M, q, params, lam, scratch):
+def _lcp(M, q, max_iter, rtol, delta, lam, a: ActiveSetScratch):
     """``0 <= lam ⟂ M lam + q >= 0`` of one instant by the primal-dual active set of
-    ``numpy_batched_._active_set``: ``(steps, settled)``; ``params`` as
-    :func:`least_norm`'s (``max_iter``, ``lcp_rtol``, ``lcp_delta`` from the third on).
+    ``numpy_batched_._active_set`` (sign tolerance ``rtol`` relative to ``max(1, max
+    |q|)``, the pinned block regularized by ``delta``): ``(steps, settled)``.
     """
-    max_iter, rtol, delta = params[2], params[3], params[4]
-    pinned, nxt, S, idx = scratch
     k = len(q)
     eps = rtol * max(1.0, np.abs(q).max()) if k else 0.0
     for i in range(k):
-        pinned[i] = q[i] < 0
+        a.pinned[i] = q[i] < 0
     for step in range(1, max_iter + 1):
-        _solve_pinned(M, q, pinned, lam, delta, S, idx)
+        _solve_pinned(M, q, a.pinned, lam, delta, a.S, a.idx)
         same = True
         for i in range(k):
-            if pinned[i]:
-                nxt[i] = lam[i] > -eps
+            if a.pinned[i]:
+                a.nxt[i] = lam[i] > -eps
             else:
                 w = q[i]
                 for j in range(k):
                     w += M[i, j] * lam[j]
-                nxt[i] = w < -eps
-            same = same and nxt[i] == pinned[i]
+                a.nxt[i] = w < -eps
+            same = same and a.nxt[i] == a.pinned[i]
         for i in range(k):
-            pinned[i] = nxt[i]
+            a.pinned[i] = a.nxt[i]
         if same:
             return step, True
     return max_iter, False
+
+
+@njit(cache=True)
+def _active_set_scratch(k):
+    """An :class:`ActiveSetScratch` for ``k`` faces."""
+    return ActiveSetScratch(np.empty(k, np.bool_), np.empty(k, np.bool_),
+                            np.empty((k, k + 1)), np.empty(k, np.int64))
 
 
 @njit(cache=True)
@@ -413,139 +422,127 @@ def active_set(M, q, max_iter, rtol, delta):
     lam = np.zeros((T, k))
     iterations = np.zeros(T, np.int64)
     settled = np.zeros(T, np.bool_)
-    pinned, nxt = np.empty(k, np.bool_), np.empty(k, np.bool_)
-    scratch = (pinned, nxt, np.empty((k, k + 1)), np.empty(k, np.int64))
+    scratch = _active_set_scratch(k)
     for t in range(T):
-        iterations[t], settled[t] = _lcp(M[t], q[t], (0.0, 0.0, max_iter, rtol, delta),
-                                         lam[t], scratch)
+        iterations[t], settled[t] = _lcp(M[t], q[t], max_iter, rtol, delta, lam[t], scratch)
     return lam, iterations, settled
 
 
 @njit(cache=True)
-def _lcps(M, q, Mr, qr, refine, params, lam, ts, count, iterations, settled, scratch):
-    """The group's LCPs one instant after the other (their active sets differ): ``(M,
-    q)`` (k, k, W), or ``(Mr, qr)`` where ``refine``; ``lam`` (k, W) their solutions.
+def _lcps(g: Group, params, ts, count, out: Answers):
+    """The group's LCPs one instant after the other (their active sets differ):
+    ``(g.M, g.q)``, or ``(g.Mr, g.qr)`` where ``g.refine``; their solutions into
+    ``g.lam``, their steps into ``out``.
     """
-    Ml, ql, lamk, lcp = scratch
-    nf = ql.shape[0]
+    one = g.lcp
+    nf = one.q.shape[0]
     for e in range(count):
         for i in range(nf):
-            ql[i] = qr[i, e] if refine[e] else q[i, e]
+            one.q[i] = g.qr[i, e] if g.refine[e] else g.q[i, e]
             for j in range(nf):
-                Ml[i, j] = Mr[i, j, e] if refine[e] else M[i, j, e]
-        iterations[ts[e]], settled[ts[e]] = _lcp(Ml, ql, params, lamk, lcp)
+                one.M[i, j] = g.Mr[i, j, e] if g.refine[e] else g.M[i, j, e]
+        out.iterations[ts[e]], out.settled[ts[e]] = _lcp(
+            one.M, one.q, params.max_iter, params.lcp_rtol, params.lcp_delta, one.lam,
+            one.active)
         for i in range(nf):
-            lam[i, e] = lamk[i]
+            g.lam[i, e] = one.lam[i]
 
 
 @njit(cache=True)
 def least_norm(A, b, root, u, layout, params):
     """Least ``1/2 x'Wx`` on ``A x = b`` (``x[u] >= 0``) at every instant, as
-    ``numpy_batched_.least_norm``: ``(x, mu, lam, iterations, settled)``, ``lam`` the
-    end faces' LCP solution (``nu_u = sqrt(w_u) lam``); ``root`` (T, n) is ``sqrt(w)``,
-    or has no rows for ``W = I``. Where ``settled`` is false the active set did not
-    settle in ``max_iter`` steps and ``lam`` is its last step. ``params``: ``(gram_rtol,
-    refine_rtol, max_iter, lcp_rtol, lcp_delta)``.
-
-    ``layout`` (``numpy_batched_._layout``): body blocks in chain order from row
-    ``starts[k]``, the columns ``own[k, :n_own[k]]`` touching body ``k``, the positions
-    ``sh_a[k]``, ``sh_b[k]`` (in ``own[k]``, ``own[k+1]``) of the ``n_sh[k]`` columns
-    touching bodies ``k`` and ``k+1``, ``upos[k, j]`` the position of face ``u[j]`` in
-    ``own[k]`` (-1: absent), ``first[j]`` the first body face ``j`` touches (the faces
-    sorted by it) and ``ncols[k]`` one plus the number of faces touching bodies up to
-    ``k``.
+    ``numpy_batched_.least_norm``: :class:`Answers`, ``lam`` the end faces' LCP solution
+    (``nu_u = sqrt(w_u) lam``); ``root`` (T, n) is ``sqrt(w)``, or has no rows for ``W =
+    I``. Where ``settled`` is false the active set did not settle in ``max_iter`` steps
+    and ``lam`` is its last step. ``layout``: the rows' structure
+    (``numpy_batched_.Layout``); ``params``: the tolerances (``numpy_batched_.Params``).
     """
     T, m, n = A.shape
-    x, mu = np.empty((T, n)), np.empty((T, m))
-    lam = np.zeros((T, len(u)))
-    iterations = np.zeros(T, np.int64)
-    settled = np.ones(T, np.bool_)
-    scratch = _scratch(m, n, len(u), layout)
+    out = Answers(np.empty((T, n)), np.empty((T, m)), np.zeros((T, len(u))),
+                  np.zeros(T, np.int64), np.ones(T, np.bool_))
+    g = _group_scratch(m, n, len(u), layout)
     ts = np.empty(W, np.int64)
     for t0 in range(0, T, W):
         count = min(W, T - t0)
         for e in range(W):
             ts[e] = t0 + min(e, count - 1)
-        _group(A, b, root, u, layout, params, ts, count, scratch,
-               (x, mu, lam, iterations, settled))
-    return x, mu, lam, iterations, settled
+        _group(A, b, root, u, layout, params, ts, count, g, out)
+    return out
 
 
 @njit(cache=True)
-def _scratch(m, n, nf, layout):
-    """The arrays one group works in (see :func:`_group`)."""
-    starts, own = layout[0], layout[1]
-    nb = len(starts)
-    every = np.full(nb, 1 + nf, np.int64)
-    lcp = (np.empty(nf, np.bool_), np.empty(nf, np.bool_), np.empty((nf, nf + 1)),
-           np.empty(nf, np.int64))
-    return (np.zeros((B * nb, own.shape[1], W)), np.empty((B * nb, B, W)),
-            np.empty((B * nb, B, W)), np.empty((m, 1 + nf, W)), np.empty((m, 1, W)),
-            np.empty((m, 1, W)), np.empty((n, W)), np.empty((m, W)),
-            np.empty((nf, nf, W)), np.empty((nf, W)), np.empty((nf, nf, W)),
-            np.empty((nf, W)), np.empty(W, np.bool_), np.empty((nf, W)),
-            (np.empty((m, 1 + nf, W)), np.empty((m, 1 + nf, W)),
-             np.empty((m, 1 + nf, W)), np.empty((n, W)), np.empty((m, W)), every),
-            (np.empty((nf, nf)), np.empty(nf), np.empty(nf), lcp))
+def _group_scratch(m, n, nf, layout):
+    """The :class:`Group` one group of instants works in."""
+    nb = len(layout.starts)
+    refined = Refinement(np.empty((m, 1 + nf, W)), np.empty((m, 1 + nf, W)),
+                         np.empty((m, 1 + nf, W)), np.empty((n, W)), np.empty((m, W)),
+                         np.full(nb, 1 + nf, np.int64))
+    lcp = LcpScratch(np.empty((nf, nf)), np.empty(nf), np.empty(nf), _active_set_scratch(nf))
+    return Group(np.zeros((B * nb, layout.own.shape[1], W)), np.empty((B * nb, B, W)),
+                 np.empty((B * nb, B, W)), np.empty((m, 1 + nf, W)), np.empty((m, 1, W)),
+                 np.empty((m, 1, W)), np.empty((n, W)), np.empty((m, W)),
+                 np.empty((nf, nf, W)), np.empty((nf, W)), np.empty((nf, nf, W)),
+                 np.empty((nf, W)), np.empty(W, np.bool_), np.empty((nf, W)), refined, lcp)
 
 
 @njit(cache=True)
-def _group(A, b, root, u, layout, params, ts, count, scratch, out):
-    """The instants ``ts[:count]`` of :func:`least_norm` (``out``: its arrays)."""
-    starts, own, n_own, sh_a, sh_b, n_sh, upos, first, ncols = layout
-    G, L, H, Z, y, y1, v, w, M, q, Mr, qr, refine, lam, rscratch, lscratch = scratch
-    x, mu, lam_out, iterations, settled = out
+def _group(A, b, root, u, layout, params, ts, count, g: Group, out: Answers):
+    """The instants ``ts[:count]`` of :func:`least_norm` into ``out``."""
+    starts, own, n_own = layout.starts, layout.own, layout.n_own
     m, n, nf = A.shape[1], A.shape[2], len(u)
-    _rows(A, root, ts, starts, own, n_own, G, v[0])
-    _factor(G, n_own, sh_a, sh_b, n_sh, params[0], L, H)
-    _rhs(G, b, ts, starts, upos, Z)
-    _down(L, H, starts, Z, ncols)
+    _rows(A, root, ts, starts, own, n_own, g.G, g.v[0])
+    _factor(g.G, n_own, layout.sh_a, layout.sh_b, layout.n_sh, params.gram_rtol, g.L, g.H)
+    _rhs(g.G, b, ts, starts, layout.upos, g.Z)
+    _down(g.L, g.H, starts, g.Z, layout.ncols)
     for i in range(m):
         for e in range(W):
-            y[i, 0, e] = Z[i, 0, e]
-    _up(L, H, starts, y)
-    any_refine = _inexact(G, own, n_own, starts, b, ts, y, v, w, params[1], refine)
+            g.y[i, 0, e] = g.Z[i, 0, e]
+    _up(g.L, g.H, starts, g.y)
+    any_refine = _inexact(g.G, own, n_own, starts, b, ts, g.y, g.v, g.w, params.refine_rtol,
+                          g.refine)
     if nf:
-        _faces_reduced(Z, starts, first, M, q)
+        _faces_reduced(g.Z, starts, layout.first, g.M, g.q)
     if any_refine:
-        _refined(G, own, n_own, starts, L, H, upos, b, ts, Z, rscratch)
+        _refined(g, layout, b, ts)
         if nf:
-            _faces(G, starts, upos, rscratch[0], Mr, qr)
-    lam[:] = 0.0
+            _faces(g.G, starts, layout.upos, g.refined.Z, g.Mr, g.qr)
+    g.lam[:] = 0.0
     if nf:
-        _lcps(M, q, Mr, qr, refine, params, lam, ts, count, iterations, settled, lscratch)
-    _forces_of(Z, rscratch[0], L, H, starts, lam, refine, any_refine, y, y1)
-    _times_Bt(G, own, n_own, starts, y, 0, v)
+        _lcps(g, params, ts, count, out)
+    _forces_of(g, starts, any_refine)
+    _times_Bt(g.G, own, n_own, starts, g.y, 0, g.v)
     for j in range(nf):
         for e in range(W):
-            v[u[j], e] += lam[j, e]
+            g.v[u[j], e] += g.lam[j, e]
     for e in range(count):
         t = ts[e]
         for i in range(m):
-            mu[t, i] = y[i, 0, e]
+            out.mu[t, i] = g.y[i, 0, e]
         for j in range(nf):
-            lam_out[t, j] = lam[j, e]
+            out.lam[t, j] = g.lam[j, e]
         for c in range(n):
-            x[t, c] = v[c, e] / root[t, c] if root.shape[0] else v[c, e]
+            out.x[t, c] = g.v[c, e] / root[t, c] if root.shape[0] else g.v[c, e]
 
 
 @njit(cache=True)
-def _forces_of(Y, Z, L, H, starts, lam, refine, any_refine, y, y1):
-    """``mu = K^-1 (b - U lam)`` into ``y`` (m, 1, W): from ``Y = C^-1 [b, U]`` (``y`` =
-    ``C^-T Y_0``) as ``y - C^-T (Y_1 lam)``, or where ``refine`` from the refined ``Z =
-    K^-1 [b, U]`` as ``Z_0 - Z_1 lam``.
+def _forces_of(g: Group, starts, any_refine):
+    """``mu = K^-1 (b - U lam)`` into ``g.y`` (m, 1, W): from ``g.Z = C^-1 [b, U]``
+    (``g.y`` = ``C^-T Z_0``) as ``y - C^-T (Z_1 lam)``, or where ``g.refine`` from the
+    refined ``K^-1 [b, U]`` as ``Z_0 - Z_1 lam``.
     """
-    m, nf = Y.shape[0], lam.shape[0]
+    y, y1, refine = g.y, g.y1, g.refine
+    m, nf = g.Z.shape[0], g.lam.shape[0]
     if any_refine:
-        _times_faces(Z, lam, y1)
+        Z = g.refined.Z
+        _times_faces(Z, g.lam, y1)
         for i in range(m):
             for e in range(W):
                 if refine[e]:
                     y[i, 0, e] = Z[i, 0, e] - y1[i, 0, e]
-    if not nf:  # no faces: Y_1 lam is zero, y stands
+    if not nf:  # no faces: Z_1 lam is zero, y stands
         return
-    _times_faces(Y, lam, y1)
-    _up(L, H, starts, y1)
+    _times_faces(g.Z, g.lam, y1)
+    _up(g.L, g.H, starts, y1)
     for i in range(m):
         for e in range(W):
             if not (any_refine and refine[e]):

@@ -40,6 +40,7 @@ import numpy as np
 from cardan_forces.formulations.batch import LeastNormBatch
 from cardan_forces.formulations.problems import LastMade
 
+from ._batched_state import Layout, Params
 from .batch import BatchOutcome
 from .lcp_ import lemke
 from .record import Status
@@ -63,6 +64,7 @@ than the null space has directions)."""
 
 MAX_ITER = 30
 """Active-set steps before an instant falls back to Lemke."""
+
 
 
 def solve_batch(batch: LeastNormBatch, tol=None, max_iter: int = MAX_ITER) -> BatchOutcome:
@@ -101,7 +103,7 @@ def least_norm(A: np.ndarray, b: np.ndarray, w: np.ndarray | None = None,
     u, layout = _layout(structure(A) if pattern is None else pattern, u)
     x, mu, lam, iterations, settled = compiled(
         np.ascontiguousarray(A, float), np.ascontiguousarray(b, float), root, u,
-        layout, (GRAM_RTOL, REFINE_RTOL, max_iter, LCP_RTOL, LCP_DELTA))
+        layout, Params(GRAM_RTOL, REFINE_RTOL, int(max_iter), LCP_RTOL, LCP_DELTA))
     nu = np.zeros((T, n))
     nu[:, u] = lam if w is None else lam * root[:, u]
     stages = {"compiled": time.perf_counter() - clock}
@@ -228,19 +230,14 @@ def _layout(pattern: np.ndarray, u: np.ndarray):
 
 @functools.lru_cache(maxsize=8)
 def _layout_of(shape: tuple, pattern: bytes, u: bytes):
-    u, *layout = _make_layout(np.frombuffer(pattern, bool).reshape(shape),
-                              np.frombuffer(u, np.int64))
-    return u, tuple(layout)
+    return _make_layout(np.frombuffer(pattern, bool).reshape(shape),
+                        np.frombuffer(u, np.int64))
 
 
-def _make_layout(pattern: np.ndarray, u: np.ndarray):
+def _make_layout(pattern: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, Layout]:
     """The compiled kernel's view of the rows' nonzero ``pattern`` (m, n) (see
     :func:`._batched_kernels.least_norm`): the signed columns ``u`` sorted by the first
-    body they touch along the chain, the bodies' first rows in chain order, per body the
-    columns touching it (padded, and counted), per neighbouring pair the positions of
-    the columns touching both in each body's list (padded, and counted), per body the
-    position of each signed column in its list (-1: absent), each signed column's first
-    body and per body one plus the number of signed columns touching it or an earlier one.
+    body they touch along the chain, and the :class:`Layout` of the bodies.
     """
     blocks = chain(pattern)
     touch = np.any(pattern.reshape(-1, 6, pattern.shape[1]), axis=1)[
@@ -255,9 +252,10 @@ def _make_layout(pattern: np.ndarray, u: np.ndarray):
     upos = np.array([[w.get(int(c), -1) for c in u] for w in where], np.int64).reshape(
         len(own), len(u))
     ncols = 1 + np.searchsorted(first, np.arange(len(blocks)), side="right")
-    return (u, np.array([k.start for k in blocks], np.int64), *_padded(own),
-            _padded(sh_a)[0], *_padded(sh_b), upos, first.astype(np.int64),
-            ncols.astype(np.int64))
+    (own, n_own), (sh_b, n_sh) = _padded(own), _padded(sh_b)
+    return u, Layout(np.array([k.start for k in blocks], np.int64), own, n_own,
+                     _padded(sh_a)[0], sh_b, n_sh, upos, first.astype(np.int64),
+                     ncols.astype(np.int64))
 
 
 def _padded(lists) -> tuple[np.ndarray, np.ndarray]:
