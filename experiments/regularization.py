@@ -1,0 +1,217 @@
+"""What regularization costs: the physics engines' softened answer beside the rigid one.
+
+MuJoCo and Drake's SAP make a contact problem's answer unique by softening every
+constraint. The ``newton`` family offers the same softening (its option ``soften =
+R``, :mod:`cardan_forces.solvers.newton_`): the equilibrium ``A f = b`` held by a
+penalty, ``min sum psi_c(f_c) + ||A f - b||^2 / (2 R rho)`` (``rho`` the mean
+diagonal of the nominal dual Hessian, so ``R`` is a pure number), the answer unique for
+any ``R > 0``. This study solves the softened ``positive`` (every contact alike, as
+MuJoCo's uniform impedance) and ``compliance`` (each contact by its stiffness) on
+``paper`` and ``propshaft`` for ``R`` from 1e-1 down to 1e-10 and ``R = 0`` (rigid),
+and measures, per run over the scene's instants:
+
+- its distance from the rigid set: the package's worst residual (equilibrium, end-face
+  sign and complementarity) relative to the load ``||b||``;
+- its distance from the ``compliance`` member (the exact active-set answer of
+  ``numpy-batched``): ``||f - f_c|| / ||f_c||``;
+- its time per instant (the batched solve, fastest of :data:`REPEATS`) and Newton steps.
+
+MuJoCo's own answer (``driveline.engine_mujoco``, its default softness) is one point
+beside the curves where MuJoCo is installed: its forces after the engine has settled,
+its time the simulation's wall time per instant read. Writes ``regularization.csv``,
+``regularization.md`` (a section for the bench report) and ``regularization.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import time
+from pathlib import Path
+
+import numpy as np
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.solvers import newton_
+from cardan_forces.solvers.batch import finalize_batch
+from cardan_forces.solvers.registry import solve_batch
+
+from .images import save
+
+SCENES = ("paper", "propshaft")
+SOFTENED = ("positive", "compliance")
+LADDER = (1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 0.0)
+"""Softenings ``R`` of the study (0: the rigid answer)."""
+INSTANTS = 101
+"""Evenly spaced instants of each scene's grid."""
+REPEATS = 3
+COLUMNS = ("scene", "formulation", "R", "instants", "time_us", "iterations",
+           "solved_share", "rigid_median", "rigid_worst", "compliance_median",
+           "compliance_worst")
+
+
+def operator(name: str, instants: int = INSTANTS):
+    """The scene's operator at ``instants`` evenly spaced instants of its grid."""
+    scene = load_scene(name)
+    times = scene.time.instants()
+    picks = np.unique(np.linspace(0, len(times) - 1, instants).round().astype(int))
+    return build_operator(simulate(scene, times[picks]))
+
+
+def measure(op, ladder=LADDER, softened=SOFTENED) -> list[dict]:
+    """One row per formulation and softening on the operator's instants (module doc)."""
+    member = solve_batch(fbatch.least_norm_batch(op, "compliance"), "numpy-batched").x
+    rows = []
+    for formulation in softened:
+        batch = fbatch.least_norm_batch(op, formulation)
+        for R in ladder:
+            rows.append(_row(op, formulation, batch, R, member))
+    return rows
+
+
+def _row(op, formulation: str, batch, R: float, member: np.ndarray) -> dict:
+    """The softened batch's measures (its fastest of :data:`REPEATS` solves timed)."""
+    outcome, best = newton_.solve_batch(batch, soften=R), np.inf  # untimed: loads the kernel
+    for _ in range(REPEATS):
+        began = time.perf_counter()
+        outcome = newton_.solve_batch(batch, soften=R)
+        best = min(best, time.perf_counter() - began)
+    record = finalize_batch(batch, "newton-batched", outcome)
+    return _measures(op.scene.name, formulation, R, record.x, record.residuals.largest(),
+                     member, best / len(batch.instants), float(np.mean(outcome.iterations)),
+                     float(np.mean(record.status == "solved")))
+
+
+def _measures(scene, formulation, R, x, primal, member, seconds, iterations, solved):
+    away = np.linalg.norm(x - member, axis=1) / np.linalg.norm(member, axis=1)
+    return {"scene": scene, "formulation": formulation, "R": R, "instants": len(x),
+            "time_us": 1e6 * seconds, "iterations": iterations, "solved_share": solved,
+            "rigid_median": float(np.median(primal)), "rigid_worst": float(np.max(primal)),
+            "compliance_median": float(np.median(away)),
+            "compliance_worst": float(np.max(away))}
+
+
+def mujoco_row(op) -> dict | None:
+    """MuJoCo's answer at its default softness as a row (``None`` where MuJoCo is not
+    installed or cannot express the scene): the instants after it settled.
+    """
+    try:
+        from cardan_forces.driveline import engine_mujoco
+
+        from .engine import settle_s
+        found = engine_mujoco.run(op, engine_mujoco.Softness(label="default"))
+    except Exception:  # an optional engine: absent or unable, the study goes on
+        return None
+    keep = op.t >= settle_s({"default": found})
+    if not keep.any() or tuple(found.names) != tuple(op.names):
+        return None
+    residuals = fbatch.least_norm_batch(op, "positive").checks.residuals(found.forces)
+    primal = np.max(list(residuals.values()), axis=0)[keep]
+    member = solve_batch(fbatch.least_norm_batch(op, "compliance"), "numpy-batched").x[keep]
+    return _measures(op.scene.name, "MuJoCo (default softness)", float("nan"),
+                     found.forces[keep], primal, member, found.wall_s / len(op.t),
+                     float("nan"), float("nan"))
+
+
+def write(rows: list[dict], folder: Path, formats=("png",)) -> list[Path]:
+    """The CSV, the markdown section and the figure of ``rows`` into ``folder``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "regularization.csv", "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    (folder / "regularization.md").write_text("\n".join(markdown(rows)) + "\n")
+    return [folder / "regularization.csv", folder / "regularization.md",
+            *draw(rows, folder / "regularization", formats)]
+
+
+def markdown(rows: list[dict]) -> list[str]:
+    """The section for the bench report: what was measured and the table."""
+    lines = ["## What regularization costs: the engines' softened answer", "",
+             "The `newton` family's `soften = R`: the equilibrium held by a penalty, as "
+             "MuJoCo and SAP soften their constraints (`solvers/newton_.py`). Rigid set: "
+             "the package's worst residual over `||b||`; compliance member: "
+             "`||f - f_c|| / ||f_c||` against `numpy-batched`'s exact answer. Time: "
+             "the batched solve per instant (fastest of "
+             f"{REPEATS}); MuJoCo's: its simulation's wall time per instant read.", "",
+             "| scene | formulation | R | time (us) | Newton steps | solved | rigid set "
+             "(median / worst) | compliance member (median / worst) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['scene']} | {r['formulation']} | {_g(r['R'])} | "
+                     f"{r['time_us']:.1f} | {_g(r['iterations'])} | "
+                     f"{_g(100 * r['solved_share'])}% | {r['rigid_median']:.1e} / "
+                     f"{r['rigid_worst']:.1e} | {r['compliance_median']:.1e} / "
+                     f"{r['compliance_worst']:.1e} |")
+    return lines
+
+
+def _g(value: float) -> str:
+    return "-" if value != value else f"{value:g}"
+
+
+def draw(rows: list[dict], stem: Path, formats=("png",)) -> list[Path]:
+    """Two panels against the time per instant: distance from the rigid set and from
+    the compliance member, one curve per scene and formulation (its points the
+    softenings, the rigid answer ``R = 0`` drawn at the floor), MuJoCo a star.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
+    for (scene, formulation), group in _curves(rows).items():
+        marker = "*" if formulation.startswith("MuJoCo") else "o"
+        style = dict(marker=marker, markersize=10 if marker == "*" else 4,
+                     linestyle="none" if marker == "*" else "-",
+                     label=f"{scene}: {formulation}")
+        for ax, key in zip(axes, ("rigid_median", "compliance_median")):
+            ax.plot([r["time_us"] for r in group], [max(r[key], 1e-17) for r in group],
+                    **style)
+    for ax, title in zip(axes, ("distance from the rigid set", "distance from the "
+                                "compliance member")):
+        ax.set(xscale="log", yscale="log", title=title, xlabel="time per instant [us]",
+               ylabel="median relative distance [-]")
+    fig.suptitle("Softened (R from 1e-1 to 0) against rigid: accuracy and time")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8)
+    paths = save(fig, stem, formats)
+    plt.close(fig)
+    return paths
+
+
+def _curves(rows: list[dict]) -> dict:
+    out: dict = {}
+    for r in rows:
+        out.setdefault((r["scene"], r["formulation"]), []).append(r)
+    return out
+
+
+def study(folder: Path, scenes=SCENES, instants: int = INSTANTS, formats=("png",),
+          with_mujoco: bool = True) -> list[Path]:
+    """The study on ``scenes``, written into ``folder``; the paths written."""
+    rows = []
+    for name in scenes:
+        op = operator(name, instants)
+        rows += measure(op)
+        found = mujoco_row(op) if with_mujoco else None
+        rows += [found] if found is not None else []
+    return write(rows, Path(folder), formats)
+
+
+def main(argv=None) -> int:
+    """``python -m cardan_forces.experiments.regularization [--out DIR]``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default="results/bench", help="output folder")
+    parser.add_argument("--instants", type=int, default=INSTANTS)
+    args = parser.parse_args(argv)
+    for path in study(Path(args.out), instants=args.instants):
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,54 @@
+"""The softening study: the softened answer leaves the rigid set by O(R) and reaches the
+rigid member as R shrinks; its outputs are written whole."""
+
+import csv
+
+import numpy as np
+import pytest
+from cardan_forces.experiments import regularization as reg
+
+
+@pytest.fixture(scope="module")
+def rows():
+    return reg.measure(reg.operator("paper", 5), ladder=(1e-2, 1e-4, 1e-6, 0.0))
+
+
+def _at(rows, formulation):
+    return {r["R"]: r for r in rows if r["formulation"] == formulation}
+
+
+@pytest.mark.parametrize("formulation", reg.SOFTENED)
+def test_softened_answer_leaves_the_rigid_set_by_order_R(rows, formulation):
+    at = _at(rows, formulation)
+    rigid = [at[R]["rigid_median"] for R in (1e-2, 1e-4, 1e-6)]
+    assert rigid[0] > rigid[1] > rigid[2]
+    assert 1e-3 <= rigid[2] / rigid[1] <= 1e-1  # the penalty's residual is linear in R
+    assert at[0.0]["rigid_worst"] <= 1e-10
+    assert at[0.0]["solved_share"] == 1.0
+
+
+def test_softened_compliance_reaches_the_compliance_member(rows):
+    at = _at(rows, "compliance")
+    away = [at[R]["compliance_median"] for R in (1e-2, 1e-4, 1e-6, 0.0)]
+    assert away == sorted(away, reverse=True)
+    assert at[0.0]["compliance_worst"] <= 1e-8
+
+
+def test_writes_table_section_and_figure(rows, tmp_path):
+    paths = reg.write(rows, tmp_path)
+    assert {p.name for p in paths} == {"regularization.csv", "regularization.md",
+                                       "regularization.png"}
+    with open(tmp_path / "regularization.csv") as handle:
+        table = list(csv.DictReader(handle))
+    assert tuple(table[0]) == reg.COLUMNS and len(table) == len(rows)
+    text = (tmp_path / "regularization.md").read_text()
+    assert text.count("\n| paper |") == len(rows)
+    assert (tmp_path / "regularization.png").stat().st_size > 0
+
+
+def test_mujoco_answer_is_near_the_rigid_set():
+    pytest.importorskip("mujoco")
+    found = reg.mujoco_row(reg.operator("paper", 5))
+    if found is None:
+        pytest.skip("MuJoCo cannot express the scene here")
+    assert np.isfinite(found["rigid_median"]) and found["rigid_median"] <= 1e-2
