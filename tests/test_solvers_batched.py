@@ -231,7 +231,8 @@ def test_a_batched_record_is_the_per_instant_record_of_the_same_answer(op):
     a moreau batch on its own gives the same record as the batch's."""
     if "moreau" not in available():
         pytest.skip("moreau not installed")
-    from cardan_forces.solvers.record import Outcome, finalize
+    from cardan_forces.solvers.checks import finalize
+    from cardan_forces.solvers.record import Outcome
 
     instants = np.arange(0, 41, 10)
     problems = fbatch.build_problems(op, "socp_face", instants)
@@ -246,3 +247,29 @@ def test_a_batched_record_is_the_per_instant_record_of_the_same_answer(op):
             assert batched.residuals[key] == pytest.approx(value, rel=1e-9, abs=1e-18)
         for key, value in alone.optimality.items():
             assert batched.optimality[key] == pytest.approx(value, rel=1e-9, abs=1e-18)
+
+
+def test_the_kernels_layout_names_the_rows_structure(op):
+    """Each field of the compiled kernel's layout says what the rows' pattern says: the
+    columns touching each body, those two neighbouring bodies share, where each face
+    sits in its body's list and the first body it touches."""
+    batch = fbatch.least_norm_batch(op, "positive")
+    pattern = nb.structure(batch.A)
+    u, layout = nb._make_layout(pattern, np.flatnonzero(batch.signed))
+    assert sorted(u) == sorted(np.flatnonzero(batch.signed))
+    touching = [set(np.flatnonzero(pattern[s:s + 6].any(axis=0))) for s in layout.starts]
+    assert sorted(layout.starts) == list(range(0, pattern.shape[0], 6))
+    for k, cols in enumerate(touching):
+        own = list(layout.own[k, :layout.n_own[k]])
+        assert set(own) == cols
+        for j, face in enumerate(u):
+            assert (layout.upos[k, j] >= 0) == (face in cols)
+            if layout.upos[k, j] >= 0:
+                assert own[layout.upos[k, j]] == face
+        if k + 1 < len(touching):
+            shared = cols & touching[k + 1]
+            a, b = (layout.sh_a[k, :layout.n_sh[k]], layout.sh_b[k, :layout.n_sh[k]])
+            assert {own[p] for p in a} == shared
+            assert [own[p] for p in a] == [layout.own[k + 1, p] for p in b]
+    assert [min(k for k, cols in enumerate(touching) if f in cols) for f in u] == list(
+        layout.first)
