@@ -147,6 +147,9 @@ def run(args) -> int:
                       sorted({s for v in backends.values() for s in v}), folder,
                       args.harness == "qpbenchmark")
     results = evaluate(measured, ladder, time.perf_counter() - started)
+    if args.regularization:  # the newton family's softening study (paper, propshaft)
+        from . import regularization
+        regularization.study(folder, formats=args.format)
     replaced = (folder / "bench_throughput.csv").exists()
     written = _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
@@ -226,6 +229,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--harness", type=_harness,
                    help="also run qpbenchmark itself on the bench's QPs (value: qpbenchmark; "
                         'needs pip install "cardan-forces[bench]")')
+    p.add_argument("--regularization", action="store_true",
+                   help="also what softening costs: the newton family's answers against "
+                        "rigid ones on paper and propshaft (regularization.csv/.md/.png)")
     p.set_defaults(func=run)
 
 

@@ -85,10 +85,12 @@ def rated(op: Operator) -> list:
 
 def loads(op: Operator, contact, forces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(Fr, Fa)`` (N) of a bearing from forces ``(T, n)``: the radial load's length and
-    the signed axial load on its shaft, in the shaft's frame.
+    the signed axial load on its shaft, in the shaft's frame (a floating bearing's is
+    zero, not the rounding of its radial columns on the axis).
     """
     v = np.asarray(forces, float) @ op.bearing_matrix(contact).T
-    return np.hypot(v[:, 0], v[:, 1]), v[:, 2]
+    axial = v[:, 2] if contact.kind == "bearing-locating" else np.zeros(len(v))
+    return np.hypot(v[:, 0], v[:, 1]), axial
 
 
 def _directions(n: int) -> np.ndarray:
@@ -99,11 +101,11 @@ def _directions(n: int) -> np.ndarray:
 
 def _rows(op: Operator, contact, free_radial: bool, n: int) -> np.ndarray:
     """The linear forms ranged for one bearing: ``u'(r1, r2)`` along the directions when
-    its radial load is free, then its axial load (a floating bearing's is zero).
+    its radial load is free, then a locating bearing's axial load.
     """
     B = op.bearing_matrix(contact)
     radial = _directions(n) @ B[:2] if free_radial else np.zeros((0, B.shape[1]))
-    return np.vstack([radial, B[2:]])
+    return np.vstack([radial, B[2:]]) if contact.kind == "bearing-locating" else radial
 
 
 def _ends(entry: dict) -> tuple[float, float]:
@@ -136,7 +138,7 @@ def _bearing_ends(op: Operator, det, contact, free: bool, found: list, n: int) -
     """:func:`envelope_at`'s entry of one bearing from its share of the LP ranges."""
     B = op.bearing_matrix(contact)
     k = n // 2 if free else 0
-    a_lo, a_hi = _ends(found[k])
+    a_lo, a_hi = _ends(found[k]) if contact.kind == "bearing-locating" else (0.0, 0.0)
     fa = (0.0 if a_lo <= 0 <= a_hi else min(abs(a_lo), abs(a_hi)), max(abs(a_lo), abs(a_hi)))
     if not free:
         fr = float(np.linalg.norm(B[:2] @ det.min_norm))

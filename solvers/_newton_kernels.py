@@ -37,9 +37,16 @@ def _contact(dg, w, signed, n, k, g):
     norm = np.sqrt(norm)
     s = dg[0] if signed else norm
     over = max(s - g, 0.0)
-    loaded = s > g or (n == 1.0 and s >= g)
-    r = (over / k) ** n if loaded else 0.0
-    slope = n * (over / k) ** (n - 1.0) / k if loaded else 0.0
+    if not (s > g or (n == 1.0 and s >= g)):
+        return 0.0, 0.0, 0.0, s, norm
+    x = over / k
+    if n == 1.0:  # the linear law and Hertz's 3/2 without a call to pow
+        r, slope = x, 1.0 / k
+    elif n == 1.5:
+        root = np.sqrt(x)
+        r, slope = x * root, 1.5 * root / k
+    else:
+        r, slope = x ** n, n * x ** (n - 1.0) / k
     ratio = r / s if s > 0 else slope
     return r, slope, ratio, s, norm
 
@@ -57,15 +64,15 @@ def _unit(dg, w, signed, norm, out):
 
 
 @njit(cache=True)
-def _state(E, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit):
+def _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit):
     """At ``u``: ``d = E'u``, the forces ``f``, per contact ``ratio``, ``slope`` and
-    ``Y_c = E_c unit_c`` (m, G).
+    ``Y_c = E_c unit_c`` (G, m).
     """
-    m, nv = E.shape
+    nv, m = Et.shape
     for j in range(nv):
         acc = 0.0
-        for i in range(m):
-            acc += E[i, j] * u[i]
+        for i in range(span[j, 0], span[j, 1]):
+            acc += Et[j, i] * u[i]
         d[j] = acc
     for c in range(members.shape[0]):
         w = 0
@@ -76,38 +83,49 @@ def _state(E, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit
         r, slope[c], ratio[c], s, norm = _contact(dg, w, signed[c], n[c], k[c], g[c])
         _unit(dg, w, signed[c], norm, unit)
         for i in range(m):
-            Y[i, c] = 0.0
+            Y[c, i] = 0.0
         for j in range(w):
             col = members[c, j]
             f[col] = r * unit[j]
-            for i in range(m):
-                Y[i, c] += E[i, col] * unit[j]
+            for i in range(span[col, 0], span[col, 1]):
+                Y[c, i] += Et[col, i] * unit[j]
 
 
 @njit(cache=True)
-def _hessian(E, members, mask, ratio, slope, Y, shift, V, nk, rho, H):
-    """``H = sum_c E_c H_c E_c' + shift I + rho V V'`` (lower triangle and mirror)."""
-    m = E.shape[0]
+def _hessian(Et, span, members, mask, ratio, slope, Y, shift, V, nk, rho, H):
+    """``H = sum_c E_c H_c E_c' + shift I + rho V V'`` (lower triangle and mirror);
+    ``span[j]``: the rows where column ``j`` can be nonzero.
+    """
+    m = Et.shape[1]
     for i in range(m):
         for j in range(i + 1):
             H[i, j] = 0.0
     for c in range(members.shape[0]):
+        if mask.shape[1] == 1 or mask[c, 1] == 0:  # one column: H_c is its slope
+            col = members[c, 0]
+            if slope[c] != 0.0:
+                _rank_one(H, Et[col], slope[c], span[col, 0], span[col, 1])
+            continue
         extra = slope[c] - ratio[c]
+        lo, hi = m, 0
         for p in range(members.shape[1]):
             if mask[c, p] > 0:
                 col = members[c, p]
-                b = ratio[c]
-                if b != 0.0:
-                    for i in range(m):
-                        a = b * E[i, col]
-                        for j in range(i + 1):
-                            H[i, j] += a * E[j, col]
+                lo, hi = min(lo, span[col, 0]), max(hi, span[col, 1])
+                if ratio[c] != 0.0:
+                    _rank_one(H, Et[col], ratio[c], span[col, 0], span[col, 1])
         if extra != 0.0:
-            for i in range(m):
-                a = extra * Y[i, c]
-                for j in range(i + 1):
-                    H[i, j] += a * Y[j, c]
+            _rank_one(H, Y[c], extra, lo, hi)
     _finish(H, shift, V, nk, rho)
+
+
+@njit(cache=True)
+def _rank_one(H, a, scale, lo, hi):
+    """``H += scale a a'`` on the lower triangle of rows and columns ``lo:hi``."""
+    for i in range(lo, hi):
+        ai = scale * a[i]
+        for j in range(lo, i + 1):
+            H[i, j] += ai * a[j]
 
 
 @njit(cache=True)
@@ -220,9 +238,9 @@ def _project(v, V, nk):
 
 
 @njit(cache=True)
-def _nominal(E, e, members, mask, n, k, H0):
+def _nominal(Et, span, e, members, mask, n, k, H0):
     """``H0`` (:func:`.newton_.nominal`) into ``H0``; returns ``rho``, its mean diagonal."""
-    m = E.shape[0]
+    m = Et.shape[1]
     F = 0.0
     for i in range(m):
         F += e[i] * e[i]
@@ -235,10 +253,7 @@ def _nominal(E, e, members, mask, n, k, H0):
         for p in range(members.shape[1]):
             if mask[c, p] > 0:
                 col = members[c, p]
-                for i in range(m):
-                    a = c0 * E[i, col]
-                    for j in range(i + 1):
-                        H0[i, j] += a * E[j, col]
+                _rank_one(H0, Et[col], c0, span[col, 0], span[col, 1])
     trace = 0.0
     for i in range(m):
         trace += H0[i, i]
@@ -303,9 +318,9 @@ def _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g
 
 
 @njit(cache=True)
-def _finite(E, e, k, g):
+def _finite(Et, e, k, g):
     """Whether one instant's data are finite and its stiffnesses positive."""
-    for x in E.ravel():
+    for x in Et.ravel():
         if not np.isfinite(x):
             return False
     for x in e:
@@ -318,11 +333,11 @@ def _finite(E, e, k, g):
 
 
 @njit(cache=True)
-def _fit(E, e, hint, members, mask, n, k, L, dependent, rhs, u):
+def _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u):
     """``u`` whose deformations fit ``hint`` in ``H0``'s weights: ``(E D0 E') u = E D0
     hint`` through ``L`` (the factor of ``H0 + rho V V' + mu I``).
     """
-    m = E.shape[0]
+    m = Et.shape[1]
     F = 0.0
     for i in range(m):
         F += e[i] * e[i]
@@ -334,20 +349,20 @@ def _fit(E, e, hint, members, mask, n, k, L, dependent, rhs, u):
         for p in range(members.shape[1]):
             if mask[c, p] > 0:
                 col = members[c, p]
-                for i in range(m):
-                    rhs[i] += c0 * E[i, col] * hint[col]
+                for i in range(span[col, 0], span[col, 1]):
+                    rhs[i] += c0 * Et[col, i] * hint[col]
     _solve(L, rhs, u, dependent, m)
 
 
 @njit(cache=True)
-def _gradient(E, e, f, u, rho_soft, V, nk, grad):
+def _gradient(Et, span, e, f, u, rho_soft, V, nk, grad):
     """``(I - V V')(E f - e + rho_soft u)`` into ``grad``; returns its norm."""
-    m, nv = E.shape
+    nv, m = Et.shape
     for i in range(m):
-        acc = -e[i] + rho_soft * u[i]
-        for j in range(nv):
-            acc += E[i, j] * f[j]
-        grad[i] = acc
+        grad[i] = -e[i] + rho_soft * u[i]
+    for j in range(nv):
+        for i in range(span[j, 0], span[j, 1]):
+            grad[i] += Et[j, i] * f[j]
     _project(grad, V, nk)
     norm = 0.0
     for i in range(m):
@@ -356,17 +371,18 @@ def _gradient(E, e, f, u, rho_soft, V, nk, grad):
 
 
 @njit(cache=True)
-def _instant(E, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, s, u):
+def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, s,
+             u):
     """One instant into ``u``; returns ``(status, iterations)`` (``groups``: members,
     mask, signed, n; ``s``: the scratch of :func:`newton`).
     """
     members, mask, signed, n = groups
     H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, dg, unit = s
     null_rtol, reg_rtol, ls_rtol, ls_max = params
-    m = E.shape[0]
-    if not _finite(E, e, k, g):
+    m = Et.shape[1]
+    if not _finite(Et, e, k, g):
         return 3, 0
-    rho = _nominal(E, e, members, mask, n, k, H0)
+    rho = _nominal(Et, span, e, members, mask, n, k, H0)
     nk = _null_space(H0, L, dependent, V, rhs, du, null_rtol)
     if nk < 0:
         return 4, 0
@@ -380,15 +396,15 @@ def _instant(E, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, 
     for i in range(m):
         u[i] = 0.0
     if use_hint:
-        _fit(E, e, hint, members, mask, n, k, L, dependent, rhs, u)
+        _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u)
         _project(u, V, nk)
     scale = 0.0
     for i in range(m):
         scale += e[i] * e[i]
     scale = max(np.sqrt(scale), 1e-300)
     for it in range(max_iter + 1):
-        _state(E, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit)
-        norm = _gradient(E, e, f, u, rho_soft, V, nk, grad)
+        _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit)
+        norm = _gradient(Et, span, e, f, u, rho_soft, V, nk, grad)
         if not np.isfinite(norm):
             return 3, it
         if norm <= tol * scale:
@@ -396,30 +412,33 @@ def _instant(E, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, 
         if it == max_iter:
             break
         if it > 0 or use_hint:
-            _hessian(E, members, mask, ratio, slope, Y, shift + rho_soft, V, nk, rho, H)
+            _hessian(Et, span, members, mask, ratio, slope, Y, shift + rho_soft, V, nk, rho,
+                     H)
             if not _cholesky(H, L, dependent, 0.0):
                 return 4, it
         for i in range(m):
             rhs[i] = -grad[i]
         _solve(L, rhs, du, dependent, m)
-        t = _step(E, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol, ls_max)
+        t = _step(Et, span, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol,
+                  ls_max)
         if t == 0.0:
             return 2, it
     return 1, max_iter
 
 
 @njit(cache=True)
-def _step(E, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol, ls_max):
+def _step(Et, span, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol,
+          ls_max):
     """The line search along ``du`` from ``u`` and the move; returns the length."""
     members, mask, signed, n = groups
-    m, nv = E.shape
+    nv, m = Et.shape
     e_du = 0.0
     for i in range(m):
         e_du += e[i] * du[i]
     for j in range(nv):
         acc = 0.0
-        for i in range(m):
-            acc += E[i, j] * du[i]
+        for i in range(span[j, 0], span[j, 1]):
+            acc += Et[j, i] * du[i]
         delta[j] = acc
     t = _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg,
                      unit, ls_rtol, int(ls_max))
@@ -429,27 +448,30 @@ def _step(E, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol, ls_m
 
 
 @njit(cache=True)
-def newton(E, e, members, mask, signed, n, k, g, d0, start, chain, tol, max_iter, soften,
-           params):
-    """:func:`.newton_.newton_numpy` compiled: ``(u, d, status, iterations)``."""
-    T, m, nv = E.shape
+def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, max_iter,
+           soften, params):
+    """:func:`.newton_.newton_numpy` compiled: ``(u, d, status, iterations)``. ``Et``
+    (T, nv, m) holds ``E'`` (a column of ``E`` a contiguous row), ``span`` (nv, 2) the
+    rows ``[lo, hi)`` where each column can be nonzero at any instant.
+    """
+    T, nv, m = Et.shape
     G, w = members.shape
     scratch = (np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)),
                np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
                np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G), np.zeros(G),
-               np.zeros((m, G)), np.zeros(w), np.zeros(w))
+               np.zeros((G, m)), np.zeros(w), np.zeros(w))
     u_out, d_out = np.zeros((T, m)), np.zeros((T, nv))
     status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
     groups = (members, mask, signed, n)
     for i in range(T):
         warm = chain and i > 0
         hint = d_out[i - 1] if warm else d0[i]
-        status[i], iters[i] = _instant(E[i], e[i], groups, k[i], g[i], hint,
+        status[i], iters[i] = _instant(Et[i], span, e[i], groups, k[i], g[i], hint,
                                        warm or start[i], tol, max_iter, soften, params,
                                        scratch, u_out[i])
         for j in range(nv):
             acc = 0.0
-            for r in range(m):
-                acc += E[i, r, j] * u_out[i, r]
+            for r in range(span[j, 0], span[j, 1]):
+                acc += Et[i, j, r] * u_out[i, r]
             d_out[i, j] = acc
     return u_out, d_out, status, iters

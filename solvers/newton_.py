@@ -463,11 +463,23 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
     T, m, nv = E.shape
     d0 = np.zeros((T, nv)) if d0 is None else np.ascontiguousarray(d0, float)
     start = np.zeros(T, np.bool_) if start is None else np.asarray(start, np.bool_)
-    return kernel(np.ascontiguousarray(E, float), np.ascontiguousarray(e, float),
+    return kernel(np.ascontiguousarray(np.swapaxes(E, 1, 2), float), spans(E),
+                  np.ascontiguousarray(e, float),
                   groups.members, groups.mask, groups.signed, groups.n,
                   np.ascontiguousarray(k, float), np.ascontiguousarray(g, float), d0, start,
                   bool(chain), float(tol), int(max_iter), float(soften),
                   (NULL_RTOL, REG_RTOL, LS_RTOL, float(LS_MAX)))
+
+
+def spans(E) -> np.ndarray:
+    """Per column of ``E`` (T, m, nv), the rows ``[lo, hi)`` outside which it is zero at
+    every instant (a contact loads at most two bodies: the kernel skips the rest).
+    """
+    nonzero = np.any(E != 0, axis=0)
+    lo = np.argmax(nonzero, axis=0)
+    hi = len(nonzero) - np.argmax(nonzero[::-1], axis=0)
+    empty = ~nonzero.any(axis=0)
+    return np.stack([np.where(empty, 0, lo), np.where(empty, 0, hi)], axis=1).astype(np.int64)
 
 
 def deformations(f, groups: Groups, k, g) -> np.ndarray:

@@ -1,0 +1,162 @@
+"""ISO 281 bearing life (``cardan life``): the standard's formulas by hand, the interval
+over the rigid set around every selection, a point where the radial loads are
+determinate, an open worst case named with the release that bounds it, strict JSON."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from cardan_forces.driveline import bearing_life as iso
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.scene import BearingRating
+from cardan_forces.experiments import life
+from cardan_forces.experiments.study import solve_over_time
+
+from cardan_forces.cli import main
+
+INSTANTS = 5
+
+
+@pytest.fixture(scope="module")
+def propshaft():
+    return life.study("propshaft", INSTANTS)
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return life.study("paper", INSTANTS)
+
+
+def _strict(text: str):
+    """JSON that has no NaN or Infinity (json.loads would take them otherwise)."""
+    def refuse(name):
+        raise ValueError(f"non-strict JSON constant {name}")
+    return json.loads(text, parse_constant=refuse)
+
+
+def _by_hand(rating: BearingRating, fr: np.ndarray, fa: np.ndarray) -> np.ndarray:
+    """``P`` written out for the types propshaft rates (tapered 15 deg, angular-contact
+    40 deg, cylindrical and floating ball: radial only), ISO 281's factors as printed."""
+    fa = np.abs(fa)
+    if rating.type == "tapered_roller":
+        a = math.radians(rating.contact_angle_deg)
+        e, x, y = 1.5 * math.tan(a), 0.4, 0.4 / math.tan(a)
+    elif rating.type == "angular_contact_ball":
+        assert rating.contact_angle_deg == 40.0
+        e, x, y = 1.14, 0.35, 0.57
+    else:
+        assert np.abs(fa).max() < 1e-9 * fr.max()  # propshaft's others are floating
+        return fr
+    return np.where(fa / fr > e, x * fr + y * fa, fr)
+
+
+def test_l10_is_iso_281_by_hand_on_determinate_loads(propshaft):
+    """propshaft's bearing loads are determinate: the positive selection's L10 equals
+    (C/Pm)^p with Pm the revolution-weighted p-mean of P, every step written here from
+    the operator's bearing loads and the motion's speeds."""
+    scene = load_scene("propshaft")
+    t = np.linspace(scene.time.start_s, scene.time.stop_s, INSTANTS)
+    motion = simulate(scene, t)
+    op = build_operator(motion)
+    forces = solve_over_time(op, "positive").forces
+    ratings = {f"{s.name}.{b.name}": b.rating for s in scene.shafts for b in s.bearings}
+    weights = np.full(INSTANTS, t[1] - t[0])
+    weights[[0, -1]] /= 2
+    found = {e["bearing"]: e for e in propshaft["bearings"]}
+    assert set(found) == set(ratings)
+    for name, load in op.bearing_loads(forces).items():
+        rating = ratings[name]
+        p = _by_hand(rating, load.radial, load.axial)
+        revs = np.abs(motion.omega[load.shaft]) * weights / (2 * math.pi)
+        power = 10 / 3 if rating.type.endswith("roller") else 3.0
+        pm = (np.sum(p ** power * revs) / revs.sum()) ** (1 / power)
+        l10 = (rating.C_N / pm) ** power
+        hours = l10 * 1e6 / (revs.sum() / (t[-1] - t[0])) / 3600
+        entry = found[name]["selections"]["positive"]
+        assert entry["P_N"] == pytest.approx(p, rel=1e-9)
+        assert entry["L10_Mrev"] == pytest.approx(l10, rel=1e-9)
+        assert entry["L10_h"] == pytest.approx(hours, rel=1e-9)
+
+
+def test_iso_tables_rows_and_switch():
+    """Table 3's rows are met exactly, interpolated between them, and P switches at e."""
+    ball = BearingRating(type="ball", C_N=30e3, C0_N=20e3)
+    x, y, e = iso.factors(ball, np.array([0.056 * 20e3, 0.07 * 20e3]))
+    assert (x[0], y[0], e[0]) == pytest.approx((0.56, 1.71, 0.26))
+    assert (y[1], e[1]) == pytest.approx(((1.71 + 1.55) / 2, (0.26 + 0.28) / 2))
+    angular = BearingRating(type="angular_contact_ball", C_N=1.0, C0_N=1.0,
+                            contact_angle_deg=27.5)
+    assert [v[0] for v in iso.factors(angular, np.zeros(1))] == pytest.approx(
+        [(0.41 + 0.39) / 2, (0.87 + 0.76) / 2, (0.68 + 0.80) / 2])
+    taper = BearingRating(type="tapered_roller", C_N=1.0, C0_N=1.0, contact_angle_deg=15.0)
+    e = 1.5 * math.tan(math.radians(15.0))
+    below, above = iso.equivalent_load(taper, [1000.0, 1000.0], [0.99 * e * 1000, 2 * e * 1000])
+    assert below == 1000.0
+    assert above == pytest.approx(400 + 0.4 / math.tan(math.radians(15)) * 2 * e * 1000)
+    assert iso.rating_life(taper, 0.0) == math.inf
+
+
+def test_every_selection_lies_in_the_set_interval(propshaft, paper):
+    """Each selection's P at each instant lies between the set's least and greatest."""
+    for answer in (propshaft, paper):
+        for entry in answer["bearings"]:
+            lo = np.asarray(entry["interval"]["P_min_N"])
+            hi = np.asarray(entry["interval"]["P_max_N"])
+            for name, sel in entry["selections"].items():
+                p = np.asarray(sel["P_N"])
+                slack = 1e-6 * max(1.0, np.nanmax(p))
+                assert np.all(p >= lo - slack), (entry["bearing"], name)
+                assert np.all(p <= hi + slack), (entry["bearing"], name)
+
+
+def test_propshaft_radial_life_interval_is_a_point(propshaft):
+    """Radial loads determinate, no axial spread: every life interval is one value."""
+    assert not propshaft["open"]
+    for entry in propshaft["bearings"]:
+        interval = entry["interval"]
+        assert interval["radial_determinate"]
+        assert interval["P_max_N"] == pytest.approx(interval["P_min_N"], rel=1e-9)
+        worst, best = interval["L10_h"]
+        assert worst == pytest.approx(best, rel=1e-8)
+        assert entry["selections"]["compliance"]["L10_h"] == pytest.approx(worst, rel=1e-6)
+
+
+def test_paper_worst_case_is_open_and_the_release_bounds_it(paper):
+    """paper's closed loop leaves the in-plane loads open above: no finite worst case,
+    the advisor's release named, and on the released line every bearing's radial and
+    axial load bounded."""
+    assert paper["open"] and paper["open_reason"] == life.OPEN
+    assert all(e["interval"]["open"] and e["interval"]["L10_h"][0] == 0.0
+               for e in paper["bearings"])
+    labels = paper["release"]["labels"]
+    assert any(label.startswith("slip:") for label in labels)
+    from cardan_forces.driveline.release import advise
+
+    scene = load_scene("paper")
+    motion = simulate(scene, np.linspace(scene.time.start_s, scene.time.stop_s, 3))
+    advice = advise(motion, 1)
+    assert [r.label for r in advice.releases] == labels
+    released = advice.operator
+    for entry in life.envelope_at(released, 1, life.rated(released)):
+        assert math.isfinite(entry["fr"][1]) and math.isfinite(entry["fa"][1])
+
+
+def test_life_json_is_strict_and_files_are_written(tmp_path, capsys):
+    assert main(["life", "paper-slip", "--instants", "3", "--json", "--quiet"]) == 0
+    answer = _strict(capsys.readouterr().out)
+    assert answer["scene"] == "paper-slip" and len(answer["bearings"]) == 4
+    assert answer["not_run"]["penalty"].startswith("not run")
+    assert main(["life", "propshaft", "--instants", "3", "--out", str(tmp_path), "--quiet",
+                 "--format", "png,svg"]) == 0
+    written = capsys.readouterr().out.split()
+    assert {p.rsplit(".", 1)[-1] for p in written} == {"csv", "md", "png", "svg"}
+
+
+def test_life_bad_input_is_one_message(capsys):
+    assert main(["life", "paper", "--instants", "1"]) == 2
+    assert main(["life", "no-such-scene"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("cardan: error:") == 2 and "Traceback" not in err
