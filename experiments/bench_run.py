@@ -26,8 +26,8 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP
 from cardan_forces.solvers import Residuals, available, backends_for, solve
 from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.checks import Stacks, stack_all
 from cardan_forces.solvers.optimality import objective_value
-from cardan_forces.solvers.record import Stacks, stack_all
 from cardan_forces.solvers.registry import batch_backends, solve_batch
 
 LADDER = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
