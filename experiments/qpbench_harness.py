@@ -33,10 +33,11 @@ import numpy as np
 from cardan_forces.formulations.problems import Conic
 from cardan_forces.solvers import get, settings_profiles
 from cardan_forces.solvers import qp_measures as qm
+from cardan_forces.solvers.checks import finalize
 from cardan_forces.solvers.conversions import convert
 from cardan_forces.solvers.optimality import unique_optimum
 from cardan_forces.solvers.qpsolvers_ import conic_duals
-from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status, finalize
+from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status
 from cardan_forces.solvers.registry import with_warnings
 
 from .export import as_qp, class_name
