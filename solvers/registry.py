@@ -54,8 +54,14 @@ ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_"
 """Adapter modules of this package, loaded lazily by :func:`available`."""
 
 
-class SolverNotFound(LookupError):
-    """The named backend is not registered (unknown, or its package is not installed)."""
+class SolverNotFound(KeyError):
+    """The named backend is not registered (unknown, or its package is not installed).
+
+    A ``KeyError`` (a ``LookupError``) whose message is printed as written, unquoted.
+    """
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else "backend not found"
 
 
 class UnsupportedProblem(TypeError):

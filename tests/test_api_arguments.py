@@ -128,3 +128,16 @@ def test_the_range_s_ends_and_numpy_integers_are_accepted(op, motion):
     assert len(cf.named_modes(motion, len(motion.t) - 1)) == last.nullity
     released = cf.apply_releases(motion, ("slip:intermediate",))  # a tuple is a list too
     assert cf.determinacy(cf.build_operator(released), 0).nullity < last.nullity
+
+
+@pytest.mark.parametrize("call", [
+    lambda op: cf.solve_over_time(op, "positive", "nosuch"),
+    lambda op: cf.intervals(op, 0, solver="nosuch"),
+    lambda op: cf.solve(cf.build_formulation("positive", op, 0), "nosuch"),
+])
+def test_an_unknown_solver_lists_the_installed_ones(call, op):
+    with pytest.raises(cf.SolverNotFound) as refused:
+        call(op)
+    assert isinstance(refused.value, KeyError)
+    text = str(refused.value)
+    assert text.startswith("unknown backend 'nosuch'") and "clarabel" in text
