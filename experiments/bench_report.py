@@ -105,7 +105,7 @@ def _log_ticks(ax, axis: str) -> None:
     decades = math.log10(high / low)
     if decades < math.log10(6.0):
         which.set_major_locator(ticker.MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10]))
-        which.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:.2g}"))
+        which.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:.3g}"))
     else:
         subs = (1.0, 2.0, 5.0) if decades < 2.0 else (1.0,)
         which.set_major_locator(ticker.LogLocator(base=10.0, subs=subs, numticks=12))
@@ -134,7 +134,7 @@ def _shared_legend(fig, styles: dict, shown, title: str, extra=()) -> None:
     height = fig.get_figheight()
     fig.suptitle(title, fontsize=11)
     fig.legend(handles=handles, loc="lower center", ncol=cols, fontsize=9, frameon=False)
-    fig.tight_layout(rect=(0, min(0.4, (0.3 * rows + 0.2) / height), 1, 1))
+    fig.tight_layout(rect=(0, min(0.4, (0.3 * rows + 0.2) / height), 1, 1 - 0.6 / height))
 
 
 def _written(drawn, path: Path, formats) -> list[Path]:

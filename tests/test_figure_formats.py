@@ -19,3 +19,13 @@ def test_an_unknown_format_is_one_line_and_exit_2(command, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("cardan: error:") and "bmp" in err[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_a_png_is_written_at_150_dpi_or_more(tmp_path):
+    from cardan_forces.experiments import images
+    from PIL import Image
+
+    assert main(["secondary", "--out", str(tmp_path), "--quiet"]) == 0
+    with Image.open(tmp_path / "secondary.png") as png:
+        dpi = png.info["dpi"]
+    assert min(dpi) >= 149.5 and images.DPI >= 150
