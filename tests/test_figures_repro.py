@@ -204,3 +204,21 @@ def test_the_y_range_holds_every_bold_curve_and_only_raw_spikes_are_clipped():
     assert "clipped: it spans 0 to 1.5e+03 N" in _texts_of(ax)
     assert figures.method_label("paper") in handles  # the paper's method, as computed here
     plt.close(fig)
+
+
+def test_fig11_and_fig12_keep_the_print_rules_and_smooth_honestly(tmp_path, drawn):
+    """The speeds' figures with a penalty run (the rigid speeds plus rattle): print
+    rules, and the smoothed speed absent where its centred window does not fit."""
+    motion = simulate(load_scene("paper"), T)
+    rattle = 0.3 * np.random.default_rng(2).standard_normal(motion.omega.shape)
+    csv11 = figures.fig11(motion, tmp_path, motion.omega + rattle)
+    figures.fig12(motion, tmp_path, motion.omega + rattle)
+    half = figures._window(T, figures.SPEED_SMOOTH_S) // 2
+    for fig in drawn:
+        assert images.problems(fig) == []
+        for line in (line for ax in fig.axes for line in ax.get_lines()
+                     if line.get_label() == figures.SMOOTH_LABELS["_smooth"]):
+            y = np.asarray(line.get_ydata(), float)
+            assert np.isnan(y[:half]).all() and np.isfinite(y[half:-half]).all()
+    cols = figures.read_csv(csv11)
+    assert np.isnan(cols["omega_input_penalty_smooth"][:half]).all()
