@@ -1,14 +1,17 @@
 """``cardan report``: one scene's bearing and joint loads over time, with the rigid
 solution set (DESIGN §4; any scene, its own names).
 
-At ``--instants`` instants spread over the scene's window: every contact force
+At ``--instants`` instants spread over the scene's window (by default enough to
+resolve the intermediate shaft's twice-per-revolution fluctuation,
+:func:`default_instants`): every contact force
 component of the operator, the member ``positive`` picks (least force, end faces
 pushing only), the interval ``[min, max]`` over every rigid solution with end faces
 >= 0 (two LPs per component that is not determinate, the band; a determinate one's
 interval is its value), and whether the component is determinate.
 Written as ``report.csv`` (long format, with each component's unit), ``report.png``
-(and ``.svg``/``.pdf`` with ``--format``: one panel per contact and unit, a slip
-joint's forces in N apart from its moments in N m; each component's legend entry says
+(and ``.svg``/``.pdf`` with ``--format``: one panel per contact, unit and scale
+group, a slip joint's forces in N apart from its moments in N m, a few-newton component
+apart from a kilonewton one; each component's legend entry, below its panel, says
 whether it is determinate or which side of its set is open) and ``report.md`` (the
 determinacy table and the named modes). With ``--engine``, MuJoCo's forces under its
 default softness (:mod:`cardan_forces.experiments.engine`) are drawn as open circles on
