@@ -387,12 +387,13 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
     if nk < 0:
         return 4, 0
     rho_soft, shift = soften * rho, reg_rtol * rho
-    for i in range(m):  # the first step's matrix: H0 with the null space held out
-        for j in range(m):
-            H[i, j] = H0[i, j]
-    _finish(H, shift, V, nk, rho)
-    if not _cholesky(H, L, dependent, 0.0):
-        return 4, 0
+    if nk > 0:  # the first step's matrix: H0 with the null space held out (else H0's
+        for i in range(m):  # factor serves: the shift is below its rounding)
+            for j in range(m):
+                H[i, j] = H0[i, j]
+        _finish(H, shift, V, nk, rho)
+        if not _cholesky(H, L, dependent, 0.0):
+            return 4, 0
     for i in range(m):
         u[i] = 0.0
     if use_hint:

@@ -395,12 +395,14 @@ def numbers(lay: Layout, P_diag, q, A, b):
     (T, rows, n_z), ``b`` (T, rows)).
     """
     held = b[:, lay.held_rows] / A[:, lay.held_rows, lay.held]
-    E = A[:, lay.eq][:, :, lay.force]
-    e = b[:, lay.eq] - np.einsum("tmh,th->tm", A[:, lay.eq][:, :, lay.held], held)
+    # E gathered as its transpose (the kernel's layout) from A's rows, in one pass
+    E = np.swapaxes(np.swapaxes(A, 1, 2)[:, lay.force[:, None], lay.eq[None, :]], 1, 2)
+    e = b[:, lay.eq] - np.einsum("tmh,th->tm", A[:, lay.eq[:, None], lay.held[None, :]],
+                                 held)
     power = lay.c_idx >= 0
     k = np.where(power, lay.p * q[:, lay.c_idx], P_diag[:, lay.a_idx])
     g = np.where(lay.g_idx >= 0, q[:, lay.g_idx], 0.0)
-    return np.ascontiguousarray(E), e, k, g, held
+    return E, e, k, g, held
 
 
 def answer(lay: Layout, A, P_diag, q, u, d, k, g, held):
@@ -437,7 +439,8 @@ def answer(lay: Layout, A, P_diag, q, u, d, k, g, held):
     y[:, at], y[:, at + 1] = c, c * (lay.p[power] - 1.0) * r[:, power] ** lay.p[power]
     y[:, at + 2] = g[:, power] - y0[:, power]
     if len(lay.held):  # the held rows' multipliers from their variables' stationarity
-        rest = np.einsum("tmh,tm->th", A[:, lay.eq][:, :, lay.held], y[:, lay.eq])
+        rest = np.einsum("tmh,tm->th", A[:, lay.eq[:, None], lay.held[None, :]],
+                         y[:, lay.eq])
         y[:, lay.held_rows] = -(rest + P_diag[:, lay.held] * held + q[:, lay.held]) / A[
             :, lay.held_rows, lay.held]
     return z, y
