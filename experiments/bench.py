@@ -187,8 +187,9 @@ def _write(folder: Path, results: dict, settings: dict, formats=("png",)) -> lis
         out.write_csv(folder / name, rows, columns)
     styles = out.backend_styles([p["solver"] for p in results["points"]]
                                 + [p["solver"] for p in results["profiles"]])
-    images = out.plot_pareto(results["points"], folder / FIGURES[0], formats, styles)
-    images += out.plot_profiles(results["profiles"], folder / FIGURES[1], formats, styles)
+    scene = settings["scene"]
+    images = out.plot_pareto(results["points"], folder / FIGURES[0], formats, styles, scene)
+    images += out.plot_profiles(results["profiles"], folder / FIGURES[1], formats, styles, scene)
     report = files.write_text(folder / "report.md", out.report(results, settings))
     return [*(folder / name for name in tables), *images, report]
 
