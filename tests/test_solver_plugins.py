@@ -175,6 +175,7 @@ DICT_ANSWER = made("dict-answer", solve=lambda problem, **kw: {"z": [0.0]})
 INT_ANSWER = made("int-answer", solve=lambda problem, **kw: 3)
 RAGGED_ANSWER = made("ragged-answer",
                      solve=lambda problem, **kw: Outcome("solved", [[1.0], [2.0, 3.0]]))
+SOLVE_EXITS = made("solve-exits", solve=lambda problem, **kw: exit_now())
 ODD_STATUS = made("odd-status", solve=lambda problem, **kw: Outcome(["solved"], None))
 BATCH_INT = made("batch-int", solve=None, batch=lambda batch, **kw: 7,
                  batch_accepts=(LeastNormBatch,))
@@ -188,7 +189,7 @@ BROKEN_POINTS = {
     "no_name": "NO_NAME", "mixed": "MIXED", "supports_raises": "SUPPORTS_RAISES",
     "solve_raises": "SOLVE_RAISES", "dict_answer": "DICT_ANSWER", "int_answer": "INT_ANSWER",
     "ragged_answer": "RAGGED_ANSWER", "odd_status": "ODD_STATUS", "batch_int": "BATCH_INT",
-    "not_a_backend": "NOT_A_BACKEND",
+    "not_a_backend": "NOT_A_BACKEND", "solve_exits": "SOLVE_EXITS",
     "exit_call": "exit_now",
 }
 """Entry points of the broken plugin: name -> attribute of its module."""
@@ -198,7 +199,7 @@ REFUSED = {"string_accepts": "accepts", "no_distributions": "distributions",
 """The entry points that register nothing (or not all they give), with what their
 :func:`plugin_errors` entry must name."""
 FAILING = ("supports-raises", "solve-raises", "dict-answer", "int-answer", "ragged-answer",
-           "odd-status")
+           "odd-status", "solve-exits")
 """Registered backends whose every solve is a failed record."""
 
 
