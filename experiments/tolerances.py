@@ -453,7 +453,7 @@ def figure(answer: dict):
 
     names = [n for n in answer["loads"][RUN[0]] if n.startswith("P:")] or \
         list(answer["loads"][RUN[0]])[:4]
-    cols = min(3, len(names))
+    cols = min(3, math.ceil(math.sqrt(len(names))))
     rows = math.ceil(len(names) / cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4.4 * cols, 2.9 * rows + 1.2),
                              squeeze=False)

@@ -13,6 +13,7 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import BearingRating
 from cardan_forces.experiments import life
+from cardan_forces.experiments.images import problems
 from cardan_forces.experiments.study import solve_over_time
 
 from cardan_forces.cli import main
@@ -131,6 +132,7 @@ def test_paper_worst_case_is_open_and_the_release_bounds_it(paper):
     assert paper["open"] and paper["open_reason"] == life.OPEN
     assert all(e["interval"]["open"] and e["interval"]["L10_h"][0] == 0.0
                for e in paper["bearings"])
+    assert not problems(life.figure(paper))  # the print rules, the open bars labelled
     labels = paper["release"]["labels"]
     assert any(label.startswith("slip:") for label in labels)
     from cardan_forces.driveline.release import advise

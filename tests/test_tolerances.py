@@ -11,6 +11,7 @@ from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.experiments import tolerance_store as store
 from cardan_forces.experiments import tolerances as tol
 from cardan_forces.experiments.environment import json_safe
+from cardan_forces.experiments.images import problems
 from cardan_forces.experiments.study import solve_over_time
 from cardan_forces.formulations.convex import contact_laws
 
@@ -137,6 +138,7 @@ def test_the_store_resumes_without_loss_or_repeat(tmp_path):
     fresh, _ = tol.run_study(spec, 4, 5, INSTANTS, tmp_path / "fresh")
     assert json.dumps(json_safe(again["L10_Mrev"])) == \
         json.dumps(json_safe(fresh["L10_Mrev"]))
+    assert not problems(tol.figure(again))  # the print rules
     with pytest.raises(store.StoreError):
         tol.run_study(spec, 4, 6, INSTANTS, out)  # another seed: another study
 
