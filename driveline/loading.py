@@ -16,10 +16,9 @@ before any work: types, finiteness, the physical ranges of :data:`~.scene.LIMITS
 that nothing overflows or integrates for ever), the size of the time grid and of the
 motion over it, the elements' layout (:mod:`.elements`), the support check
 (:mod:`.support`: the line must turn with exactly one degree of freedom while its
-contacts hold it) and the loads a friction-bound line can carry.
-
-This module is longer than most (about 650 lines): each table's reader is short, and
-keeping every field rule beside the one reader keeps one home for scene validation.
+contacts hold it) and the loads a friction-bound line can carry. An element's own
+fields are read and checked by its kind (:mod:`.elements`: a bearing's by its
+``kind``, a joint's and a slip joint's by theirs) through this module's table reader.
 """
 
 from __future__ import annotations
@@ -34,16 +33,14 @@ import numpy as np
 
 from .catalogue import read_rating, read_tolerances
 from .elements import check_elements
+from .elements.registry import BEARING_KINDS, JOINT, SLIP
 from .scene import (
-    BEARING_KINDS,
     EFFECTS,
     LIMITS,
-    MAX_ARTICULATION_DEG,
     MAX_CYCLES,
     MAX_INSTANTS,
     MAX_SHAFTS,
     NAME_PATTERN,
-    Bearing,
     Contact,
     Crosspin,
     Frame,
@@ -52,7 +49,6 @@ from .scene import (
     Scene,
     SceneError,
     Shaft,
-    SlipJoint,
     TimeGrid,
     TorqueLaw,
     use_validator,
@@ -379,10 +375,10 @@ def _shaft(t: _Table) -> Shaft:
         if abs(offset) > length / 2:
             bt.fail("offset_m", f"bearing lies outside the shaft (|offset| > {length / 2} m), "
                                 f"got {offset:g}")
-        kind = bt.string("kind", "locating", choices=BEARING_KINDS)
+        kind = bt.string("kind", "locating", choices=tuple(BEARING_KINDS))
         rating = read_rating(bt.table("rating")) if "rating" in bt.raw else None
-        bearings.append(Bearing(name=bt.string("name", name=True), offset_m=offset,
-                                kind=kind, rating=rating))
+        bearings.append(BEARING_KINDS[kind].read(bt, bt.string("name", name=True), offset,
+                                                 rating))
         bt.used.add("rating")
         bt.done()
     if len({b.name for b in bearings}) != len(bearings):
@@ -398,32 +394,6 @@ def _shaft(t: _Table) -> Shaft:
     return shaft
 
 
-def _joint(t: _Table) -> Joint:
-    name = t.string("name", name=True)
-    gamma = t.number("articulation_deg", kind="angle_deg")
-    if not abs(gamma) <= MAX_ARTICULATION_DEG:
-        t.fail("articulation_deg", f"|articulation| must be at most {MAX_ARTICULATION_DEG:g} "
-                                   f"deg (below 90: the velocity ratio 1/cos grows without "
-                                   f"bound), got {gamma:g}")
-    joint = Joint(
-        name=name,
-        articulation_deg=gamma,
-        yoke_phase_deg=t.number("yoke_phase_deg", 0.0, kind="angle_deg"),
-        hs_m=t.number("hs_m", positive=True, kind="length_m"),
-        rs_m=t.number("rs_m", positive=True, kind="length_m"),
-        rb_m=t.number("rb_m", positive=True, kind="length_m"),
-        ht_m=t.number("ht_m", positive=True, kind="length_m"),
-        hb_m=t.number("hb_m", positive=True, kind="length_m"),
-        rt_m=t.number("rt_m", positive=True, kind="length_m"),
-    )
-    if joint.rb_m < joint.rs_m:
-        t.fail("rb_m", f"housing bore {joint.rb_m} m is smaller than the trunnion {joint.rs_m} m")
-    if joint.hb_m < joint.ht_m:
-        t.fail("hb_m", f"housing bottom {joint.hb_m} m is inside the trunnion end {joint.ht_m} m")
-    t.done()
-    return joint
-
-
 def _scene_name(top: _Table) -> str:
     name = top.string("name")
     if not name.strip():
@@ -433,8 +403,7 @@ def _scene_name(top: _Table) -> str:
 
 def validate(raw: dict, source: str) -> Scene:
     """The one validation of a scene: its fields (:func:`_fields`), then the structure
-    (elements, motion, support and the loads it can carry). ``raw`` has ``extends``
-    resolved.
+    (elements, motion, support and loads it can carry). ``raw`` has ``extends`` resolved.
     """
     scene = _fields(raw, source)
     _check_elements(scene)
@@ -515,7 +484,7 @@ def _chain(top: _Table) -> tuple[tuple[Shaft, ...], tuple[Joint, ...], list[str]
     if len(shaft_tables) > MAX_SHAFTS:
         top.fail("shafts", f"at most {MAX_SHAFTS} shafts, got {len(shaft_tables)}")
     shafts = tuple(_shaft(t) for t in shaft_tables)
-    joints = tuple(_joint(t) for t in top.tables("joints"))
+    joints = tuple(JOINT.read(t) for t in top.tables("joints"))
     if len(shafts) < 2:
         top.fail("shafts", "a drive line needs at least two shafts")
     if len(joints) != len(shafts) - 1:
@@ -598,7 +567,7 @@ def _fields(raw: dict, source: str) -> Scene:
     init.done()
     time = _time(top)
     material, contact = _material(top), _contact(top, effects)
-    slips = _slip_joints(top, shafts, names)
+    slips = SLIP.read(top, shafts, names)
     scene = Scene(
         name=_scene_name(top), description=top.string("description", ""),
         effects=frozenset(effects), arrangement=top.string("arrangement", "Z", choices=("Z", "W")),
@@ -617,52 +586,12 @@ def _fields(raw: dict, source: str) -> Scene:
     return scene
 
 
-# ---------------------------------------------------------------------------- elements
-# Slip joints and bearing kinds (DESIGN §1, elements a real drive line has).
-
-
-def _slip_joints(top: _Table, shafts: tuple[Shaft, ...], names: list[str]) -> tuple:
-    """The ``[[slip_joints]]`` array: at most one per shaft, strictly inside it, not at a
-    bearing.
-    """
-    if "slip_joints" not in top.raw:
-        top.used.add("slip_joints")
-        return ()
-    by_name = {s.name: s for s in shafts}
-    slips = []
-    for t in top.tables("slip_joints"):
-        shaft_name = t.string("shaft", name=True)
-        if shaft_name not in by_name:
-            t.fail("shaft", f"no shaft {shaft_name!r}; shafts: {', '.join(by_name)}")
-        shaft = by_name[shaft_name]
-        offset = t.number("offset_m", 0.0, kind="position_m")
-        if not abs(offset) < shaft.length_m / 2:
-            t.fail("offset_m", f"the slip joint must lie inside shaft {shaft_name!r} "
-                   f"(|offset| < {shaft.length_m / 2} m), got {offset}")
-        if any(abs(b.offset_m - offset) < 1e-9 for b in shaft.bearings):
-            t.fail("offset_m", "a slip joint cannot sit exactly at a bearing")
-        slips.append(SlipJoint(
-            name=t.string("name", name=True), shaft=shaft_name, offset_m=offset,
-            pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m"),
-            friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True,
-                                          kind="ratio")))
-        t.done()
-    taken = names + [s.name for s in slips]
-    if len(set(taken)) != len(taken):
-        top.fail("slip_joints", f"slip joint names must differ from each other and from "
-                 f"shafts and joints, got {[s.name for s in slips]}")
-    on = [s.shaft for s in slips]
-    if len(set(on)) != len(on):
-        top.fail("slip_joints", "at most one slip joint per shaft")
-    return tuple(slips)
-
-
 def _check_elements(scene: Scene) -> None:
-    """Slip joints and floating bearings that leave a part of the line unheld (a more
-    specific message than the general support check, for lines that have them).
+    """Elements that leave a part of the line unheld (slip joints, bearings a shaft slides
+    through): a more specific message than the support check, for lines that have them.
     """
-    if not scene.slip_joints and all(b.kind == "locating"
-                                     for s in scene.shafts for b in s.bearings):
+    if not scene.slip_joints and not any(BEARING_KINDS[b.kind].slides
+                                         for s in scene.shafts for b in s.bearings):
         return
     check_elements(scene)
 

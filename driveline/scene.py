@@ -85,11 +85,6 @@ class SceneError(ValueError):
     """A scene that cannot be used: the message names the file and the field."""
 
 
-BEARING_KINDS = ("locating", "floating")
-"""Bearing kinds: ``locating`` carries radial and axial force, ``floating`` radial only
-(the shaft slides through it axially)."""
-
-
 BEARING_TYPES = ("ball", "cylindrical_roller", "tapered_roller", "angular_contact_ball")
 """Rolling-bearing types of a bearing's catalogue data (:class:`BearingRating`): ``ball``
 a radial (deep-groove) ball bearing and ``cylindrical_roller`` a radial roller bearing,
@@ -157,9 +152,10 @@ class Bearing:
     """A rolling bearing: carries a force, no moment.
 
     ``offset_m`` is its position along the shaft axis from the shaft's centre, positive
-    downstream (towards the output). ``kind`` (:data:`BEARING_KINDS`): ``locating``
-    carries a force in any direction (3 components), ``floating`` only normal to the
-    shaft axis (2 components; the shaft slides through it). ``rating``: its catalogue
+    downstream (towards the output). ``kind``: one of the bearing kinds of
+    :mod:`.elements` (each says what it carries; ``locating`` a force in any
+    direction, ``floating`` only normal to the shaft axis, the shaft slides through it).
+    A kind with fields of its own subclasses this record. ``rating``: its catalogue
     data (:class:`BearingRating`), if the scene gives it.
     """
 

@@ -70,8 +70,9 @@ class BearingKind(ElementKind):
         return [Law(link.columns, ct.bearing_stiffness_N_m, ct.bearing_clearance_m)]
 
     def axial_faces(self, link: Link, scene: Scene) -> list[tuple[float, float]]:
-        """Its axial penalty contacts: ``(sign, stiffness)`` per face pushing the shaft
-        along ``sign`` times its axis (N/m).
+        """Its axial penalty contacts: ``(sign, stiffness)`` per face (N/m), the face's
+        axis ``sign`` times the shaft's: it pushes the shaft along ``-sign`` times the
+        axis, against the shaft's motion along ``sign`` times it.
         """
         return []
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contact import hertz_stiffness
-from ..scene import Joint, Scene
+from ..scene import MAX_ARTICULATION_DEG, Joint, Scene
 from .base import Body, Column, ElementKind, Law, Layout, Link, PairMode
 
 RADIAL, FACE = "trunnion-radial", "end-face"
@@ -54,6 +54,31 @@ class Cardan(ElementKind):
 
     link_kinds = (RADIAL, FACE)
     paper = True
+
+    def read(self, t) -> Joint:
+        """A ``[[joints]]`` table (:class:`~..scene.Joint`: angles in deg, the cross-pin
+        geometry of the paper's Table 2 and Fig. 5 in m), checked: the articulation
+        within :data:`~..scene.MAX_ARTICULATION_DEG`, bore and housing bottom outside
+        the trunnion.
+        """
+        name = t.string("name", name=True)
+        gamma = t.number("articulation_deg", kind="angle_deg")
+        if not abs(gamma) <= MAX_ARTICULATION_DEG:
+            t.fail("articulation_deg", f"|articulation| must be at most "
+                   f"{MAX_ARTICULATION_DEG:g} deg (below 90: the velocity ratio 1/cos grows "
+                   f"without bound), got {gamma:g}")
+        joint = Joint(name=name, articulation_deg=gamma,
+                      yoke_phase_deg=t.number("yoke_phase_deg", 0.0, kind="angle_deg"),
+                      **{key: t.number(key, positive=True, kind="length_m")
+                         for key in ("hs_m", "rs_m", "rb_m", "ht_m", "hb_m", "rt_m")})
+        if joint.rb_m < joint.rs_m:
+            t.fail("rb_m", f"housing bore {joint.rb_m} m is smaller than the trunnion "
+                   f"{joint.rs_m} m")
+        if joint.hb_m < joint.ht_m:
+            t.fail("hb_m", f"housing bottom {joint.hb_m} m is inside the trunnion end "
+                   f"{joint.ht_m} m")
+        t.done()
+        return joint
 
     def holds(self, element: Joint, shaft, segments, axes):
         a, b = _yokes(segments, shaft)

@@ -75,6 +75,44 @@ class Slip(ElementKind):
 
     link_kinds = ("slip",)
 
+    def read(self, top, shafts: tuple, names: list[str]) -> tuple[SlipJoint, ...]:
+        """The scene's ``[[slip_joints]]`` array (none without it): at most one per shaft,
+        strictly inside it, not at a bearing, named apart from the shafts and joints
+        (``names``).
+        """
+        if "slip_joints" not in top.raw:
+            top.used.add("slip_joints")
+            return ()
+        by_name = {s.name: s for s in shafts}
+        slips = [self._read_one(t, by_name) for t in top.tables("slip_joints")]
+        taken = names + [s.name for s in slips]
+        if len(set(taken)) != len(taken):
+            top.fail("slip_joints", f"slip joint names must differ from each other and from "
+                     f"shafts and joints, got {[s.name for s in slips]}")
+        on = [s.shaft for s in slips]
+        if len(set(on)) != len(on):
+            top.fail("slip_joints", "at most one slip joint per shaft")
+        return tuple(slips)
+
+    def _read_one(self, t, by_name: dict) -> SlipJoint:
+        shaft_name = t.string("shaft", name=True)
+        if shaft_name not in by_name:
+            t.fail("shaft", f"no shaft {shaft_name!r}; shafts: {', '.join(by_name)}")
+        shaft = by_name[shaft_name]
+        offset = t.number("offset_m", 0.0, kind="position_m")
+        if not abs(offset) < shaft.length_m / 2:
+            t.fail("offset_m", f"the slip joint must lie inside shaft {shaft_name!r} "
+                   f"(|offset| < {shaft.length_m / 2} m), got {offset}")
+        if any(abs(b.offset_m - offset) < 1e-9 for b in shaft.bearings):
+            t.fail("offset_m", "a slip joint cannot sit exactly at a bearing")
+        slip = SlipJoint(
+            name=t.string("name", name=True), shaft=shaft_name, offset_m=offset,
+            pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m"),
+            friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True,
+                                          kind="ratio"))
+        t.done()
+        return slip
+
     def check(self, element: SlipJoint, shaft: int, scene: Scene) -> None:
         """Each segment needs a neighbour: a Cardan joint at its end or a bearing on it."""
         last = len(scene.shafts) - 1
