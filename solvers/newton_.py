@@ -513,12 +513,47 @@ def _patterns(P, q, A):
 
 
 def _parse_conic(problem: Conic) -> Layout | None:
+    """The problem's layout: found once per structure (its cones and where its data are
+    nonzero; an instant of a formulation shares its neighbours'), its unit entries
+    checked at every instant.
+    """
     P_pattern, q_pattern, A_pattern = _patterns(problem.P, problem.q, problem.A)
-    try:
-        return parse(P_pattern, q_pattern, A_pattern, np.asarray(problem.A, float),
-                     np.asarray(problem.b, float), problem.cones)
-    except NotContact:
+    A, b = np.asarray(problem.A, float), np.asarray(problem.b, float)
+    key = (tuple(problem.cones), A_pattern.shape, *(np.packbits(x).tobytes() for x in (
+        P_pattern, q_pattern, A_pattern)))
+    if key not in _STRUCTURES:
+        try:
+            found = parse(P_pattern, q_pattern, A_pattern, A, b, problem.cones)
+        except NotContact:
+            found = None
+        while len(_STRUCTURES) >= 16:
+            _STRUCTURES.pop(next(iter(_STRUCTURES)))
+        _STRUCTURES[key] = (found, None if found is None else _unit_entries(found))
+    found, units = _STRUCTURES[key]
+    if found is None or np.any(A[units] != -1.0) or np.any(b[units[0]] != 0.0):
         return None
+    return found
+
+
+_STRUCTURES: dict = {}
+"""Layouts by structure (:func:`_parse_conic`), with their unit entries."""
+
+
+def _unit_entries(lay: Layout) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, columns) of the entries ``-1`` of a layout's cone and sign rows."""
+    rows, cols = [], []
+    for c in range(len(lay.soc_row)):
+        members = lay.force[lay.groups.members[c][lay.groups.mask[c] > 0]]
+        if lay.soc_row[c] >= 0:
+            rows += list(lay.soc_row[c] + np.arange(len(members) + 1))
+            cols += [lay.r_col[c], *members]
+        if lay.pow_row[c] >= 0:
+            rows += [lay.pow_row[c], lay.pow_row[c] + 2]
+            cols += [lay.c_idx[c], lay.r_col[c]]
+        if lay.nn_row[c] >= 0:
+            rows.append(lay.nn_row[c])
+            cols.append(members[0])
+    return np.array(rows, np.int64), np.array(cols, np.int64)
 
 
 def _parse_batch(batch: ConicBatch) -> Layout | None:
