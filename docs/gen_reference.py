@@ -248,6 +248,21 @@ def element_kind_markdown() -> str:
     return "\n".join(_table(["method", "must be written", "what it gives"], rows)) + "\n"
 
 
+# ---------------------------------------------------------------------- formulations
+
+
+def formulations_markdown() -> str:
+    """The formulation registry's records: problem classes, whether the answer is a
+    physical selection, the default backends, the label figures use.
+    """
+    rows = [[f"`{f.name}`", ", ".join(c.__name__ for c in f.problem),
+             "physical selection" if f.physical else "comparison",
+             ", ".join(f"`{b}`" for b in f.backends), f.label]
+            for f in cf.FORMULATIONS.values()]
+    return "\n".join(_table(["formulation", "problem", "its answer is", "default backends",
+                              "label in figures"], rows)) + "\n"
+
+
 # ---------------------------------------------------------------------- determinacy
 
 SCENES = ("paper", "paper-slip", "propshaft")

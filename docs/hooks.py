@@ -38,6 +38,7 @@ GENERATED = {
     "api": gen_reference.api_markdown,
     "determinacy": gen_reference.determinacy_markdown,
     "element-kind": gen_reference.element_kind_markdown,
+    "formulations": gen_reference.formulations_markdown,
     "bench": gen_reference.bench_markdown,
     "changelog": lambda: (ROOT / "CHANGELOG.md").read_text().split("\n", 1)[1],
 }

@@ -230,3 +230,10 @@ def test_every_command_shown_in_the_docs_parses():
     for page, line in lines:
         args = cli._parser().parse_args(shlex.split(line)[1:])  # UsageError if not
         assert args.command, (page, line)
+
+
+def test_every_formulation_is_explained():
+    text = (DOCS / "explanation/formulations.md").read_text()
+    hand_table = text.split("<!-- generated:", 1)[0]
+    for name in cf.FORMULATIONS:
+        assert f"| `{name}` |" in hand_table, name
