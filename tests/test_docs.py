@@ -237,3 +237,18 @@ def test_every_formulation_is_explained():
     hand_table = text.split("<!-- generated:", 1)[0]
     for name in cf.FORMULATIONS:
         assert f"| `{name}` |" in hand_table, name
+
+
+def test_the_backend_how_to_names_what_an_adapter_and_a_backend_declare():
+    import dataclasses
+
+    from cardan_forces.solvers import registry
+
+    text = (DOCS / "how-to/backend.md").read_text()
+    for module in registry.ADAPTERS:
+        adapter = registry._adapter(module)
+        assert callable(adapter.backends) and isinstance(adapter.EXTRAS, dict), module
+    assert "`EXTRAS`" in text and "`backends()`" in text and "`ADAPTERS`" in text
+    declared = {f.name for f in dataclasses.fields(registry.Backend)}
+    for name in re.findall(r"^- `(\w+)`", text, flags=re.M):
+        assert name in declared or name in ("EXTRAS",), name
