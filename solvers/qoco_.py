@@ -23,7 +23,7 @@ from cardan_forces.formulations.problems import Conic
 
 from . import settings
 from .batch import BatchOutcome
-from .optimality import blocks
+from .qoco_form import CLAIM_TOL, csc_ones, layout, supports
 from .record import Outcome, Status
 from .registry import Backend
 
@@ -36,35 +36,10 @@ STATUS = {"QOCO_SOLVED": "solved", "QOCO_SOLVED_INACCURATE": "inaccurate",
           "QOCO_MAX_ITER": "inaccurate"}
 """QOCO status -> ours; anything else (numerical error, unsolved) is failed."""
 
-CLAIM_TOL = 1e-5
-"""QOCO has no certificate of infeasibility or unboundedness (no homogeneous
-embedding): on an unbounded LP its iterates diverge and it reports solved, its tolerances
-being relative to them, with a dual residual near 1. A solved whose own absolute dual
-residual or gap exceeds this (QOCO's default ``abstol_inacc``; the package's problems
-are scaled to O(1)) is reported inaccurate."""
-
-
 def _status(sol) -> str:
     if sol.status == "QOCO_SOLVED" and max(sol.dres, sol.gap) > CLAIM_TOL:
         return "inaccurate"
     return STATUS.get(sol.status, "failed")
-
-
-def supports(problem: Conic) -> bool:
-    """Zero, nonnegative and second-order cones only (QOCO has no power cone)."""
-    return all(kind in ("zero", "nonneg", "soc") for kind, _ in problem.cones)
-
-
-def layout(cones) -> tuple[np.ndarray, np.ndarray, int, list[int]]:
-    """QOCO's row order: the zero-cone rows, the nonnegative rows, then each second-order
-    block (stable within a kind); ``(equality rows, cone rows, l, q)``.
-    """
-    rows = {"zero": [], "nonneg": [], "soc": []}
-    for kind, _, block in blocks(cones):
-        rows[kind].extend(range(block.start, block.stop))
-    sizes = [int(size) for kind, size in cones if kind == "soc"]
-    return (np.array(rows["zero"], int), np.array(rows["nonneg"] + rows["soc"], int),
-            len(rows["nonneg"]), sizes)
 
 
 def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
@@ -98,18 +73,6 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
                    f"QOCO status {sol.status} (dual residual {sol.dres:.1e}, gap {sol.gap:.1e})",
                    objective=float(sol.obj), setup_s=setup_done - start,
                    solve_s=solved - setup_done, y=y)
-
-
-def csc_ones(mask: np.ndarray):
-    """CSC pattern of a (r, c) boolean ``mask``: a matrix of ones on it (a placeholder
-    that no value can thin out) and the (row, col) of its entries in CSC order, which is
-    the order QOCO's updates (and the generated solver's) take the values in.
-    """
-    import scipy.sparse as spa
-
-    cols, rows = np.nonzero(mask.T)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(cols, minlength=mask.shape[1]))])
-    return spa.csc_matrix((np.ones(len(rows)), rows, indptr), shape=mask.shape), rows, cols
 
 
 def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
