@@ -374,7 +374,11 @@ def figure(answer: dict):
     ax.set_ylabel("bearing [-]")
     ax.set_title("L10 over every rigid solution (bar) and each selection (marks)", fontsize=9)
     fig.suptitle(f"{answer['scene']}: ISO 281 bearing life", fontsize=10)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    if entries:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    else:
+        ax.text(0.5, 0.5, "no bearing of the scene has catalogue data", ha="center",
+                transform=ax.transAxes, fontsize=9)
     height = fig.get_size_inches()[1]
     fig.subplots_adjust(left=0.2, right=0.74, bottom=0.6 / height, top=1 - 0.75 / height)
     return fig
