@@ -11,6 +11,7 @@ every other backend runs. The package's own adapters are trusted and pay for non
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 
@@ -19,7 +20,7 @@ from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LCP, LP, LS, NLS, QP, Conic
 
 from .batch import BatchOutcome
-from .record import Outcome
+from .record import Outcome, Status
 
 PROBLEMS = (LS, QP, LP, Conic, LCP, NLS)
 """The problem classes a backend may accept (``cardan_forces.formulations.problems``)."""
@@ -164,6 +165,17 @@ def blame(solver: str, message: str) -> str:
     """
     origin = ORIGINS.get(solver)
     return message if origin is None else f"{origin}: {message}"
+
+
+def blamed(results):
+    """``results`` (:class:`~.record.Results` of a registered backend) with where it
+    comes from before the message of each failed instant that does not say it yet.
+    """
+    origin = ORIGINS[results.solver]
+    failed = results.status == Status.FAILED
+    message = tuple(f"{origin}: {m}" if bad and not m.startswith(origin) else m
+                    for bad, m in zip(failed.tolist(), results.message))
+    return dataclasses.replace(results, message=message)
 
 
 def plugin_origin(point) -> str:

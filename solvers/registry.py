@@ -44,7 +44,7 @@ from . import plugins, settings
 from .batch import BatchOutcome, BatchRecord, ConicBatch, finalize_batch
 from .conversions import convert, reachable
 from .plugins import InvalidBackend, blame
-from .record import Outcome, Record, Stacks, Status, failed_record, finalize_all
+from .record import Outcome, Record, Results, Stacks, Status, failed_record, finalize_all
 
 if TYPE_CHECKING:  # settings_profiles looks backends up here: a type-only import
     from .settings_profiles import Profile
@@ -374,26 +374,38 @@ _PENDING = operator.attrgetter("problem", "outcome", "reference", "optimal_value
 """What :func:`check` reads of a :class:`Pending`, in :func:`finalize_all`'s order."""
 
 
-def check(pending: list[Pending], stacks: Stacks | None = None) -> list[Record]:
-    """The package-judged records of deferred solves, as :func:`solve` returns them
+def check(pending: list[Pending], stacks: Stacks | None = None) -> Results:
+    """The package-judged results of deferred solves, as :func:`solve` judges one
     (``stacks``: their problems' data stacked beforehand, :func:`.record.stack_all`).
+    A registered backend's failed instants name where it comes from; an answer of one
+    that the checks cannot read fails alone (:func:`_check_each`).
     """
     if not pending:
         return []
     problems, outcomes, references, optimal_values, convert_s, received, elapsed_s = zip(
         *map(_PENDING, pending))
+    solver = pending[0].solver
     try:
-        return finalize_all(problems, pending[0].solver, outcomes, references=references,
-                            optimal_values=optimal_values, extra_setup_s=convert_s,
-                            received=received, elapsed_s=elapsed_s, stacks=stacks)
+        results = finalize_all(problems, solver, outcomes, references=references,
+                               optimal_values=optimal_values, extra_setup_s=convert_s,
+                               received=received, elapsed_s=elapsed_s, stacks=stacks)
     except Exception as exc:
-        if pending[0].solver not in plugins.ORIGINS:
+        if solver not in plugins.ORIGINS:
             raise  # the package's own backends: a fault of the checks, not hidden
-        if len(pending) > 1:  # one answer the checks cannot read fails alone
-            return [record for p in pending for record in check([p])]
-        return [failed_record(problems[0], pending[0].solver, blame(
-            pending[0].solver, f"answer could not be checked: {type(exc).__name__}: {exc}"),
-            reference=references[0])]
+        return _check_each(pending, exc)
+    return results if solver not in plugins.ORIGINS else plugins.blamed(results)
+
+
+def _check_each(pending: list[Pending], exc: Exception) -> Results:
+    """:func:`check` of a registered backend's answers one by one, after the pass over
+    all of them raised ``exc``: each that raises alone is a failed record saying why.
+    """
+    if len(pending) > 1:
+        return Results.of([record for p in pending for record in check([p])])
+    p = pending[0]
+    why = f"answer could not be checked: {type(exc).__name__}: {exc}"
+    return Results.of([failed_record(p.problem, p.solver, blame(p.solver, why),
+                                     reference=p.reference)])
 
 
 def solve(

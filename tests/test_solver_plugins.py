@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import textwrap
@@ -175,6 +176,7 @@ DICT_ANSWER = made("dict-answer", solve=lambda problem, **kw: {"z": [0.0]})
 INT_ANSWER = made("int-answer", solve=lambda problem, **kw: 3)
 RAGGED_ANSWER = made("ragged-answer",
                      solve=lambda problem, **kw: Outcome("solved", [[1.0], [2.0, 3.0]]))
+SHORT_ANSWER = made("short-answer", solve=lambda problem, **kw: Outcome("solved", np.zeros(3)))
 SOLVE_EXITS = made("solve-exits", solve=lambda problem, **kw: exit_now())
 ODD_STATUS = made("odd-status", solve=lambda problem, **kw: Outcome(["solved"], None))
 BATCH_INT = made("batch-int", solve=None, batch=lambda batch, **kw: 7,
@@ -190,6 +192,7 @@ BROKEN_POINTS = {
     "solve_raises": "SOLVE_RAISES", "dict_answer": "DICT_ANSWER", "int_answer": "INT_ANSWER",
     "ragged_answer": "RAGGED_ANSWER", "odd_status": "ODD_STATUS", "batch_int": "BATCH_INT",
     "not_a_backend": "NOT_A_BACKEND", "solve_exits": "SOLVE_EXITS",
+    "short_answer": "SHORT_ANSWER",
     "exit_call": "exit_now",
 }
 """Entry points of the broken plugin: name -> attribute of its module."""
@@ -199,7 +202,7 @@ REFUSED = {"string_accepts": "accepts", "no_distributions": "distributions",
 """The entry points that register nothing (or not all they give), with what their
 :func:`plugin_errors` entry must name."""
 FAILING = ("supports-raises", "solve-raises", "dict-answer", "int-answer", "ragged-answer",
-           "odd-status", "solve-exits")
+           "odd-status", "solve-exits", "short-answer")
 """Registered backends whose every solve is a failed record."""
 
 
@@ -322,3 +325,34 @@ def test_cardan_bench_runs_beside_broken_plugins(broken, tmp_path, capsys):
     assert rows["numpy-kkt"]["success_rate"] == 1.0
     for name in ("int-answer", "supports-raises", "batch-int"):  # a row each, all failed
         assert rows[name]["success_rate"] == 0.0 and rows[name]["instants"] > 0, name
+
+
+def test_a_plugin_s_answers_the_checks_refuse_fail_with_its_name(broken, op):
+    """A z of the wrong length passes the first look and fails in the check pass: the
+    failed records still name the plugin."""
+    history = cf.solve_over_time(op, "min_norm", "short-answer")
+    assert set(history.statuses) == {Status.FAILED}
+    assert history.records[0].message.startswith("plugin entry point short_answer: ")
+
+
+def test_an_answer_the_check_pass_cannot_read_fails_alone(broken, monkeypatch):
+    """Where the check pass over all instants raises on one plugin answer, the others
+    keep their judged records and that one is a failed record saying why."""
+    three = cf.build_operator(simulate(load_scene("paper"), [0.5, 0.6, 0.7]))
+    real = registry.finalize_all
+
+    def fragile(problems, solver, outcomes, **kw):
+        if solver == "numpy-kkt" or any(o.message == "unreadable" for o in outcomes):
+            raise FloatingPointError("cannot read this answer")
+        return real(problems, solver, outcomes, **kw)
+
+    good, marks = registry.get("broken-good"), iter(["", "unreadable", ""])
+    cf.register(dataclasses.replace(good, name="second-unreadable", solve=lambda p, **kw: (
+        dataclasses.replace(good.solve(p, **kw), message=next(marks)))))
+    monkeypatch.setattr(registry, "finalize_all", fragile)
+    history = cf.solve_over_time(three, "min_norm", "second-unreadable")
+    assert [str(s) for s in history.statuses] == ["solved", "failed", "solved"]
+    assert "answer could not be checked: FloatingPointError" in history.records[1].message
+    assert history.records[1].message.startswith("registered from ")
+    with pytest.raises(FloatingPointError):  # the package's own backends: not hidden
+        cf.solve_over_time(three, "min_norm", "numpy-kkt", instants=[1])
