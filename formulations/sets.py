@@ -14,15 +14,31 @@ model) is a choice inside it.
 from __future__ import annotations
 
 import numpy as np
+from cardan_forces.driveline.determinacy import RANK_RTOL
 from cardan_forces.driveline.equilibrium import Operator
 
 from .convex import checks, equalities, slip_rows
 from .problems import LP
 
 
+def orthonormal_equalities(op: Operator, i: int) -> tuple[np.ndarray, np.ndarray]:
+    """``A x = b`` as ``rank(A)`` orthonormal rows: ``V' x = S^-1 U' b`` from the SVD.
+    The same set as :func:`~.convex.equalities` (``S V' x = U' b``), but every row of
+    unit length: there a row's scale is its singular value, which spans many decades on
+    a line of micrometre lengths (moment rows of 1e-6 m arms), and an LP solver's
+    absolute feasibility tolerance then passes the small rows unchecked and calls the
+    LP inaccurate. Here each row is held to the same tolerance.
+    """
+    u, s, vt = np.linalg.svd(op.A[i], full_matrices=False)
+    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    return vt[:rank], (u[:, :rank].T @ op.b[i]) / s[:rank]
+
+
 def range_problems(op: Operator, i: int, c: np.ndarray) -> tuple[LP, LP]:
-    """The two LPs bounding ``c'x`` over the rigid set: min ``c'x``, min ``-c'x``."""
-    A, b = equalities(op, i)
+    """The two LPs bounding ``c'x`` over the rigid set: min ``c'x``, min ``-c'x``
+    (its equalities as :func:`orthonormal_equalities`).
+    """
+    A, b = orthonormal_equalities(op, i)
     lb = np.where(op.unilateral, 0.0, -np.inf)
     base = checks(op, i, pairs=False)
     G = slip_rows(op, i)

@@ -15,7 +15,7 @@ def test_sets_json_reports_every_component(capsys):
         components = report["components"]
         assert len(components) == 36
         assert set(components["bearing.input.near.x"]) == {"determinate", "min_norm", "min",
-                                                           "max", "positive"}
+                                                           "max", "positive", "interval_status"}
         near_y = components["bearing.input.near.y"]
         assert near_y["determinate"] is True
         assert near_y["min"] == near_y["max"] == pytest.approx(near_y["min_norm"], abs=1e-6)

@@ -77,6 +77,10 @@ def run(args) -> int:
     return 0
 
 
+EMPTY = ("empty: no forces satisfy the equilibrium with end faces >= 0 and the slip "
+         "joints' friction bounds at this instant")
+"""What the table says of a rigid set the LPs find infeasible."""
+
 SIGNED = "positive"
 """The formulation whose answer ``sets`` shows as a member of the rigid set: the least
 norm with end faces >= 0, so it lies inside every interval the table prints."""
@@ -92,14 +96,31 @@ def signed_member(op) -> tuple[np.ndarray, str]:
     return (record.x if record.solved else np.full(len(op.names), np.nan)), backend
 
 
+def rigid_set(ranges: dict) -> str:
+    """The rigid set's state from its intervals: ``solved`` when some interval was
+    found, else the one status they share (``infeasible``: no forces satisfy the
+    equilibrium with end faces >= 0 and the slip joints' friction bounds).
+    """
+    statuses = {found["status"] for found in ranges.values()}
+    return "solved" if "solved" in statuses or not statuses else statuses.pop()
+
+
 def _with_intervals(report: dict, ranges: dict, member) -> dict:
-    """A determinacy report's components with their ``min``/``max`` (None: unbounded)
-    and their value in the signed member (``positive``, :func:`signed_member`).
+    """A determinacy report's components with their ``min``/``max`` (None: unbounded
+    when ``interval_status`` is ``solved``, else not known) and their value in the
+    signed member (``positive``, :func:`signed_member`); ``rigid_set`` as
+    :func:`rigid_set` says. A component is called determinate only with its one value
+    as ``min = max``: where the set is empty or its interval was not found, the null
+    space alone does not give it a value (``determinate`` false, the reason in
+    ``interval_status``).
     """
     values, _ = member
+    report["rigid_set"] = rigid_set(ranges)
     for j, (name, entry) in enumerate(report["components"].items()):
-        entry.update(min=ranges[name]["min"], max=ranges[name]["max"],
-                     positive=float(values[j]))
+        found = ranges[name]
+        entry.update(min=found["min"], max=found["max"], positive=float(values[j]),
+                     interval_status=found["status"])
+        entry["determinate"] = bool(entry["determinate"]) and found["status"] == "solved"
     return report
 
 
@@ -111,6 +132,11 @@ def print_table(name, result, ranges, member, starts=None, n_starts=0) -> None:
     values, backend = member
     print(f"scene {name}, t = {result.t:g} s: rank {result.rank}, nullity "
           f"{result.nullity}, least-norm residual {result.residual:.1e}")
+    state = rigid_set(ranges)
+    if state != "solved":
+        words = EMPTY if state == "infeasible" else \
+            f"{state} (the LP solver could not decide whether forces exist)"
+        print(f"rigid set: {words}: no component has a value or an interval")
     print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; 'positive': the least-"
           f"norm solution with end faces >= 0 ({backend}), one member of the rigid set, in N "
           "(N m for a slip joint's bending and torque); interval over all solutions with end "
@@ -122,8 +148,11 @@ def print_table(name, result, ranges, member, starts=None, n_starts=0) -> None:
         print(f"paper method (fsolve, end faces on the axis) from {n_starts} random "
               f"starts: {len(starts)} converged; their spread per component at the right")
     for j, (name, det, value) in enumerate(zip(result.names, result.determinate, values)):
-        lo, hi = ranges[name]["min"], ranges[name]["max"]
+        lo, hi, status = ranges[name]["min"], ranges[name]["max"], ranges[name]["status"]
         lo, hi = number_text(lo, ".4f", "-inf"), number_text(hi, ".4f", "+inf")
+        if status != "solved":  # no interval found: not unbounded, unknown or empty
+            lo = hi = "empty" if status == "infeasible" else status
+            det = False
         spread = "" if starts is None or not len(starts) else \
             f"  paper: [{number_text(starts[:, j].min(), '.3f')}, " \
             f"{number_text(starts[:, j].max(), '.3f')}]"
