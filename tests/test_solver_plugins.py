@@ -106,7 +106,8 @@ def test_an_entry_point_backend_solves_and_is_judged_by_the_package(plugin, op):
 def test_broken_plugins_are_reported_not_fatal(plugin, capsys):
     assert main(["solvers"]) == 0
     captured = capsys.readouterr()
-    assert any(line.split()[0] == "plugin-lstsq" for line in captured.out.splitlines())
+    assert any(line.split()[0] == "plugin-lstsq" and line.endswith("(plugin fakeplugin (lstsq))")
+               for line in captured.out.splitlines())
     assert "fakeplugin 1.0" in captured.out
     errors = registry.plugin_errors()
     assert {k.split()[0] for k in errors} == {"missing", "taken"}
@@ -281,8 +282,10 @@ def test_a_keyboard_interrupt_while_loading_a_plugin_is_not_swallowed(tmp_path, 
 def test_cardan_solvers_lists_every_valid_backend_despite_broken_plugins(broken, capsys):
     assert main(["solvers", "--json"]) == 0
     captured = capsys.readouterr()
-    listed = {b["name"] for b in json.loads(captured.out)}  # the plugin's print: on stderr
-    assert {"numpy-kkt", "broken-good", *FAILING} <= listed
+    listed = {b["name"]: b for b in json.loads(captured.out)}  # the plugin's print: stderr
+    assert {"numpy-kkt", "broken-good", *FAILING} <= set(listed)
+    assert listed["broken-good"]["origin"] == "plugin entry point good"
+    assert listed["numpy-kkt"]["origin"] is None  # the package's own
     assert "a plugin that talks" in captured.err
     assert captured.err.count("not loaded") == len(REFUSED)
 

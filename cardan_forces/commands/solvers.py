@@ -1,5 +1,6 @@
-"""``cardan solvers``: the backends present, their problem classes, and how to install
-the absent ones.
+"""``cardan solvers``: the backends present, their problem classes, where each that is
+not the package's own comes from (a plugin's distribution and entry point), and how to
+install the absent ones.
 """
 
 from __future__ import annotations
@@ -7,6 +8,7 @@ from __future__ import annotations
 import sys
 
 from cardan_forces.solvers import available
+from cardan_forces.solvers.plugins import ORIGINS
 from cardan_forces.solvers.registry import known_backends, plugin_errors
 
 from . import print_json
@@ -26,11 +28,12 @@ def run(args) -> int:
         print(f"cardan solvers: plugin {plugin} not loaded: {why}", file=sys.stderr)
     if args.json:
         print_json([{"name": b.name, "family": b.family, "version": b.version,
-                     "classes": [c.__name__ for c in b.accepts], "extra": b.extra}
-                    for b in backends.values()])
+                     "classes": [c.__name__ for c in b.accepts], "extra": b.extra,
+                     "origin": ORIGINS.get(b.name)} for b in backends.values()])
         return 0
     for b in backends.values():
-        print(f"{b.name:22s} {'/'.join(c.__name__ for c in b.accepts):18s} {b.version}")
+        origin = f"  ({ORIGINS[b.name]})" if b.name in ORIGINS else ""
+        print(f"{b.name:22s} {'/'.join(c.__name__ for c in b.accepts):18s} {b.version}{origin}")
     for name in sorted(set(known_backends()) - set(backends)):
         extra = known_backends()[name]
         target = "cardan-forces" if extra is None else f"cardan-forces[{extra}]"
