@@ -148,7 +148,8 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     instants (at least one) are solved; ``references``: ``{i: (forces, optimal
     value)}`` for the records' distance and objective gap; ``stacks``:
     ``problem(i)``'s check data stacked beforehand at every instant ``i`` of ``op``
-    (:func:`~.record.stack_all`), so the checks do not stack each instant's matrices;
+    (:func:`~cardan_forces.solvers.checks.stack_all`), so the checks do not stack each
+    instant's matrices;
     ``check_passes``: times the deferred answers are checked (the records are the first
     pass's; the fastest pass's time per instant is ``History.checks_s``, a benchmark's
     measure of the checks' own cost: the pass is the same work each time, and other
