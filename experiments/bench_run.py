@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from cardan_forces.experiments.progress import line
 from cardan_forces.experiments.study import solve_over_time
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import FORMULATIONS, default_backends
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP
@@ -52,8 +52,9 @@ warm-up run (numba compiles on a process's first call); its time is the fastest 
 The budget, not the count, bounds a quick backend's repeats: on a shared machine a
 burst of other work outlasted twenty runs of a few milliseconds."""
 
-QUICK_SOLVERS = ("scipy-fsolve", "numpy-kkt", "qpsolvers-osqp", "clarabel", "lcp-lemke",
-                 "lcp-pgs", "numpy-batched", "moreau")
+QUICK_SOLVERS = (*default_backends(), "qpsolvers-osqp", "lcp-pgs", "numpy-batched", "moreau")
+"""The backends of ``--quick``: every formulation's default ones and, beside them, a
+first-order QP solver, projected Gauss-Seidel, the batched least norm and moreau."""
 
 MEASURES = ("primal", "dual", "gap", "distance")
 SPLIT = ("build_s", "convert_s", "solve_s", "checks_s")

@@ -39,7 +39,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import MAX_INSTANTS
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LS, QP, Conic
@@ -49,10 +49,9 @@ from cardan_forces.commands import UsageError
 
 from . import files
 
-QP_FORMULATIONS = ("min_norm", "positive", "compliance")
+QP_FORMULATIONS = where(exported=True)
 """Formulations exported by default (the ones qpbenchmark takes as QPs)."""
-EXPORTABLE = (*QP_FORMULATIONS, "min_norm_scaled", "socp_face", "min_max", "friction",
-              "compliance_hertz")
+EXPORTABLE = where(exportable=True)
 """Formulations whose problems are QPs or conic problems (the others are refused)."""
 INSTANTS = 50
 """Evenly spaced instants per scene by default."""

@@ -37,7 +37,7 @@ from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
 from cardan_forces.experiments import progress
 from cardan_forces.experiments.environment import json_number, json_text, number_text
 from cardan_forces.experiments.study import History, solve_over_time
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import FORMULATIONS, default_backends
 from cardan_forces.formulations.convex import NotApplicable as NotApplicableProblem
 from cardan_forces.solvers import ACCEPT, Residuals, backends_for
 
@@ -65,9 +65,8 @@ def bar(tol: float | None) -> float:
 INSTANTS, QUICK_INSTANTS = 11, 6
 """Instants per window; the quick ones are every other full one."""
 
-QUICK_SOLVERS = ("clarabel", "numpy-kkt", "qpsolvers-daqp", "lcp-lemke", "scipy-fsolve",
-                 "scipy-root-lm")
-"""The reduced backend set of ``--quick``: at least one per formulation."""
+QUICK_SOLVERS = default_backends()
+"""The reduced backend set of ``--quick``: every formulation's default backends."""
 
 
 Changes = Callable[[Scene], dict]

@@ -6,7 +6,15 @@
 says how the package uses that formulation.
 """
 
-from .registry import FALLBACK, FORMULATIONS, Formulation, UnknownFormulation, formulation, where
+from .registry import (
+    FALLBACK,
+    FORMULATIONS,
+    Formulation,
+    UnknownFormulation,
+    default_backends,
+    formulation,
+    where,
+)
 
-__all__ = ["FALLBACK", "FORMULATIONS", "Formulation", "UnknownFormulation", "formulation",
-           "where"]
+__all__ = ["FALLBACK", "FORMULATIONS", "Formulation", "UnknownFormulation",
+           "default_backends", "formulation", "where"]

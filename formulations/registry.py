@@ -130,6 +130,14 @@ def formulation(name: str) -> Formulation:
                                  f"{', '.join(FORMULATIONS)}") from None
 
 
+def default_backends() -> tuple[str, ...]:
+    """Every formulation's default backends, then :data:`FALLBACK`, each once: at least
+    one backend per formulation (the ``--quick`` runs' set).
+    """
+    names = [b for f in REGISTRY for b in f.backends] + [FALLBACK]
+    return tuple(dict.fromkeys(names))
+
+
 def where(**wanted) -> tuple[str, ...]:
     """Names of the formulations whose fields equal ``wanted`` (e.g. ``drawn=True``)."""
     return tuple(f.name for f in REGISTRY

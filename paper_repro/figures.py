@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.driveline.dynamics import Motion
 from cardan_forces.driveline.equilibrium import Operator
+from cardan_forces.formulations import FORMULATIONS
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_filter
 
@@ -34,15 +35,6 @@ SPEED_SMOOTH_S = 0.1
 """Savitzky-Golay window (s, cubic) for the penalty simulation's speeds: on ``paper`` it
 keeps the intermediate shaft's peaks (14.94 vs the rigid 14.98 rad/s after 4 s, where a
 0.1 s moving average gives 14.33) while taking out the rattle."""
-METHOD_LABELS = {
-    "paper": "the paper's method (as computed here; end faces at the rim, eqs. 33-36)",
-    "min_max": "min_max (comparison only: both end faces of a pair may push)",
-}
-"""Legend labels of methods whose bare name would mislead: ``paper`` is this package's
-run of the paper's method, not data from the paper, and it puts the end-face forces at
-the rim (with their moments), so its forces may leave the set drawn (of forces on the
-axis); ``min_max`` bounds the largest force but does not impose the end faces'
-complementarity (eqs. 39, 46), so its curve is no physical selection."""
 SMOOTH_LABELS = {
     SMOOTHED[False]: f"penalty, centred {SMOOTH_S:g} s moving average (none within "
                      f"{SMOOTH_S / 2:g} s of either end)",
@@ -52,8 +44,11 @@ SMOOTH_LABELS = {
 
 
 def method_label(method: str) -> str:
-    """The legend label of ``method`` (its name unless :data:`METHOD_LABELS` says more)."""
-    return METHOD_LABELS.get(method, method)
+    """The legend label of ``method``: its formulation record's (what it selects; e.g.
+    ``paper`` is this package's run of the paper's method, not data from the paper, and
+    ``min_max`` no physical selection), else its name.
+    """
+    return FORMULATIONS[method].label if method in FORMULATIONS else method
 
 
 def _window(t: np.ndarray, window_s: float) -> int:
@@ -131,7 +126,7 @@ def _with_smoothed(columns: dict[str, np.ndarray], t: np.ndarray, speeds: bool =
 def _plot_grid(csv: Path, panels: list[Panel], title: str, ncols: int,
                formats=("png",)) -> list[Path]:
     """:func:`figures_draw.plot_grid` with this module's legend labels (methods, smoothing)."""
-    labels = {m: method_label(m) for m in METHOD_LABELS} | SMOOTH_LABELS
+    labels = {m: method_label(m) for m in FORMULATIONS} | SMOOTH_LABELS
     return plot_grid(csv, panels, title, ncols, formats, labels)
 
 

@@ -50,7 +50,7 @@ from cardan_forces.experiments.engine import (
 from cardan_forces.experiments.environment import machine, number_text, versions
 from cardan_forces.experiments.progress import bar
 from cardan_forces.experiments.study import value_ranges
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations.convex import NotApplicable
 from scipy.stats import binomtest
 
@@ -80,13 +80,10 @@ ENGINE_BOUND_INSTANTS = 11
 ENGINE_RTOL = 1e-4
 """A load of MuJoCo's is inside the rigid band within this share of the largest load:
 its soft constraints leave ``A x = b`` at ~1e-5 (module doc of the engine's tests)."""
-JOB_COST_S = {("paper", None): 4.0, ("min_max", None): 2.0, ("positive", None): 1.0,
-              ("compliance", None): 0.5, ("compliance_hertz", "clarabel"): 2.7,
-              ("compliance", "clarabel"): 2.3, ("positive", "qpsolvers-daqp"): 1.0,
-              ("min_norm", "numpy-kkt"): 0.6, ("bounds", None): 0.2}
-"""CPU s of a rigid-model job, ``(method, backend)`` over 1001 instants of the paper's
-scenes (one run each on a 2-core machine; an unknown job counts 1 s): jobs are queued
-for the worker processes longest first, so that they end together."""
+BOUNDS_JOB_COST = 0.2
+"""Relative CPU cost of a figure's rigid-set bounds, on the scale of the formulations'
+``job_cost`` (:class:`~cardan_forces.formulations.Formulation`): jobs are queued for the
+worker processes dearest first, so that they end together."""
 BOUND_INSTANTS = 41
 """Instants (evenly spread) at which Figs. 13-15's solution-set intervals are computed."""
 QUICK_S = 0.15
@@ -98,10 +95,10 @@ PENALTY_TARGET_S = 1.0
 """The penalty simulation's target cost: wall seconds per simulated second."""
 SIGNIFICANCE = 0.05
 """Two-sided level of the sign test behind "larger" / "smaller" verdicts."""
-COMPLIANCE_VS_PENALTY = {"compliance": "clarabel", "compliance_hertz": "clarabel",
-                         "positive": "qpsolvers-daqp", "min_norm": "numpy-kkt"}
-"""Methods compared with the penalty simulation, on the released scene's operator (the
-same effects, so the compliance formulations see the same clearances as gaps)."""
+COMPLIANCE_VS_PENALTY = where(beside_penalty=True)
+"""Methods compared with the penalty simulation (each by its default backend), on the
+released scene's operator (the same effects, so the compliance formulations see the
+same clearances as gaps)."""
 
 
 def default_methods() -> tuple[str, ...]:
@@ -237,7 +234,8 @@ def _verdict(stat, ok: np.ndarray, agree, disagree) -> tuple[str, str]:
     if verdict != "undecided" and any(_classify(v, agree, disagree) != verdict
                                       for v in parts):
         verdict = "undecided"
-    return verdict, f"{whole:.3g} (first half {parts[0]:.3g}, second half {parts[1]:.3g})"
+    first, second = (number_text(v, ".3g", "no instant") for v in parts)
+    return verdict, f"{number_text(whole, '.3g')} (first half {first}, second half {second})"
 
 
 def _sign_test(differences: list[np.ndarray], scale: list[np.ndarray], block: int):
@@ -616,13 +614,16 @@ def _rigid_jobs(scene: Scene, op: Operator, figs, rigid) -> list[_Job]:
     """
     if not figs:
         return []
-    jobs = [_Job((scene, m, None), JOB_COST_S.get((m, None), 1.0), history, op, (m,))
-            for m in rigid]
+    jobs = [_Job((scene, m, None), _cost(m), history, op, (m,)) for m in rigid]
     for number in (13, 14):
         if number in figs or (number == 14 and 15 in figs):
-            jobs.append(_Job((scene, number), JOB_COST_S[("bounds", None)], _bounds, op,
-                             (number,)))
+            jobs.append(_Job((scene, number), BOUNDS_JOB_COST, _bounds, op, (number,)))
     return jobs
+
+
+def _cost(method: str) -> float:
+    """A method's relative job cost (1 for one the registry does not hold)."""
+    return FORMULATIONS[method].job_cost if method in FORMULATIONS else 1.0
 
 
 def _bounds(op: Operator, number: int) -> dict:
@@ -812,13 +813,12 @@ def _compliance_plan(runs: _Runs, scene: Scene):
     runs.progress("repro: compliance vs penalty ...")
     op = build_operator(runs.motion(released(scene), "the compliance comparison"))
     jobs, skipped = [], []
-    for method, solver in COMPLIANCE_VS_PENALTY.items():
+    for method in COMPLIANCE_VS_PENALTY:
         why = _refusal(op.scene, op, method)  # builds the method's first problem
         if why:
             skipped.append(f"`{method}` ({why})")
         else:
-            jobs.append(_Job((op.scene, method, solver), JOB_COST_S.get((method, solver), 1.0),
-                             history, op, (method, solver)))
+            jobs.append(_Job((op.scene, method, None), _cost(method), history, op, (method,)))
     return op, skipped, jobs
 
 

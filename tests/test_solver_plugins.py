@@ -306,9 +306,7 @@ def test_cardan_solve_gives_each_broken_backend_a_failed_row_and_runs_the_rest(b
 
 def test_cardan_solve_prints_the_whole_table_with_broken_backends(broken, capsys):
     assert main(["solve"]) == 0
-    captured = capsys.readouterr()
-    lines = captured.out.splitlines()
-    assert captured.err.count("cardan solve: plugin") == len(REFUSED)  # and why not
+    lines = capsys.readouterr().out.splitlines()
     for name in FAILING:
         assert any(line.split()[1:3] == [name, "failed"] for line in lines[2:]), name
 
