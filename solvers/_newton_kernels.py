@@ -1,6 +1,6 @@
 """Compiled Newton method of the ``newton`` family (numba, extra ``numba``).
 
-The same method as :func:`.newton_.newton_numpy`, its NumPy reference, one instant
+The same method as :func:`._newton_numpy.newton_numpy`, its NumPy reference, one instant
 after the other (warm-started from the instant before where asked), with every array
 of an instant in scratch allocated once per call. Two places differ in how, not what:
 the left null space of ``E`` comes from the Cholesky factor of the nominal Hessian
@@ -11,7 +11,7 @@ of ``u`` to the deformations is weighted by ``H0``'s slopes where the reference 
 plain least squares. Both span the same subspace and reach the same optimum.
 
 Nothing raises on numbers: non-finite data end with status 3, a factor that is not
-positive definite with status 4 (:data:`.newton_.REASONS`). No fastmath: every
+positive definite with status 4 (:data:`._newton_numpy.REASONS`). No fastmath: every
 operation rounds as IEEE 754 says, so an instant's answer does not depend on the CPU
 numba compiles for beyond the last bits of fused multiply-adds.
 """
@@ -29,7 +29,7 @@ if not HAVE_NUMBA:  # an optional extra: the caller takes the NumPy reference
 @njit(cache=True)
 def _contact(dg, w, signed, n, k, g):
     """One contact at deformations ``dg`` (its first ``w`` entries): ``(r, slope, ratio,
-    s, norm)`` as :func:`.newton_.evaluate`'s.
+    s, norm)`` as :func:`._newton_numpy.evaluate`'s.
     """
     norm = 0.0
     for j in range(w):
@@ -64,9 +64,10 @@ def _unit(dg, w, signed, norm, out):
 
 
 @njit(cache=True)
-def _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit):
-    """At ``u``: ``d = E'u``, the forces ``f``, per contact ``ratio``, ``slope`` and
-    ``Y_c = E_c unit_c`` (G, m).
+def _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, U, dg,
+           unit):
+    """At ``u``: ``d = E'u``, the forces ``f``, per contact ``ratio``, ``slope``, its
+    direction ``U_c`` and ``Y_c = E_c U_c`` (G, m).
     """
     nv, m = Et.shape
     for j in range(nv):
@@ -87,36 +88,59 @@ def _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, d
         for j in range(w):
             col = members[c, j]
             f[col] = r * unit[j]
+            U[c, j] = unit[j]
             for i in range(span[col, 0], span[col, 1]):
                 Y[c, i] += Et[col, i] * unit[j]
 
 
 @njit(cache=True)
-def _hessian(Et, span, members, mask, ratio, slope, Y, shift, V, nk, rho, H):
+def _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift, V, nk, rho, H):
     """``H = sum_c E_c H_c E_c' + shift I + rho V V'`` (lower triangle and mirror);
-    ``span[j]``: the rows where column ``j`` can be nonzero.
+    ``span[j]``: the rows where column ``j`` can be nonzero. ``H_c = slope u u' + ratio
+    (I - u u')`` is ``w`` rank-one terms: ``Y_c = E_c u`` and ``E_c h`` for the columns
+    ``h`` of the Householder reflection that maps ``e_1`` onto ``-+u`` (the rest are an
+    orthonormal basis of ``u``'s complement).
     """
     m = Et.shape[1]
     for i in range(m):
         for j in range(i + 1):
             H[i, j] = 0.0
     for c in range(members.shape[0]):
-        if mask.shape[1] == 1 or mask[c, 1] == 0:  # one column: H_c is its slope
-            col = members[c, 0]
-            if slope[c] != 0.0:
-                _rank_one(H, Et[col], slope[c], span[col, 0], span[col, 1])
-            continue
-        extra = slope[c] - ratio[c]
-        lo, hi = m, 0
+        w, lo, hi, length = 0, m, 0, 0.0
         for p in range(members.shape[1]):
             if mask[c, p] > 0:
                 col = members[c, p]
                 lo, hi = min(lo, span[col, 0]), max(hi, span[col, 1])
-                if ratio[c] != 0.0:
-                    _rank_one(H, Et[col], ratio[c], span[col, 0], span[col, 1])
-        if extra != 0.0:
-            _rank_one(H, Y[c], extra, lo, hi)
+                length += U[c, p] * U[c, p]
+                w += 1
+        if length == 0.0:  # no direction (an exactly unloaded linear contact): ratio I
+            for p in range(w):
+                col = members[c, p]
+                _rank_one(H, Et[col], ratio[c], span[col, 0], span[col, 1])
+            continue
+        if slope[c] != 0.0:
+            _rank_one(H, Y[c], slope[c], lo, hi)
+        if ratio[c] != 0.0 and w > 1:
+            _complement(Et, span, members[c], U[c], w, lo, hi, ratio[c], z, H)
     _finish(H, shift, V, nk, rho)
+
+
+@njit(cache=True)
+def _complement(Et, span, cols, u, w, lo, hi, ratio, z, H):
+    """``H += ratio E_c (I - u u') E_c'`` through the reflection's columns 2..w."""
+    v0 = u[0] + (1.0 if u[0] >= 0 else -1.0)
+    vv = v0 * v0
+    for j in range(1, w):
+        vv += u[j] * u[j]
+    for q in range(1, w):
+        for i in range(lo, hi):
+            z[i] = 0.0
+        for j in range(w):
+            vj = v0 if j == 0 else u[j]
+            h = (1.0 if j == q else 0.0) - 2.0 * vj * u[q] / vv
+            for i in range(span[cols[j], 0], span[cols[j], 1]):
+                z[i] += Et[cols[j], i] * h
+        _rank_one(H, z, ratio, lo, hi)
 
 
 @njit(cache=True)
@@ -239,7 +263,7 @@ def _project(v, V, nk):
 
 @njit(cache=True)
 def _nominal(Et, span, e, members, mask, n, k, H0):
-    """``H0`` (:func:`.newton_.nominal`) into ``H0``; returns ``rho``, its mean diagonal."""
+    """``H0`` (:func:`._newton_numpy.nominal`) into ``H0``; returns ``rho``, its mean diagonal."""
     m = Et.shape[1]
     F = 0.0
     for i in range(m):
@@ -293,7 +317,7 @@ def _slope(d, delta, t, u, du, e_du, rho_soft, members, mask, signed, n, k, g, d
 @njit(cache=True)
 def _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg,
                  unit, ls_rtol, ls_max):
-    """:func:`.newton_.line_search`: the exact step length (0 where the slope at 0 is
+    """:func:`._newton_numpy.line_search`: the exact step length (0 where the slope at 0 is
     not negative).
     """
     start, _ = _slope(d, delta, 0.0, u, du, e_du, rho_soft, members, mask, signed, n, k,
@@ -377,7 +401,7 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
     mask, signed, n; ``s``: the scratch of :func:`newton`).
     """
     members, mask, signed, n = groups
-    H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, dg, unit = s
+    H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, U, z, dg, unit = s
     null_rtol, reg_rtol, ls_rtol, ls_max = params
     m = Et.shape[1]
     if not _finite(Et, e, k, g):
@@ -404,7 +428,8 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
         scale += e[i] * e[i]
     scale = max(np.sqrt(scale), 1e-300)
     for it in range(max_iter + 1):
-        _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, dg, unit)
+        _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, U, dg,
+               unit)
         norm = _gradient(Et, span, e, f, u, rho_soft, V, nk, grad)
         if not np.isfinite(norm):
             return 3, it
@@ -413,8 +438,8 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
         if it == max_iter:
             break
         if it > 0 or use_hint:
-            _hessian(Et, span, members, mask, ratio, slope, Y, shift + rho_soft, V, nk, rho,
-                     H)
+            _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift + rho_soft, V, nk,
+                     rho, H)
             if not _cholesky(H, L, dependent, 0.0):
                 return 4, it
         for i in range(m):
@@ -451,7 +476,7 @@ def _step(Et, span, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rto
 @njit(cache=True)
 def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, max_iter,
            soften, params):
-    """:func:`.newton_.newton_numpy` compiled: ``(u, d, status, iterations)``. ``Et``
+    """:func:`._newton_numpy.newton_numpy` compiled: ``(u, d, status, iterations)``. ``Et``
     (T, nv, m) holds ``E'`` (a column of ``E`` a contiguous row), ``span`` (nv, 2) the
     rows ``[lo, hi)`` where each column can be nonzero at any instant.
     """
@@ -460,7 +485,7 @@ def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, m
     scratch = (np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)),
                np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
                np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G), np.zeros(G),
-               np.zeros((G, m)), np.zeros(w), np.zeros(w))
+               np.zeros((G, m)), np.zeros((G, w)), np.zeros(m), np.zeros(w), np.zeros(w))
     u_out, d_out = np.zeros((T, m)), np.zeros((T, nv))
     status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
     groups = (members, mask, signed, n)

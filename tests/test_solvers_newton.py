@@ -15,6 +15,7 @@ from cardan_forces.driveline.loading import builtin_names, load_scene
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.solvers import _newton_numpy as method
 from cardan_forces.solvers import newton_ as nt
 from cardan_forces.solvers import solve
 from cardan_forces.solvers.registry import batch_backends, solve_batch
@@ -109,9 +110,9 @@ def test_warm_start_reaches_the_same_answer(paper_op):
 
 def _one_row(k, g, n, signed, F):
     """Contacts in parallel on one body: ``E = [1 ... 1]``, load ``F``."""
-    groups = nt.groups_of([[j] for j in range(len(k))], signed, n)
+    groups = method.groups_of([[j] for j in range(len(k))], signed, n)
     E = np.ones((1, 1, len(k)))
-    return nt.newton_numpy(E, np.array([[F]]), groups, np.array([k], float),
+    return method.newton_numpy(E, np.array([[F]]), groups, np.array([k], float),
                            np.array([g], float)), groups
 
 
@@ -119,7 +120,7 @@ def test_linear_springs_share_a_load_by_stiffness():
     """Compliances ``k`` (energy ``k f^2 / 2``): ``f_i = F / k_i / sum(1 / k)``."""
     k = np.array([1.0, 2.0, 4.0])
     (u, d, status, _), groups = _one_row(k, [0, 0, 0], [1, 1, 1], [False] * 3, 7.0)
-    f = nt.forces(d[0], groups, k, np.zeros(3))
+    f = method.forces(d[0], groups, k, np.zeros(3))
     assert status[0] == 0
     np.testing.assert_allclose(f, 7.0 / k / np.sum(1.0 / k), rtol=1e-12)
 
@@ -133,7 +134,7 @@ def test_hertz_contact_with_a_gap_closes_by_its_law():
     assert d[0, 0] == pytest.approx(0.3 + 2.0 * 8.0 ** (2.0 / 3.0), rel=1e-12)
     (u, d, status, _), groups = _one_row([1.0, 1.0], [0.0, 0.0], [1, 1], [True, False],
                                          -3.0)
-    f = nt.forces(d[0], groups, np.ones(2), np.zeros(2))
+    f = method.forces(d[0], groups, np.ones(2), np.zeros(2))
     np.testing.assert_allclose(f, [0.0, -3.0], atol=1e-12)
 
 
@@ -146,7 +147,7 @@ def test_left_null_space_is_the_operators(paper_op):
     for A, b in zip(paper_op.A[:3], paper_op.b[:3]):
         s = np.linalg.svd(A, compute_uv=False)
         nullity = A.shape[0] - int(np.sum(s > RANK_RTOL * s[0]))
-        V = nt.null_basis(nt.nominal(A, b, groups, ones)[0])
+        V = method.null_basis(method.nominal(A, b, groups, ones)[0])
         assert V.shape[1] == nullity >= 1
         np.testing.assert_allclose(V.T @ V, np.eye(nullity), atol=1e-12)
         assert np.linalg.norm(A.T @ V) <= 1e-9 * np.linalg.norm(A)
@@ -183,7 +184,7 @@ def test_non_finite_data_end_as_a_failed_instant(paper_op, compiled):
     k = np.ones((len(E), E.shape[2]))
     u, d, status, _ = nt.solve_duals(E, b, groups, k, 0.0 * k, compiled=compiled)
     assert list(status[:4]) == [0, 3, 3, 0]
-    assert nt.REASONS[3] and nt.STATUS[3] == "failed"
+    assert method.REASONS[3] and method.STATUS[3] == "failed"
 
 
 def test_refuses_what_it_does_not_solve(paper_op):

@@ -1,0 +1,201 @@
+"""The Newton method of the ``newton`` family in NumPy: the contacts' energies, their
+derivatives, and the iteration (the compiled kernel's reference, :mod:`._newton_kernels`).
+
+The method and its equations: :mod:`.newton_`. Functions take one instant, or a
+leading axis of instants where they say ``(..., )``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+TOL = 1e-12
+"""Default stopping rule: ``||E f - e|| <= TOL ||e||`` (the equilibrium residual, the
+only optimality condition the dual iteration leaves inexact)."""
+MAX_ITER = 60
+"""Newton steps before an instant is left ``inaccurate``."""
+NULL_RTOL = 1e-10
+"""A pivot of ``H0``'s Cholesky factor below this, relative to its diagonal entry,
+marks a row dependent on the rows before it (a left null direction of ``E``)."""
+REG_RTOL = 1e-13
+"""``mu / rho``: the shift that keeps a step's factor positive definite."""
+LS_RTOL = 1e-10
+"""The line search stops at a slope below this fraction of its start's."""
+LS_MAX = 60
+"""Line-search evaluations per step."""
+
+STATUS = ("solved", "inaccurate", "inaccurate", "failed", "failed")
+"""Status codes of :func:`newton_numpy` and the kernel, by index."""
+REASONS = ("", "no convergence in the iteration limit", "the line search made no progress",
+           "non-finite numbers", "a step's factor is not positive definite")
+"""Why, by status code."""
+
+
+@dataclass(frozen=True)
+class Groups:
+    """The contacts' structure: ``members`` (G, w) columns of ``E`` per contact (padded
+    with 0, ``mask`` 1 where real), ``signed`` (G,) a pushing column (a group of one
+    with ``f >= 0``), ``n`` (G,) the law's exponent (1 linear).
+    """
+
+    members: np.ndarray
+    mask: np.ndarray
+    signed: np.ndarray
+    n: np.ndarray
+
+
+def groups_of(lists, signed, n) -> Groups:
+    """:class:`Groups` of column lists ``lists`` with their ``signed`` flags and ``n``."""
+    width = max(len(c) for c in lists)
+    members = np.zeros((len(lists), width), np.int64)
+    mask = np.zeros((len(lists), width))
+    for k, cols in enumerate(lists):
+        members[k, :len(cols)] = cols
+        mask[k, :len(cols)] = 1.0
+    return Groups(members, mask, np.asarray(signed, bool), np.asarray(n, float))
+
+
+def evaluate(d, groups: Groups, k, g):
+    """Per contact at deformations ``d`` (..., nv): load ``r``, slope ``r'``, ``r / s``,
+    the unit direction (..., G, w) and the energy; pushing columns are one-sided, an
+    exactly touching linear contact counts as loaded (its one-sided slope).
+    """
+    dg = d[..., groups.members] * groups.mask
+    norm = np.sqrt(np.einsum("...gw,...gw->...g", dg, dg))
+    s = np.where(groups.signed, dg[..., 0], norm)
+    n = groups.n
+    over = np.maximum(s - g, 0.0)
+    loaded = (s > g) | ((n == 1.0) & (s >= g))
+    r = np.where(loaded, (over / k) ** n, 0.0)
+    slope = np.where(loaded, n * (over / k) ** (n - 1.0) / k, 0.0)
+    ratio = np.where(s > 0, r / np.where(s > 0, s, 1.0), slope)
+    unit = np.where(groups.signed[:, None], groups.mask,
+                    dg / np.where(norm > 0, norm, 1.0)[..., None])
+    return r, slope, ratio, unit, over * r / (n + 1.0)
+
+
+def forces(d, groups: Groups, k, g) -> np.ndarray:
+    """The forces (..., nv) at deformations ``d`` (every column is in one contact)."""
+    r, _, _, unit, _ = evaluate(d, groups, k, g)
+    f = np.zeros(np.shape(d))
+    real = groups.mask > 0
+    f[..., groups.members[real]] = (r[..., None] * unit)[..., real]
+    return f
+
+
+def _hessian(E, groups: Groups, ratio, slope, unit, rho_soft):
+    """``sum_c E_c H_c E_c' + rho_soft I``."""
+    beta = np.zeros(E.shape[1])
+    np.add.at(beta, groups.members, ratio[:, None] * groups.mask)
+    Y = np.einsum("mgw,gw->mg", E[:, groups.members], unit * groups.mask)
+    H = (E * beta) @ E.T + (Y * (slope - ratio)) @ Y.T
+    return H + rho_soft * np.eye(len(H))
+
+
+def nominal(E, e, groups: Groups, k):
+    """``H0 = sum_c c0 E_c E_c'`` with ``c0 = n F^(1 - 1/n) / k`` the slope at a load
+    ``F = ||e||``, and ``rho`` its mean diagonal.
+    """
+    F = max(float(np.linalg.norm(e)), 1e-300)
+    c0 = groups.n * F ** (1.0 - 1.0 / groups.n) / k
+    beta = np.zeros(E.shape[1])
+    np.add.at(beta, groups.members, c0[:, None] * groups.mask)
+    H0 = (E * beta) @ E.T
+    return H0, max(float(np.trace(H0)) / len(H0), 1e-300)
+
+
+def null_basis(H0) -> np.ndarray:
+    """An orthonormal basis (m, k) of ``H0``'s null space (the left null space of ``E``):
+    the eigenvectors whose eigenvalue is below ``NULL_RTOL`` of the largest diagonal
+    entry (the reference of the kernel's pivoted Cholesky).
+    """
+    w, vecs = np.linalg.eigh(H0)
+    return vecs[:, w <= NULL_RTOL * max(float(np.max(np.diag(H0))), 1e-300)]
+
+
+def line_search(d, delta, u, du, e, groups: Groups, k, g, rho_soft) -> float:
+    """The step length ``t >= 0`` minimizing ``Phi(u + t du)`` (``delta = E'du``):
+    safeguarded Newton on the slope, the bracket grown until the slope turns.
+    """
+    def slope(t):
+        r, sl, ratio, unit, _ = evaluate(d + t * delta, groups, k, g)
+        dg = delta[groups.members] * groups.mask
+        along = np.einsum("gw,gw->g", unit, dg)
+        first = r @ along - e @ du + rho_soft * (u + t * du) @ du
+        second = (ratio @ np.einsum("gw,gw->g", dg, dg) + (sl - ratio) @ along ** 2
+                  + rho_soft * du @ du)
+        return first, second
+
+    start = slope(0.0)[0]
+    if not start < 0:
+        return 0.0
+    lo, hi, t = 0.0, np.inf, 1.0
+    for _ in range(LS_MAX):
+        first, second = slope(t)
+        if abs(first) <= LS_RTOL * abs(start):
+            return t
+        lo, hi = (t, hi) if first < 0 else (lo, t)
+        guess = t - first / second if second > 0 else np.inf
+        if not lo < guess < hi:
+            guess = 2.0 * t if hi == np.inf else 0.5 * (lo + hi)
+        t = guess
+    return lo if hi == np.inf else 0.5 * (lo + hi)
+
+
+def newton_numpy(E, e, groups: Groups, k, g, d0=None, start=None, chain=False,
+                 tol=TOL, max_iter=MAX_ITER, soften=0.0):
+    """The method at T instants, one after the other (the kernel's NumPy reference).
+
+    ``E`` (T, m, nv), ``e`` (T, m), ``k``, ``g`` (T, G); ``d0`` (T, nv) deformations to
+    start from where ``start`` (T,) is set; ``chain``: each instant after the first
+    starts from the answer before it. Returns ``u`` (T, m), ``d`` (T, nv), status codes
+    and iterations (T,).
+    """
+    T, m, nv = E.shape
+    u_out, d_out = np.zeros((T, m)), np.zeros((T, nv))
+    status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
+    for i in range(T):
+        hint = d_out[i - 1] if chain and i else (
+            d0[i] if start is not None and start[i] else None)
+        u_out[i], status[i], iters[i] = _one(E[i], e[i], groups, k[i], g[i], hint, tol,
+                                             max_iter, soften)
+        d_out[i] = E[i].T @ u_out[i]
+    return u_out, d_out, status, iters
+
+
+def _one(E, e, groups, k, g, hint, tol, max_iter, soften):
+    """One instant of :func:`newton_numpy`: ``(u, status, iterations)``."""
+    if not (np.all(np.isfinite(E)) and np.all(np.isfinite(e)) and np.all(np.isfinite(k))
+            and np.all(np.isfinite(g)) and np.all(k > 0)):
+        return np.zeros(len(e)), 3, 0
+    H0, rho = nominal(E, e, groups, k)
+    V = null_basis(H0)
+    project = np.eye(len(e)) - V @ V.T
+    rho_soft = soften * rho
+    u = np.zeros(len(e)) if hint is None else project @ np.linalg.lstsq(E.T, hint,
+                                                                        rcond=None)[0]
+    scale = max(float(np.linalg.norm(e)), 1e-300)
+    for it in range(max_iter + 1):
+        d = E.T @ u
+        r, slope, ratio, unit, _ = evaluate(d, groups, k, g)
+        grad = project @ (E @ forces(d, groups, k, g) - e + rho_soft * u)
+        if not np.all(np.isfinite(grad)):
+            return u, 3, it
+        if np.linalg.norm(grad) <= tol * scale:
+            return u, 0, it
+        if it == max_iter:
+            break
+        H = H0 if it == 0 and hint is None else _hessian(E, groups, ratio, slope, unit,
+                                                         rho_soft)
+        try:
+            factor = np.linalg.cholesky(H + rho * V @ V.T + REG_RTOL * rho * np.eye(len(e)))
+        except np.linalg.LinAlgError:
+            return u, 4, it
+        du = -np.linalg.solve(factor.T, np.linalg.solve(factor, grad))
+        t = line_search(d, E.T @ du, u, du, e, groups, k, g, rho_soft)
+        if t == 0.0:
+            return u, 2, it
+        u = u + t * du
+    return u, 1, max_iter
