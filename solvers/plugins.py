@@ -144,7 +144,7 @@ def batch_fault(outcome, T: int) -> str:
                 np.asarray(outcome.iterations)]
     except (TypeError, ValueError) as exc:
         return f"BatchOutcome fields are not arrays: {exc}"
-    if any(len(r) != T for r in rows) or rows[0].ndim != 2:
+    if any(r.ndim == 0 or len(r) != T for r in rows) or rows[0].ndim != 2:
         return f"BatchOutcome z, status and iterations must have {T} rows (z: (T, n))"
     return ""
 

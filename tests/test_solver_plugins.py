@@ -143,6 +143,7 @@ import numpy as np
 from cardan_forces.formulations.batch import LeastNormBatch
 from cardan_forces.formulations.problems import LS
 from cardan_forces.solvers import Backend, Outcome
+from cardan_forces.solvers.batch import BatchOutcome
 
 print("a plugin that talks while it loads")
 
@@ -182,6 +183,8 @@ SOLVE_EXITS = made("solve-exits", solve=lambda problem, **kw: exit_now())
 ODD_STATUS = made("odd-status", solve=lambda problem, **kw: Outcome(["solved"], None))
 BATCH_INT = made("batch-int", solve=None, batch=lambda batch, **kw: 7,
                  batch_accepts=(LeastNormBatch,))
+BATCH_SCALAR = made("batch-scalar", solve=None, batch_accepts=(LeastNormBatch,),
+                    batch=lambda batch, **kw: BatchOutcome("solved", np.zeros(3), None, 0, 0, 0))
 NOT_A_BACKEND = "lstsq"
 '''
 
@@ -192,6 +195,7 @@ BROKEN_POINTS = {
     "no_name": "NO_NAME", "mixed": "MIXED", "supports_raises": "SUPPORTS_RAISES",
     "solve_raises": "SOLVE_RAISES", "dict_answer": "DICT_ANSWER", "int_answer": "INT_ANSWER",
     "ragged_answer": "RAGGED_ANSWER", "odd_status": "ODD_STATUS", "batch_int": "BATCH_INT",
+    "batch_scalar": "BATCH_SCALAR",
     "not_a_backend": "NOT_A_BACKEND", "solve_exits": "SOLVE_EXITS",
     "short_answer": "SHORT_ANSWER",
     "exit_call": "exit_now",
@@ -306,18 +310,22 @@ def test_cardan_solve_gives_each_broken_backend_a_failed_row_and_runs_the_rest(b
 
 def test_cardan_solve_prints_the_whole_table_with_broken_backends(broken, capsys):
     assert main(["solve"]) == 0
-    lines = capsys.readouterr().out.splitlines()
+    captured = capsys.readouterr()
+    lines = captured.out.splitlines()
+    assert captured.err.count("cardan solve: plugin") == len(REFUSED)  # and why not
     for name in FAILING:
         assert any(line.split()[1:3] == [name, "failed"] for line in lines[2:]), name
 
 
-def test_a_batched_plugin_that_answers_nonsense_is_a_failed_batch(broken, op):
+@pytest.mark.parametrize(("name", "said"), [("batch-int", "returned int"),
+                                          ("batch-scalar", "must have 1 rows")])
+def test_a_batched_plugin_that_answers_nonsense_is_a_failed_batch(broken, op, name, said):
     batch = least_norm_batch(op, "min_norm", [0])
-    assert "batch-int" in registry.batch_backends(batch)
-    record = registry.solve_batch(batch, "batch-int")
+    assert name in registry.batch_backends(batch)
+    record = registry.solve_batch(batch, name)
     assert list(record.status) == ["failed"]
-    assert record.messages[0].startswith("plugin entry point batch_int: ")
-    assert "returned int" in record.messages[0]
+    assert record.messages[0].startswith(f"plugin entry point {name.replace('-', '_')}: ")
+    assert said in record.messages[0]
 
 
 def test_cardan_bench_runs_beside_broken_plugins(broken, tmp_path, capsys):
