@@ -19,8 +19,6 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from . import progress
-
 
 @contextlib.contextmanager
 def replacing(path: Path | str, mode: str = "w", **options) -> Iterator:
@@ -93,11 +91,11 @@ def say_written(command: str, paths: Iterable[Path | str], replaced: bool = Fals
                 removed: Iterable[Path | str] = (), note: str = "") -> None:
     """One line on stderr naming where ``command`` wrote (its folder when every path
     shares one), whether it replaced an earlier run's files, which files of an earlier
-    run it ``removed``, and a ``note`` (e.g. what a resumed run found); none with
-    ``--quiet`` (the command's answer on stdout still names its files).
+    run it ``removed``, and a ``note`` (e.g. what a resumed run found). Not silenced by
+    ``--quiet``: it is the run's outcome, not its progress.
     """
     paths, removed = [Path(p) for p in paths], [Path(p) for p in removed]
-    if not paths or progress.quiet():
+    if not paths:
         return
     folders = {p.parent for p in paths}
     where = f"{folders.pop()}/ ({', '.join(p.name for p in paths)})" if len(folders) == 1 \

@@ -384,18 +384,6 @@ def _held(idle, cones) -> list[int]:
                    for k in c.members]
 
 
-FORMULATIONS = {
-    "min_norm": min_norm,
-    "min_norm_scaled": min_norm_scaled,
-    "positive": positive,
-    "min_max": min_max,
-    "socp_face": socp_face,
-    "lcp": lcp,
-    "friction": friction,
-}
-"""Builders by name: ``FORMULATIONS[name](op, i) -> problem``."""
-
-
 def contact_laws(op: Operator) -> list[Law]:
     """Every contact force (a group of columns) with its compliance law, in column
     order, as each contact's kind gives them (:meth:`~cardan_forces.driveline.elements.
@@ -517,6 +505,3 @@ def _contact_energies(scene, laws, is_bearing, power, use_gaps, sb, n, out):
             P[load, load] = sb / (k if bearing else k * d_ref ** (n_exp - 1.0))
     return P, q
 
-
-FORMULATIONS["compliance"] = compliance
-FORMULATIONS["compliance_hertz"] = lambda op, i: compliance(op, i, law="hertz")

@@ -395,36 +395,6 @@ def _gradient(Et, span, e, f, u, rho_soft, V, nk, grad):
 
 
 @njit(cache=True)
-def _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, reg_rtol, s, u):
-    """An instant's start: ``H0``, its null space ``V`` and the first step's factor
-    ``L`` in the scratch ``s``, ``u`` cold (0) or fitted to ``hint``. Returns ``(code,
-    rho, nk)``: a nonzero code ends the instant (3 non-finite data, 4 no factor).
-    """
-    members, mask, signed, n = groups
-    H0, H, L, V, dependent, rhs, du = s[:7]
-    m = Et.shape[1]
-    if not _finite(Et, e, k, g):
-        return 3, 0.0, 0
-    rho = _nominal(Et, span, e, members, mask, n, k, H0)
-    nk = _null_space(H0, L, dependent, V, rhs, du, null_rtol)
-    if nk < 0:
-        return 4, rho, 0
-    if nk > 0:  # the first step's matrix: H0 with the null space held out (else H0's
-        for i in range(m):  # factor serves: the shift is below its rounding)
-            for j in range(m):
-                H[i, j] = H0[i, j]
-        _finish(H, reg_rtol * rho, V, nk, rho)
-        if not _cholesky(H, L, dependent, 0.0):
-            return 4, rho, nk
-    for i in range(m):
-        u[i] = 0.0
-    if use_hint:
-        _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u)
-        _project(u, V, nk)
-    return 0, rho, nk
-
-
-@njit(cache=True)
 def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, s,
              u):
     """One instant into ``u``; returns ``(status, iterations)`` (``groups``: members,
@@ -434,11 +404,25 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
     H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, U, z, dg, unit = s
     null_rtol, reg_rtol, ls_rtol, ls_max = params
     m = Et.shape[1]
-    code, rho, nk = _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, reg_rtol,
-                           s, u)
-    if code:
-        return code, 0
+    if not _finite(Et, e, k, g):
+        return 3, 0
+    rho = _nominal(Et, span, e, members, mask, n, k, H0)
+    nk = _null_space(H0, L, dependent, V, rhs, du, null_rtol)
+    if nk < 0:
+        return 4, 0
     rho_soft, shift = soften * rho, reg_rtol * rho
+    if nk > 0:  # the first step's matrix: H0 with the null space held out (else H0's
+        for i in range(m):  # factor serves: the shift is below its rounding)
+            for j in range(m):
+                H[i, j] = H0[i, j]
+        _finish(H, shift, V, nk, rho)
+        if not _cholesky(H, L, dependent, 0.0):
+            return 4, 0
+    for i in range(m):
+        u[i] = 0.0
+    if use_hint:
+        _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u)
+        _project(u, V, nk)
     scale = 0.0
     for i in range(m):
         scale += e[i] * e[i]
