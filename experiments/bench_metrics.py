@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import BASELINE, FORMULATIONS
 from cardan_forces.solvers import Status
 from cardan_forces.solvers.qp_measures import SETTINGS, SHIFT_S, TIME_LIMIT_S
 
@@ -254,7 +254,7 @@ def targets(summary: list[dict], success_rows: list[dict], conic: set[str],
     hold that level).
     """
     best = best_runs(summary)
-    paper = max((e for e in summary if e["formulation"] == "paper"),
+    paper = max((e for e in summary if e["formulation"] == BASELINE),
                 key=lambda e: e["instants_per_s"], default=None)
     out = []
     for name, wanted in _target_rates().items():

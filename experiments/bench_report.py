@@ -7,6 +7,8 @@ import datetime
 import math
 from pathlib import Path
 
+from cardan_forces.formulations import BASELINE
+
 from . import files
 from .bench_metrics import PROFILES, SHIFT_S, TAUS, TIME_LIMIT_S, best_runs
 from .bench_run import CHECK_PASSES
@@ -333,7 +335,7 @@ def best_table(summary) -> list[dict]:
     paper method's fastest run of the same benchmark.
     """
     best = best_runs(summary)
-    paper = max((e for e in summary if e["formulation"] == "paper"),
+    paper = max((e for e in summary if e["formulation"] == BASELINE),
                 key=lambda e: e["instants_per_s"], default=None)
     return [{"formulation": name, "solver": e["solver"], "mode": e["mode"],
              "instants_per_s": e["instants_per_s"],

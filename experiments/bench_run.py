@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from cardan_forces.experiments.progress import line
 from cardan_forces.experiments.study import solve_over_time
-from cardan_forces.formulations import FORMULATIONS, default_backends
+from cardan_forces.formulations import BASELINE, FORMULATIONS, default_backends
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP
@@ -261,7 +261,7 @@ def baseline(solvers: list[str]) -> tuple[str, str] | None:
     backend (its :class:`~cardan_forces.formulations.Formulation`'s), warm-started
     where it can be (the paper's method as the paper runs it, the fair baseline).
     """
-    chosen = _preferred("paper", solvers)
+    chosen = _preferred(BASELINE, solvers)
     if chosen is None:
         return None
     return chosen, "warm" if get_backend(chosen).warm_start else "cold"
@@ -283,7 +283,7 @@ def throughput(prepared: Prepared, solvers: list[str], budget_s: float):
     run goes with everything alive before it :func:`frozen`.
     """
     rows, stages = [], {}
-    full = baseline(solvers) if prepared.name == "paper" else None
+    full = baseline(solvers) if prepared.name == BASELINE else None
     _warm_up(prepared, solvers)
     for solver in solvers:
         if _is_batched(solver):

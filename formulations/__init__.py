@@ -7,8 +7,10 @@ says how the package uses that formulation.
 """
 
 from .registry import (
+    BASELINE,
     FALLBACK,
     FORMULATIONS,
+    SELECTION,
     Formulation,
     UnknownFormulation,
     default_backends,
@@ -16,5 +18,5 @@ from .registry import (
     where,
 )
 
-__all__ = ["FALLBACK", "FORMULATIONS", "Formulation", "UnknownFormulation",
+__all__ = ["BASELINE", "FALLBACK", "FORMULATIONS", "SELECTION", "Formulation", "UnknownFormulation",
            "default_backends", "formulation", "where"]

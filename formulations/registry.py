@@ -29,6 +29,14 @@ FALLBACK = "clarabel"
 """Tried after a formulation's own backends (a core dependency that takes every convex
 class)."""
 
+SELECTION = "positive"
+"""The physical selection shown where one member of the rigid set is drawn or printed
+(``sets``' member column, ``report``'s lines, the figures' reference curve): the least
+norm with end faces >= 0, so it lies inside every interval."""
+
+BASELINE = "paper"
+"""The paper's method: the bench's baseline, the reference of the paper's figures."""
+
 
 @dataclass(frozen=True)
 class Formulation:

@@ -50,7 +50,7 @@ from cardan_forces.experiments.engine import (
 from cardan_forces.experiments.environment import machine, number_text, versions
 from cardan_forces.experiments.progress import bar
 from cardan_forces.experiments.study import value_ranges
-from cardan_forces.formulations import FORMULATIONS, where
+from cardan_forces.formulations import FORMULATIONS, SELECTION, where
 from cardan_forces.formulations.convex import NotApplicable
 from scipy.stats import binomtest
 
@@ -270,7 +270,7 @@ def _fig13_notes(op: Operator, hist: dict[str, History]) -> list[str]:
              f"{op.t[len(op.t) // 2]:.3f} s): {', '.join(unique) or 'none'}; all others "
              "depend on the selection rule."]
     rigid = [m for m in mags if m != PENALTY]
-    ref = "positive" if "positive" in rigid else rigid[0] if rigid else None
+    ref = SELECTION if SELECTION in rigid else rigid[0] if rigid else None
     for label in mags[ref] if ref else ():
         spread = np.nanmax([np.nanmax(np.abs(mags[m][label] - mags[ref][label]))
                             for m in rigid])

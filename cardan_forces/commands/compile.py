@@ -13,6 +13,7 @@ from cardan_forces.commands import progress
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.compiled import HAVE_NUMBA
 from cardan_forces.driveline.loading import load_scene
+from cardan_forces.formulations import SELECTION
 
 
 def add_parser(subparsers) -> None:
@@ -42,4 +43,4 @@ def _batched() -> None:
     import cardan_forces as cf
 
     op = cf.build_operator(cf.simulate(load_scene("paper")))
-    cf.solve_over_time(op, "positive", "numpy-batched", instants=[0, 1])
+    cf.solve_over_time(op, SELECTION, "numpy-batched", instants=[0, 1])

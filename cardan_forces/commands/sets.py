@@ -22,7 +22,7 @@ from cardan_forces.driveline.release import (
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.paper_method import multistart
 from cardan_forces.experiments.study import default_backend, intervals
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import FORMULATIONS, SELECTION
 from cardan_forces.solvers import solve
 
 from . import check_time, print_json
@@ -81,7 +81,7 @@ EMPTY = ("empty: no forces satisfy the equilibrium with end faces >= 0 and the s
          "joints' friction bounds at this instant")
 """What the table says of a rigid set the LPs find infeasible."""
 
-SIGNED = "positive"
+SIGNED = SELECTION
 """The formulation whose answer ``sets`` shows as a member of the rigid set: the least
 norm with end faces >= 0, so it lies inside every interval the table prints."""
 
