@@ -19,6 +19,8 @@ import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+from . import progress
+
 
 @contextlib.contextmanager
 def replacing(path: Path | str, mode: str = "w", **options) -> Iterator:
@@ -87,18 +89,23 @@ def stale(folder: Path | str, written: Iterable[Path | str],
     return sorted(p for p in found if p.resolve() not in mine)
 
 
+LISTED = 8
+"""Most files :func:`say_written` names one by one (more: their count)."""
+
+
 def say_written(command: str, paths: Iterable[Path | str], replaced: bool = False,
                 removed: Iterable[Path | str] = (), note: str = "") -> None:
     """One line on stderr naming where ``command`` wrote (its folder when every path
     shares one), whether it replaced an earlier run's files, which files of an earlier
-    run it ``removed``, and a ``note`` (e.g. what a resumed run found). Not silenced by
-    ``--quiet``: it is the run's outcome, not its progress.
+    run it ``removed``, and a ``note`` (e.g. what a resumed run found); none with
+    ``--quiet`` (the command's answer on stdout still names its files).
     """
     paths, removed = [Path(p) for p in paths], [Path(p) for p in removed]
-    if not paths:
+    if not paths or progress.quiet():
         return
     folders = {p.parent for p in paths}
-    where = f"{folders.pop()}/ ({', '.join(p.name for p in paths)})" if len(folders) == 1 \
+    names = ", ".join(p.name for p in paths) if len(paths) <= LISTED else f"{len(paths)} files"
+    where = f"{folders.pop()}/ ({names})" if len(folders) == 1 \
         else ", ".join(str(p) for p in paths)
     again = " (replacing the earlier run's files)" if replaced else ""
     gone = f"; removed an earlier run's {', '.join(p.name for p in removed)}" if removed \

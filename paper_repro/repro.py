@@ -36,6 +36,7 @@ from cardan_forces.driveline.kinematics import kinematics
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene
+from cardan_forces.experiments import files
 from cardan_forces.experiments.engine import (
     FIGURE_SETTINGS,
     SETTINGS,
@@ -587,10 +588,40 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     runs.close()
     report = _report(scene, motion, sections, quick, [s.name for s in fig15], methods,
                      formats, runs, time.perf_counter() - started)
-    path = out / "report.md"
-    path.write_text(report)
+    written = _written(sections, formats)
+    stale = files.stale(out, [*written, out / "report.md"], OUTPUTS)
+    path = files.write_text(out / "report.md", report + _stale_lines(stale))
     progress(f"repro: report -> {path} ({time.perf_counter() - started:.1f} s in all)")
+    files.say_written("repro", [*written, path], note=f"{len(stale)} file(s) of an earlier "
+                      "run left beside them, listed in report.md" if stale else "")
     return path
+
+
+OUTPUTS = tuple(f"{stem}.{kind}" for stem in ("fig1[1-5]*", "engine")
+                for kind in ("csv", "png", "svg", "pdf")) + ("compliance_vs_penalty.csv",)
+"""Glob patterns of the files a run writes into its folder (besides ``report.md``)."""
+
+
+def _written(sections, formats) -> list[Path]:
+    """The files of the report's ``sections``: each CSV, and a figure's images."""
+    out = []
+    for _, csv, _ in sections:
+        if csv is not None:
+            images = formats if csv.name.startswith(("fig", "engine")) else ()
+            out += [csv, *(csv.with_suffix(f".{f}") for f in images)]
+    return out
+
+
+def _stale_lines(stale: list[Path]) -> str:
+    """``report.md``'s list of the files in its folder an earlier run left (another
+    figure, format or method set): kept, for they may be wanted, but not this report's.
+    """
+    if not stale:
+        return ""
+    return "\n".join(["", "## Files of an earlier run", "",
+                       "In this folder but not written by this run (another run's figures, "
+                       "formats or methods; this report does not cover them):", "",
+                       *(f"- `{p.name}`" for p in stale)]) + "\n"
 
 
 @dataclass(frozen=True)
@@ -847,7 +878,7 @@ def _compliance_vs_penalty(compliance, result, out: Path):
         rows.append(row)
     path = out / "compliance_vs_penalty.csv"
     keys = list(rows[0])
-    path.write_text(",".join(keys) + "\n" + "".join(
+    files.write_text(path, ",".join(keys) + "\n" + "".join(
         ",".join(f"{r[k]:.6g}" if isinstance(r[k], float) else str(r[k]) for k in keys) + "\n"
         for r in rows))
     lines = [f"Median over the instants after {SETTLED_S:g} s of ||x_method - x_penalty|| / "
