@@ -26,6 +26,12 @@ if not HAVE_NUMBA:  # an optional extra: the caller takes the NumPy reference
     raise ImportError("numba is not installed")
 
 
+DENSE = 0.6
+"""Share of ``E``'s entries inside the columns' spans from which a Hessian is summed by
+one BLAS product (the conic forms' rotated rows) rather than by rank-one updates over
+the spans (the operator's rows: a contact loads two bodies of the line)."""
+
+
 @njit(cache=True)
 def _contact(dg, w, signed, n, k, g):
     """One contact at deformations ``dg`` (its first ``w`` entries): ``(r, slope, ratio,
@@ -94,17 +100,17 @@ def _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, U
 
 
 @njit(cache=True)
-def _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift, V, nk, rho, H):
-    """``H = sum_c E_c H_c E_c' + shift I + rho V V'`` (lower triangle and mirror);
-    ``span[j]``: the rows where column ``j`` can be nonzero. ``H_c = slope u u' + ratio
-    (I - u u')`` is ``w`` rank-one terms: ``Y_c = E_c u`` and ``E_c h`` for the columns
-    ``h`` of the Householder reflection that maps ``e_1`` onto ``-+u`` (the rest are an
-    orthonormal basis of ``u``'s complement).
+def _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift, V, nk, rho, H, terms):
+    """``H = sum_c E_c H_c E_c' + shift I + rho V V'``; ``span[j]``: the rows where
+    column ``j`` can be nonzero. ``H_c = slope u u' + ratio (I - u u')`` is ``w``
+    rank-one terms: ``Y_c = E_c u`` and ``E_c h`` for the columns ``h`` of the
+    Householder reflection that maps ``e_1`` onto ``-+u`` (the rest are an orthonormal
+    basis of ``u``'s complement). ``terms``: ``(B, ranges, dense)``, the terms' rows
+    scaled by their roots and summed as ``B'B`` (one BLAS product where the columns are
+    dense, rank-one updates over their rows where they are not).
     """
-    m = Et.shape[1]
-    for i in range(m):
-        for j in range(i + 1):
-            H[i, j] = 0.0
+    B, ranges, dense = terms
+    m, t = Et.shape[1], 0
     for c in range(members.shape[0]):
         w, lo, hi, length = 0, m, 0, 0.0
         for p in range(members.shape[1]):
@@ -116,18 +122,43 @@ def _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift, V, nk, rho, 
         if length == 0.0:  # no direction (an exactly unloaded linear contact): ratio I
             for p in range(w):
                 col = members[c, p]
-                _rank_one(H, Et[col], ratio[c], span[col, 0], span[col, 1])
+                t = _term(B, ranges, t, Et[col], ratio[c], span[col, 0], span[col, 1])
             continue
         if slope[c] != 0.0:
-            _rank_one(H, Y[c], slope[c], lo, hi)
+            t = _term(B, ranges, t, Y[c], slope[c], lo, hi)
         if ratio[c] != 0.0 and w > 1:
-            _complement(Et, span, members[c], U[c], w, lo, hi, ratio[c], z, H)
+            t = _complement(Et, span, members[c], U[c], w, lo, hi, ratio[c], z, B, ranges, t)
+    _sum_terms(B, ranges, t, dense, H)
     _finish(H, shift, V, nk, rho)
 
 
 @njit(cache=True)
-def _complement(Et, span, cols, u, w, lo, hi, ratio, z, H):
-    """``H += ratio E_c (I - u u') E_c'`` through the reflection's columns 2..w."""
+def _term(B, ranges, t, a, scale, lo, hi):
+    """Row ``t`` of ``B``: ``sqrt(scale) a`` on rows ``lo:hi`` (0 elsewhere); ``t + 1``."""
+    root = np.sqrt(scale)
+    for i in range(B.shape[1]):
+        B[t, i] = root * a[i] if lo <= i < hi else 0.0
+    ranges[t, 0], ranges[t, 1] = lo, hi
+    return t + 1
+
+
+@njit(cache=True)
+def _sum_terms(B, ranges, count, dense, H):
+    """``H = B'B`` over the first ``count`` rows (at least its lower triangle)."""
+    if dense and count > 0:
+        rows = B[:count]
+        np.dot(rows.T, rows, H)
+        return
+    for i in range(H.shape[0]):
+        for j in range(i + 1):
+            H[i, j] = 0.0
+    for t in range(count):
+        _rank_one(H, B[t], 1.0, ranges[t, 0], ranges[t, 1])
+
+
+@njit(cache=True)
+def _complement(Et, span, cols, u, w, lo, hi, ratio, z, B, ranges, t):
+    """The terms of ``ratio E_c (I - u u') E_c'``: the reflection's columns 2..w."""
     v0 = u[0] + (1.0 if u[0] >= 0 else -1.0)
     vv = v0 * v0
     for j in range(1, w):
@@ -140,7 +171,8 @@ def _complement(Et, span, cols, u, w, lo, hi, ratio, z, H):
             h = (1.0 if j == q else 0.0) - 2.0 * vj * u[q] / vv
             for i in range(span[cols[j], 0], span[cols[j], 1]):
                 z[i] += Et[cols[j], i] * h
-        _rank_one(H, z, ratio, lo, hi)
+        t = _term(B, ranges, t, z, ratio, lo, hi)
+    return t
 
 
 @njit(cache=True)
@@ -262,22 +294,23 @@ def _project(v, V, nk):
 
 
 @njit(cache=True)
-def _nominal(Et, span, e, members, mask, n, k, H0):
-    """``H0`` (:func:`._newton_numpy.nominal`) into ``H0``; returns ``rho``, its mean diagonal."""
-    m = Et.shape[1]
+def _nominal(Et, span, e, members, mask, n, k, H0, terms):
+    """``H0`` (:func:`._newton_numpy.nominal`) into ``H0`` (summed as :func:`_hessian`
+    sums its terms); returns ``rho``, its mean diagonal.
+    """
+    B, ranges, dense = terms
+    m, t = Et.shape[1], 0
     F = 0.0
     for i in range(m):
         F += e[i] * e[i]
     F = max(np.sqrt(F), 1e-300)
-    for i in range(m):
-        for j in range(i + 1):
-            H0[i, j] = 0.0
     for c in range(members.shape[0]):
         c0 = n[c] * F ** (1.0 - 1.0 / n[c]) / k[c]
         for p in range(members.shape[1]):
             if mask[c, p] > 0:
                 col = members[c, p]
-                _rank_one(H0, Et[col], c0, span[col, 0], span[col, 1])
+                t = _term(B, ranges, t, Et[col], c0, span[col, 0], span[col, 1])
+    _sum_terms(B, ranges, t, dense, H0)
     trace = 0.0
     for i in range(m):
         trace += H0[i, i]
@@ -395,34 +428,50 @@ def _gradient(Et, span, e, f, u, rho_soft, V, nk, grad):
 
 
 @njit(cache=True)
-def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, s,
-             u):
-    """One instant into ``u``; returns ``(status, iterations)`` (``groups``: members,
-    mask, signed, n; ``s``: the scratch of :func:`newton`).
+def _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, reg_rtol, s, terms, u):
+    """An instant's start: ``H0``, its null space ``V`` and the first step's factor
+    ``L`` in the scratch ``s``, ``u`` cold (0) or fitted to ``hint``. Returns ``(code,
+    rho, nk)``: a nonzero code ends the instant (3 non-finite data, 4 no factor).
     """
     members, mask, signed, n = groups
-    H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, U, z, dg, unit = s
-    null_rtol, reg_rtol, ls_rtol, ls_max = params
+    H0, H, L, V, dependent, rhs, du = s[:7]
     m = Et.shape[1]
     if not _finite(Et, e, k, g):
-        return 3, 0
-    rho = _nominal(Et, span, e, members, mask, n, k, H0)
+        return 3, 0.0, 0
+    rho = _nominal(Et, span, e, members, mask, n, k, H0, terms)
     nk = _null_space(H0, L, dependent, V, rhs, du, null_rtol)
     if nk < 0:
-        return 4, 0
-    rho_soft, shift = soften * rho, reg_rtol * rho
+        return 4, rho, 0
     if nk > 0:  # the first step's matrix: H0 with the null space held out (else H0's
         for i in range(m):  # factor serves: the shift is below its rounding)
             for j in range(m):
                 H[i, j] = H0[i, j]
-        _finish(H, shift, V, nk, rho)
+        _finish(H, reg_rtol * rho, V, nk, rho)
         if not _cholesky(H, L, dependent, 0.0):
-            return 4, 0
+            return 4, rho, nk
     for i in range(m):
         u[i] = 0.0
     if use_hint:
         _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u)
         _project(u, V, nk)
+    return 0, rho, nk
+
+
+@njit(cache=True)
+def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, s,
+             terms, u):
+    """One instant into ``u``; returns ``(status, iterations)`` (``groups``: members,
+    mask, signed, n; ``s``, ``terms``: the scratch of :func:`newton`).
+    """
+    members, mask, signed, n = groups
+    H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, U, z, dg, unit = s
+    null_rtol, reg_rtol, ls_rtol, ls_max = params
+    m = Et.shape[1]
+    code, rho, nk = _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, reg_rtol,
+                           s, terms, u)
+    if code:
+        return code, 0
+    rho_soft, shift = soften * rho, reg_rtol * rho
     scale = 0.0
     for i in range(m):
         scale += e[i] * e[i]
@@ -439,7 +488,7 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
             break
         if it > 0 or use_hint:
             _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift + rho_soft, V, nk,
-                     rho, H)
+                     rho, H, terms)
             if not _cholesky(H, L, dependent, 0.0):
                 return 4, it
         for i in range(m):
@@ -486,6 +535,10 @@ def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, m
                np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
                np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G), np.zeros(G),
                np.zeros((G, m)), np.zeros((G, w)), np.zeros(m), np.zeros(w), np.zeros(w))
+    covered = 0
+    for j in range(nv):
+        covered += span[j, 1] - span[j, 0]
+    terms = (np.zeros((nv, m)), np.zeros((nv, 2), np.int64), covered >= DENSE * nv * m)
     u_out, d_out = np.zeros((T, m)), np.zeros((T, nv))
     status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
     groups = (members, mask, signed, n)
@@ -494,7 +547,7 @@ def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, m
         hint = d_out[i - 1] if warm else d0[i]
         status[i], iters[i] = _instant(Et[i], span, e[i], groups, k[i], g[i], hint,
                                        warm or start[i], tol, max_iter, soften, params,
-                                       scratch, u_out[i])
+                                       scratch, terms, u_out[i])
         for j in range(nv):
             acc = 0.0
             for r in range(span[j, 0], span[j, 1]):
