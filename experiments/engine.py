@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.driveline import engine_mujoco
 from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
+from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import draw_set, format_list, save
 from cardan_forces.experiments.study import intervals as rigid_intervals
@@ -379,13 +380,13 @@ def write(result: EngineStudy, out: Path, mujoco_version: str,
     figure ``engine.<format>`` for each of ``formats``.
     """
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "engine.csv", "w", newline="") as handle:
+    with files.replacing(out / "engine.csv", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["setting", "t", *result.op.names])
         for label, r in result.runs.items():
             for t, x in zip(r.t, r.forces):
                 writer.writerow([label, f"{t:.6g}", *(f"{v:.9g}" for v in x)])
-    (out / "engine.md").write_text("\n".join(report_lines(result, mujoco_version)) + "\n")
+    files.write_text(out / "engine.md", "\n".join(report_lines(result, mujoco_version)) + "\n")
     return [out / "engine.csv", out / "engine.md", *draw(result, out / "engine", formats)]
 
 
@@ -442,6 +443,6 @@ def run(args) -> int:
     result = study(args.scene, args.stop, args.instants)
     paths = write(result, Path(args.out), version, args.format)
     print("\n".join(agreement_lines(result)))
-    print(f"wrote {', '.join(str(p) for p in paths)} ({time.perf_counter() - start:.1f} s)")
+    files.say_written("engine", paths, note=f"{time.perf_counter() - start:.1f} s")
     return 0
 

@@ -34,7 +34,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
-from cardan_forces.experiments import progress
+from cardan_forces.experiments import files, progress
 from cardan_forces.experiments.environment import json_number, json_text, number_text
 from cardan_forces.experiments.study import History, solve_over_time
 from cardan_forces.formulations import FORMULATIONS, default_backends
@@ -409,7 +409,7 @@ def write_csv(runs: list[Run], path: Path) -> None:
     solve is a row with empty residual cells (undefined); ``jump`` is the step from the
     previous instant, empty next to an instant without forces.
     """
-    with open(path, "w", newline="") as f:
+    with files.replacing(path, newline="") as f:
         w = csv.writer(f)
         w.writerow(["case", "formulation", "solver", "t_s", "status", *Residuals.KEYS, "jump",
                     "time_s", "message"])
@@ -449,7 +449,7 @@ def write_md(rows: list[dict], path: Path, settings: str, cases: list[Case],
               if _verdict(r) == "FAIL"] or ["none"]
     lines += ["", "## Cases that do not apply to this scene", ""]
     lines += [f"- **{c.case}**: {c.reason}" for c in skipped] or ["none"]
-    path.write_text("\n".join([*lines, ""]))
+    files.write_text(path, "\n".join([*lines, ""]))
 
 
 # ---------------------------------------------------------------------------- CLI
@@ -504,6 +504,7 @@ def run(args) -> int:
         out.mkdir(parents=True, exist_ok=True)
         write_csv(runs, out / "hard.csv")
         write_md(rows, out / "hard.md", settings, cases, skipped, len(scene.joints))
+        files.say_written("hard", [out / "hard.csv", out / "hard.md"])
     failed = 1 if any(_verdict(r) == "FAIL" for r in rows) else 0  # unexpected failures
     if args.json:
         print(json_text({"cases": [r.to_json() for r in runs],

@@ -46,6 +46,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import LIMITS, Scene, SceneError, TimeGrid, TorqueLaw
+from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import coinciding, format_list, save
 
@@ -137,7 +138,7 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
     import matplotlib.pyplot as plt
 
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "secondary.csv", "w", newline="") as f:
+    with files.replacing(out / "secondary.csv", newline="") as f:
         w = csv.writer(f)
         w.writerow(["case", "bearing_load", "angle_deg", "force_N"])
         for case, loads in results.items():
@@ -285,4 +286,7 @@ def run(args) -> int:
             print(f"{_case_name(arrangement, angles):16s} {bearing.name:12s} "
                   f"{360 * i // STEPS:9d} {number_text(expect[key], '12.4f')} "
                   f"{number_text(got, '12.4f')}")
+    out = Path(args.out)
+    files.say_written("secondary", [out / "secondary.csv",
+                                    *(out / f"secondary.{f}" for f in args.format)])
     return 0

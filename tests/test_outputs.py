@@ -53,3 +53,18 @@ def test_repro_lists_an_earlier_runs_figures_as_not_its_own(tmp_path, capsys):
     assert "`fig11.csv`" in earlier and "`fig11.png`" in earlier and "fig12" not in earlier
     assert (tmp_path / "fig11.csv").exists()
     assert f"cardan repro: wrote {tmp_path}/" in err and "listed in report.md" in err
+
+
+@pytest.mark.parametrize("argv, names", [
+    (["hard", "--quick", "--case", "articulation-0", "--formulation", "positive"],
+     ("hard.csv", "hard.md")),
+    (["secondary"], ("secondary.csv", "secondary.png")),
+])
+def test_a_command_that_writes_files_ends_saying_where(tmp_path, capsys, argv, names):
+    """The last line on stderr names the folder and the files, which are there; a
+    second run replaces them (no second copy, no temporary left)."""
+    for _ in range(2):
+        assert main([*argv, "--out", str(tmp_path)]) == 0
+        last = capsys.readouterr().err.splitlines()[-1]
+        assert last == f"cardan {argv[0]}: wrote {tmp_path}/ ({', '.join(names)})"
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
