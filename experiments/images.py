@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import files
+
 FORMATS = ("png", "svg", "pdf")
 """Image formats a figure can be written in."""
 DPI = 150
@@ -47,12 +49,13 @@ def format_list(text: str) -> tuple[str, ...]:
 
 
 def save(fig, stem: Path, formats=("png",)) -> list[Path]:
-    """Write ``fig`` as ``stem.<format>`` for each of ``formats`` (PNG at :data:`DPI`);
-    their paths.
+    """Write ``fig`` as ``stem.<format>`` for each of ``formats`` (PNG at :data:`DPI`),
+    each whole or not at all (:func:`.files.replacing`); their paths.
     """
     paths = [stem.with_suffix(f".{fmt}") for fmt in formats]
-    for path in paths:
-        fig.savefig(path, dpi=DPI)
+    for path, fmt in zip(paths, formats):
+        with files.replacing(path, "wb") as handle:
+            fig.savefig(handle, format=fmt, dpi=DPI)
     return paths
 
 
