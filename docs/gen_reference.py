@@ -69,27 +69,42 @@ def cli_markdown() -> str:
 # ---------------------------------------------------------------------------- scene
 
 
-def _record_reads() -> tuple[dict[str, str], dict[str, set[str]]]:
-    """The kind of quantity (a key of ``LIMITS``) each numeric field is read as, and the
-    defaults the loader gives a field a file leaves out (one per table that reads it),
-    found by loading every built-in scene through the loader with its readers watched.
+def _record_reads() -> dict[tuple[str, str], dict]:
+    """Every key the loader reads, as ``(table, key) -> {"kind", "defaults"}``: the kind
+    of quantity (a key of ``LIMITS``) a number is read as, and the default the loader
+    gives a key a file leaves out ("required" where there is none, "optional" where a
+    table loaded without it); found by loading
+    every built-in scene through the loader with its readers watched. ``table`` is the
+    key's table in the file, array indices dropped (``shafts[].bearings[]``).
     """
-    kinds: dict[str, str] = {}
-    defaults: dict[str, set[str]] = {}
+    reads: dict[tuple[str, str], dict] = {}
     table = loading._Table
     get, number, vector = table.get, table.number, table.vector
 
+    seen: dict[str, set[int]] = {}  # the tables read at each place, by identity
+
+    def entry(self, key) -> dict:
+        where = re.sub(r"\[\d+\]", "[]", self.path) or "(top level)"
+        seen.setdefault(where, set()).add(id(self))
+        read = reads.setdefault((where, key), {"kind": None, "defaults": set(), "in": set()})
+        read["in"].add(id(self))
+        return read
+
     def watched_get(self, key, default=...):
-        shown = "required" if default is ... or isinstance(default, dict) else f"`{default!r}`"
-        defaults.setdefault(key, set()).add(shown)
+        if isinstance(default, dict):  # a table whose keys have defaults of their own
+            entry(self, key)["defaults"].add("optional")
+        elif default is not ...:
+            entry(self, key)["defaults"].add(f"`{default!r}`")
+        else:
+            entry(self, key)
         return get(self, key, default)
 
     def watched_number(self, key, *args, kind="number", **kw):
-        kinds.setdefault(key, kind)
+        entry(self, key)["kind"] = kind
         return number(self, key, *args, kind=kind, **kw)
 
     def watched_vector(self, key, size, *args, kind="position_m", unit=False, **kw):
-        kinds.setdefault(key, "direction" if unit else kind)
+        entry(self, key)["kind"] = "direction" if unit else kind
         return vector(self, key, size, *args, kind=kind, unit=unit, **kw)
 
     table.get, table.number, table.vector = watched_get, watched_number, watched_vector
@@ -98,7 +113,37 @@ def _record_reads() -> tuple[dict[str, str], dict[str, set[str]]]:
             loading.load_scene(name)
     finally:
         table.get, table.number, table.vector = get, number, vector
+    for (where, _), read in reads.items():  # a table that loaded without the key
+        if not read["defaults"]:
+            read["defaults"].add("optional" if read["in"] < seen[where] else "required")
+    return reads
+
+
+def _by_key(reads: dict) -> tuple[dict[str, str], dict[str, set[str]]]:
+    """The kinds and the defaults of :func:`_record_reads` by key alone (every table)."""
+    kinds: dict[str, str] = {}
+    defaults: dict[str, set[str]] = {}
+    for (_, key), read in reads.items():
+        if read["kind"]:
+            kinds.setdefault(key, read["kind"])
+        defaults.setdefault(key, set()).update(read["defaults"])
     return kinds, defaults
+
+
+def file_keys_markdown(reads: dict) -> str:
+    """Every key of a scene file the loader reads, by table, with unit, default, limit."""
+    optional = {f.name for cls in scene_classes() for f in dataclasses.fields(cls)
+                if f.default is not dataclasses.MISSING
+                or f.default_factory is not dataclasses.MISSING}  # the model's defaults
+
+    def default(key: str, read: dict) -> str:
+        if read["defaults"] == {"required"} and key in optional:
+            return "optional"
+        return " or ".join(sorted(read["defaults"]))
+
+    rows = [[f"`{where}`", f"`{key}`", _unit(key), default(key, read),
+             _limit(key, {key: read["kind"]})] for (where, key), read in sorted(reads.items())]
+    return "\n".join(_table(["table", "key", "unit", "default", "limit"], rows)) + "\n"
 
 
 def _unit(name: str) -> str:
@@ -148,8 +193,9 @@ def _type_name(hint) -> str:
 
 def _default(field: dataclasses.Field, defaults: dict[str, set[str]]) -> str:
     """The loader's default where every table reads the field alike, else the model's."""
-    if len(defaults.get(field.name, ())) == 1:
-        return next(iter(defaults[field.name]))
+    loader = defaults.get(field.name, set())
+    if len(loader) == 1 and not loader <= {"required", "optional"}:
+        return next(iter(loader))
     if field.default is not dataclasses.MISSING:
         return f"`{field.default!r}`"
     if field.default_factory is not dataclasses.MISSING:
@@ -181,7 +227,8 @@ def scene_markdown() -> str:
     """Each class of the scene model: its fields with type, unit, default and limit;
     then the limits per kind of quantity and the model's other bounds.
     """
-    kinds, defaults = _record_reads()
+    reads = _record_reads()
+    kinds, defaults = _by_key(reads)
     parts = []
     for cls in scene_classes():
         hints = typing.get_type_hints(cls, vars(scene))
@@ -192,6 +239,11 @@ def scene_markdown() -> str:
             parts.append(f"| `{f.name}` | {_type_name(hints[f.name])} | {_unit(f.name)} | "
                          f"{_default(f, defaults)} | {_limit(f.name, kinds)} |")
         parts.append("")
+    parts += ["## Every key of a scene file", "",
+              "Every key the loader reads from the built-in scenes' files, by table (an "
+              "array's tables as `[]`), with the default it gives a key the file leaves "
+              "out. A kind of element may read keys of its own (a bearing kind's table).",
+              "", file_keys_markdown(reads)]
     parts += ["## Limits per kind of quantity", "",
               "Every number is finite; a positive field is at least `least`, every field at "
               "most `most` in magnitude (`LIMITS` in `driveline/scene.py`).", "",
@@ -261,6 +313,25 @@ def formulations_markdown() -> str:
             for f in cf.FORMULATIONS.values()]
     return "\n".join(_table(["formulation", "problem", "its answer is", "default backends",
                               "label in figures"], rows)) + "\n"
+
+
+# --------------------------------------------------------------------------- solvers
+
+
+def backends_markdown() -> str:
+    """Every backend the package's adapters can provide, by adapter, with the extra that
+    installs it and the adapter's own summary (from ``solvers/registry.py``'s list).
+    """
+    from cardan_forces.solvers import registry
+
+    rows = []
+    for module in registry.ADAPTERS:
+        adapter = registry._adapter(module)
+        summary = " ".join((inspect.getdoc(adapter) or "").split("\n\n")[0].split())
+        names = ", ".join(f"`{n}`" + (f" (`{e}`)" if e else "")
+                          for n, e in adapter.EXTRAS.items())
+        rows.append([f"`solvers/{module}.py`", names, summary])
+    return "\n".join(_table(["adapter", "backends (extra)", "what it is"], rows)) + "\n"
 
 
 # ---------------------------------------------------------------------- determinacy

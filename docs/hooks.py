@@ -39,6 +39,7 @@ GENERATED = {
     "determinacy": gen_reference.determinacy_markdown,
     "element-kind": gen_reference.element_kind_markdown,
     "formulations": gen_reference.formulations_markdown,
+    "backends": gen_reference.backends_markdown,
     "bench": gen_reference.bench_markdown,
     "changelog": lambda: (ROOT / "CHANGELOG.md").read_text().split("\n", 1)[1],
 }
