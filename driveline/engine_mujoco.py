@@ -2,12 +2,14 @@
 constraint forces read back into the operator's named forces (optional extra ``mujoco``).
 
 **Model** (MJCF generated from the scene, :func:`build_mjcf`). The line is one kinematic
-tree in chain order: the first shaft body floats (a free joint), each cross-pin hangs on
-its driving yoke by a hinge about ``e1``, the next shaft on the pin by a hinge about
-``e2``, and a slip joint's downstream segment on its upstream one by a slide along the
-axis (frictionless). Masses and inertias are the scene's (a shaft's transverse moments
-``J1``, ``J3`` along ``r1``, ``r2``; a segment takes its length share of all three, as
-the operator does of the axial one). Every bearing is an equality constraint to the
+tree in chain order: the first shaft body floats (a free joint), each next body hangs
+on the one before by the joint the kind of the element between them gives
+(:meth:`~.elements.base.ElementKind.mjcf_joint`): a cross-pin on its driving yoke by a
+hinge about ``e1``, the next shaft on the pin by a hinge about ``e2``, a slip joint's
+downstream segment on its upstream one by a slide along the axis (frictionless).
+Masses and inertias are the scene's (a shaft's transverse moments ``J1``, ``J3`` along
+``r1``, ``r2``; a segment takes its length share of all three, as the operator does of
+the axial one). Every bearing is an equality constraint to the
 ground, as its kind writes it (:meth:`~.elements.bearing.BearingKind.mjcf`): a
 locating one a ``connect`` at the bearing point (3 rows), a floating one a ``connect``
 to a carrier body that slides along the shaft's axis on the ground (its weight
@@ -51,13 +53,9 @@ import numpy as np
 
 from .elements import shaft_segments
 from .elements.base import mjcf_numbers as _vec
-from .equilibrium import Operator, body_references
+from .equilibrium import Link, Operator, body_references
 from .kinematics import kinematics, rest_geometry
 from .scene import Scene
-
-MASSLESS_PIN_KG = 1e-6
-"""Mass given to a cross-pin the scene leaves massless (no ``crosspin_inertia``): the
-engine needs a positive one; its weight, 1e-5 N, is far below the loads compared."""
 
 
 class EngineUnsupported(ValueError):
@@ -159,7 +157,8 @@ def check_expressible(scene: Scene) -> None:
 class _Body:
     """One engine body: the operator's body index, its global pose at the start, its
     joint (``free``, ``hinge`` or ``slide``) with the joint's global axis, mass and
-    global inertia tensor about its centre of mass ``pos``.
+    global inertia tensor about its centre of mass ``pos``; ``link``: the contact whose
+    kind made the joint (None for the free first body).
     """
 
     index: int
@@ -170,6 +169,7 @@ class _Body:
     joint_pos: np.ndarray
     mass: float
     inertia: np.ndarray
+    link: Link | None = None
 
 
 def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -184,44 +184,67 @@ def reference_points(op: Operator) -> np.ndarray:
     return body_references(rest_geometry(op.scene), shaft_segments(op.scene))
 
 
-def _chain(op: Operator) -> list[_Body]:
-    """The engine bodies in tree order (each the child of the one before it)."""
+@dataclass(frozen=True)
+class Start:
+    """The line at the scene's start, as the kinds place their MuJoCo joints and bodies:
+    the scene, its rest geometry, the kinematics at the initial angle, the operator's
+    bodies and their moment references ``refs``, the initial ``speed`` (rad/s).
+    """
+
+    scene: Scene
+    geo: object
+    kin: object
+    bodies: tuple
+    refs: np.ndarray
+    speed: float
+
+
+def _start(op: Operator) -> Start:
     scene = op.scene
     geo = rest_geometry(scene)
-    kin = kinematics(geo, scene.initial_angle_rad)
-    segs = shaft_segments(scene)
-    refs = reference_points(op)
-    n_seg = len(segs)
-    frames = op.shaft_frames
-    chain: list[_Body] = []
-    for g, seg in enumerate(segs):
-        k, shaft = seg.shaft, scene.shafts[seg.shaft]
-        a = geo.axes[k]
-        if not chain:
-            joint, axis, at = "free", a, refs[g]
-        elif chain[-1].index >= n_seg:  # hangs on a cross-pin: hinge about e2
-            joint, axis, at = "hinge", kin.e2[k - 1, 0], geo.joint_centres[k - 1]
-        else:  # downstream segment of a slip joint
-            joint, axis, at = "slide", a, refs[g]
-        j_axes = np.array(shaft.inertia_kg_m2)[[0, 2, 1]] * seg.fraction
-        rot = _rotation(a, kin.phi[k, 0])
-        inertia = rot @ np.einsum("i,ia,ib->ab", j_axes, frames[k], frames[k]) @ rot.T
-        chain.append(_Body(g, refs[g], rot, joint, axis, at, seg.fraction * shaft.mass_kg,
-                           inertia))
-        if k < len(scene.joints) and seg.hi_m == shaft.length_m / 2:
-            chain.append(_pin(scene, geo, kin, k, n_seg + k))
-    return chain
+    return Start(scene, geo, kinematics(geo, scene.initial_angle_rad), op.bodies,
+                 reference_points(op), scene.initial_speed_rad_s)
 
 
-def _pin(scene: Scene, geo, kin, j: int, index: int) -> _Body:
-    now = np.stack([kin.e1[j, 0], kin.e2[j, 0], kin.e3[j, 0]], axis=1)
-    rest = np.stack([geo.yoke_in[j], geo.yoke_out[j],
-                     np.cross(geo.yoke_in[j], geo.yoke_out[j])], axis=1)
-    massive = scene.has("crosspin_inertia")
-    moments = np.array(scene.crosspin.inertia_kg_m2) if massive else np.full(3, 1e-12)
-    return _Body(index, geo.joint_centres[j], now @ rest.T, "hinge", kin.e1[j, 0],
-                 geo.joint_centres[j], scene.crosspin.mass_kg if massive else MASSLESS_PIN_KG,
-                 now @ np.diag(moments) @ now.T)
+def _chain(op: Operator) -> list[_Body]:
+    """The engine bodies in tree order (each the child of the one before it): a walk
+    along the line from its first shaft body (which floats) through the links between
+    bodies, each link's kind giving the joint by which the next body hangs on the last
+    (and the body itself where the kind made it, a cross-pin).
+    """
+    start = _start(op)
+    joins = [c for c in op.contacts if c.other is not None]
+    chain = [_shaft_body(op, start, 0, "free", start.geo.axes[0], start.refs[0], None)]
+    seen = {0}
+    while True:
+        here = chain[-1].index
+        link = next((c for c in joins if here in (c.body, c.other)
+                     and {c.body, c.other} - seen), None)
+        if link is None:
+            return chain
+        child = link.other if link.body == here else link.body
+        seen.add(child)
+        kind = link.element_kind
+        joint, axis, at = kind.mjcf_joint(link, child, start)
+        if op.bodies[child].shaft is not None:
+            chain.append(_shaft_body(op, start, child, joint, axis, at, link))
+        else:
+            pos, rot, mass, inertia = kind.mjcf_body(child, start)
+            chain.append(_Body(child, pos, rot, joint, axis, at, mass, inertia, link))
+
+
+def _shaft_body(op: Operator, start: Start, g: int, joint: str, axis, at, link) -> _Body:
+    """Shaft body ``g`` (a shaft or a segment): the shaft's mass and principal moments
+    by its length share, turned to the initial angle.
+    """
+    seg = shaft_segments(op.scene)[g]
+    k, shaft = seg.shaft, op.scene.shafts[seg.shaft]
+    frame = op.shaft_frames[k]
+    j_axes = np.array(shaft.inertia_kg_m2)[[0, 2, 1]] * seg.fraction
+    rot = _rotation(start.geo.axes[k], start.kin.phi[k, 0])
+    inertia = rot @ np.einsum("i,ia,ib->ab", j_axes, frame, frame) @ rot.T
+    return _Body(g, start.refs[g], rot, joint, axis, at, seg.fraction * shaft.mass_kg,
+                 inertia, link)
 
 
 def _quat(rot: np.ndarray) -> np.ndarray:
@@ -290,24 +313,18 @@ def _timestep(op: Operator, softness: Softness) -> float:
 
 
 def _initial_velocity(model, data, op: Operator, chain: list[_Body]) -> None:
-    """Joint speeds of the scene's initial state: the first shaft turning at the
-    initial speed, each hinge at its kinematic rate, the slides still.
+    """Joint speeds of the scene's initial state: the first shaft turning at the initial
+    speed, every other joint at the speed its kind gives (a hinge at its kinematic rate,
+    a slide still).
     """
-    scene = op.scene
-    qd0 = scene.initial_speed_rad_s
-    geo = rest_geometry(scene)
-    kin, axes = kinematics(geo, scene.initial_angle_rad), geo.axes
-    n_seg = len(shaft_segments(scene))
+    start = _start(op)
     for pos, body in enumerate(chain):
         dof = model.jnt_dofadr[model.body_jntadr[pos + 1]]
-        if body.joint == "free":
-            data.qvel[dof + 3: dof + 6] = body.rot.T @ (qd0 * axes[0])
-        elif body.joint == "hinge" and body.index >= n_seg:
-            j = body.index - n_seg
-            data.qvel[dof] = qd0 * (kin.pin_rate[j, 0] - kin.ratio[j, 0] * axes[j]) @ body.axis
-        elif body.joint == "hinge":
-            k = op.bodies[body.index].shaft
-            data.qvel[dof] = qd0 * (kin.ratio[k, 0] * axes[k] - kin.pin_rate[k - 1, 0]) @ body.axis
+        if body.link is None:
+            data.qvel[dof + 3: dof + 6] = body.rot.T @ (start.speed * start.geo.axes[0])
+        else:
+            data.qvel[dof] = body.link.element_kind.mjcf_speed(body.link, body.index,
+                                                               body.axis, start)
 
 
 def _groups(op: Operator, chain: list[_Body]):

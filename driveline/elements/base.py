@@ -286,6 +286,27 @@ class ElementKind:
         """Apply ``release`` to a scene's ``shafts`` and ``slip_joints`` (lists, in place)."""
         raise NotImplementedError
 
+    # ------------------------------------------------------------ MuJoCo's tree
+
+    def mjcf_joint(self, link: Link, child: int, start) -> tuple[str, np.ndarray, np.ndarray]:
+        """The engine joint by which body ``child`` (one of ``link``'s two) hangs on the
+        other in MuJoCo's kinematic tree: its type (``hinge``, ``slide``), global axis and
+        point at the scene's start (``start``: the engine's :class:`~..engine_mujoco.Start`).
+        Only kinds that join two bodies have one.
+        """
+        raise NotImplementedError
+
+    def mjcf_speed(self, link: Link, child: int, axis: np.ndarray, start) -> float:
+        """That joint's speed in the scene's initial state (rad/s or m/s)."""
+        return 0.0
+
+    def mjcf_body(self, body: int, start) -> tuple:
+        """``(pos, rot, mass, inertia)`` at the start of a body this kind made (a
+        cross-pin): its centre (m), rotation (3, 3), mass (kg) and global inertia tensor
+        (kg m^2) about its centre.
+        """
+        raise NotImplementedError
+
     # ------------------------------------------------------------ formulations
 
     def rim_moments(self, op, i: int, link: Link) -> list:

@@ -35,6 +35,11 @@ from .base import Body, Column, ElementKind, Law, Layout, Link, PairMode
 
 RADIAL, FACE = "trunnion-radial", "end-face"
 
+MASSLESS_PIN_KG = 1e-6
+"""Mass MuJoCo's model gives a cross-pin the scene leaves massless (no
+``crosspin_inertia``): the engine needs a positive one; its weight, 1e-5 N, is far below
+the loads compared."""
+
 
 def normal_components(trunnion: str) -> tuple[str, str]:
     """The pin-frame directions normal to a trunnion axis, in the operator's order."""
@@ -138,6 +143,37 @@ class Cardan(ElementKind):
 
     def words(self, link: Link) -> str:
         return "trunnion, radial" if link.kind == RADIAL else "end face"
+
+    # ------------------------------------------------------------ MuJoCo
+
+    def mjcf_joint(self, link, child, start):
+        """MuJoCo: the cross-pin hangs on its driving yoke by a hinge about ``e1``, the
+        driven shaft on the pin by a hinge about ``e2``, both through the joint centre.
+        """
+        axis = (start.kin.e1 if link.trunnion == "e1" else start.kin.e2)[link.joint, 0]
+        return "hinge", axis, start.geo.joint_centres[link.joint]
+
+    def mjcf_speed(self, link, child, axis, start):
+        """The hinge's kinematic rate (eq. 3's ratio, the pin's rate) at the start."""
+        kin, axes, qd0, j = start.kin, start.geo.axes, start.speed, link.joint
+        if child == link.body:  # the pin on its driving shaft
+            return qd0 * (kin.pin_rate[j, 0] - kin.ratio[j, 0] * axes[j]) @ axis
+        return qd0 * (kin.ratio[j + 1, 0] * axes[j + 1] - kin.pin_rate[j, 0]) @ axis
+
+    def mjcf_body(self, body, start):
+        """The cross-pin at the start: the scene's ``[crosspin]`` mass and inertia with
+        ``crosspin_inertia``, else nearly massless (:data:`MASSLESS_PIN_KG`).
+        """
+        scene, geo, kin = start.scene, start.geo, start.kin
+        j = start.bodies[body].joint
+        now = np.stack([kin.e1[j, 0], kin.e2[j, 0], kin.e3[j, 0]], axis=1)
+        rest = np.stack([geo.yoke_in[j], geo.yoke_out[j],
+                         np.cross(geo.yoke_in[j], geo.yoke_out[j])], axis=1)
+        massive = scene.has("crosspin_inertia")
+        moments = np.array(scene.crosspin.inertia_kg_m2) if massive else np.full(3, 1e-12)
+        return (geo.joint_centres[j], now @ rest.T,
+                scene.crosspin.mass_kg if massive else MASSLESS_PIN_KG,
+                now @ np.diag(moments) @ now.T)
 
     # ------------------------------------------------------------ convex extensions
 

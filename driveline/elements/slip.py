@@ -152,6 +152,10 @@ class Slip(ElementKind):
         layout.add(columns, name=name, kind="slip", body=down, other=up, element=name,
                    frame="shaft", components=tuple(comps), shaft=shaft, units=units)
 
+    def mjcf_joint(self, link, child, start):
+        """MuJoCo: the downstream segment slides along the axis (frictionless)."""
+        return "slide", start.geo.axes[link.shaft], start.refs[child]
+
     def friction(self, link: Link, scene: Scene) -> SlipFriction | None:
         """Its friction bound, if it has friction."""
         slip = next(s for s in scene.slip_joints if s.name == link.element)
