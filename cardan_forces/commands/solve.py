@@ -19,6 +19,7 @@ from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.record import ACCEPT, Status
 
 from . import UsageError, check_time, print_json, progress
+from .solvers import say_plugin_errors
 
 OPTIMALITY = ("dual", "gap", "distance")
 ENGINE = ("engine: MuJoCo is a forward simulation from the scene's start, not a formulation "
@@ -57,6 +58,7 @@ def run(args) -> int:
     _check_pairs(built, args.formulation, args.solver)
     records = solve_all(op, 0, args.formulation, args.solver, tol=args.tol,
                         progress=None if args.json else progress, built=built)
+    say_plugin_errors("solve")  # a plugin left out says so: its rows are missing
     if args.json:
         print_json([record_json(r) for r in records])
         return 0

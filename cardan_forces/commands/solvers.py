@@ -22,10 +22,17 @@ def add_parser(subparsers) -> None:
     sv.set_defaults(func=run)
 
 
+def say_plugin_errors(command: str) -> None:
+    """One stderr line per plugin that could not be loaded, with why (stderr: ``--json``
+    stays strict JSON); the command runs on with the other backends.
+    """
+    for plugin, why in plugin_errors().items():
+        print(f"cardan {command}: plugin {plugin} not loaded: {why}", file=sys.stderr)
+
+
 def run(args) -> int:
     backends = available()
-    for plugin, why in plugin_errors().items():  # stderr: --json stays strict JSON
-        print(f"cardan solvers: plugin {plugin} not loaded: {why}", file=sys.stderr)
+    say_plugin_errors("solvers")
     if args.json:
         print_json([{"name": b.name, "family": b.family, "version": b.version,
                      "classes": [c.__name__ for c in b.accepts], "extra": b.extra,
