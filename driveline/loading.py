@@ -587,13 +587,11 @@ def _fields(raw: dict, source: str) -> Scene:
 
 
 def _check_elements(scene: Scene) -> None:
-    """Elements that leave a part of the line unheld (slip joints, bearings a shaft slides
-    through): a more specific message than the support check, for lines that have them.
+    """Each element's kind's checks, then parts of the line left unheld by slip joints or
+    bearings a shaft slides through (a message more specific than the support check's).
     """
-    if not scene.slip_joints and not any(BEARING_KINDS[b.kind].slides
-                                         for s in scene.shafts for b in s.bearings):
-        return
-    check_elements(scene)
+    check_elements(scene, sliding=bool(scene.slip_joints) or any(
+        BEARING_KINDS[b.kind].slides for s in scene.shafts for b in s.bearings))
 
 
 use_validator(revalidate)

@@ -75,15 +75,15 @@ def segment_of(segments: list[Segment], shaft: int, offset_m: float) -> int:
     raise ValueError(f"offset {offset_m} m lies on no segment of shaft {shaft}")
 
 
-def check_elements(scene: Scene) -> None:
-    """Refuse elements their kinds refuse (a slip joint with an unheld segment, ...) and
-    lines free to slide (module doc).
+def check_elements(scene: Scene, sliding: bool = True) -> None:
+    """Refuse elements their kinds refuse (a slip joint with an unheld segment, ...) and,
+    if ``sliding``, lines free to slide (module doc).
     """
     from .registry import scene_elements
 
     for kind, element, shaft, _ in scene_elements(scene):
         kind.check(element, shaft, scene)
-    free = sliding_bodies(scene)
+    free = sliding_bodies(scene) if sliding else []
     if free:
         raise SceneError(
             f"scene {scene.source}: no axial support: {', '.join(free)} can slide along "
