@@ -17,7 +17,7 @@ from .bearing import BearingKind
 from .cardan import KIND as JOINT
 from .slip import KIND as SLIP
 
-MODULES = ("locating", "floating", "slip", "cardan")
+MODULES = ("locating", "floating", "slip", "cardan", "angular_contact")
 """The kinds' modules (in this package), in the order their pairs are listed."""
 
 KINDS: tuple[ElementKind, ...] = tuple(import_module(f".{m}", __package__).KIND
