@@ -89,7 +89,7 @@ def loads(op: Operator, contact, forces: np.ndarray) -> tuple[np.ndarray, np.nda
     zero, not the rounding of its radial columns on the axis).
     """
     v = np.asarray(forces, float) @ op.bearing_matrix(contact).T
-    axial = v[:, 2] if contact.kind == "bearing-locating" else np.zeros(len(v))
+    axial = np.zeros(len(v)) if contact.element_kind.slides else v[:, 2]
     return np.hypot(v[:, 0], v[:, 1]), axial
 
 
@@ -105,7 +105,7 @@ def _rows(op: Operator, contact, free_radial: bool, n: int) -> np.ndarray:
     """
     B = op.bearing_matrix(contact)
     radial = _directions(n) @ B[:2] if free_radial else np.zeros((0, B.shape[1]))
-    return np.vstack([radial, B[2:]]) if contact.kind == "bearing-locating" else radial
+    return radial if contact.element_kind.slides else np.vstack([radial, B[2:]])
 
 
 def _ends(entry: dict) -> tuple[float, float]:
@@ -138,7 +138,7 @@ def _bearing_ends(op: Operator, det, contact, free: bool, found: list, n: int) -
     """:func:`envelope_at`'s entry of one bearing from its share of the LP ranges."""
     B = op.bearing_matrix(contact)
     k = n // 2 if free else 0
-    a_lo, a_hi = _ends(found[k]) if contact.kind == "bearing-locating" else (0.0, 0.0)
+    a_lo, a_hi = (0.0, 0.0) if contact.element_kind.slides else _ends(found[k])
     fa = (0.0 if a_lo <= 0 <= a_hi else min(abs(a_lo), abs(a_hi)), max(abs(a_lo), abs(a_hi)))
     if not free:
         fr = float(np.linalg.norm(B[:2] @ det.min_norm))
@@ -245,16 +245,16 @@ def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
             "L10_h": [worst["L10_h"], best["L10_h"]],
             "open": bool(np.isinf(hi).any()),
             "radial_determinate": determinate,
-            "ends": _ends_words(determinate, contact.kind, env, b)},
+            "ends": _ends_words(determinate, contact.element_kind.slides, env, b)},
     }
 
 
-def _ends_words(determinate: bool, kind: str, env: dict, b: int) -> str:
+def _ends_words(determinate: bool, slides: bool, env: dict, b: int) -> str:
     """How exact the interval's ends are, in words."""
     axial_free = bool((env["fa_hi"][:, b] > env["fa_lo"][:, b]).any())
     if determinate:
         return "exact: the radial load is determinate, the axial ends are LPs"
-    if kind == "bearing-floating" or not axial_free:
+    if slides or not axial_free:
         return (f"the greatest radial load from {DIRECTIONS} directions, an upper bound "
                 f"within 1/cos(pi/{DIRECTIONS}) of it; the least a lower bound")
     return ("a bound: the greatest radial and the greatest axial load paired, which one "
