@@ -8,7 +8,10 @@ default unless ``--solver`` says otherwise) and summed up in one typed row. Poin
 in a local process pool, or on a Dask distributed cluster given ``--scheduler``
 (:mod:`.sweep_exec`); each finished point's rows are appended to ``sweep.csv`` at once
 (:mod:`.sweep_store`), so a killed sweep loses only the points in flight and a rerun
-computes only the rows the CSV lacks.
+computes only the rows the CSV lacks (one row per key: a second run into the folder
+resumes, and says how many points it found there). One sweep at a time writes into a
+folder; its local workers end with it, however it ends; a Dask run left without workers
+ends after ``--timeout`` s, keeping its rows.
 
 Every request is checked against the scene's limits before any work: the angles and
 amplitudes, the window (instants, span, the revolutions and torque periods it implies)
