@@ -544,7 +544,9 @@ def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, m
     groups = (members, mask, signed, n)
     for i in range(T):
         warm = chain and i > 0
-        hint = d_out[i - 1] if warm else d0[i]
+        hint = d0[i]
+        if warm:  # the deformations extrapolated linearly from the two instants before
+            hint = 2.0 * d_out[i - 1] - d_out[i - 2] if i > 1 else d_out[i - 1]
         status[i], iters[i] = _instant(Et[i], span, e[i], groups, k[i], g[i], hint,
                                        warm or start[i], tol, max_iter, soften, params,
                                        scratch, terms, u_out[i])

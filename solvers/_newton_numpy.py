@@ -157,8 +157,9 @@ def newton_numpy(E, e, groups: Groups, k, g, d0=None, start=None, chain=False,
     u_out, d_out = np.zeros((T, m)), np.zeros((T, nv))
     status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
     for i in range(T):
-        hint = d_out[i - 1] if chain and i else (
-            d0[i] if start is not None and start[i] else None)
+        hint = d0[i] if start is not None and start[i] else None
+        if chain and i:  # extrapolated from the two answers before (linear in time)
+            hint = 2.0 * d_out[i - 1] - d_out[i - 2] if i > 1 else d_out[i - 1]
         u_out[i], status[i], iters[i] = _one(E[i], e[i], groups, k[i], g[i], hint, tol,
                                              max_iter, soften)
         d_out[i] = E[i].T @ u_out[i]

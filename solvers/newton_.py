@@ -31,7 +31,8 @@ work along a direction (idle end faces, open clearances), whose step the line se
 then bounds. The line search minimizes ``Phi`` along the step exactly (a safeguarded
 Newton iteration on the slope, ``O(n)`` an evaluation). A cold start takes its first
 step with ``H0``; a warm start fits ``u`` to the deformations ``d`` of a neighbouring
-answer. The iteration stops when ``||(I - V V') grad|| <= tol ||e||``.
+answer (in a batch's chain, extrapolated linearly from the two answers before). The
+iteration stops when ``||(I - V V') grad|| <= tol ||e||``.
 
 ``soften`` (option, >= 0): the equilibrium softened as MuJoCo and SAP soften their
 constraints, ``+ soften rho ||u||^2 / 2`` in the dual, i.e. the primal
