@@ -86,10 +86,10 @@ def _discard(cache, exc: Exception) -> None:
     if index:
         with contextlib.suppress(OSError):
             os.unlink(index)
-    if not _WARNED:
-        warnings.warn(f"numba cache {index or cache}: unreadable ({type(exc).__name__}: "
-                      f"{exc}); removed, the kernels compile again and are cached anew",
-                      RuntimeWarning, stacklevel=3)
+    if not _WARNED:  # named by the file, not by numba's line that read it
+        warnings.warn_explicit(f"{index or cache}: unreadable ({type(exc).__name__}: {exc}); "
+                               "removed, the kernels compile again and are cached anew",
+                               RuntimeWarning, filename="numba cache", lineno=0)
     _WARNED.append(str(index))
 
 
