@@ -145,6 +145,12 @@ def markdown(rows: list[dict]) -> list[str]:
                      f"{_g(100 * r['solved_share'])}% | {r['rigid_median']:.1e} / "
                      f"{r['rigid_worst']:.1e} | {r['compliance_median']:.1e} / "
                      f"{r['compliance_worst']:.1e} |")
+    engine = {r["scene"] for r in rows if r["formulation"].startswith("MuJoCo")}
+    without = sorted({r["scene"] for r in rows} - engine)
+    if without:
+        lines += ["", f"No MuJoCo point for {', '.join(without)}: MuJoCo is not installed or "
+                  "cannot express the scene (a quasi-static one: the engine integrates "
+                  "dynamics)."]
     return lines
 
 
