@@ -23,8 +23,12 @@ exported test set, for its success and runtime tables.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import io
+import logging
 import math
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -40,6 +44,7 @@ from cardan_forces.solvers.qpsolvers_ import conic_duals
 from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status
 from cardan_forces.solvers.registry import with_warnings
 
+from . import progress
 from .export import as_qp, class_name
 
 FORCE_LEVEL = ACCEPT
@@ -223,18 +228,40 @@ def load_test_set(path: Path):
     return getattr(module, class_name(path.stem))()
 
 
+@contextlib.contextmanager
+def _their_output():
+    """The output of qpbenchmark held to the package's rules while it runs: its progress
+    bars (tqdm on ``sys.stderr``) only where the package's are drawn
+    (:func:`.progress.shown`), its log lines (info on the root logger, which its import
+    sets to INFO with a handler of its own on the real stderr) none with ``--quiet``;
+    warnings and errors still shown. The root logger's level is restored after, so
+    other libraries' info lines do not follow.
+    """
+    root = logging.getLogger()
+    level = root.level
+    import qpbenchmark  # noqa: F401 - its import sets the root logger up
+
+    try:
+        root.setLevel(logging.WARNING if progress.quiet() else logging.INFO)
+        with contextlib.redirect_stderr(sys.stderr if progress.shown() else io.StringIO()):
+            yield
+    finally:
+        root.setLevel(level)
+
+
 def run_qpbenchmark(path: Path, solvers, results: Path) -> list[dict]:
     """Run qpbenchmark itself on the test set at ``path`` for ``solvers`` (qpsolvers names):
     per solver x setting its success % and its runtime shifted-geometric-mean ratio to
     the best solver (its ``Results.build_success_rate_df`` and ``build_shgeom_df``).
     """
-    import qpbenchmark
+    with _their_output():
+        import qpbenchmark
 
-    test_set = load_test_set(path)
-    found = qpbenchmark.Results(results, test_set)
-    for solver in solvers:
-        if solver in test_set.solvers:
-            qpbenchmark.run(test_set, found, only_solver=solver)
+        test_set = load_test_set(path)
+        found = qpbenchmark.Results(results, test_set)
+        for solver in solvers:
+            if solver in test_set.solvers:
+                qpbenchmark.run(test_set, found, only_solver=solver)
     tol = test_set.tolerances
     success = found.build_success_rate_df({k: t.primal for k, t in tol.items()},
                                           {k: t.dual for k, t in tol.items()},

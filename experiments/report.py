@@ -32,12 +32,15 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Link, Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.release import named_modes
-from cardan_forces.experiments import engine
+from cardan_forces.driveline.scene import MAX_INSTANTS
+from cardan_forces.experiments import engine, files
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import format_list, save
 from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.formulations.convex import NotApplicable
+
+from cardan_forces.commands import UsageError
 
 INSTANTS = 41
 """The fewest instants of the report by default (each costs two LPs per component)."""
@@ -84,7 +87,7 @@ def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path,
     column ``engine_N``: MuJoCo's value (empty before its settling).
     """
     extra = ["engine_N"] if overlay is not None else []
-    with open(path, "w", newline="") as f:
+    with files.replacing(path, newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s", "component", "contact", "kind", f"{SELECTION}_N", "min_N", "max_N",
                     "determinate", "unit", *extra])
@@ -441,7 +444,7 @@ def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path,
     lines += ["", "## Modes (null-space directions)", ""]
     lines += [f"- **{m.kind}**: {m.description}; release: {m.release}" for m in modes]
     lines += engine_lines(op, overlay) if overlay is not None else []
-    path.write_text("\n".join(lines) + "\n")
+    files.write_text(path, "\n".join(lines) + "\n")
 
 
 def run_report(scene_spec: str, out: Path, instants: int | None = None,
@@ -452,6 +455,10 @@ def run_report(scene_spec: str, out: Path, instants: int | None = None,
     ``instants``: default :func:`default_instants`.
     """
     scene = load_scene(scene_spec)
+    grid = len(scene.time.instants())
+    if instants is not None and instants > grid:  # before any work
+        raise UsageError(f"--instants {instants}: scene {scene.name} has {grid} instants on "
+                         "its time grid; ask for at most as many")
     version = check_engine(scene) if with_engine else None
     instants = instants or default_instants(scene)
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
@@ -500,14 +507,17 @@ def _count(text: str) -> int:
         value = int(text)
     except ValueError:
         value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 2, got {text!r}")
+    if not 2 <= value <= MAX_INSTANTS:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 2 to {MAX_INSTANTS}, "
+                                         f"got {text!r}")
     return value
 
 
 def run(args) -> int:
     """Write the report; the paths written on stdout, progress on stderr."""
-    for path in run_report(args.scene, Path(args.out), args.instants, progress=bars.line,
-                           formats=args.format, with_engine=args.engine):
+    written = run_report(args.scene, Path(args.out), args.instants, progress=bars.line,
+                         formats=args.format, with_engine=args.engine)
+    for path in written:
         print(path)
+    files.say_written("report", written)
     return 0

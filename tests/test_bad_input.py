@@ -169,6 +169,13 @@ COMMANDS = [
     ("sweep --amplitude 1e300", "--amplitude 1e+300: must be at most 1e+09 N m in magnitude"),
     ("sweep --instants 0", "--instants 0: must be at least 1"),
     ("sweep --workers -1", "--workers -1: must be in [1, 1024]"),
+    ("report --instants 20002", "argument --instants: expected a whole number from 2 to "
+                               "20001, got '20002' (see 'cardan report --help')"),
+    ("report --instants 1002 --out {dir}", "--instants 1002: scene paper has 1001 instants "
+                                           "on its time grid; ask for at most as many"),
+    ("export --instants 1e20 --out {dir}", "argument --instants: expected a whole number "
+                                           "from 1 to 20001, got '1e20' (see 'cardan export "
+                                           "--help')"),
     ("", "the following arguments are required: command (see 'cardan --help')"),
     ("scene check {dir}", "scene {dir}: is a directory, not a scene file"),
     ("sets no-such-scene", f"scene no-such-scene: not a built-in name "

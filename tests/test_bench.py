@@ -288,7 +288,7 @@ def test_a_second_run_replaces_the_first_and_says_so(tmp_path, capsys):
     from cardan_forces.cli import main
 
     argv = ["bench", "--quick", "--formulation", "min_norm", "--solver", "numpy-kkt",
-            "--out", str(tmp_path), "--quiet"]
+            "--out", str(tmp_path)]
     assert main([*argv, "--format", "svg"]) == 0
     capsys.readouterr()
     assert main([*argv, "--json"]) == 0
@@ -299,3 +299,20 @@ def test_a_second_run_replaces_the_first_and_says_so(tmp_path, capsys):
     assert not list(tmp_path.glob("*.svg")) and (tmp_path / "bench_pareto.png").exists()
     assert str(tmp_path) in captured.err and "replacing" in captured.err
     assert "bench_pareto.svg" in captured.err
+
+
+def test_quiet_silences_qpbenchmark_too(tmp_path, capfd):
+    """--quiet with --harness qpbenchmark: none of qpbenchmark's log lines (ANSI-coloured
+    info on the root logger) or bars reach stderr, nothing does; qpbenchmark still ran
+    (its results file is there)."""
+    pytest.importorskip("qpbenchmark")
+    if "qpsolvers-quadprog" not in registry.available():
+        pytest.skip("quadprog not installed")
+    from cardan_forces.cli import main
+
+    assert main(["bench", "--quick", "--formulation", "positive", "--solver",
+                 "qpsolvers-quadprog", "--harness", "qpbenchmark", "--quiet",
+                 "--out", str(tmp_path)]) == 0
+    err = capfd.readouterr().err
+    assert err == ""
+    assert (tmp_path / "qpbenchmark" / "qpbenchmark_results.csv").stat().st_size > 0
