@@ -1303,8 +1303,8 @@ def _attempt(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args
         _change_d(d, order, min_step / h_abs, work)
         h_abs, ints[I_EQUAL] = min_step, 0
     while True:
-        if h_abs < min_step:
-            ints[I_STATUS] = STEP_TOO_SMALL
+        if not h_abs >= min_step:  # also a NaN step: a state gone bad
+            ints[I_STATUS] = STEP_TOO_SMALL if h_abs < min_step else NOT_FINITE
             return np.nan, 0
         t_new = t + h_abs
         if t_new > t_bound:
@@ -1403,8 +1403,13 @@ def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
     """Step the run (:func:`start`'s arrays) until ``t >= t_stop`` (or ``t_bound``, the
     end, where the status becomes finished), filling the rows of ``out`` at the sorted
     instants ``t_out`` as they are passed; the status and counters are in ``run[1]``.
+    A time or step that is not a number (the right-hand side at the start was not
+    finite) or a step that falls below the spacing of numbers ends the run with that
+    status: it never raises and never loops on a NaN.
     """
     floats, ints, d, jac, lu, pivots, blocks, work = run
+    if not (np.isfinite(floats[F_T]) and np.isfinite(floats[F_H])):
+        ints[I_STATUS] = NOT_FINITE
     while ints[I_STATUS] == RUNNING and floats[F_T] < t_stop:
         _step(floats, ints, d, jac, lu, pivots, blocks, t_bound, atol, rtol, args, work)
         if ints[I_STATUS] != RUNNING:
