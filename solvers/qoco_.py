@@ -27,7 +27,8 @@ from .qoco_form import CLAIM_TOL, csc_ones, layout, supports
 from .record import Outcome, Status
 from .registry import Backend
 
-EXTRAS: dict[str, str | None] = {"qoco": "qoco", "qoco-batched": "qoco"}
+EXTRAS: dict[str, str | None] = {"qoco": "qoco", "qoco-batched": "qoco", "qoco-reduced": "qoco",
+                                 "qoco-batched-reduced": "qoco"}
 
 TOLERANCES = ("abstol", "reltol")
 """QOCO's settings a requested tolerance sets."""
@@ -126,7 +127,7 @@ def backends() -> list[Backend]:
         return []
     return [Backend(name="qoco", family="qoco", distributions=("qoco",), extra="qoco",
                     accepts=(Conic,), solve=solve_conic, supports=supports,
-                    tolerances=TOLERANCES),
+                    tolerances=TOLERANCES, reducible=True),
             Backend(name="qoco-batched", family="qoco", distributions=("qoco",), extra="qoco",
                     supports=supports, tolerances=TOLERANCES, batch=solve_batch,
-                    batch_accepts=(ConicBatch,))]
+                    batch_accepts=(ConicBatch,), reducible=True)]

@@ -10,7 +10,7 @@ the shared library in a user cache directory named by a hash of the structure: a
 process loads it (milliseconds) instead of compiling (seconds to minutes, reported in
 the ``compile`` stage and by :func:`compile_seconds`, never in a solve's time).
 
-It is registered only as ``qocogen-reduced`` (:data:`.reduced_.WRAPPED`): on the full
+It is registered only as ``qocogen-reduced`` (``Backend.reduced_only``): on the full
 form the equality rows are dense, so the unrolled factor is large (2-7 times the code,
 2-4 minutes to compile against 10-40 s) and a solve 3.6-4.5 times slower than on the
 reduced form (the propshaft's ``min_max`` and ``socp_face``, one run).
@@ -19,7 +19,7 @@ The answer does not depend on the order of the instants: the generated solver st
 every solve from its own initial point and does no equilibration (``ruiz_iters`` 0), and
 the driver clears the status and iteration count before each. Like ``qoco`` it has no
 certificate of infeasibility, so a "solved" whose own dual residual or gap exceeds
-:data:`.qoco_.CLAIM_TOL` is reported inaccurate. Optional extra ``qocogen``; absent
+:data:`.qoco_form.CLAIM_TOL` is reported inaccurate. Optional extra ``qocogen``; absent
 without qocogen or a C compiler.
 """
 
@@ -40,12 +40,12 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
-from . import qoco_, settings
+from . import qoco_form, settings
 from .batch import BatchOutcome
-from .qoco_ import CLAIM_TOL, csc_ones, layout
+from .qoco_form import CLAIM_TOL, csc_ones, layout
 from .registry import Backend, dist_version
 
-EXTRAS: dict[str, str | None] = {"qocogen": "qocogen"}
+EXTRAS: dict[str, str | None] = {"qocogen-reduced": "qocogen"}
 
 TOLERANCES = ("abstol", "reltol")
 """The generated solver's settings a requested tolerance sets."""
@@ -204,7 +204,7 @@ def supports(problem) -> bool:
     the least-norm family (LS, QP) ``numpy-batched`` is an order of magnitude faster than
     any interior point, so compiling a solver for them would buy nothing.
     """
-    return qoco_.supports(problem) and any(kind == "soc" for kind, _ in problem.cones)
+    return qoco_form.supports(problem) and any(kind == "soc" for kind, _ in problem.cones)
 
 
 def cache_dir() -> Path:
@@ -314,7 +314,7 @@ def _pointer(array: np.ndarray):
 
 
 def _pattern(mask: np.ndarray):
-    """:func:`.qoco_.csc_ones` of ``mask``, with no matrix where it is empty (the
+    """:func:`.qoco_form.csc_ones` of ``mask``, with no matrix where it is empty (the
     generated solver takes none).
     """
     if not mask.any():
@@ -422,7 +422,7 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
 
 def backends() -> list[Backend]:
     """The generated-QOCO backend, if qocogen and a C compiler are installed (registered
-    through :data:`.reduced_.WRAPPED` as ``qocogen-reduced`` only).
+    as ``qocogen-reduced`` only: ``reduced_only``).
     """
     try:
         import qocogen  # noqa: F401
@@ -432,4 +432,4 @@ def backends() -> list[Backend]:
         return []
     return [Backend(name="qocogen", family="qoco", distributions=("qocogen",),
                     extra="qocogen", supports=supports, tolerances=TOLERANCES,
-                    batch=solve_batch, batch_accepts=(ConicBatch,))]
+                    batch=solve_batch, batch_accepts=(ConicBatch,), reduced_only=True)]

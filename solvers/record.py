@@ -425,14 +425,3 @@ def confirm(status, optimality: Optimality, duals: str):
     with_duals = np.asarray(duals, object) != "none"
     return np.where((status == _AS_INACCURATE) & optimality.confirms() & with_duals,
                     _AS_SOLVED, status)
-
-
-
-
-def __getattr__(name: str):
-    """The check pass's names, read from :mod:`.checks` (where they moved)."""
-    if name in ("finalize", "finalize_all", "failed_record", "Stacks", "stack_all"):
-        from . import checks
-
-        return getattr(checks, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -12,7 +12,9 @@ The reduced form also folds a two-row cone that one of its nonnegative rows make
 linear (:class:`Folded`): the same feasible set with fewer rows and cones, so every
 backend sees the same reduced problem.
 
-Which backends get a reduced variant is :data:`WRAPPED`: data, one line each.
+The registry applies :func:`variant` to every backend that declares it takes the
+reduced form (``Backend.reducible``, or ``reduced_only`` for a backend made for it
+alone); this module knows no backend by name and imports no adapter.
 """
 
 from __future__ import annotations
@@ -20,40 +22,25 @@ from __future__ import annotations
 import dataclasses
 import functools
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
-from . import clarabel_, moreau_, qoco_, qocogen_
 from .batch import BatchOutcome
 from .conversions import Reduced, eliminate_equalities
 from .optimality import blocks, cone_layout
 from .record import Outcome
-from .registry import Backend
 
-WRAPPED = {"clarabel": clarabel_, "qoco": qoco_, "qoco-batched": qoco_, "moreau": moreau_,
-           "moreau-warm": moreau_, "qocogen": qocogen_}
-"""Backend name -> its adapter module; each gets a ``<name>-reduced`` variant (``qocogen``
-only this one: its module is no adapter of the registry's own)."""
+if TYPE_CHECKING:  # the registry imports this module to apply it
+    from .registry import Backend
 
-UNSCALED = {"clarabel": ("soc", "pow"), "moreau": ("pow",), "moreau-warm": ("pow",)}
-"""Backend -> the cone kinds on which its reduced variant runs without equilibration
-(``equilibrate_enable=False`` unless the caller sets it). The reduced data are the
-formulation's (in units of the load) seen through an orthonormal basis. Measured on
-the paper's 1001 instants: Clarabel's and moreau's Ruiz scaling nearly doubled the
-iterations on ``compliance_hertz`` (20 against 11); Clarabel per instant, without it,
-took 9.1 iterations instead of 13.7 on ``min_max`` (its worst dual residual 7e-10
-instead of 1e-6) and 7.4 instead of 8.4 on ``socp_face``, but left 23 ``positive`` instants
-inaccurate instead of 21 (so it keeps it on linear cones alone); moreau without it
-missed one ``socp_face`` instant, so it keeps it there."""
-
-
-def _defaults(backend: str, cones, options: dict) -> dict:
-    """The options for the wrapped backend: no equilibration where :data:`UNSCALED`
-    says so, under the caller's options.
+def _defaults(backend: Backend, cones, options: dict) -> dict:
+    """The options for the wrapped backend: no equilibration on the cone kinds it
+    declares (``Backend.unscaled``), under the caller's options.
     """
-    off = any(kind in UNSCALED.get(backend, ()) for kind, _ in cones)
+    off = any(kind in backend.unscaled for kind, _ in cones)
     return ({"equilibrate_enable": False} if off else {}) | options
 
 
@@ -178,15 +165,11 @@ def _lift(red: Reduced, plan: Folded | None, z: np.ndarray, y: np.ndarray | None
     return red.lift(z, y if plan is None or y is None else plan.duals(y))
 
 
-EXTRAS: dict[str, str | None] = {f"{name}-reduced": module.EXTRAS[name]
-                                 for name, module in WRAPPED.items()}
-
-
 def _has_equalities(problem) -> bool:
     return any(kind == "zero" for kind, _ in problem.cones)
 
 
-def _per_instant(solve, name: str):
+def _per_instant(solve, backend: Backend):
     """``solve`` (a per-instant conic backend's) on the reduced problem with
     :func:`_defaults`, lifted back (the wrapped backends take no start, so
     ``initvals`` is not passed on).
@@ -201,7 +184,7 @@ def _per_instant(solve, name: str):
         inner = Conic(checks=problem.checks, formulation=problem.formulation, P=red.P[0],
                       q=red.q[0], A=A[0], b=b[0], cones=cones)
         reduced_s = time.perf_counter() - start
-        out = solve(inner, tol=tol, **_defaults(name, inner.cones, options))
+        out = solve(inner, tol=tol, **_defaults(backend, inner.cones, options))
         lifted = time.perf_counter()
         if out.z is None:
             return dataclasses.replace(out, setup_s=out.setup_s + reduced_s)
@@ -215,7 +198,7 @@ def _per_instant(solve, name: str):
     return run
 
 
-def _batched(solve_batch, name: str):
+def _batched(solve_batch, backend: Backend):
     """``solve_batch`` (a batched conic backend's) on the reduced batch with
     :func:`_defaults`, lifted back.
     """
@@ -227,7 +210,7 @@ def _batched(solve_batch, name: str):
         inner = dataclasses.replace(batch, P=red.P, q=red.q, A=A, b=b, cones=cones,
                                     problems=(), null_space=None)
         reduced = time.perf_counter()
-        out = solve_batch(inner, tol=tol, **_defaults(name, inner.cones, options))
+        out = solve_batch(inner, tol=tol, **_defaults(backend, inner.cones, options))
         lifting = time.perf_counter()
         z, y = _lift(red, plan, np.asarray(out.z, float), out.y)
         done = time.perf_counter()
@@ -238,17 +221,19 @@ def _batched(solve_batch, name: str):
     return run
 
 
-def _variant(backend: Backend) -> Backend:
-    supports, name = backend.supports, backend.name
+SUFFIX = "-reduced"
+"""A reduced variant's name is its backend's and this."""
+
+
+def variant(backend: Backend) -> Backend:
+    """``backend`` on the reduced form of the problems it takes that have equality rows,
+    named ``<name>-reduced`` (it takes no start: the reduced unknowns are not the
+    problem's).
+    """
+    supports = backend.supports
     return dataclasses.replace(
-        backend, name=f"{backend.name}-reduced",
-        solve=None if backend.solve is None else _per_instant(backend.solve, name),
-        batch=None if backend.batch is None else _batched(backend.batch, name),
+        backend, name=backend.name + SUFFIX,
+        solve=None if backend.solve is None else _per_instant(backend.solve, backend),
+        batch=None if backend.batch is None else _batched(backend.batch, backend),
         supports=lambda problem: _has_equalities(problem) and supports(problem),
-        warm_start=False)
-
-
-def backends() -> list[Backend]:
-    """The reduced variant of every installed backend of :data:`WRAPPED`."""
-    return [_variant(b) for module in WRAPPED.values() for b in module.backends()
-            if b.name in WRAPPED]
+        warm_start=False, reducible=False, reduced_only=False)

@@ -30,7 +30,6 @@ import dataclasses
 import functools
 import importlib
 import importlib.metadata
-import operator
 import sys
 import time
 import warnings
@@ -40,17 +39,18 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import plugins, settings
+from . import plugins, reduced_, settings
 from .batch import BatchOutcome, BatchRecord, ConicBatch, finalize_batch
+from .checks import Stacks, failed_record, finalize_all
 from .conversions import convert, reachable
 from .plugins import InvalidBackend, blame
-from .record import Outcome, Record, Results, Stacks, Status, failed_record, finalize_all
+from .record import Outcome, Record, Results, Status
 
 if TYPE_CHECKING:  # settings_profiles looks backends up here: a type-only import
     from .settings_profiles import Profile
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
-            "numpy_batched_", "moreau_", "reduced_", "newton_")
+            "numpy_batched_", "moreau_", "qocogen_", "newton_")
 """Adapter modules of this package, loaded lazily by :func:`available`."""
 
 
@@ -86,7 +86,11 @@ class Backend:
     solver; ``batch(batch, tol, **options) -> BatchOutcome`` solves all instants of a
     formulation's batch of one of the ``batch_accepts`` classes at once.
     ``qpbenchmark``: how it takes qpbenchmark's four settings (:mod:`.settings_profiles`;
-    ``None``: it does not).
+    ``None``: it does not). ``reducible``: a conic backend that also runs on the reduced
+    form (equality rows eliminated), registered as ``<name>-reduced`` beside it
+    (:func:`.reduced_.variant`); ``reduced_only``: registered only so (a backend made
+    for the reduced form); ``unscaled``: the cone kinds on which its reduced variant
+    runs without equilibration.
     """
 
     name: str
@@ -102,6 +106,9 @@ class Backend:
     batch: Callable | None = None
     batch_accepts: tuple[type, ...] = ()
     qpbenchmark: Profile | None = None
+    reducible: bool = False
+    reduced_only: bool = False
+    unscaled: tuple[str, ...] = ()
 
     @property
     def version(self) -> str:
@@ -154,8 +161,16 @@ def _adapter(module_name: str):
 def _adapter_backends(module_name: str) -> list[Backend]:
     """One adapter's backends, its package imported on first use (once)."""
     if module_name not in _BY_ADAPTER:
-        _BY_ADAPTER[module_name] = _adapter(module_name).backends()
+        _BY_ADAPTER[module_name] = _with_reductions(_adapter(module_name).backends())
     return _BY_ADAPTER[module_name]
+
+
+def _with_reductions(found: list[Backend]) -> list[Backend]:
+    """An adapter's backends as registered: each it declares (but one made for the
+    reduced form alone), then the reduced variant of each that takes it.
+    """
+    return ([b for b in found if not b.reduced_only]
+            + [reduced_.variant(b) for b in found if b.reducible or b.reduced_only])
 
 
 def _one(name: str) -> Backend | None:
@@ -369,26 +384,23 @@ class Pending:
         return self.outcome.z
 
 
-_PENDING = operator.attrgetter("problem", "outcome", "reference", "optimal_value",
-                               "convert_s", "received", "elapsed_s")
-"""What :func:`check` reads of a :class:`Pending`, in :func:`finalize_all`'s order."""
-
-
 def check(pending: list[Pending], stacks: Stacks | None = None) -> Results:
     """The package-judged results of deferred solves, as :func:`solve` judges one
-    (``stacks``: their problems' data stacked beforehand, :func:`.record.stack_all`).
+    (``stacks``: their problems' data stacked beforehand, :func:`.checks.stack_all`).
     A registered backend's failed instants name where it comes from; an answer of one
     that the checks cannot read fails alone (:func:`_check_each`).
     """
     if not pending:
-        return []
-    problems, outcomes, references, optimal_values, convert_s, received, elapsed_s = zip(
-        *map(_PENDING, pending))
+        return Results.of([])
     solver = pending[0].solver
     try:
-        results = finalize_all(problems, solver, outcomes, references=references,
-                               optimal_values=optimal_values, extra_setup_s=convert_s,
-                               received=received, elapsed_s=elapsed_s, stacks=stacks)
+        results = finalize_all(
+            [p.problem for p in pending], solver, [p.outcome for p in pending],
+            references=[p.reference for p in pending],
+            optimal_values=[p.optimal_value for p in pending],
+            extra_setup_s=[p.convert_s for p in pending],
+            received=[p.received for p in pending],
+            elapsed_s=[p.elapsed_s for p in pending], stacks=stacks)
     except Exception as exc:
         if solver not in plugins.ORIGINS:
             raise  # the package's own backends: a fault of the checks, not hidden

@@ -236,3 +236,32 @@ def test_moreau_warm_agrees_with_cold(problems, name, solver):
     cold, warm = (solve_batch(batch, s, tol=TOL) for s in ("moreau", solver))
     for k, problem in enumerate(batch.problems):
         _agree(problem, warm.record(k), cold.record(k))
+
+
+def test_a_reduced_backend_is_the_registrys_variant_of_one_that_declares_it():
+    """Reductions are one wrapper the registry applies: every ``-reduced`` backend is
+    the variant of a backend that declares it takes the reduced form (``reducible``,
+    or ``reduced_only`` where only the variant is registered), every backend that
+    declares it has its variant, and the wrapper's module imports no adapter."""
+    import ast
+    import inspect
+
+    from cardan_forces.solvers import reduced_, registry
+
+    tree = ast.parse(inspect.getsource(reduced_))
+    imported = {alias.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+                for alias in node.names} | {node.module for node in ast.walk(tree)
+                                            if isinstance(node, ast.ImportFrom)}
+    assert not imported & set(registry.ADAPTERS)
+    found = available()
+    declared = [b for module in registry.ADAPTERS
+                for b in registry._adapter(module).backends()]
+    for backend in declared:
+        variant = backend.name + reduced_.SUFFIX
+        assert (variant in found) == (backend.reducible or backend.reduced_only)
+        assert (backend.name in found) == (not backend.reduced_only)
+    bases = {b.name for b in declared}
+    for name in found:
+        if name.endswith(reduced_.SUFFIX) and name not in bases:
+            assert name.removesuffix(reduced_.SUFFIX) in bases
+            assert not found[name].warm_start and not found[name].reducible
