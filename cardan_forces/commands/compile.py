@@ -37,10 +37,12 @@ def run(args) -> int:
 
 
 def _batched() -> None:
-    """Solve two instants of ``paper`` with the batched backend (its first call
-    compiles its kernels), as a study does.
+    """Solve two instants of ``paper`` as one batch with the batched backend (its first
+    call compiles its kernels), as the bench does.
     """
     import cardan_forces as cf
+    from cardan_forces.formulations.batch import least_norm_batch
+    from cardan_forces.solvers.registry import solve_batch
 
     op = cf.build_operator(cf.simulate(load_scene("paper")))
-    cf.solve_over_time(op, SELECTION, "numpy-batched", instants=[0, 1])
+    solve_batch(least_norm_batch(op, SELECTION, [0, 1]), "numpy-batched")
