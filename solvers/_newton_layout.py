@@ -105,6 +105,8 @@ def _layout(P_pattern, q_pattern, pattern, A, zero, signed, socs) -> Layout:
             raise NotContact("a contact's force carries energy of its own")
         if power is not None and diag[r]:
             raise NotContact("a contact with both a linear and a power law")
+        if power is None and not diag[r]:
+            raise NotContact("a contact without stiffness (its energy only linear)")
         s, prow, p = power if power is not None else (-1, -1, 0.0)
         lists.append(cols)
         rows.append((cols[0] in signed and len(cols) == 1, 1.0 / (p - 1.0) if p else 1.0,

@@ -29,7 +29,8 @@ LS_MAX = 60
 STATUS = ("solved", "inaccurate", "inaccurate", "failed", "failed")
 """Status codes of :func:`newton_numpy` and the kernel, by index."""
 REASONS = ("", "no convergence in the iteration limit", "the line search made no progress",
-           "non-finite numbers", "a step's factor is not positive definite")
+           "non-finite numbers or a contact without positive stiffness",
+           "a step's factor is not positive definite")
 """Why, by status code."""
 
 
