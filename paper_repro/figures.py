@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.driveline.dynamics import Motion
 from cardan_forces.driveline.equilibrium import Operator
+from cardan_forces.experiments import files
 from cardan_forces.formulations import FORMULATIONS
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_filter
@@ -96,10 +97,17 @@ def smooth_speed(values: np.ndarray, t: np.ndarray, window_s: float = SPEED_SMOO
 
 
 def write_csv(path: Path, columns: dict[str, np.ndarray]) -> Path:
-    """Write equal-length columns with a header row; full double precision."""
+    """Write equal-length columns with a header row; full double precision, written
+    whole (:func:`~cardan_forces.experiments.files.replacing`). A number not known
+    (NaN: not solved, not computed) is an empty cell; ``inf``/``-inf`` is only an open
+    side of a rigid set (``*_set_max``/``*_set_min``: unbounded).
+    """
     path.parent.mkdir(parents=True, exist_ok=True)
     data = np.column_stack([np.asarray(v, float) for v in columns.values()])
-    np.savetxt(path, data, delimiter=",", header=",".join(columns), comments="", fmt="%.10g")
+    with files.replacing(path, newline="") as f:
+        f.write(",".join(columns) + "\n")
+        f.writelines(",".join("" if np.isnan(v) else f"{v:.10g}" for v in row) + "\n"
+                     for row in data)
     return path
 
 

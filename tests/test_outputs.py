@@ -46,6 +46,8 @@ def test_repro_lists_an_earlier_runs_figures_as_not_its_own(tmp_path, capsys):
             str(tmp_path)]
     assert main([*argv, "--fig", "11"]) == 0
     capsys.readouterr()
+    cells = [line.split(",") for line in (tmp_path / "fig11.csv").read_text().splitlines()]
+    assert not any(c in ("nan", "inf", "-inf") for row in cells[1:] for c in row)
     assert main([*argv, "--fig", "12"]) == 0
     err = capsys.readouterr().err
     report = (tmp_path / "report.md").read_text()
@@ -68,3 +70,22 @@ def test_a_command_that_writes_files_ends_saying_where(tmp_path, capsys, argv, n
         last = capsys.readouterr().err.splitlines()[-1]
         assert last == f"cardan {argv[0]}: wrote {tmp_path}/ ({', '.join(names)})"
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
+
+
+def test_a_figure_csv_leaves_unknown_numbers_empty_and_marks_open_sides(tmp_path):
+    """NaN (not solved, not computed) is an empty cell; an open side of a rigid set is
+    ``inf``/``-inf`` and only there; reading the file back gives the same columns."""
+    import numpy as np
+    from cardan_forces.paper_repro import figures
+
+    columns = {"t": np.array([0.0, 0.5, 1.0]),
+               "load_positive": np.array([1.5, np.nan, -2.25e-300]),
+               "load_set_min": np.array([-np.inf, np.nan, 0.0]),
+               "load_set_max": np.array([np.inf, np.nan, 3.0])}
+    path = figures.write_csv(tmp_path / "fig.csv", columns)
+    lines = path.read_text().splitlines()
+    assert lines[2] == "0.5,,,"
+    assert lines[1] == "0,1.5,-inf,inf"
+    back = figures.read_csv(path)
+    for name, values in columns.items():
+        np.testing.assert_array_equal(back[name], values)
