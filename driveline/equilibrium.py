@@ -37,6 +37,7 @@ from .dynamics import Motion, _pin_inertia_global
 from .elements import Segment, shaft_segments
 from .elements.base import Body, Layout, Link
 from .elements.registry import KINDS, LINK_KINDS, scene_elements
+from .elements.segments import frames_of
 from .elements.slip import SlipFriction
 from .scene import Scene
 
@@ -176,9 +177,7 @@ def shaft_frames(motion: Motion) -> np.ndarray:
     """Per shaft the rows ``r1, r2, axis``: ``r1 = n x axis`` in the articulation plane,
     ``r2 = n`` its normal (the geometry's ``plane_normal``).
     """
-    geo = motion.geometry
-    n = np.broadcast_to(geo.plane_normal, geo.axes.shape)
-    return np.stack([np.cross(n, geo.axes), n, geo.axes], axis=1)
+    return frames_of(motion.geometry)
 
 
 def _layout(motion: Motion) -> Layout:

@@ -27,8 +27,8 @@ axial force of one law).
 
 Columns, in the shaft's frame: ``bearing.<shaft>.<bearing>.<r1|r2>`` (radial, both
 ways, as a floating bearing's) and ``bearing.<shaft>.<bearing>.axial`` >= 0, the push
-along ``pushes``. The rigid translations it stops are taken as a locating bearing's
-(the structural checks are linear; one facing the other way completes it).
+along ``pushes``. The structural checks are linear: they take it as stopping its
+shaft's translations both ways along the axis (one facing the other way completes it).
 
 Contact laws, an assumption: the scene's ``bearing_stiffness_N_m`` is its radial
 stiffness ``k_r``; a rolling element's normal approach is ``cos alpha`` of a radial and
@@ -108,9 +108,6 @@ class AngularContact(BearingKind):
 
     def unilateral(self, element, components):
         return (False, False, True)
-
-    def stops(self, axis):
-        return np.eye(3)
 
     def pairs(self, links: list[Link]) -> list[tuple[int, int]]:
         """Per shaft body, its bearing pushing upstream and the one pushing downstream."""

@@ -222,9 +222,10 @@ class ElementKind:
         ``scene`` (beyond its own fields).
         """
 
-    def holds(self, element, shaft: int, segments: list, axes: np.ndarray) -> list:
+    def holds(self, element, shaft: int, segments: list, frames: np.ndarray) -> list:
         """The rigid translations it stops: ``(body, matrix, other)`` rows, ``matrix``
-        (3, 3) the directions stopped on ``body`` relative to ``other`` (None: ground).
+        (3, 3) the directions stopped on ``body`` relative to ``other`` (None: ground);
+        ``frames``: per shaft the rows ``r1, r2, axis``.
         """
         return []
 

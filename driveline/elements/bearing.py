@@ -1,13 +1,14 @@
 """What every rolling bearing kind shares: a bearing is a contact of one shaft body
 with the ground at its bearing point, carrying a force and no moment.
 
-A kind says which components it has (:meth:`BearingKind.directions`), which
-translations it stops, and how it reads its fields of a scene's ``[[shafts.bearings]]``
-table (:meth:`BearingKind.read`: ``name``, ``offset_m`` and ``rating`` are read for
-every kind by :mod:`..loading`). Its contact laws, for the compliance energy and the
-penalty model, are linear with the scene's ``contact.bearing_stiffness_N_m`` and
-``bearing_clearance_m`` (an assumption the scenes state: a rolling bearing is far
-stiffer than the loads' range of interest needs).
+A kind says which components it has (:meth:`BearingKind.directions`: the
+translations it stops follow from them) and how it reads its fields of a scene's
+``[[shafts.bearings]]`` table (:meth:`BearingKind.read`: ``name``, ``offset_m`` and
+``rating`` are read for every kind by :mod:`..loading`). Its contact laws, for the
+compliance energy and the penalty model, are linear with the scene's
+``contact.bearing_stiffness_N_m`` and ``bearing_clearance_m`` (an assumption the
+scenes state: a rolling bearing is far stiffer than the loads' range of interest
+needs).
 """
 
 from __future__ import annotations
@@ -39,14 +40,15 @@ class BearingKind(ElementKind):
         """
         raise NotImplementedError
 
-    def stops(self, axis: np.ndarray) -> np.ndarray:
-        """(3, 3): the translations of its shaft body it stops, on a shaft of ``axis``."""
-        raise NotImplementedError
-
-    def holds(self, element, shaft, segments, axes):
+    def holds(self, element, shaft, segments, frames):
+        """The translations its components' directions span (``D' D``): what it
+        constrains is said once, by :meth:`directions`.
+        """
         from .segments import segment_of
 
-        return [(segment_of(segments, shaft, element.offset_m), self.stops(axes[shaft]), None)]
+        _, _, directions = self.directions(element, frames[shaft])
+        return [(segment_of(segments, shaft, element.offset_m), directions.T @ directions,
+                 None)]
 
     def add_links(self, element: Bearing, shaft: int, index: int, layout: Layout) -> None:
         g = layout.segment(shaft, element.offset_m)

@@ -85,7 +85,7 @@ class Cardan(ElementKind):
         t.done()
         return joint
 
-    def holds(self, element: Joint, shaft, segments, axes):
+    def holds(self, element: Joint, shaft, segments, frames):
         a, b = _yokes(segments, shaft)
         return [(a, np.eye(3), b)]
 

@@ -32,8 +32,6 @@ class Floating(BearingKind):
                 f'mass="{mass:.17g}" diaginertia="{inertia}"/></body>',
                 _connect(link.name, body, carrier, anchor, soft))
 
-    def stops(self, axis):
-        return np.eye(3) - np.outer(axis, axis)
 
 
 KIND = Floating()

@@ -25,9 +25,6 @@ class Locating(BearingKind):
     def directions(self, element, frame):
         return "global", ("x", "y", "z"), np.eye(3)
 
-    def stops(self, axis):
-        return np.eye(3)
-
     release_name, release_form, release_rank = "floating", "float:<shaft>.<bearing>", 1
 
     def releases(self, scene):

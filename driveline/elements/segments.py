@@ -75,6 +75,14 @@ def segment_of(segments: list[Segment], shaft: int, offset_m: float) -> int:
     raise ValueError(f"offset {offset_m} m lies on no segment of shaft {shaft}")
 
 
+def frames_of(geo) -> np.ndarray:
+    """Per shaft the rows ``r1, r2, axis`` of its frame in rest geometry ``geo``: ``r1 =
+    n x axis`` in the articulation plane, ``r2 = n`` its normal (``plane_normal``).
+    """
+    n = np.broadcast_to(geo.plane_normal, geo.axes.shape)
+    return np.stack([np.cross(n, geo.axes), n, geo.axes], axis=1)
+
+
 def check_elements(scene: Scene, sliding: bool = True) -> None:
     """Refuse elements their kinds refuse (a slip joint with an unheld segment, ...) and,
     if ``sliding``, lines free to slide (module doc).
@@ -98,11 +106,11 @@ def sliding_bodies(scene: Scene, segments: list[Segment] | None = None) -> list[
     from .registry import scene_elements
 
     segments = shaft_segments(scene) if segments is None else segments
-    axes = rest_geometry(scene).axes
+    frames = frames_of(rest_geometry(scene))
     n = 3 * len(segments)
     rows = []
     for kind, element, shaft, _ in scene_elements(scene):
-        for g, matrix, h in kind.holds(element, shaft, segments, axes):
+        for g, matrix, h in kind.holds(element, shaft, segments, frames):
             row = np.zeros((3, n))
             row[:, 3 * g: 3 * g + 3] = matrix
             if h is not None:

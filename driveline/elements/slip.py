@@ -126,9 +126,9 @@ class Slip(ElementKind):
                     f"{body.name!r}: its {side} segment has no neighbour (no Cardan joint at "
                     "its end, no bearing on it): nothing but the spline would hold it")
 
-    def holds(self, element: SlipJoint, shaft, segments, axes):
+    def holds(self, element: SlipJoint, shaft, segments, frames):
         up, down = _parts(segments, shaft)
-        axis = axes[shaft]
+        axis = frames[shaft][2]
         stops = np.eye(3) if element.friction_coefficient > 0 else \
             np.eye(3) - np.outer(axis, axis)
         return [(up, stops, down)]
