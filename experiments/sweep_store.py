@@ -123,9 +123,11 @@ def locked(folder: Path):
     with open(folder / ".sweep.lock", "a") as handle:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
+        except BlockingIOError:
             raise StoreError(f"another cardan sweep is writing into {folder}; wait for it "
                              "to end (a rerun then resumes) or choose another --out") from None
+        except OSError:  # a file system without locks (some network mounts): run unheld
+            pass
         yield
 
 
