@@ -428,13 +428,15 @@ def _gradient(Et, span, e, f, u, rho_soft, V, nk, grad):
 
 
 @njit(cache=True)
-def _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, reg_rtol, s, terms, u):
+def _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, s, terms, u):
     """An instant's start: ``H0``, its null space ``V`` and the first step's factor
-    ``L`` in the scratch ``s``, ``u`` cold (0) or fitted to ``hint``. Returns ``(code,
-    rho, nk)``: a nonzero code ends the instant (3 non-finite data, 4 no factor).
+    ``L`` (``H0``'s, its dependent rows skipped: a right-hand side orthogonal to ``V``
+    has a solution there, which the caller projects out of ``V``) in the scratch ``s``,
+    ``u`` cold (0) or fitted to ``hint``. Returns ``(code, rho, nk)``: a nonzero code
+    ends the instant (3 non-finite data, 4 no factor).
     """
     members, mask, signed, n = groups
-    H0, H, L, V, dependent, rhs, du = s[:7]
+    H0, _, L, V, dependent, rhs, du = s[:7]
     m = Et.shape[1]
     if not _finite(Et, e, k, g):
         return 3, 0.0, 0
@@ -442,13 +444,6 @@ def _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, reg_rtol, s, te
     nk = _null_space(H0, L, dependent, V, rhs, du, null_rtol)
     if nk < 0:
         return 4, rho, 0
-    if nk > 0:  # the first step's matrix: H0 with the null space held out (else H0's
-        for i in range(m):  # factor serves: the shift is below its rounding)
-            for j in range(m):
-                H[i, j] = H0[i, j]
-        _finish(H, reg_rtol * rho, V, nk, rho)
-        if not _cholesky(H, L, dependent, 0.0):
-            return 4, rho, nk
     for i in range(m):
         u[i] = 0.0
     if use_hint:
@@ -467,8 +462,8 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
     H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, U, z, dg, unit = s
     null_rtol, reg_rtol, ls_rtol, ls_max = params
     m = Et.shape[1]
-    code, rho, nk = _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, reg_rtol,
-                           s, terms, u)
+    code, rho, nk = _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, s, terms,
+                           u)
     if code:
         return code, 0
     rho_soft, shift = soften * rho, reg_rtol * rho
@@ -494,6 +489,7 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
         for i in range(m):
             rhs[i] = -grad[i]
         _solve(L, rhs, du, dependent, m)
+        _project(du, V, nk)  # (H0's factor skips its dependent rows: held out here)
         t = _step(Et, span, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol,
                   ls_max)
         if t == 0.0:
