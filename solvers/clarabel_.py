@@ -25,7 +25,7 @@ from cardan_forces.formulations.problems import Conic
 from . import settings
 from .record import Outcome
 from .registry import Backend
-from .settings_profiles import Profile
+from .settings_profiles import CLARABEL
 
 EXTRAS: dict[str, str | None] = {"clarabel": None, "clarabel-reduced": None}
 
@@ -41,8 +41,6 @@ iterations instead of 13.7 on ``min_max`` (its worst dual residual 7e-10 instead
 1e-6) and 7.4 instead of 8.4 on ``socp_face``, but left 23 ``positive`` instants
 inaccurate instead of 21 (so it keeps it on linear cones alone)."""
 
-PROFILE = Profile("clarabel", ("tol_feas", "tol_gap_abs"), ("tol_gap_rel",))
-"""How Clarabel takes qpbenchmark's four settings (qpbenchmark 2.7's for ``clarabel``)."""
 
 STATUS = {
     "Solved": "solved",
@@ -162,4 +160,4 @@ def backends() -> list[Backend]:
         return []
     return [Backend(name="clarabel", family="clarabel", distributions=("clarabel",),
                     accepts=(Conic,), solve=solve_conic, tolerances=TOLERANCES,
-                    qpbenchmark=PROFILE, reducible=True, unscaled=UNSCALED)]
+                    qpbenchmark=CLARABEL, reducible=True, unscaled=UNSCALED)]

@@ -42,7 +42,7 @@ from cardan_forces.formulations.problems import LastMade
 
 from ._batched_state import Layout, Params
 from .batch import BatchOutcome
-from .lcp_ import lemke
+from .lcp_methods import lemke
 from .record import Status
 from .registry import Backend
 

@@ -13,11 +13,11 @@ import time
 import numpy as np
 from cardan_forces.formulations.problems import QP
 
-from . import clarabel_, settings
+from . import settings
 from .ranging import HAVE_HIGHSPY, without_banner
 from .record import Outcome
 from .registry import Backend
-from .settings_profiles import Profile
+from .settings_profiles import CLARABEL, Profile
 
 DISTRIBUTIONS: dict[str, str] = {
     "clarabel": "clarabel", "daqp": "daqp", "ecos": "ecos", "highs": "highspy", "osqp": "osqp",
@@ -46,7 +46,7 @@ TOLERANCES: dict[str, tuple[str, ...]] = {
 """Each solver's own parameters a requested tolerance sets (quadprog: a direct method)."""
 
 PROFILES: dict[str, Profile] = {
-    "clarabel": clarabel_.PROFILE,
+    "clarabel": CLARABEL,
     "daqp": Profile("daqp", ("dual_tol", "primal_tol")),
     "ecos": Profile("ecos", ("feastol",)),
     "highs": Profile("highs", ("dual_feasibility_tolerance", "primal_feasibility_tolerance"),

@@ -7,8 +7,8 @@ where the solver takes one), and ``low_accuracy``, ``mid_accuracy``, ``high_accu
 it, relative tolerances set to 0, PIQP's and ProxQP's duality-gap check on). Each
 solver's translation is one :class:`Profile`, declared by the backend itself beside its
 tolerance parameters (``Backend.qpbenchmark``: ``qpsolvers_.PROFILES`` per qpsolvers
-solver, ``clarabel_.PROFILE`` for the direct Clarabel backend, as qpbenchmark declares
-them), so the package's bench runs a backend exactly as qpbenchmark would;
+solver, :data:`CLARABEL` for the direct Clarabel backend and qpsolvers' alike, as
+qpbenchmark declares them), so the package's bench runs a backend exactly as qpbenchmark would;
 :func:`options` gives a backend's keyword arguments for a setting. The tolerance
 each setting is judged by is in :data:`cardan_forces.solvers.qp_measures.SETTINGS`.
 """
@@ -44,6 +44,11 @@ class Profile:
             return out
         return (out | dict.fromkeys(self.eps_abs, chosen.eps_abs)
                 | dict.fromkeys(self.eps_rel, 0.0) | self.extra)
+
+
+CLARABEL = Profile("clarabel", ("tol_feas", "tol_gap_abs"), ("tol_gap_rel",))
+"""How Clarabel takes qpbenchmark's four settings (qpbenchmark 2.7's for ``clarabel``),
+through its own API (``clarabel``) or through qpsolvers (``qpsolvers-clarabel``)."""
 
 
 def profile(backend: str) -> Profile | None:

@@ -25,7 +25,7 @@ from cardan_forces.solvers import (
     settings,
     solve,
 )
-from cardan_forces.solvers.lcp_ import fb_newton
+from cardan_forces.solvers.lcp_methods import fb_newton
 from cardan_forces.solvers.record import Outcome
 from cardan_forces.solvers.reference_problems import references
 
@@ -349,3 +349,22 @@ def test_clarabel_reads_the_packages_csc_as_scipys():
                                     cones, settings).solve()
     assert str(ours.status) == "Solved"
     assert np.array_equal(np.asarray(ours.x), np.asarray(theirs.x))
+
+
+def test_no_adapter_imports_another():
+    """Each adapter stands alone (what two share lives in a module of its own), and the
+    reduced form's wrapper imports none: a backend added or removed touches its adapter
+    and the registry's list, nothing else."""
+    import ast
+    import inspect
+
+    from cardan_forces.solvers import reduced_
+
+    adapters = set(registry.ADAPTERS)
+    for module in [*(registry._adapter(name) for name in adapters), reduced_]:
+        tree = ast.parse(inspect.getsource(module))
+        named = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+        named |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+                  and node.module is None for alias in node.names}
+        own = module.__name__.rsplit(".", 1)[1]
+        assert not (named - {own}) & adapters, module.__name__

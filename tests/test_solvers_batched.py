@@ -8,7 +8,7 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.solvers import available, solve
 from cardan_forces.solvers import numpy_batched_ as nb
-from cardan_forces.solvers.lcp_ import lemke
+from cardan_forces.solvers.lcp_methods import lemke
 from cardan_forces.solvers.optimality import objective_value
 from cardan_forces.solvers.registry import UnsupportedProblem, batch_backends, solve_batch
 

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from cardan_forces.solvers.lcp_ import fb_newton, fischer_burmeister, lemke, natural_residual, pgs
+from cardan_forces.solvers.lcp_methods import (
+    fb_newton,
+    fischer_burmeister,
+    lemke,
+    natural_residual,
+    pgs,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
