@@ -36,6 +36,7 @@ from .record import Outcome
 if TYPE_CHECKING:  # the registry imports this module to apply it
     from .registry import Backend
 
+
 def _defaults(backend: Backend, cones, options: dict) -> dict:
     """The options for the wrapped backend: no equilibration on the cone kinds it
     declares (``Backend.unscaled``), under the caller's options.
