@@ -35,7 +35,7 @@ from cardan_forces.driveline.determinacy import RANK_RTOL, determinacy
 from cardan_forces.driveline.elements.base import Law
 from cardan_forces.driveline.equilibrium import Operator
 
-from .problems import LCP, LS, QP, Conic, ForceChecks, Scaled, SecondOrderCone
+from .problems import LCP, LS, QP, Conic, ForceChecks, LastMade, Scaled, SecondOrderCone
 
 MIN_MAX_NORM_WEIGHT = 1e-4
 """Weight of the tie-breaking ``1/2 ||x / ||b|| ||^2`` term of ``min_max`` (its cost in
@@ -384,13 +384,15 @@ def _held(idle, cones) -> list[int]:
                    for k in c.members]
 
 
-def contact_laws(op: Operator) -> list[Law]:
+@LastMade
+def contact_laws(op: Operator) -> tuple[Law, ...]:
     """Every contact force (a group of columns) with its compliance law, in column
     order, as each contact's kind gives them (:meth:`~cardan_forces.driveline.elements.
     base.ElementKind.laws`): bearings and slip joints linear, the Cardan joints' contacts
-    Hertz (eqs. 76-77), each kind's module saying why.
+    Hertz (eqs. 76-77), each kind's module saying why. The same at every instant: made
+    once per operator.
     """
-    return [law for c in op.contacts for law in c.element_kind.laws(c, op.scene)]
+    return tuple(law for c in op.contacts for law in c.element_kind.laws(c, op.scene))
 
 
 def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None = None):

@@ -35,6 +35,11 @@ def mjcf_numbers(values) -> str:
     return " ".join(f"{float(c):.17g}" for c in np.ravel(values))
 
 
+LINK_KINDS: dict[str, ElementKind] = {}
+"""The kind of each :attr:`Link.kind`, filled by :mod:`.registry` as it registers the
+kinds (this module is below them)."""
+
+
 @dataclass(frozen=True)
 class Body:
     """A rigid body of the operator, rows ``6 * index .. 6 * index + 6``.
@@ -55,7 +60,7 @@ class Link:
     """One contact: its force components (``columns`` of ``A``) act on ``body`` and the
     opposite on ``other`` (``None``: the ground).
 
-    ``kind`` names what the contact is (a key of :data:`~.registry.LINK_KINDS`; its
+    ``kind`` names what the contact is (a key of :data:`LINK_KINDS`; its
     :class:`ElementKind` is :attr:`element_kind`); ``element`` the scene element it
     belongs to (``<shaft>.<bearing>``, a joint's or a slip joint's name); ``frame`` the
     frame of its components: ``global``, ``shaft`` (``r1, r2``, axis) or ``pin`` (``e1,
@@ -88,8 +93,6 @@ class Link:
     @property
     def element_kind(self) -> ElementKind:
         """The kind that made this contact and knows its laws."""
-        from .registry import LINK_KINDS
-
         return LINK_KINDS[self.kind]
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 from importlib import import_module
 
 from ..scene import Scene
-from .base import ElementKind
+from .base import LINK_KINDS, ElementKind
 from .bearing import BearingKind
 from .cardan import KIND as JOINT
 from .slip import KIND as SLIP
@@ -28,8 +28,7 @@ BEARING_KINDS: dict[str, BearingKind] = {k.name: k for k in KINDS
                                          if isinstance(k, BearingKind)}
 """Bearing kinds by their ``kind`` in a scene."""
 
-LINK_KINDS: dict[str, ElementKind] = {name: k for k in KINDS for name in k.link_kinds}
-"""The kind of each :attr:`~.base.Link.kind`."""
+LINK_KINDS.update({name: k for k in KINDS for name in k.link_kinds})
 
 
 
