@@ -172,8 +172,7 @@ def peaks(op: Operator, h: History) -> dict[str, float]:
         return dict.fromkeys(PEAKS, math.nan)
     out = {}
     for k, name in enumerate(("peak_joint1_N", "peak_joint2_N")):
-        groups = [list(c.columns) for c in op.of_kind("trunnion-radial", "end-face")
-                  if c.joint == k]
+        groups = [list(c.columns) for c in op.joint_contacts(k).values()]
         out[name] = _max(np.linalg.norm(x[:, cols], axis=1) for cols in groups)
     for k, radial in ((0, "peak_input_radial_N"), (len(op.scene.shafts) - 1,
                                                    "peak_output_radial_N")):
