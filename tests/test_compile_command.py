@@ -11,7 +11,7 @@ from cardan_forces.commands import compile as compile_command
 pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
 
 
-def test_compile_runs_the_penalty_model_and_a_batch(monkeypatch, capsys):
+def test_compile_runs_the_penalty_model_and_a_batch(monkeypatch):
     pytest.importorskip("numba")
     calls = []
     monkeypatch.setattr(penalty, "simulate_penalty",
@@ -21,4 +21,3 @@ def test_compile_runs_the_penalty_model_and_a_batch(monkeypatch, capsys):
     from cardan_forces.solvers import _batched_kernels
 
     assert _batched_kernels.least_norm.signatures  # compiled (or loaded) by the batch
-    assert "cached in" in capsys.readouterr().err
