@@ -428,15 +428,18 @@ def _gradient(Et, span, e, f, u, rho_soft, V, nk, grad):
 
 
 @njit(cache=True)
-def _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, s, terms, u):
+def _start(Et, span, e, groups, k, g, hints, use_hint, null_rtol, s, terms, u):
     """An instant's start: ``H0``, its null space ``V`` and the first step's factor
     ``L`` (``H0``'s, its dependent rows skipped: a right-hand side orthogonal to ``V``
     has a solution there, which the caller projects out of ``V``) in the scratch ``s``,
-    ``u`` cold (0) or fitted to ``hint``. Returns ``(code, rho, nk)``: a nonzero code
-    ends the instant (3 non-finite data, 4 no factor).
+    ``u`` cold (0) or fitted to the first of ``hints`` (the deformations to start
+    from, and another or ``None``: then the fit of the two with the smaller gradient).
+    Returns ``(code, rho, nk)``: a nonzero code ends the instant (3 non-finite data, 4
+    no factor).
     """
     members, mask, signed, n = groups
     H0, _, L, V, dependent, rhs, du = s[:7]
+    hint, other = hints
     m = Et.shape[1]
     if not _finite(Et, e, k, g):
         return 3, 0.0, 0
@@ -449,20 +452,36 @@ def _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, s, terms, u):
     if use_hint:
         _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u)
         _project(u, V, nk)
+    if use_hint and other is not None:
+        first = _start_gradient(Et, span, e, groups, k, g, V, nk, s, u)
+        _fit(Et, span, e, other, members, mask, n, k, L, dependent, rhs, du)
+        _project(du, V, nk)
+        if _start_gradient(Et, span, e, groups, k, g, V, nk, s, du) < first:
+            for i in range(m):
+                u[i] = du[i]
     return 0, rho, nk
 
 
 @njit(cache=True)
-def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, params, s,
+def _start_gradient(Et, span, e, groups, k, g, V, nk, s, u):
+    """``||(I - V V')(E f - e)||`` at ``u`` (a start's measure, in the scratch ``s``)."""
+    members, mask, signed, n = groups
+    _, _, _, _, _, _, _, grad, d, f, _, ratio, slope, Y, U, _, dg, unit = s
+    _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, U, dg, unit)
+    return _gradient(Et, span, e, f, u, 0.0, V, nk, grad)
+
+
+@njit(cache=True)
+def _instant(Et, span, e, groups, k, g, hints, use_hint, tol, max_iter, soften, params, s,
              terms, u):
     """One instant into ``u``; returns ``(status, iterations)`` (``groups``: members,
     mask, signed, n; ``s``, ``terms``: the scratch of :func:`newton`).
     """
     members, mask, signed, n = groups
     H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, U, z, dg, unit = s
-    null_rtol, reg_rtol, ls_rtol, ls_max = params
+    null_rtol, reg_rtol, ls_rtol, ls_max, stall = params
     m = Et.shape[1]
-    code, rho, nk = _start(Et, span, e, groups, k, g, hint, use_hint, null_rtol, s, terms,
+    code, rho, nk = _start(Et, span, e, groups, k, g, hints, use_hint, null_rtol, s, terms,
                            u)
     if code:
         return code, 0
@@ -492,8 +511,8 @@ def _instant(Et, span, e, groups, k, g, hint, use_hint, tol, max_iter, soften, p
         _project(du, V, nk)  # (H0's factor skips its dependent rows: held out here)
         t = _step(Et, span, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol,
                   ls_max)
-        if t == 0.0:
-            return 2, it
+        if t == 0.0:  # no decrease left: rounding, solved if within STALL tol
+            return (0 if norm <= stall * tol * scale else 2), it
     return 1, max_iter
 
 
@@ -540,10 +559,11 @@ def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, m
     groups = (members, mask, signed, n)
     for i in range(T):
         warm = chain and i > 0
-        hint = d0[i]
-        if warm:  # the deformations extrapolated linearly from the two instants before
-            hint = 2.0 * d_out[i - 1] - d_out[i - 2] if i > 1 else d_out[i - 1]
-        status[i], iters[i] = _instant(Et[i], span, e[i], groups, k[i], g[i], hint,
+        hints = (d0[i], None)
+        if warm:  # the answer before, or extrapolated linearly from the two before
+            hints = ((2.0 * d_out[i - 1] - d_out[i - 2], d_out[i - 1]) if i > 1 else
+                     (d_out[i - 1], None))
+        status[i], iters[i] = _instant(Et[i], span, e[i], groups, k[i], g[i], hints,
                                        warm or start[i], tol, max_iter, soften, params,
                                        scratch, terms, u_out[i])
         for j in range(nv):

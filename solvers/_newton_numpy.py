@@ -23,6 +23,10 @@ REG_RTOL = 1e-13
 """``mu / rho``: the shift that keeps a step's factor positive definite."""
 LS_RTOL = 1e-10
 """The line search stops at a slope below this fraction of its start's."""
+STALL = 100.0
+"""Where the line search finds no decrease left (rounding), the instant counts as
+solved if ``||grad|| <= STALL tol ||e||`` (1e-10 at the default ``TOL``: the package's
+accuracy level), else it is left ``inaccurate``."""
 LS_MAX = 60
 """Line-search evaluations per step."""
 
@@ -159,12 +163,23 @@ def newton_numpy(E, e, groups: Groups, k, g, d0=None, start=None, chain=False,
     status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
     for i in range(T):
         hint = d0[i] if start is not None and start[i] else None
-        if chain and i:  # extrapolated from the two answers before (linear in time)
-            hint = 2.0 * d_out[i - 1] - d_out[i - 2] if i > 1 else d_out[i - 1]
+        if chain and i:  # the answer before, or extrapolated from the two before
+            hint = (2.0 * d_out[i - 1] - d_out[i - 2], d_out[i - 1]) if i > 1 else d_out[
+                i - 1]
         u_out[i], status[i], iters[i] = _one(E[i], e[i], groups, k[i], g[i], hint, tol,
                                              max_iter, soften)
         d_out[i] = E[i].T @ u_out[i]
     return u_out, d_out, status, iters
+
+
+def _fitted(E, e, groups, k, g, project, hint):
+    """``u`` whose deformations fit ``hint`` (least squares, out of the null space); of
+    a pair of hints, the fit with the smaller gradient.
+    """
+    fits = [project @ np.linalg.lstsq(E.T, h, rcond=None)[0]
+            for h in (hint if isinstance(hint, tuple) else (hint,))]
+    return min(fits, key=lambda u: np.linalg.norm(
+        project @ (E @ forces(E.T @ u, groups, k, g) - e)))
 
 
 def _one(E, e, groups, k, g, hint, tol, max_iter, soften):
@@ -176,8 +191,7 @@ def _one(E, e, groups, k, g, hint, tol, max_iter, soften):
     V = null_basis(H0)
     project = np.eye(len(e)) - V @ V.T
     rho_soft = soften * rho
-    u = np.zeros(len(e)) if hint is None else project @ np.linalg.lstsq(E.T, hint,
-                                                                        rcond=None)[0]
+    u = np.zeros(len(e)) if hint is None else _fitted(E, e, groups, k, g, project, hint)
     scale = max(float(np.linalg.norm(e)), 1e-300)
     for it in range(max_iter + 1):
         d = E.T @ u
@@ -197,7 +211,7 @@ def _one(E, e, groups, k, g, hint, tol, max_iter, soften):
             return u, 4, it
         du = -np.linalg.solve(factor.T, np.linalg.solve(factor, grad))
         t = line_search(d, E.T @ du, u, du, e, groups, k, g, rho_soft)
-        if t == 0.0:
-            return u, 2, it
+        if t == 0.0:  # no decrease left: rounding, solved if within STALL tol
+            return u, (0 if np.linalg.norm(grad) <= STALL * tol * scale else 2), it
         u = u + t * du
     return u, 1, max_iter

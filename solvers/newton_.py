@@ -32,7 +32,8 @@ then bounds. The line search minimizes ``Phi`` along the step exactly (a safegua
 Newton iteration on the slope, ``O(n)`` an evaluation). A cold start takes its first
 step with ``H0``; a warm start fits ``u`` to the deformations ``d`` of a neighbouring
 answer (in a batch's chain, extrapolated linearly from the two answers before). The
-iteration stops when ``||(I - V V') grad|| <= tol ||e||``.
+iteration stops when ``||(I - V V') grad|| <= tol ||e||`` (or at rounding, where no
+decrease is left, within ``STALL tol``).
 
 ``soften`` (option, >= 0): the equilibrium softened as MuJoCo and SAP soften their
 constraints, ``+ soften rho ||u||^2 / 2`` in the dual, i.e. the primal
@@ -66,6 +67,7 @@ from ._newton_numpy import (
     NULL_RTOL,
     REASONS,
     REG_RTOL,
+    STALL,
     STATUS,
     TOL,
     Groups,
@@ -105,7 +107,7 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
                   groups.members, groups.mask, groups.signed, groups.n,
                   np.ascontiguousarray(k, float), np.ascontiguousarray(g, float), d0, start,
                   bool(chain), float(tol), int(max_iter), float(soften),
-                  (NULL_RTOL, REG_RTOL, LS_RTOL, float(LS_MAX)))
+                  (NULL_RTOL, REG_RTOL, LS_RTOL, float(LS_MAX), STALL))
 
 
 def spans(E) -> np.ndarray:
