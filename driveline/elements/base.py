@@ -14,11 +14,17 @@ bearing, a Cardan joint, ...) owns, for its elements of a scene:
   complementarity resolves (:meth:`ElementKind.pairs`);
 - its contact laws: the compliance energy's (:meth:`ElementKind.laws`) and the
   penalty model's (:meth:`ElementKind.penalty`);
-- its MJCF (bearing kinds), its releases, its labels (:meth:`ElementKind.words`).
+- its MJCF, its releases, its labels (:meth:`ElementKind.words`).
 
-Every method has a default that means "this kind adds nothing here", so a kind writes
-only what it has. The modules that build and read operators iterate over the links and
-ask their kind (:attr:`Link.element_kind`); none of them names a kind.
+What every kind must say (its links, laws, penalty contacts) raises
+``NotImplementedError`` in the base; the rest has a default that means "this kind adds
+nothing here" (no pairs, no release, no extra unknowns), so a kind writes only what it
+has. A kind that joins two bodies gives MuJoCo's joint between them
+(:meth:`ElementKind.mjcf_joint`), one that makes a body gives it
+(:meth:`ElementKind.mjcf_body`), a bearing kind its constraint to the ground
+(:meth:`~.bearing.BearingKind.mjcf`). The modules that build and read operators
+iterate over the links and ask their kind (:attr:`Link.element_kind`); none of them
+names a kind.
 """
 
 from __future__ import annotations
@@ -258,7 +264,7 @@ class ElementKind:
         """Its contact forces (column groups) with their compliance laws, in column
         order; the groups are also the contact forces ``min_max`` bounds.
         """
-        return [Law(link.columns, scene.contact.bearing_stiffness_N_m, 0.0)]
+        raise NotImplementedError
 
     def penalty(self, link: Link, rows) -> None:
         """Add its penalty contacts (eqs. 75-78) through ``rows`` (the penalty
