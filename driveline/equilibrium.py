@@ -41,7 +41,8 @@ from .elements.segments import frames_of
 from .elements.slip import SlipFriction
 from .scene import Scene
 
-__all__ = ["Body", "Link", "SlipFriction", "Operator", "BearingLoad", "build_operator"]
+__all__ = ["AXES", "BearingLoad", "Body", "CONTACT_KINDS", "Link", "Operator", "SlipFriction",
+           "body_references", "build_operator", "shaft_frames"]
 
 AXES = "xyz"
 

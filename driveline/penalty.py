@@ -124,7 +124,8 @@ from .penalty_integrators import RTOL, Marks, run_compiled, run_odeint, run_step
 from .penalty_model import Model, contact_law
 from .scene import Scene, SceneError
 
-__all__ = ["PenaltyResult", "simulate_penalty", "contact_law", "ContactRows"]
+__all__ = ["COMPILED", "ContactRows", "DAMPING_LENGTH_UNIT_M", "FALLBACK", "KERNELS", "METHODS",
+           "PenaltyResult", "cache_folder", "contact_law", "simulate_penalty"]
 
 COMPILED = "BDF-numba"
 DAMPING_LENGTH_UNIT_M = 1e-3

@@ -36,7 +36,9 @@ from .modes import Mode, counts, name_modes
 from .scene import Scene, SceneError
 from .support import check_loads
 
-__all__ = ["Release", "parse_release", "candidates", "released_scene", "advise"]
+__all__ = ["Advice", "MAX_RELEASES", "MAX_RELEASE_SETS", "Release", "ReleaseSearchTooLarge",
+           "advise", "at_instant", "candidates", "named_modes", "parse_release",
+           "released_operator", "released_scene", "search_size"]
 
 
 def parse_release(text: str, scene: Scene) -> Release:
