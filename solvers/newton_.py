@@ -82,6 +82,7 @@ from .registry import Backend
 EXTRAS: dict[str, str | None] = {"newton": None, "newton-batched": None,
                                  "newton-batched-warm": None}
 
+
 def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, tol=TOL,
                 max_iter=MAX_ITER, soften=0.0, compiled=None):
     """:func:`newton_numpy`'s answer, compiled where numba is installed (``compiled``:
