@@ -36,8 +36,8 @@ import numpy as np
 from .dynamics import Motion, _pin_inertia_global
 from .elements import Segment, shaft_segments
 from .elements.base import Body, Layout, Link
+from .elements.bodies import frames_of
 from .elements.registry import KINDS, LINK_KINDS, scene_elements
-from .elements.segments import frames_of
 from .elements.slip import SlipFriction
 from .scene import Scene
 

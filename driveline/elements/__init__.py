@@ -1,8 +1,9 @@
 """Element kinds of a drive line as objects (:mod:`.base`: the protocol; one module
-per kind; :mod:`.registry`: the list), and the shaft bodies they act on
-(:mod:`.segments`).
+per kind; :mod:`.registry`: the list), the shaft bodies they act on (:mod:`.bodies`)
+and the checks that the line is held (:mod:`.checks`).
 """
 
-from .segments import Segment, check_elements, segment_of, shaft_segments, sliding_bodies
+from .bodies import Segment, segment_of, shaft_segments
+from .checks import check_elements, sliding_bodies
 
 __all__ = ["Segment", "check_elements", "segment_of", "shaft_segments", "sliding_bodies"]

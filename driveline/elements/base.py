@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene import Scene
+from .bodies import segment_of
 
 
 def mjcf_numbers(values) -> str:
@@ -44,6 +45,10 @@ def mjcf_numbers(values) -> str:
 LINK_KINDS: dict[str, ElementKind] = {}
 """The kind of each :attr:`Link.kind`, filled by :mod:`.registry` as it registers the
 kinds (this module is below them)."""
+
+RELEASES: dict[str, ElementKind] = {}
+"""The kinds that offer a release, by its name (:attr:`Release.kind`), in the advisor's
+order; filled by :mod:`.registry`."""
 
 
 @dataclass(frozen=True)
@@ -146,8 +151,6 @@ class Layout:
 
     def segment(self, shaft: int, offset_m: float) -> int:
         """Index of the body of shaft ``shaft`` (scene index) holding ``offset_m``."""
-        from .segments import segment_of
-
         return segment_of(self.segments, shaft, offset_m)
 
 
@@ -177,8 +180,6 @@ class Release:
 
     @property
     def offered_by(self) -> ElementKind:
-        from .registry import RELEASES
-
         return RELEASES[self.kind]
 
     @property

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..scene import Bearing, Scene
 from .base import Column, ElementKind, Law, Layout, Link, mjcf_numbers
+from .bodies import segment_of
 
 
 class BearingKind(ElementKind):
@@ -44,8 +45,6 @@ class BearingKind(ElementKind):
         """The translations its components' directions span (``D' D``): what it
         constrains is said once, by :meth:`directions`.
         """
-        from .segments import segment_of
-
         _, _, directions = self.directions(element, frames[shaft])
         return [(segment_of(segments, shaft, element.offset_m), directions.T @ directions,
                  None)]

@@ -12,7 +12,7 @@ from __future__ import annotations
 from importlib import import_module
 
 from ..scene import Scene
-from .base import LINK_KINDS, ElementKind
+from .base import LINK_KINDS, RELEASES, ElementKind
 from .bearing import BearingKind
 from .cardan import KIND as JOINT
 from .slip import KIND as SLIP
@@ -32,10 +32,8 @@ LINK_KINDS.update({name: k for k in KINDS for name in k.link_kinds})
 
 
 
-RELEASES: dict[str, ElementKind] = {k.release_name: k for k in
-                                    sorted(KINDS, key=lambda k: k.release_rank)
-                                    if k.release_name}
-"""The kinds that offer a release, by its name, in the advisor's order."""
+RELEASES.update({k.release_name: k for k in sorted(KINDS, key=lambda k: k.release_rank)
+                 if k.release_name})
 
 
 def scene_elements(scene: Scene):
