@@ -11,7 +11,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import qpbench_harness as harness
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.problems import QP, ForceChecks
-from cardan_forces.solvers import available, clarabel_, qpsolvers_, settings_profiles
+from cardan_forces.solvers import available, qpsolvers_, settings_profiles
 from cardan_forces.solvers import qp_measures as qm
 
 
@@ -109,7 +109,7 @@ def test_settings_profiles_are_qpbenchmarks(qpbenchmark):
         tol = probe.tolerances[name]
         assert (tol.primal, tol.dual, tol.gap, tol.runtime) == (
             setting.tolerance, setting.tolerance, setting.tolerance, setting.time_limit_s)
-        for profile in [*qpsolvers_.PROFILES.values(), clarabel_.PROFILE]:
+        for profile in [*qpsolvers_.PROFILES.values(), settings_profiles.CLARABEL]:
             assert profile.options(name) == dict(
                 probe.solver_settings[name][profile.solver]), (name, profile.solver)
     for backend in available().values():  # each backend reads its own declaration
