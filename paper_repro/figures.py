@@ -28,6 +28,7 @@ from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_filter
 
 from .figures_draw import PENALTY, SMOOTHED, Panel, plot_grid
+from .figures_draw import read_csv as read_csv  # the figures' CSV reader, with write_csv
 
 SMOOTH_S = 0.1
 """Moving-average window (s) for the penalty simulation's forces: the released line
@@ -109,12 +110,6 @@ def write_csv(path: Path, columns: dict[str, np.ndarray]) -> Path:
         f.writelines(",".join("" if np.isnan(v) else f"{v:.10g}" for v in row) + "\n"
                      for row in data)
     return path
-
-
-def read_csv(path: Path) -> dict[str, np.ndarray]:
-    """Read a CSV written by :func:`write_csv` back into named columns."""
-    data = np.genfromtxt(path, delimiter=",", names=True, deletechars="")
-    return {name: data[name] for name in data.dtype.names}
 
 
 def _with_smoothed(columns: dict[str, np.ndarray], t: np.ndarray, speeds: bool = False

@@ -70,11 +70,17 @@ class Panel:
         return found.group(0)[1:-1] if found else ""
 
 
+def read_csv(path: Path) -> dict[str, np.ndarray]:
+    """Read a figure's CSV (``figures.write_csv``: empty cells not known) back into
+    named columns.
+    """
+    data = np.genfromtxt(path, delimiter=",", names=True, deletechars="")
+    return {name: data[name] for name in data.dtype.names}
+
+
 def plot_grid(csv: Path, panels: list[Panel], title: str, ncols: int, formats=("png",),
               labels: dict | None = None) -> list[Path]:
     """:func:`grid_figure` of the CSV's columns, written beside it in each format."""
-    from .figures import read_csv
-
     with plt.rc_context(STYLE):
         fig = grid_figure(read_csv(csv), panels, title, ncols, labels or {})
         paths = save(fig, csv.with_suffix(""), formats)

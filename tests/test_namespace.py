@@ -36,10 +36,11 @@ def test_layers_import_only_downwards():
             assert not above, f"{path.name} imports {above}"
 
 
-PAPER_REPRO_MAY_USE = {"study", "environment", "progress", "images", "engine"}
+PAPER_REPRO_MAY_USE = {"study", "environment", "progress", "images", "engine", "files"}
 """What paper_repro takes from experiments: the study layer, the run's environment, the
-progress bars, the image files shared with ``cardan report`` and MuJoCo's comparison
-with the rigid set (``cardan engine``), which repro draws as a method."""
+progress bars, the image files shared with ``cardan report``, MuJoCo's comparison
+with the rigid set (``cardan engine``), which repro draws as a method, and the writing
+of output files whole."""
 
 
 def test_paper_repro_uses_experiments_one_way():
