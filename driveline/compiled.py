@@ -11,13 +11,22 @@ their results for finite numbers and end with a failed status instead.
 A cache file numba cannot read (a disk that filled while it was written, a copy from
 another machine or numba) is removed and the kernel compiled again, with one warning,
 instead of ending the run in numba's unpickling error.
+
+numba keys a cached function by its own source file only: a kernel that inlines or
+calls kernels of other files would be loaded stale after an edit there. A kernel names
+the files it depends on (``njit(cache=True, depends=(...))``, paths relative to its own
+file); their contents' hash joins its cache key, so an edit of any of them compiles it
+again.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import hashlib
 import os
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -27,15 +36,16 @@ try:
 
     HAVE_NUMBA = True
 
-    def njit(*args, **kwargs):
+    def njit(*args, depends=(), **kwargs):
         """``numba.njit`` with NumPy's error model unless the caller sets one, and a
-        disk cache that rebuilds a file it cannot read (:class:`_RebuildingCache`).
+        disk cache that rebuilds a file it cannot read and is keyed also by the
+        contents of the source files in ``depends`` (:class:`_RebuildingCache`).
         """
         kwargs.setdefault("error_model", "numpy")
         made = numba.njit(*args, **kwargs)
         if args and callable(args[0]):
-            return _rebuilding(made)
-        return lambda function: _rebuilding(made(function))
+            return _rebuilding(made, depends)
+        return lambda function: _rebuilding(made(function), depends)
 
     class _RebuildingCache(FunctionCache):
         """numba's on-disk cache of one function, where a cache file that cannot be read
@@ -43,7 +53,21 @@ try:
         call in ``EOFError``, ``UnpicklingError``, ``MemoryError`` or ``IndexError``) is
         removed and counts as absent: the function compiles again and its cache is
         written anew, with one warning per process.
+
+        Its index key holds, besides numba's (signature, CPU, bytecode), the hash of
+        the files the function ``depends`` on (:func:`_files_hash`): a cache written
+        before any of them changed is not found, and the function compiles again.
         """
+
+        def __init__(self, py_func, depends=()):
+            super().__init__(py_func)
+            self._depends_hash = _files_hash(py_func.__code__.co_filename, tuple(depends))
+
+        def _index_key(self, sig, codegen):
+            key = super()._index_key(sig, codegen)
+            if not self._depends_hash:
+                return key  # numba's own key: caches written before stay valid
+            return (*key[:2], (*key[2], self._depends_hash))
 
         def load_overload(self, sig, target_context):
             try:
@@ -61,7 +85,7 @@ try:
 except ImportError:
     HAVE_NUMBA = False
 
-    def njit(*args, **kwargs):
+    def njit(*args, depends=(), **kwargs):
         """Leave a function as it is where numba is not installed."""
         return args[0] if args and callable(args[0]) else (lambda f: f)
 
@@ -69,13 +93,27 @@ _WARNED: list[str] = []
 """The cache files already reported as unreadable in this process (one warning)."""
 
 
-def _rebuilding(dispatcher):
+def _rebuilding(dispatcher, depends=()):
     """``dispatcher`` with its disk cache (if it has one) replaced by a
-    :class:`_RebuildingCache` of the same function.
+    :class:`_RebuildingCache` of the same function, keyed also by ``depends``.
     """
     if type(getattr(dispatcher, "_cache", None)) is FunctionCache:
-        dispatcher._cache = _RebuildingCache(dispatcher.py_func)
+        dispatcher._cache = _RebuildingCache(dispatcher.py_func, depends)
     return dispatcher
+
+
+@functools.cache
+def _files_hash(source: str, depends: tuple) -> str:
+    """SHA-256 of the contents of the files ``depends`` (paths relative to the folder
+    of the file ``source``), in their order; empty where there are none. A file that
+    is missing raises at import: a kernel's declared dependency must exist.
+    """
+    if not depends:
+        return ""
+    hasher, folder = hashlib.sha256(), Path(source).parent
+    for name in depends:
+        hasher.update((folder / name).read_bytes())
+    return hasher.hexdigest()
 
 
 def _discard(cache, exc: Exception) -> None:

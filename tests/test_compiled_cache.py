@@ -1,0 +1,71 @@
+"""The package's ``njit`` keys a kernel's disk cache also by the source files it
+declares it depends on: editing one of them compiles the kernel again instead of
+loading a cached copy that inlined the old code.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+HELPER = '''
+from cardan_forces.driveline.compiled import njit
+
+
+@njit(inline="always")
+def offset(x):
+    return x + {step}
+'''
+
+KERNEL = '''
+from cardan_forces.driveline.compiled import njit
+from helper_module import offset
+
+
+@njit(cache=True, depends=("helper_module.py",))
+def shifted(x):
+    return offset(x)
+
+
+value = shifted(1.0)
+print(value, shifted.stats.cache_hits.get(shifted.signatures[0], 0))
+'''
+
+
+def _run(folder, cache):
+    """Import the kernel module in a new process, its numba cache in ``cache``:
+    (the kernel's value, whether it was loaded from the cache)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(folder))
+    done = subprocess.run([sys.executable, "-c", "import kernel_module"], env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    value, hits = done.stdout.split()
+    return float(value), int(hits) > 0
+
+
+def test_a_kernel_is_compiled_again_when_a_file_it_depends_on_changes(tmp_path):
+    """A cached kernel that inlines a function of another file: loaded from the cache
+    while nothing changes, compiled again (with the new function) once that file is
+    edited, and loaded again after that."""
+    pytest.importorskip("numba")
+    (tmp_path / "kernel_module.py").write_text(KERNEL)
+    (tmp_path / "helper_module.py").write_text(HELPER.format(step="1.0"))
+    cache = tmp_path / "numba_cache"
+    assert _run(tmp_path, cache) == (2.0, False)
+    assert _run(tmp_path, cache) == (2.0, True)
+    (tmp_path / "helper_module.py").write_text(HELPER.format(step="2.0"))
+    assert _run(tmp_path, cache) == (3.0, False)
+    assert _run(tmp_path, cache) == (3.0, True)
+
+
+def test_a_declared_dependency_that_does_not_exist_fails_at_import(tmp_path):
+    """A kernel that names a missing file fails when its module is imported (a
+    declaration that could never invalidate anything is an error, not a no-op)."""
+    pytest.importorskip("numba")
+    from cardan_forces.driveline.compiled import njit
+
+    with pytest.raises(FileNotFoundError):
+        njit(cache=True, depends=("no_such_file.py",))(lambda x: x)
