@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments.study import History
-from cardan_forces.paper_repro import figures, repro
+from cardan_forces.paper_repro import figures, repro, verdicts
+from cardan_forces.paper_repro import runs as repro_runs
 
 from cardan_forces.cli import main
 
@@ -15,13 +16,13 @@ def test_a_verdict_the_halves_do_not_share_is_undecided():
     values = np.r_[np.full(50, 3.0), np.full(50, 1.0)]  # the first half says yes, then no
     ok = np.ones(100, dtype=bool)
     stat = lambda mask: values[mask].mean()  # noqa: E731
-    verdict, text = repro._verdict(stat, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)
+    verdict, text = verdicts._verdict(stat, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)
     assert verdict == "undecided" and "first half 3" in text
     steady = lambda mask: 3.0  # noqa: E731
-    assert repro._verdict(steady, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)[0] == "agrees"
-    assert repro._verdict(lambda m: 1.0, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)[0] == \
+    assert verdicts._verdict(steady, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)[0] == "agrees"
+    assert verdicts._verdict(lambda m: 1.0, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)[0] == \
         "undecided"  # between the thresholds
-    assert repro._verdict(lambda m: np.nan, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)[0] == \
+    assert verdicts._verdict(lambda m: np.nan, ok, lambda x: x >= 1.5, lambda x: x <= 0.5)[0] == \
         "undecided"
 
 
@@ -31,12 +32,12 @@ def test_sign_test_tells_a_coin_toss_from_a_bias():
     rng = np.random.default_rng(1)
     scale = [np.full(2000, 100.0)]
     coin = np.repeat(np.where(np.arange(100) < 53, 1.0, -1.0), 20)
-    share, n, p, _ = repro._sign_test([coin], scale, 20)
+    share, n, p, _ = verdicts._sign_test([coin], scale, 20)
     assert n == 100 and share == 0.53 and p > 0.5
     biased = np.repeat(np.where(rng.permutation(100) < 80, 5.0, -5.0), 20)
-    share, n, p, rel = repro._sign_test([biased], scale, 20)
+    share, n, p, rel = verdicts._sign_test([biased], scale, 20)
     assert share == 0.8 and p < 1e-6 and rel == 0.05
-    ties = repro._sign_test([np.zeros(2000)], scale, 20)
+    ties = verdicts._sign_test([np.zeros(2000)], scale, 20)
     assert ties[1] == 0 and ties[2] == 1.0
 
 
@@ -62,7 +63,7 @@ def test_a_method_whose_end_faces_both_push_is_named_not_a_physical_selection():
     one = np.array([[0, 3, 0, 0], [5.8, 0, 0, 1], [0, 0, 2, 0]], float)
     hist = {m: History(m, "s", Op.t, x, (), 0.0) for m, x in (("min_max", both),
                                                               ("positive", one))}
-    lines = repro._both_faces_note(Op, hist)
+    lines = verdicts._both_faces_note(Op, hist)
     assert "`min_max`: both end faces of a pair push at once at 1 of 3 instants (up to " \
            "5.8 N each, t = 0.020 s)" in lines[0]
     assert lines[1].startswith("- `positive`: no pair of end faces pushes at once")
@@ -70,10 +71,10 @@ def test_a_method_whose_end_faces_both_push_is_named_not_a_physical_selection():
 
 def test_fig15_names_the_scene_whose_verdicts_both_agree():
     y, x = load_scene("paper-fig15"), load_scene("paper-fig15-axial")
-    _, _, lines = repro._fig15_summary([(y, {"radial": "disagrees", "axial": "disagrees"}),
-                                        (x, {"radial": "agrees", "axial": "agrees"})])
+    _, _, lines = verdicts._fig15_summary([(y, {"radial": "disagrees", "axial": "disagrees"}),
+                                           (x, {"radial": "agrees", "axial": "agrees"})])
     assert lines[-1] == "- matches the paper's text (both verdicts agree): `paper-fig15-axial`"
-    _, _, lines = repro._fig15_summary([(y, {"radial": "agrees", "axial": "undecided"})])
+    _, _, lines = verdicts._fig15_summary([(y, {"radial": "agrees", "axial": "undecided"})])
     assert lines[-1].endswith("none of the scenes drawn")
 
 
@@ -111,13 +112,13 @@ def test_one_penalty_simulation_per_scene_and_the_runs_listed(tmp_path, monkeypa
     """Fig. 15 on the same scene as Figs. 11-14 reuses its penalty simulation; the report
     lists what was made and what for; without the penalty nothing is simulated."""
     made = []
-    real = repro.run_penalty
+    real = repro_runs.run_penalty
 
     def counted(scene, times, progress=None):
         made.append(scene.name)
         return real(scene, times, progress)
 
-    monkeypatch.setattr(repro, "run_penalty", counted)
+    monkeypatch.setattr(repro_runs, "run_penalty", counted)
     report = repro.run_repro(figs=(11, 15), out=tmp_path, quick=True, fig15_scenes=("paper",),
                              progress=lambda s: None, workers=0).read_text()
     assert made == ["paper"]
@@ -136,7 +137,7 @@ def test_the_runs_list_says_what_the_compiled_integrator_measured(paper):
     from cardan_forces.driveline.penalty import COMPILED, PenaltyResult
 
     t = np.array([0.0, 0.5])
-    runs = repro._Runs(t, True, lambda _: None)
+    runs = repro_runs._Runs(t, True, lambda _: None)
     runs.penalties["paper-penalty"] = PenaltyResult(
         paper, t, np.zeros((3, 2)), {}, np.zeros(2), wall_s=1.0, nfev=2000, njev=100,
         nlu=300, nsteps=1000, method=COMPILED, status=0, message="ok", kernel="numba",
