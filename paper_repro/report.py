@@ -15,6 +15,7 @@ from pathlib import Path
 
 from cardan_forces.driveline.dynamics import Motion
 from cardan_forces.driveline.scene import Scene
+from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import machine, versions
 
 from .figures import PENALTY
@@ -100,3 +101,18 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str
                                 for s in (".csv", *(f".{f}" for f in images))), ""]
         lines += notes
     return "\n".join(lines) + "\n"
+
+
+def _write_report(out: Path, report: str, sections, formats, progress, started: float
+                  ) -> Path:
+    """Write ``report`` into ``out/report.md`` with the list of the files an earlier run
+    left beside this run's (:data:`OUTPUTS`), and say what was written; ``started``: the
+    run's start (:func:`time.perf_counter`), for the total time said.
+    """
+    written = _written(sections, formats)
+    stale = files.stale(out, [*written, out / "report.md"], OUTPUTS)
+    path = files.write_text(out / "report.md", report + _stale_lines(stale))
+    progress(f"repro: report -> {path} ({time.perf_counter() - started:.1f} s in all)")
+    files.say_written("repro", [*written, path], note=f"{len(stale)} file(s) of an earlier "
+                      "run left beside them, listed in report.md" if stale else "")
+    return path

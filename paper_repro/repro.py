@@ -31,13 +31,12 @@ from pathlib import Path
 
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
-from cardan_forces.experiments import files
 
 from .compliance import _compliance_plan
 from .engine_section import _engine_section, _engine_work
 from .figures import PENALTY
 from .histories import METHODS
-from .report import OUTPUTS, _report, _stale_lines, _written
+from .report import _report, _write_report
 from .request import ALL_METHODS, ENGINE, FIG15_SCENES, FIGURES, check_request, default_methods
 from .runs import _rigid_jobs, _rigid_result, _run_jobs, _Runs
 from .sections import _fig15, _main_figures
@@ -103,10 +102,4 @@ def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "result
     runs.close()
     report = _report(scene, motion, sections, quick, [s.name for s in fig15], methods,
                      formats, runs, time.perf_counter() - started)
-    written = _written(sections, formats)
-    stale = files.stale(out, [*written, out / "report.md"], OUTPUTS)
-    path = files.write_text(out / "report.md", report + _stale_lines(stale))
-    progress(f"repro: report -> {path} ({time.perf_counter() - started:.1f} s in all)")
-    files.say_written("repro", [*written, path], note=f"{len(stale)} file(s) of an earlier "
-                      "run left beside them, listed in report.md" if stale else "")
-    return path
+    return _write_report(out, report, sections, formats, progress, started)
