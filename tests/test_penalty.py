@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from cardan_forces.driveline import penalty
+from cardan_forces.driveline import penalty, penalty_jacobian, penalty_linear
 from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
@@ -231,7 +231,7 @@ def test_compiled_jacobian_is_exact_on_slip_joints_and_floating_bearings(name):
 @pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
 def test_bodies_without_a_shared_contact_do_not_couple(model):
     """The Newton solve skips the blocks of bodies that share no contact
-    (:func:`penalty_kernels._linked`): in the NumPy model's complex-step Jacobian at a
+    (:func:`penalty_jacobian._linked`): in the NumPy model's complex-step Jacobian at a
     pressed state, a body's accelerations do not move with such a body's states, and
     do with every linked one's (every body touches one here).
     """
@@ -239,7 +239,7 @@ def test_bodies_without_a_shared_contact_do_not_couple(model):
     _, step = model.tolerances(1e-8)
     jac = model.jacobian(0.0, y, step)
     nb = model.n_bodies
-    linked = penalty.kernels._linked(nb, model.kernel_args[2])
+    linked = penalty_jacobian._linked(nb, model.kernel_args[2])
 
     def states(j):  # displacement, quaternion, velocity, rate of body j
         return np.r_[3 * j:3 * j + 3, 3 * nb + 4 * j:3 * nb + 4 * j + 4,
@@ -264,21 +264,18 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c, by_blocks):
     ``J`` spans 1e-3 ... 1e10), for values of ``c`` (the step over the formula's
     coefficient) across those it takes.
     """
-    kernels = penalty.kernels
     y = _pressed_state(model, 1)
     jac = model.jacobian_compiled(0.0, y)
     n, nb = len(y), model.n_bodies
-    lu, pivots = np.zeros((6 * nb, 6 * nb)), np.zeros(6 * nb, kernels.F_INT_nptype)
-    blocks, coupling = np.zeros((nb, 4, 4)), np.zeros((nb, 4, 3))
-    linked = kernels._linked(nb, model.kernel_args[2])
-    chain = kernels._new_chain(linked)
-    assert len(chain[0]) == nb  # paper's bodies form a chain
+    factors = penalty_linear.new_factors(penalty_jacobian._linked(nb, model.kernel_args[2]))
+    assert len(factors.chain.order) == nb  # paper's bodies form a chain
     if not by_blocks:
-        chain = (chain[0][:0], *chain[1:])
-    assert kernels._factor(jac, c, lu, pivots, blocks, coupling, linked, chain) == 0
+        chain = factors.chain
+        factors = factors._replace(chain=chain._replace(order=chain.order[:0]))
+    assert penalty_linear._factor(jac, c, factors) == 0
     b = np.random.default_rng(2).standard_normal(n)
     x = b.copy()
-    kernels._solve(jac, c, lu, pivots, blocks, coupling, linked, chain, x, np.zeros((2, n)))
+    penalty_linear._solve(jac, c, factors, x, np.zeros(n), np.zeros(n))
     matrix = np.eye(n) - c * jac
     dense = np.linalg.solve(matrix, b)
     assert np.abs(matrix @ x - b).max() <= 1e-13 * np.abs(matrix).max() * np.abs(x).max()
@@ -293,16 +290,15 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c, by_blocks):
     ([(0, 1), (0, 2), (0, 3)], False),  # a body with three neighbours
 ])
 def test_chain_order_puts_linked_bodies_side_by_side(edges, chains):
-    """The order of the block factorization (:func:`penalty_kernels._chain_order`) has
+    """The order of the block factorization (:func:`penalty_linear._chain_order`) has
     every pair of linked bodies next to each other (so the reduced matrix is block
     tridiagonal), every body once; where the links form no chain there is no order
     (the factorization falls back to ``getrf``).
     """
-    kernels = penalty.kernels
     linked = np.eye(5, dtype=bool)
     for a, b in edges:
         linked[a, b] = linked[b, a] = True
-    order = kernels._chain_order(linked)
+    order = penalty_linear._chain_order(linked)
     if not chains:
         assert len(order) == 0
         return

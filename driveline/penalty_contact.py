@@ -1,0 +1,378 @@
+"""Compiled contact geometry, contact law and right-hand side of the penalty simulation.
+
+The same Newton-Euler equations and contact law (paper eqs. 75-78) as the NumPy model
+of :mod:`cardan_forces.driveline.penalty_model`, written as loops over bodies and
+contacts and compiled by numba (:mod:`.penalty_kernels` tells the whole story). The
+state of one evaluation lives in named tuples of arrays made once per run
+(:class:`Frames`, :class:`Local`, :class:`ContactState`): the integrator's right-hand
+sides then allocate nothing.
+
+Every kernel of the penalty modules is compiled by :data:`kernel`: its disk cache is
+keyed also by the contents of all of them (:data:`KERNEL_FILES`), so an edit of any
+one compiles every kernel that may have inlined it again.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import NamedTuple
+
+import numpy as np
+
+from .compiled import harmonic, njit
+
+KERNEL_FILES = ("compiled.py", "penalty_contact.py", "penalty_jacobian.py",
+                "penalty_linear.py", "penalty_bdf.py")
+"""The source files of the penalty kernels (beside this one): each kernel's cache is
+keyed by all of their contents, as one file was before."""
+
+kernel = partial(njit, cache=True, depends=KERNEL_FILES)
+"""The penalty modules' ``njit``: cached, and compiled again when any of
+:data:`KERNEL_FILES` changes."""
+
+
+class Frames(NamedTuple):
+    """Per body (row ``nb``: the ground, which does not move), global: its centre (m),
+    velocity (m/s), rotation body to global, the rotation's rate ``R [w]x`` and the
+    angular velocity ``R w`` (rad/s).
+    """
+
+    centre: np.ndarray
+    vel: np.ndarray
+    rot: np.ndarray
+    rate: np.ndarray
+    omega: np.ndarray
+
+
+class Local(NamedTuple):
+    """One contact's local kinematics (3-vectors, global; :func:`_local`): the offset
+    ``p`` of a's point from b's, the axes ``ea`` (on a) and ``ub`` (on b), the relative
+    velocity ``rel``, the arms of the points from a's and b's centres, the contact's
+    normal (then its force on a), and two spare rows (a body's ``J w`` and its rate in
+    :func:`_bodies`; the contact point from b's centre, ``w x point`` and
+    ``(dR/dq) w`` in the Jacobian). Rows of one (9, 3) array.
+    """
+
+    p: np.ndarray
+    ea: np.ndarray
+    ub: np.ndarray
+    rel: np.ndarray
+    arm: np.ndarray
+    arm_b: np.ndarray
+    normal: np.ndarray
+    spare: np.ndarray
+    spare_b: np.ndarray
+
+
+class ContactState(NamedTuple):
+    """What one evaluation of the contacts fills (:func:`_contacts_into`): per contact
+    its penetration ``depth`` (m), ``push`` (N) and force on ``a`` (``on_a``, global,
+    N); per body (and the ground, row ``nb``) the net contact ``force`` (N) and
+    ``moment`` about its centre (N m, global); the ``local`` kinematics of the contact
+    at hand and the bodies' ``frames``.
+    """
+
+    depth: np.ndarray
+    push: np.ndarray
+    force: np.ndarray
+    moment: np.ndarray
+    on_a: np.ndarray
+    local: Local
+    frames: Frames
+
+@kernel(inline="always")
+def _rotation(state, at, out):
+    """Rotation matrix (body to global) of the quaternion (w, x, y, z), of any norm, at
+    ``state[at:at + 4]``, into the (3, 3) ``out``.
+    """
+    w, x, y, z = state[at], state[at + 1], state[at + 2], state[at + 3]
+    n = w * w + x * x + y * y + z * z
+    out[0, 0] = (w * w + x * x - y * y - z * z) / n
+    out[1, 1] = (w * w - x * x + y * y - z * z) / n
+    out[2, 2] = (w * w - x * x - y * y + z * z) / n
+    out[0, 1] = 2.0 * (x * y - w * z) / n
+    out[1, 0] = 2.0 * (x * y + w * z) / n
+    out[0, 2] = 2.0 * (x * z + w * y) / n
+    out[2, 0] = 2.0 * (x * z - w * y) / n
+    out[1, 2] = 2.0 * (y * z - w * x) / n
+    out[2, 1] = 2.0 * (y * z + w * x) / n
+
+
+@kernel(inline="always")
+def _law(d, rate, stiffness, exponent, c_max, d_max):
+    """Paper eqs. 75 and 78 for one contact (N); on/off by the real parts only."""
+    if d.real <= 0.0:
+        return 0.0 * d
+    x = d / d_max
+    if x.real > 1.0:
+        x = 1.0 + 0.0 * d
+    if exponent == 1.0:
+        power = d
+    elif exponent == 1.5:  # the paper's Hertz exponent: a square root, not a power
+        power = d * np.sqrt(d)
+    else:
+        power = d**exponent
+    f = stiffness * power + c_max * x * x * (3.0 - 2.0 * x) * rate
+    return f if f.real > 0.0 else 0.0 * f
+
+
+@kernel(inline="always")
+def _frames(y, rest_centre, frames):
+    """Into ``frames`` (:class:`Frames`; row ``nb``, the ground, left as it is) from the
+    state ``y`` (layout of :class:`penalty_model._Model`).
+    """
+    centre, vel, rot = frames.centre, frames.vel, frames.rot
+    rate, omega = frames.rate, frames.omega
+    nb = rest_centre.shape[0]
+    for k in range(nb):  # element by element: no views of rows in the loop
+        _rotation(y, 3 * nb + 4 * k, rot[k])
+        w = 10 * nb + 3 * k
+        w0, w1, w2 = y[w], y[w + 1], y[w + 2]
+        for i in range(3):
+            centre[k, i] = rest_centre[k, i] + y[3 * k + i]
+            vel[k, i] = y[7 * nb + 3 * k + i]
+            r0, r1, r2 = rot[k, i, 0], rot[k, i, 1], rot[k, i, 2]
+            rate[k, i, 0] = 0.0 + 1.0 * (r1 * w2 - r2 * w1)  # row i of R [w]x
+            rate[k, i, 1] = 0.0 + 1.0 * (r2 * w0 - r0 * w2)
+            rate[k, i, 2] = 0.0 + 1.0 * (r0 * w1 - r1 * w0)
+            omega[k, i] = r0 * w0 + r1 * w1 + r2 * w2
+
+
+@kernel()
+def _new_frames(y, nb):
+    """Zeroed :class:`Frames` for ``nb`` bodies and the ground (rotation: identity)."""
+    vectors = np.zeros((3, nb + 1, 3), dtype=y.dtype)  # one allocation each: the
+    matrices = np.zeros((2, nb + 1, 3, 3), dtype=y.dtype)  # right-hand side is ~3 us
+    rot = matrices[0]
+    for i in range(3):
+        rot[nb, i, i] = 1.0
+    return Frames(centre=vectors[0], vel=vectors[1], rot=rot, rate=matrices[1],
+                  omega=vectors[2])
+
+
+@kernel(inline="always")
+def _local(frames, ka, kb, geometry, c, work):
+    """Into ``work`` (:class:`Local`: ``p`` ... ``arm_b``), for contact ``c`` between
+    bodies ``ka`` and ``kb`` with geometry row ``geometry[c]`` (``s, e, j, u``): the
+    offset ``p`` of a's point from b's, the axes ``ea`` (on a) and ``ub`` (on b), the
+    relative velocity ``rel`` of a's material point at ``p`` against b's, and the arms
+    of the points from a's and b's centres. Element by element, no views of rows: in the
+    right-hand side's loop over contacts each view costs its array's reference count
+    twice.
+    """
+    _offset(frames, ka, kb, geometry, c, work)
+    _relative(frames, ka, kb, geometry, c, work)
+
+
+@kernel(inline="always")
+def _offset(frames, ka, kb, geometry, c, work):
+    """:func:`_local`'s geometry: ``p``, ``ea``, ``ub`` and the arms (not ``rel``)."""
+    centre, rot = frames.centre, frames.rot
+    p, ea, ub = work.p, work.ea, work.ub
+    for i in range(3):  # arm, arm_b kept in registers
+        a0, a1, a2 = rot[ka, i, 0], rot[ka, i, 1], rot[ka, i, 2]
+        b0, b1, b2 = rot[kb, i, 0], rot[kb, i, 1], rot[kb, i, 2]
+        arm = a0 * geometry[c, 0] + a1 * geometry[c, 1] + a2 * geometry[c, 2]
+        arm_b = b0 * geometry[c, 6] + b1 * geometry[c, 7] + b2 * geometry[c, 8]
+        ea[i] = a0 * geometry[c, 3] + a1 * geometry[c, 4] + a2 * geometry[c, 5]
+        ub[i] = b0 * geometry[c, 9] + b1 * geometry[c, 10] + b2 * geometry[c, 11]
+        work.arm[i], work.arm_b[i] = arm, arm_b
+        p[i] = centre[ka, i] + arm - centre[kb, i] - arm_b
+
+
+@kernel(inline="always")
+def _relative(frames, ka, kb, geometry, c, work):
+    """:func:`_local`'s relative velocity ``rel``, after :func:`_offset`."""
+    vel, rate, omega = frames.vel, frames.rate, frames.omega
+    p, rel = work.p, work.rel
+    for i in range(3):
+        rel[i] = (vel[ka, i] - vel[kb, i]
+                      + rate[ka, i, 0] * geometry[c, 0] + rate[ka, i, 1] * geometry[c, 1]
+                      + rate[ka, i, 2] * geometry[c, 2]
+                      - rate[kb, i, 0] * geometry[c, 6] - rate[kb, i, 1] * geometry[c, 7]
+                      - rate[kb, i, 2] * geometry[c, 8])
+    # - omega_b x p
+    rel[0] += -1.0 * (omega[kb, 1] * p[2] - omega[kb, 2] * p[1])
+    rel[1] += -1.0 * (omega[kb, 2] * p[0] - omega[kb, 0] * p[2])
+    rel[2] += -1.0 * (omega[kb, 0] * p[1] - omega[kb, 1] * p[0])
+
+
+@kernel(inline="always")
+def _depth(p, ea, ub, radial, clearance, normal):
+    """Penetration ``d`` of one contact, its normal into ``normal``: radial contacts
+    along the offset of the bore axis from the trunnion point in the trunnion's
+    cross-section, faces along ``ub``.
+    """
+    if radial:
+        # the bore axis meets the trunnion's cross-section plane at p - r
+        ratio = (p[0] * ea[0] + p[1] * ea[1] + p[2] * ea[2]) / (
+            ub[0] * ea[0] + ub[1] * ea[1] + ub[2] * ea[2])
+        for i in range(3):
+            normal[i] = p[i] - ratio * ub[i]
+        rho = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+        if rho.real < 1e-300:
+            rho = 1e-300 + 0.0 * rho
+        for i in range(3):
+            normal[i] = normal[i] / rho
+        return rho - clearance
+    for i in range(3):
+        normal[i] = ub[i]
+    return p[0] * ub[0] + p[1] * ub[1] + p[2] * ub[2] - clearance
+
+
+@kernel(inline="always")
+def _push(p, ea, ub, rel, radial, law, d_max, force):
+    """Penetration ``d`` and push ``f`` of one contact (eqs. 75-78), and its force on
+    body ``a`` into ``force``: radial contacts along their normal (:func:`_depth`),
+    faces along ``-ea``.
+    """
+    d = _depth(p, ea, ub, radial, law[0], force)  # the normal, for now
+    return d, _pressed(d, ea, rel, radial, law, d_max, force)
+
+
+@kernel(inline="always")
+def _pressed(d, ea, rel, radial, law, d_max, force):
+    """:func:`_push` of a contact whose penetration ``d`` and normal (in ``force``,
+    :func:`_depth`'s) are known: its push ``f``, and its force on ``a`` into ``force``.
+    """
+    f = _law(d, force[0] * rel[0] + force[1] * rel[1] + force[2] * rel[2], law[1], law[2],
+             law[3], d_max)
+    for i in range(3):
+        force[i] = -f * (force[i] if radial else ea[i])
+    return f
+
+
+@kernel(inline="always")
+def _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force, moment, work):
+    """Add every contact to the bodies' net ``force`` and ``moment``
+    (global, about their centres) and write its penetration, push and force on ``a``.
+    The geometry of :meth:`penalty._Model.contacts`, one contact at a time, the relative
+    velocity and the law only for those that touch; ``work``: the :class:`Local` rows.
+    """
+    p, ea, ub, rel, arm, arm_b, normal = work.p, work.ea, work.ub, work.rel, work.arm, \
+        work.arm_b, work.normal
+    for c in range(topology.shape[0]):
+        ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
+        _offset(frames, ka, kb, geometry, c, work)
+        depth[c] = _depth(p, ea, ub, radial, laws[c, 0], normal)
+        if depth[c].real <= 0.0:  # out of touch: no force (eq. 75)
+            push[c] = 0.0
+            for i in range(3):
+                on_a[c, i] = 0.0
+            continue
+        _relative(frames, ka, kb, geometry, c, work)
+        push[c] = _pressed(depth[c], ea, rel, radial, laws[c], d_max, normal)
+        for i in range(3):
+            on_a[c, i] = normal[i]  # now the force on a
+            force[ka, i] += normal[i]
+            force[kb, i] -= normal[i]
+            p[i] += arm_b[i]  # the contact point from b's centre
+        for i in range(3):  # moment on a: arm x F; on b: -(p + arm_b) x F
+            j, k = (i + 1) % 3, (i + 2) % 3
+            moment[ka, i] += 1.0 * (arm[j] * normal[k] - arm[k] * normal[j])
+            moment[kb, i] += -1.0 * (p[j] * normal[k] - p[k] * normal[j])
+
+
+@kernel()
+def contact_forces(y, bodies, topology, geometry, laws, d_max):
+    """Per contact: penetration ``d`` (m), push ``f >= 0`` (N), the force on body ``a``
+    (global, N); per body the net contact force and moment about its centre (global);
+    the :class:`Frames`.
+
+    ``bodies`` (nb, 7): mass, principal inertias, rest centre. ``topology`` (m, 3): body
+    ``a``, body ``b`` (the ground: nb), radial (1) or face (0). ``geometry`` (m, 12):
+    ``s``, ``e`` (on ``a``), ``j``, ``u`` (on ``b``), body coordinates. ``laws`` (m, 4):
+    offset (clearance), stiffness, exponent, ``c_max``.
+    """
+    state = new_contact_state(y, bodies.shape[0], topology.shape[0])
+    _contacts_into(y, bodies, topology, geometry, laws, d_max, state)
+    return state.depth, state.push, state.on_a, state.force, state.moment, state.frames
+
+
+@kernel()
+def new_contact_state(y, nb, m):
+    """A zeroed :class:`ContactState` (of ``y``'s type) for ``nb`` bodies and ``m``
+    contacts. Made once per run by the integrator: its right-hand sides then allocate
+    nothing.
+    """
+    pushes, loads = np.zeros((2, m), dtype=y.dtype), np.zeros((2, nb + 1, 3), dtype=y.dtype)
+    return ContactState(depth=pushes[0], push=pushes[1], force=loads[0], moment=loads[1],
+                        on_a=np.zeros((m, 3), dtype=y.dtype),
+                        local=new_local(y.dtype), frames=_new_frames(y, nb))
+
+
+@kernel()
+def new_local(dtype):
+    """A zeroed :class:`Local` of ``dtype``: the rows of one (9, 3) array."""
+    rows = np.zeros((9, 3), dtype=dtype)
+    return Local(p=rows[0], ea=rows[1], ub=rows[2], rel=rows[3], arm=rows[4],
+                 arm_b=rows[5], normal=rows[6], spare=rows[7], spare_b=rows[8])
+
+
+@kernel(inline="always")
+def _contacts_into(y, bodies, topology, geometry, laws, d_max, state):
+    """:func:`contact_forces` into ``state`` (:class:`ContactState`)."""
+    state.force[:] = 0.0
+    state.moment[:] = 0.0
+    _frames(y, bodies[:, 4:], state.frames)
+    _contacts(state.frames, topology, geometry, laws, d_max, state.depth, state.push,
+              state.on_a, state.force, state.moment, state.local)
+
+
+@kernel(inline="always")
+def _bodies(t, y, rot, force, moment, n_shafts, bodies, loads, dy, jw, dw):
+    """Newton-Euler equations of every body into ``dy``, given the net contact force and
+    moment; the torques added here (``moment`` is changed); ``jw``, ``dw``: (3,)
+    scratch.
+    """
+    nb = bodies.shape[0]
+    torque_in, torque_load = harmonic(loads[3:7], t), harmonic(loads[7:11], t)
+    for i in range(3):  # a shaft's axis is its body frame's second column
+        moment[0, i] += torque_in * rot[0, i, 1]
+        moment[n_shafts - 1, i] -= torque_load * rot[n_shafts - 1, i, 1]
+    for k in range(nb):  # element by element: no views of rows in the loop
+        q, w = 3 * nb + 4 * k, 10 * nb + 3 * k
+        w0, w1, w2 = y[w], y[w + 1], y[w + 2]
+        for i in range(3):
+            dy[3 * k + i] = y[7 * nb + 3 * k + i]
+            dy[7 * nb + 3 * k + i] = force[k, i] / bodies[k, 0] + loads[i]
+            jw[i] = bodies[k, 1 + i] * y[w + i]
+            dw[i] = rot[k, 0, i] * moment[k, 0] + rot[k, 1, i] * moment[k, 1] \
+                + rot[k, 2, i] * moment[k, 2]
+        dw[0] += -1.0 * (w1 * jw[2] - w2 * jw[1])  # - w x J w
+        dw[1] += -1.0 * (w2 * jw[0] - w0 * jw[2])
+        dw[2] += -1.0 * (w0 * jw[1] - w1 * jw[0])
+        for i in range(3):
+            dy[w + i] = dw[i] / bodies[k, 1 + i]
+        q0, q1, q2, q3 = y[q], y[q + 1], y[q + 2], y[q + 3]
+        dy[q] = -0.5 * (q1 * w0 + q2 * w1 + q3 * w2)
+        for i in range(3):
+            dy[q + 1 + i] = 0.5 * q0 * y[w + i]
+        dy[q + 1] += 0.5 * (q2 * w2 - q3 * w1)  # + (q_v x w) / 2
+        dy[q + 2] += 0.5 * (q3 * w0 - q1 * w2)
+        dy[q + 3] += 0.5 * (q1 * w1 - q2 * w0)
+
+
+@kernel()
+def rhs(t, y, n_shafts, bodies, topology, geometry, laws, loads):
+    """Newton-Euler equations of every body at time ``t`` (s), state ``y``:
+    ``x' = v``, ``q' = q (0, w) / 2``, ``m v' = F + m g``, ``J w' + w x J w = R^T M``
+    (body axes). ``loads``: gravity (3), the input torque law (4: mean, amplitude,
+    frequency, phase) about the first shaft's axis, the load torque law (4) against the
+    last shaft's, ``d_max``.
+    """
+    dy = np.empty_like(y)
+    _rhs_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads),
+              new_contact_state(y, bodies.shape[0], topology.shape[0]), dy)
+    return dy
+
+
+@kernel(inline="always")
+def _rhs_into(t, y, args, state, dy):
+    """:func:`rhs` into ``dy``, with ``args`` its model arguments (as one tuple, in
+    :func:`rhs`'s order) and ``state`` a :class:`ContactState` to fill.
+    """
+    n_shafts, bodies, topology, geometry, laws, loads = args
+    _contacts_into(y, bodies, topology, geometry, laws, loads[11], state)
+    _bodies(t, y, state.frames.rot, state.force, state.moment, n_shafts, bodies, loads, dy,
+            state.local.spare, state.local.spare_b)
