@@ -69,3 +69,29 @@ def test_a_declared_dependency_that_does_not_exist_fails_at_import(tmp_path):
 
     with pytest.raises(FileNotFoundError):
         njit(cache=True, depends=("no_such_file.py",))(lambda x: x)
+
+
+def test_every_penalty_kernel_is_keyed_by_every_penalty_kernel_file():
+    """The penalty integrator inlines kernels of several files: each of their cached
+    kernels is keyed by the contents of all of them (so an edit of one cannot leave a
+    stale integrator), and every file that holds one is among those listed."""
+    numba = pytest.importorskip("numba")
+    from cardan_forces.driveline import (
+        compiled,
+        penalty_bdf,
+        penalty_contact,
+        penalty_jacobian,
+        penalty_linear,
+    )
+
+    files = penalty_contact.KERNEL_FILES
+    expected = compiled._files_hash(penalty_contact.__file__, files)
+    found = 0
+    for module in (penalty_contact, penalty_jacobian, penalty_linear, penalty_bdf):
+        assert os.path.basename(module.__file__) in files
+        for value in vars(module).values():
+            if isinstance(value, numba.core.dispatcher.Dispatcher) \
+                    and value.py_func.__module__ == module.__name__:
+                assert value._cache._depends_hash == expected, value.py_func.__name__
+                found += 1
+    assert found >= 40
