@@ -165,9 +165,9 @@ def _keep_freed_memory() -> None:
 
     By default glibc returns every freed block over 128 KiB to the system, so a pass
     vectorized over hundreds of instants, which allocates and frees arrays of a few
-    MiB, page-faults its way through each of them again: products over 300 instants ran
-    10-20 times slower than with the memory kept (one run each, same process). The
-    worker processes a command starts read :data:`MALLOC` from their environment.
+    MiB, page-faults its way through each of them again, several times slower than with
+    the memory kept. The worker processes a command starts read :data:`MALLOC` from
+    their environment.
     """
     try:
         mallopt = ctypes.CDLL(None).mallopt
