@@ -51,7 +51,7 @@ play (~0.07 s) before it meets the rest of the line; the impacts make the light
 intermediate shaft (J2 = 0.0152 kg m^2) rattle, nearly elastically since the step
 damping vanishes at small depths. Twice a revolution the cross-pins' axial load
 reverses and they cross their 1.5 mm axial play. These impacts, not the stiffness, set
-the step size (~10 us) and the cost.
+the step size and the cost.
 
 **Bodies.** Shafts: the scene's mass and principal inertias (J2 about the axis).
 Cross-pins: always the scene's ``[crosspin]`` mass and inertia about (e1, e2, e3) (a
@@ -69,8 +69,8 @@ its floor): the O(1) quaternion components are controlled like positions, to
 problem is stiff (a 0.05 kg pin on a contact of ~1e8 N/m with up to 1.5e7 N s/m), so
 it is integrated by an implicit method of the BDF family (that of ADAMS's GSTIFF): by
 default ``BDF-numba``, SciPy's variable-order BDF compiled with the right-hand side and
-its Jacobian (:mod:`~cardan_forces.driveline.penalty_kernels`: a few microseconds per
-state instead of ~0.1 ms of array calls, and no Python between steps); without numba,
+its Jacobian (:mod:`~cardan_forces.driveline.penalty_kernels`: loops instead of array
+calls on a few bodies, and no Python between steps); without numba,
 SciPy's LSODA (ODEPACK's, stepped in Fortran) on the NumPy model here
 (``kernel="numpy"``). LSODA, SciPy's ``BDF`` and ``Radau`` take either kernel on
 request, calling it back through Python. Both Jacobians are exact to
@@ -86,16 +86,16 @@ stepping loop in Fortran); ``BDF`` and ``Radau`` are stepped as ``solve_ivp`` do
 (:mod:`~cardan_forces.driveline.penalty_integrators`). Either way progress is reported
 and a failure turned into a status.
 
-**Cost.** The step count is set by the impacts (~10 us steps while a cross-pin
-rattles, about 85,000 steps per simulated second on ``paper-penalty`` with the
-compiled BDF, 136,000 with LSODA); per step about two right-hand sides, a Jacobian
+**Cost.** The step count is set by the impacts (short steps while a cross-pin
+rattles; the compiled BDF takes fewer steps than LSODA); per step about two
+right-hand sides, a Jacobian
 every 7 steps (after a Newton iteration fails: in the first 2 s of ``paper-penalty``
 5 failures in 6 began with the same contacts in touch as the Jacobian, so it is the
 forces of the touching contacts, stiff and damped, that outrun it, more than contacts
 opening or closing) and a factorization every 3 (after a Jacobian or a change of step
 by more than 30 %). Nearly every step's error test is a cross-pin's angular velocity; where the
 pins slide on eq. 75's ``f = 0`` while pressed, the clamp's kink makes steps fail.
-``propshaft`` (8 bodies, 104 states) takes twice the steps (mean 4.5 us): the
+``propshaft`` (8 bodies, 104 states) takes about twice the steps: the
 end faces of its cross-pins carry the axial load of the slip joint's segments, pressed
 by ~0.5 um, and eq. 75's ``f >= 0`` switches them on and off while still pressed
 (100 times in 20 ms), whenever the damping term outweighs the spring's ~16 N. Its
