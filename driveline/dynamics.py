@@ -99,7 +99,7 @@ def _right_hand_side(scene: Scene, geometry: Geometry):
     kinematics (:func:`~cardan_forces.driveline.kinematics.reduced_terms`) where numba is
     installed and it reproduces the array path (:func:`_acceleration`) to 1e-12 at a few
     angles, so that a chain the compiled copy does not know falls back to the array path
-    instead of giving other answers; else the array path (~0.3 ms a call).
+    instead of giving other answers; else the array path (array calls per instant).
     """
     def array(time, y):
         kin = kinematics(geometry, y[0])
@@ -129,7 +129,7 @@ def simulate(scene: Scene, times=None, rtol: float = 1e-11, atol: float = 1e-12)
         raise DynamicsError(f"instants before the scene's start {scene.time.start_s} s")
     q0, w0 = scene.initial_angle_rad, scene.initial_speed_rad_s
     if scene.has("inertia"):
-        from scipy.integrate import solve_ivp  # 0.3 s to import; quasi-static lines skip it
+        from scipy.integrate import solve_ivp  # slow to import; quasi-static lines skip it
 
         order = np.argsort(t)
 
