@@ -46,7 +46,7 @@ FAILURES = (ArithmeticError, ValueError, np.linalg.LinAlgError)
 
 def run_odeint(_, fun, jac, t0, y0, t, atol, states, marks: Marks):
     """LSODA through ``odeint``, whose stepping loop is Fortran (SciPy's ``LSODA`` class
-    is the same ODEPACK code stepped from Python, ~8 us more a step); ``states`` rows
+    is the same ODEPACK code stepped from Python, dearer a step); ``states`` rows
     are filled at the instants ``t``. Returns status, message and (steps, Jacobians,
     LU factorizations: one with each Jacobian in LSODA).
     """
