@@ -3,8 +3,8 @@
 The same Newton-Euler equations and contact law (paper eqs. 75-78) as the NumPy model
 of :mod:`cardan_forces.driveline.penalty_model` (their oracle: the tests hold each
 compiled path to it), written as loops over bodies and contacts and compiled by numba:
-one state costs a few thousand flops, so a right-hand side takes microseconds instead
-of the ~0.2 ms that array calls on 5 bodies and 28 contacts cost in the interpreter.
+one state costs a few thousand flops, far less than the interpreter's overhead of array
+calls on a few bodies and dozens of contacts.
 This module is their public face; the kernels live by concern:
 
 - :mod:`.penalty_contact`: contact geometry, the contact law and the right-hand side;
@@ -25,9 +25,8 @@ of dozens of arrays: a few hundred counts a step, about as dear as the arithmeti
 Newton iteration. So the kernels the step calls many times (right-hand side, Newton
 iteration and solve, the Jacobian's and the factorization's parts, the step itself)
 are inlined (``inline="always"``), leaving as calls only the factorization and the
-Jacobian, made less than once a step: a right-hand side 1.3, a Newton solve 1.4, a
-Jacobian 1.2 times cheaper, the same numbers to the bit. Compiling takes longer (about
-90 s of CPU instead of 40, once). An integrator inlines kernels of all four files:
+Jacobian, made less than once a step: each kernel cheaper, the same numbers to the
+bit, for a longer compilation (once). An integrator inlines kernels of all four files:
 each kernel's disk cache is keyed by all of their contents
 (:data:`~.penalty_contact.KERNEL_FILES`, :func:`.compiled.njit`'s ``depends``), so an
 edit of any of them compiles them all again instead of loading stale copies.
