@@ -4,8 +4,8 @@ The LU factorization of ``I - c J`` works on what is left after the rows whose s
 is known are eliminated (:func:`_factor`: 30 x 30 on ``paper`` instead of 65 x 65),
 block tridiagonal along the chain of bodies (shaft, pin, shaft, ...): factored block by
 block, 6 x 6 blocks with pivoting inside each (:func:`_factor_chain`; LAPACK's
-``getrf`` where the bodies form no chain). Measured on ``paper``: a factorization 5.1 ->
-2.7 us, a Newton solve 1.1 -> 0.9 us; the rounding differs from ``getrf``'s, and over
+``getrf`` where the bodies form no chain), cheaper than ``getrf`` on the whole reduced
+matrix; the rounding differs from ``getrf``'s, and over
 six runs of each started 1e-15 apart the forces' 0.1 s averages, their spread and peaks
 and the step counts did not differ beyond the runs' own spread (the rattle is chaotic).
 A hand-written LU of the whole reduced matrix was no faster than ``getrf`` at 30 x 30.
