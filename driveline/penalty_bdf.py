@@ -20,8 +20,8 @@ iteration (no fewer Jacobians).
 
 Why not a library: ODEPACK and SUNDIALS reach these kernels only
 through a Python callback per call (``odeint``, ``scikit-sundae``), ``numbalsoda`` does
-not build for this Python, and ``diffrax`` spends 0.2-0.3 ms a step on a 65-state
-system even with a trivial right-hand side, where the penalty model needs ~20 us.
+not build for this Python, and ``diffrax``'s own overhead per step on a 65-state
+system, even with a trivial right-hand side, exceeds the penalty model's whole step.
 
 Same error control as SciPy's ``BDF``: the local error estimate of every component
 below ``atol + rtol |y|``. One difference: the Newton iteration stops at
@@ -60,7 +60,7 @@ orders up to 3, the same error control on ``paper-penalty`` takes ~7 % fewer ste
 cheaper (fewer differences to predict and rescale), and the forces' 0.1 s averages and
 the speeds differ from the order-5 run's no more than two order-5 runs whose starts
 differ by 1e-15 differ from each other (the rattle is chaotic). Up to order 2 it takes
-45 % more steps (each 20 % cheaper), up to order 4 1 % more, each dearer (5 s of
+45 % more steps (each cheaper), up to order 4 1 % more, each dearer (5 s of
 ``paper-penalty``)."""
 NEWTON_MAXITER = 4
 NEWTON_TOL = 0.03
