@@ -142,7 +142,7 @@ def _frames(y, rest_centre, frames):
 def _new_frames(y, nb):
     """Zeroed :class:`Frames` for ``nb`` bodies and the ground (rotation: identity)."""
     vectors = np.zeros((3, nb + 1, 3), dtype=y.dtype)  # one allocation each: the
-    matrices = np.zeros((2, nb + 1, 3, 3), dtype=y.dtype)  # right-hand side is ~3 us
+    matrices = np.zeros((2, nb + 1, 3, 3), dtype=y.dtype)
     rot = matrices[0]
     for i in range(3):
         rot[nb, i, i] = 1.0
