@@ -495,8 +495,8 @@ class _PaperForces:
     def stacked(maps: list[_PaperForces], Z: np.ndarray) -> np.ndarray:
         """The forces (T, n) of the points ``Z`` (T, n_z), row ``k`` by ``maps[k]``; the
         maps share their :class:`_Terms` (instants of one operator). One vectorized
-        pass, for a check pass over a run's instants (some 1 us an instant where the
-        per-instant call costs some 25 us, calls included).
+        pass, for a check pass over a run's instants (far cheaper an instant than the
+        per-instant call).
         """
         t = maps[0].terms
         if any(m.terms is not t or m.plan is not maps[0].plan for m in maps):
