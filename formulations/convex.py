@@ -447,8 +447,8 @@ def _compliance_conic(op: Operator, i: int, laws, is_bearing, hertz: bool, use_g
     Every contact has ``r_c >= ||f_c||`` (a second-order cone) and its energy on
     ``r_c`` (``P`` for a linear law), plus ``s_c`` (a power cone) for a Hertz law.
     Shortcuts with the same optimum were measured and not kept: an end face's signed
-    force in its power cone itself, without ``r_c`` (4 unknowns fewer on ``paper``,
-    moreau 15% faster), left Clarabel's full form at ``InsufficientProgress`` on a
+    force in its power cone itself, without ``r_c`` (4 unknowns fewer on ``paper``),
+    left Clarabel's full form at ``InsufficientProgress`` on a
     straight ``propshaft`` (its idle faces at the cone's apex); a linear law's energy on
     the force itself left Clarabel's equilibrium at 6e-8 of the load at 1e6 N m,
     against 1e-9 on ``r_c``.
