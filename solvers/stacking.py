@@ -113,8 +113,8 @@ class Pattern:
 
 def _block(stack: np.ndarray) -> np.ndarray | Pattern:
     """A (T, r, n) stack of constraint rows as the products over it run fastest: dense
-    where at least a quarter of its entries can be nonzero (``socp_face``: 46%, 1.3x
-    faster dense), else a :class:`Pattern` (``compliance_hertz``: 15%, 4x faster).
+    where at least a quarter of its entries can be nonzero (``socp_face``: 46%, faster
+    dense), else a :class:`Pattern` (``compliance_hertz``: 15%, faster as a pattern).
     """
     nonzero = int(np.any(stack != 0, axis=0).sum())
     if 4 * nonzero >= stack.shape[1] * stack.shape[2]:
@@ -150,7 +150,7 @@ def _add_transposed(blk, part: np.ndarray, out: np.ndarray) -> None:
     """``out += B'part`` per instant for a block ``B`` of rows and its rows of ``y``."""
     if isinstance(blk, Pattern):
         out += blk.transposed_times(part)
-    elif isinstance(blk, np.ndarray):  # stacked products: 2x einsum's
+    elif isinstance(blk, np.ndarray):  # stacked products: faster than einsum's
         out += part @ blk if blk.ndim == 2 else (part[:, None, :] @ blk)[:, 0]
     else:
         out[:, blk[1]] += blk[0] * part  # its columns are distinct
