@@ -114,8 +114,8 @@ class Reduced:
 
 
 def _mv(M: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Stacked matrix-vector products ``M[t] @ v[t]`` (matmul: einsum is 5-10 times
-    slower on these shapes).
+    """Stacked matrix-vector products ``M[t] @ v[t]`` (matmul: einsum is slower on
+    these shapes).
     """
     return (M @ v[..., None])[..., 0]
 
@@ -145,7 +145,7 @@ def _part(M: np.ndarray, rows: np.ndarray) -> np.ndarray:
 def _triangular(R: np.ndarray, v: np.ndarray, transposed: bool = False) -> np.ndarray:
     """``w`` with ``R w = v`` (``R' w = v`` if ``transposed``) for upper-triangular ``R``
     (T, s, s) and ``v`` (T, s): substitution one row at a time over all instants at
-    once (for s ~ 30, 3 times faster than ``np.linalg.solve``'s LU of every instant).
+    once (for s ~ 30, faster than ``np.linalg.solve``'s LU of every instant).
     """
     w = np.zeros_like(v)
     for i in range(R.shape[-1]) if transposed else reversed(range(R.shape[-1])):
