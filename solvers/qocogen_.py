@@ -7,13 +7,13 @@ generates it once per structure, compiles it with a small driver that solves eve
 instant of a batch in one C call (each instant's numbers replace the last), with a
 line search that computes QOCO's bisected step in closed form (:data:`STEP`), and keeps
 the shared library in a user cache directory named by a hash of the structure: a later
-process loads it (milliseconds) instead of compiling (seconds to minutes, reported in
-the ``compile`` stage and by :func:`compile_seconds`, never in a solve's time).
+process loads it instead of compiling it again (a compilation is reported in the
+``compile`` stage and by :func:`compile_seconds`, never in a solve's time).
 
 It is registered only as ``qocogen-reduced`` (``Backend.reduced_only``): on the full
-form the equality rows are dense, so the unrolled factor is large (2-7 times the code,
-2-4 minutes to compile against 10-40 s) and a solve 3.6-4.5 times slower than on the
-reduced form (the propshaft's ``min_max`` and ``socp_face``, one run).
+form the equality rows are dense, so the unrolled factor is large (several times the
+code, and as many times longer to compile) and a solve several times slower than on
+the reduced form.
 
 The answer does not depend on the order of the instants: the generated solver starts
 every solve from its own initial point and does no equilibration (``ruiz_iters`` 0), and
@@ -60,7 +60,7 @@ them). No iterative refinement of the KKT solves: on the reduced ``min_max`` and
 ``socp_face`` (1001 instants each) it changed no status or iteration count and left the
 package's measures at the same levels (dual residual at the default tolerance 4.5e-10
 with it, 5.8e-10 without; at 1e-10 4e-13 and 3e-11, the gap unchanged), and it costs a
-fifth of the solve. Badly scaled cases lose more: on ``cardan hard``'s 89 deg case the
+sizeable share of the solve. Badly scaled cases lose more: on ``cardan hard``'s 89 deg case the
 worst dual residual of ``min_max`` is 7.2e-8 without it against 4.5e-9 with it (every
 instant still solved). Steps on a grid of 2^-7 instead of 2^-5 (free with :data:`STEP`:
 the grid no longer sets the number of passes): on the paper's 1001 instants 9.0
@@ -88,9 +88,9 @@ CFLAGS = ("-O3", "-fno-math-errno", "-fPIC", "-shared")
 """Portable flags (no ``-march=native``: the cache may be shared between machines).
 ``-fno-math-errno``: a square root is one instruction, without the call that would set
 ``errno`` for a negative argument (nothing reads it); the same answers to the bit, the
-generated solve 3% faster on the reduced ``min_max`` (best of nine interleaved, twice).
-``-march=native``, ``-flto``, ``-fno-semantic-interposition`` and ``-funroll-loops``
-gained 0-3% there, within the spread."""
+generated solve a little faster. ``-march=native``, ``-flto``,
+``-fno-semantic-interposition`` and ``-funroll-loops`` gained nothing beyond the
+spread of repeated runs."""
 
 DRIVER = r"""
 #include <stdlib.h>
@@ -187,9 +187,8 @@ double cardan_boundary_step(double* u, double* Du, double f, Workspace* work) {
 QOCO's step, one pass over the cones instead of one per halving of the bisection (each
 a pass that takes a square root per cone). The step is the bisection's (the same grid
 below the boundary), so the iterations are QOCO's: with its five halvings, on the
-paper's 1001 instants the same iterations and answers to the bit, the generated solve
-1.13 times faster on the reduced ``min_max`` and 1.07 on ``socp_face``, the whole batch
-1.09 and 1.05 (best of nine interleaved). The step at the boundary itself (0.99 of it, up
+paper's 1001 instants the same iterations and answers to the bit, in a faster
+generated solve. The step at the boundary itself (0.99 of it, up
 to the bisection's largest) took 7% fewer iterations on ``min_max`` but stalled every
 ``socp_face`` instant of ``cardan hard``'s 1e6 N m case (step below 1e-8, gap 1e-5)."""
 
@@ -201,8 +200,8 @@ SOURCES = ("qoco_custom.c", "cone.c", "utils.c", "ldl.c", "kkt.c", "driver.c")
 
 def supports(problem) -> bool:
     """Second-order cone programs without power cones: QOCO takes no power cone, and on
-    the least-norm family (LS, QP) ``numpy-batched`` is an order of magnitude faster than
-    any interior point, so compiling a solver for them would buy nothing.
+    the least-norm family (LS, QP) ``numpy-batched`` is much faster than any interior
+    point, so compiling a solver for them would buy nothing.
     """
     return qoco_form.supports(problem) and any(kind == "soc" for kind, _ in problem.cones)
 
@@ -326,7 +325,7 @@ def _entries(M: np.ndarray, mask: np.ndarray, rows_of: np.ndarray, T: int):
     """The CSC pattern of ``mask`` (over the rows ``rows_of`` of the stack ``M``) and
     its entries' values per instant, C-ordered (T, k) as the driver reads them: one
     ``np.take`` on the flattened rows (``M[:, rows, cols]`` comes out ordered by entry,
-    not by instant, and reordering it cost 6 times the gather); a shared ``P`` is
+    not by instant, and reordering it cost more than the gather); a shared ``P`` is
     broadcast.
     """
     pattern, rows, cols = _pattern(mask)
