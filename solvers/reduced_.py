@@ -52,8 +52,8 @@ class Folded:
     (``sign = -1``): there ``sign s1 >= 0``, so the cone is the one linear row
     ``s0 - sign s1 >= 0`` (the same feasible set, one row and one cone fewer). In
     ``min_max`` these are the end faces' ``|x| <= t`` next to ``x >= 0``: folded, the
-    generated QOCO solve took 14% less time with the same iterations and measures (the
-    paper's 1001 instants, best of five interleaved). The full form keeps the cones
+    generated QOCO solve takes less time with the same iterations and measures (the
+    paper's 1001 instants). The full form keeps the cones
     (folded there, moreau's full form was left ``AlmostSolved`` at one instant).
 
     ``apex``, ``member``, ``sign``: per folded cone its two rows (of the problem's cone
