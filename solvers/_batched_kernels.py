@@ -13,8 +13,8 @@ Every array of a group has the instants as its last axis (``X[i, j, e]``: entry 
 j)`` of the group's instant ``e``), so that each step's innermost loop runs over the
 instants with the same arithmetic in every lane, and LLVM's loop vectorizer turns it
 into vector instructions. Eight lanes were too few: such a loop is unrolled into scalar
-code (numba leaves LLVM's SLP vectorizer off), and took 1.6 times these seconds on
-``paper``'s least-norm family (best of 25 interleaved). The LCP, whose active set
+code (numba leaves LLVM's SLP vectorizer off), and was slower on ``paper``'s
+least-norm family. The LCP, whose active set
 differs between instants, is solved one instant after the other. A group short of
 :data:`W` instants (the batch's last) repeats its last instant in the lanes left over.
 
