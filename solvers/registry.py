@@ -352,8 +352,8 @@ def _supports(backend: Backend, problem) -> bool | str:
 class Pending:
     """A solve whose checks are still to come (:func:`solve_unchecked`): the adapter's
     outcome, the problem it received and what the checks need. :func:`check` turns a
-    list of them into records in one vectorized pass (a few microseconds per instant),
-    so a loop over instants pays the checks once, not per call.
+    list of them into records in one vectorized pass, so a loop over instants pays the
+    checks' fixed cost once, not per call.
     """
 
     problem: object
