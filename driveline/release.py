@@ -133,7 +133,7 @@ MAX_RELEASES = 4
 MAX_RELEASE_SETS = 400
 """Most release sets the advisor may have to try (every set of up to
 :data:`MAX_RELEASES` of the scene's candidates), known before any is built: each costs
-an operator and SVDs (tenths of a second at eight shafts). The built-in scenes need at
+an operator and SVDs, dearer with every shaft. The built-in scenes need at
 most 99; a line with every bearing of eight shafts locating would need thousands."""
 
 
