@@ -61,8 +61,8 @@ deg the motion is numerically singular."""
 
 MAX_SHAFTS = 8
 """Largest number of shafts: vehicle drive lines have up to four or five; the rigid
-set's intervals take two LPs per force component (about 200 LPs, tens of seconds, at
-eight shafts) and the operator's SVD grows with the cube of the bodies."""
+set's intervals take two LPs per force component (about 200 LPs at eight shafts) and
+the operator's SVD grows with the cube of the bodies."""
 
 MAX_INSTANTS = 20_001
 """Largest time grid: operators are built over the whole grid (a 3-shaft line's takes
