@@ -192,7 +192,7 @@ def _checked(records: list, walls: list, stacks, picks,
     The solves' young garbage is collected first (``gc.collect(1)``) and that time is
     the solves', spread over the instants: some backends leave hundreds of tracked
     objects an instant, and the collection they made due fell inside the checks
-    (a first pass ~1.4x the next on the same answers).
+    (a first pass dearer than the next on the same answers).
     """
     deferred = [k for k, r in enumerate(records) if isinstance(r, Pending)]
     if not deferred:
