@@ -40,17 +40,17 @@ BUDGET_S = 0.5
 :data:`LEAST_INSTANTS`: the bench's largest cost is per-instant runs x formulations."""
 LEAST_INSTANTS = 150
 """Instants a per-instant throughput run covers at least, past the budget (the slowest
-backends do 30-60 a second): its success rate rests on 150 instants (one failure is
-0.7 %, not 3 % of 30), and its checks' cost per pass (about 0.3 ms: the pass is
+backends cover only tens in it): its success rate rests on 150 instants (one failure
+is 0.7 %, not 3 % of 30), and its checks' constant cost per pass (the pass is
 vectorized over the run's instants) is shared by enough of them to show their cost
-per instant. It adds about 5 s to the full bench."""
+per instant."""
 REPEATS = 200
 BATCH_BUDGET_S = 0.5
 """A batched run is repeated for this long (at most ``REPEATS`` times) after one
 warm-up run (numba compiles on a process's first call); its time is the fastest repeat
 (timeit's rule: other processes only ever add time, so the fastest is the code's own).
 The budget, not the count, bounds a quick backend's repeats: on a shared machine a
-burst of other work outlasted twenty runs of a few milliseconds."""
+burst of other work can outlast many short runs."""
 
 QUICK_SOLVERS = (*default_backends(), "qpsolvers-osqp", "lcp-pgs", "numpy-batched", "moreau")
 """The backends of ``--quick``: every formulation's default ones and, beside them, a
@@ -62,8 +62,8 @@ SPLIT = ("build_s", "convert_s", "solve_s", "checks_s")
 CHECK_PASSES = 3
 """Check passes over a per-instant throughput run's answers: a row's ``checks_s`` is the
 fastest (timeit's rule, as a batched run's time: the pass is the same work each time,
-and other processes only ever add time; one pass measured once read 14 us one run and
-27 the next for the same row), ``checks_first_s`` the first, cold after the solver's
+and other processes only ever add time; one pass measured once can read twice what it
+did in the run before for the same row), ``checks_first_s`` the first, cold after the solver's
 run, which the row's end-to-end ``time_s`` holds (its excess over the fastest is in the
 report's "other")."""
 
@@ -107,9 +107,8 @@ def frozen():
     """The objects alive now (the bench's prebuilt problems and stacks, the rows of the
     runs before) left out of the garbage collector's scans while a timed run goes
     (``gc.freeze``): a full collection scanning them fell inside whichever instant or
-    check pass allocated at the time, 2-5 ms into a pass of 250-1000 instants (up to
-    eight times the checks' time of a run). Garbage is still collected; they are put
-    back after.
+    check pass allocated at the time, a multiple of the checks' own time in a run.
+    Garbage is still collected; they are put back after.
     """
     gc.freeze()
     try:
@@ -312,7 +311,7 @@ def _warm_up(prepared: Prepared, solvers: list[str]) -> None:
     """One untimed run of the formulation's first per-instant backend (its default where
     it is among ``solvers``) over :data:`WARM_UP_INSTANTS` instants: a process's first
     pass over a formulation's code and arrays (cold code, fresh memory) cost its checks
-    1.4-2x what the next pass did, on whichever backend came first.
+    more than the next pass did, on whichever backend came first.
     """
     chosen = _preferred(prepared.name, [s for s in solvers if not _is_batched(s)])
     if chosen is not None:
