@@ -36,7 +36,8 @@ from .runs import _Runs
 
 ENGINE_S = 0.5
 """MuJoCo's window (s from the start): its settling (80 ms at the softest setting drawn)
-and some 100 ms of each load's swing, at about 0.7 s of CPU per setting."""
+and some 100 ms of each load's swing, short enough for every setting to stay a small
+part of the run."""
 ENGINE_INSTANTS = 3
 """Instants of MuJoCo's window, after its settling, set against every component's
 interval and the formulations (:func:`cardan_forces.experiments.engine.compare`; some
