@@ -9,8 +9,7 @@ Every solve builds a new solver from this problem's own data. Clarabel's ``updat
 it scales the new numbers by the equilibration computed from the first instant's, so
 the answer, the iterations and even the status (``AlmostSolved`` or ``Solved``) would
 depend on which instant was solved before. A new solver per instant costs its
-symbolic setup: 1.1-1.4 times the solver time of an update and solve on the propshaft's
-conic formulations (one run).
+symbolic setup, a modest share of the solver's time on the conic formulations.
 """
 
 from __future__ import annotations
