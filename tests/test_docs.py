@@ -252,3 +252,40 @@ def test_the_backend_how_to_names_what_an_adapter_and_a_backend_declare():
     declared = {f.name for f in dataclasses.fields(registry.Backend)}
     for name in re.findall(r"^- `(\w+)`", text, flags=re.M):
         assert name in declared or name in ("EXTRAS",), name
+
+
+PACKAGE_DIRS = ("cardan_forces", "driveline", "formulations", "solvers", "experiments",
+                "paper_repro")
+QUOTED_TIMING = re.compile(r"\d\s?(us|µs)\b|\d\s*(x|times) (faster|slower|cheaper|dearer)"
+                           r"|\d\s?% (faster|slower|cheaper|less time)|\bs of CPU\b"
+                           r"|\d\s?ms (a|an|per) (call|step|instant)")
+
+
+def _prose(path: Path) -> list[tuple[int, str]]:
+    """The docstrings and comments of a source file, with their line numbers."""
+    import ast
+    import io
+    import tokenize
+
+    text = path.read_text()
+    found = [(tok.start[0], tok.string) for tok in
+             tokenize.generate_tokens(io.StringIO(text).readline)
+             if tok.type == tokenize.COMMENT]
+    for node in ast.walk(ast.parse(text)):
+        body = getattr(node, "body", None)
+        if isinstance(body, list):
+            for first, second in zip(body, body[1:] + [None]):
+                for item in (first, second):
+                    if (isinstance(item, ast.Expr) and isinstance(item.value, ast.Constant)
+                            and isinstance(item.value.value, str)):
+                        found.append((item.lineno, item.value.value))
+    return found
+
+
+def test_no_docstring_or_comment_quotes_a_timing():
+    """Measured times go stale silently; they belong to the generated benchmarks page."""
+    quoted = {f"{path.relative_to(ROOT)}:{line}: {match.group(0)}"
+              for folder in PACKAGE_DIRS for path in sorted((ROOT / folder).rglob("*.py"))
+              for line, text in _prose(path) for match in [QUOTED_TIMING.search(text)]
+              if match}
+    assert not quoted, "\n".join(sorted(quoted))
