@@ -179,12 +179,12 @@ def fig12(motion: Motion, out: Path, penalty_omega: np.ndarray | None = None,
 
 def joint_magnitudes(op: Operator, forces: np.ndarray, joint: int = 0) -> dict:
     """|F1| ... |F8| of joint ``joint`` (scene index) in N, from forces (T, n) in the
-    operator's columns: a radial force as the length of its 2-vector, an end face's push
-    as it is (:meth:`Operator.contact_magnitudes`).
+    operator's columns: the length of each of its contacts' forces (a radial force's
+    2-vector, an end face's push).
     """
-    links = op.joint_contacts(joint)
-    magnitudes = op.contact_magnitudes(forces, ("trunnion-radial", "end-face"))
-    return {label: magnitudes[links[label].name] for label in sorted(links)}
+    forces = np.asarray(forces)
+    return {label: np.linalg.norm(forces[..., list(link.columns)], axis=-1)
+            for label, link in sorted(op.joint_contacts(joint).items())}
 
 
 def bearing_loads(op: Operator, forces: np.ndarray, shaft: int = 0) -> dict:
@@ -220,7 +220,7 @@ def fig13(op: Operator, histories: dict[str, np.ndarray],
     csv = write_csv(Path(out) / "fig13.csv", _with_smoothed(_set_columns(columns, bounds), t))
     links = op.joint_contacts(0)
     rigid = tuple(m for m in histories if m != PENALTY)
-    panels = [Panel(f"({'abcdefgh'[k]}) {_force_title(label, links[label].kind)}", label,
+    panels = [Panel(f"({'abcdefgh'[k]}) {_force_title(label, links[label])}", label,
                     "force [N]", rigid, sets=label in bounds)
               for k, label in enumerate(sorted(links))]
     _plot_grid(csv, panels,
@@ -229,10 +229,15 @@ def fig13(op: Operator, histories: dict[str, np.ndarray],
     return csv
 
 
-def _force_title(label: str, kind: str) -> str:
-    """A Fig. 13 panel's quantity: a radial force's magnitude, an end face's push."""
-    return {"trunnion-radial": f"|{label}|, magnitude of the trunnion's radial force",
-            "end-face": f"{label}, end-face push (axial)"}.get(kind, f"{label} ({kind})")
+def _force_title(label: str, link) -> str:
+    """A Fig. 13 panel's quantity: the magnitude of a contact's force of several
+    components, the push of a one-component contact; what the contact is in its kind's
+    words.
+    """
+    words = link.element_kind.words(link)
+    if len(link.columns) > 1:
+        return f"|{label}|, magnitude of its force ({words})"
+    return f"{label}, push ({words})"
 
 
 def fig14(op: Operator, histories: dict[str, np.ndarray],

@@ -70,7 +70,7 @@ def test_fig13_keeps_the_print_rules_and_names_what_it_plots(op, tmp_path, drawn
     fig, = drawn
     assert images.problems(fig) == []
     text = _texts(fig)
-    assert "|F1|, magnitude" in text and "F3, end-face push" in text
+    assert "|F1|, magnitude" in text and "F3, push (end face)" in text
     assert "to 0 N" not in text.replace("0 to 0 N", "X")  # one value is printed once
     assert "0 to 0 N" not in text
     assert "open above and below (any value)" in text
