@@ -63,10 +63,17 @@ def api_sources(root: Path = ROOT) -> Path:
     return target
 
 
+def on_startup(**kwargs):
+    """Lay out the API sources before any plugin reads its configuration (mkdocstrings
+    keeps only the source folders that exist when it starts).
+    """
+    api_sources()
+
+
 def on_config(config, **kwargs):
-    """Lay out the API sources, and build from ``build/``: the API reader takes a
-    folder named like the package in the working directory for the package itself, and
-    the repository's ``cardan_forces/`` holds only its top layer.
+    """Build from ``build/``: the API reader takes a folder named like the package in the
+    working directory for the package itself, and the repository's ``cardan_forces/``
+    holds only its top layer.
     """
     api_sources()
     global _FOLDER
