@@ -289,3 +289,15 @@ def test_no_docstring_or_comment_quotes_a_timing():
               for line, text in _prose(path) for match in [QUOTED_TIMING.search(text)]
               if match}
     assert not quoted, "\n".join(sorted(quoted))
+
+
+def test_the_bench_views_page_states_qpbenchmarks_settings():
+    from cardan_forces.solvers.qp_measures import SETTINGS
+    from cardan_forces.solvers.record import ACCEPT
+
+    text = " ".join((DOCS / "how-to/bench-views.md").read_text().split())
+    assert "`default` (the solver's defaults, judged at 1)" in text
+    assert SETTINGS["default"].tolerance == 1.0
+    for name in ("low_accuracy", "mid_accuracy", "high_accuracy"):
+        assert f"`{name}` {SETTINGS[name].tolerance:g}" in text, name
+    assert f"each is at most {ACCEPT:g}" in text
