@@ -46,6 +46,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.modes import counts
 from cardan_forces.driveline.release import advise, named_modes
 from cardan_forces.driveline.scene import SceneError
+from cardan_forces.experiments import files
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.images import format_list, save
@@ -291,7 +292,7 @@ def write_csv(answer: dict, path: Path) -> None:
     """Long format: one row per bearing, instant and series (each selection's ``P``,
     the set's least and greatest); an empty cell where undefined (open or unsolved).
     """
-    with open(path, "w", newline="") as f:
+    with files.replacing(path, newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s", "bearing", "series", "P_N"])
         for entry in answer["bearings"]:
@@ -393,7 +394,7 @@ def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
 
     out.mkdir(parents=True, exist_ok=True)
     write_csv(answer, out / "life.csv")
-    (out / "life.md").write_text(markdown(answer))
+    files.write_text(out / "life.md", markdown(answer))
     fig = figure(answer)
     images = save(fig, out / "life", formats)
     plt.close(fig)

@@ -38,6 +38,7 @@ from cardan_forces.solvers import newton_
 from cardan_forces.solvers.batch import finalize_batch
 from cardan_forces.solvers.registry import solve_batch
 
+from . import files
 from .images import save
 
 SCENES = ("paper", "propshaft")
@@ -118,11 +119,11 @@ def mujoco_row(op) -> dict | None:
 def write(rows: list[dict], folder: Path, formats=("png",)) -> list[Path]:
     """The CSV, the markdown section and the figure of ``rows`` into ``folder``."""
     folder.mkdir(parents=True, exist_ok=True)
-    with open(folder / "regularization.csv", "w", newline="") as handle:
+    with files.replacing(folder / "regularization.csv", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=COLUMNS)
         writer.writeheader()
         writer.writerows(rows)
-    (folder / "regularization.md").write_text("\n".join(markdown(rows)) + "\n")
+    files.write_text(folder / "regularization.md", "\n".join(markdown(rows)) + "\n")
     return [folder / "regularization.csv", folder / "regularization.md",
             *draw(rows, folder / "regularization", formats)]
 

@@ -43,6 +43,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import MAX_ARTICULATION_DEG, Scene, SceneError
+from cardan_forces.experiments import files
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments import tolerance_store as store
 from cardan_forces.experiments.environment import json_text, number_text
@@ -416,7 +417,7 @@ def write_csv(answer: dict, path: Path) -> None:
     the nominal value (N); an empty cell where undefined.
     """
     keys = [f"P{q:g}" for q in QUANTILES] + ["nominal"]
-    with open(path, "w", newline="") as f:
+    with files.replacing(path, newline="") as f:
         w = csv.writer(f)
         w.writerow(["t_s", "formulation", "load", *(f"{k}_N" for k in keys)])
         for form, loads in answer["loads"].items():
@@ -488,7 +489,7 @@ def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
 
     out.mkdir(parents=True, exist_ok=True)
     write_csv(answer, out / "tolerances.csv")
-    (out / "tolerances.md").write_text(markdown(answer))
+    files.write_text(out / "tolerances.md", markdown(answer))
     fig = figure(answer)
     images = save(fig, out / "tolerances", formats)
     plt.close(fig)
