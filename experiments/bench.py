@@ -147,15 +147,20 @@ def run(args) -> int:
                       sorted({s for v in backends.values() for s in v}), folder,
                       args.harness == "qpbenchmark")
     results = evaluate(measured, ladder, time.perf_counter() - started)
-    if args.regularization:  # the newton family's softening study (paper, propshaft)
-        from . import regularization
-        regularization.study(folder, formats=args.format)
+    softened = _regularization(folder, args.format) if args.regularization else []
     replaced = (folder / "bench_throughput.csv").exists()
     written = _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
         "budget_s": args.budget_s, "samples": len(samples), "ladder": ladder,
         "quick": args.quick, "simulate_s": simulated - started, "operator_s": operator_s,
         "wall_s": time.perf_counter() - started}, args.format)
+    if softened:  # its section in the report, its files among the run's
+        report = folder / "report.md"
+        image = next((p.name for p in softened if p.suffix in (".png", ".svg")), None)
+        figure = f"\n![what regularization costs]({image})\n" if image else ""
+        files.write_text(report, report.read_text() + "\n"
+                         + (folder / "regularization.md").read_text() + figure)
+        written += softened
     removed = files.stale(folder, written, [f"{stem}.{f}" for stem in FIGURES for f in FORMATS])
     for path in removed:  # an earlier run's figure in another format: not this run's
         path.unlink()
@@ -172,6 +177,16 @@ def run(args) -> int:
 
 FIGURES = ("bench_pareto", "bench_profiles")
 """The figures' names (without format) in the output folder."""
+
+
+def _regularization(folder: Path, formats) -> list[Path]:
+    """The newton family's softening study on paper and propshaft (what the physics
+    engines' regularization costs in distance from the rigid set, against time),
+    written into ``folder``; its paths.
+    """
+    from . import regularization
+
+    return regularization.study(folder, formats=formats)
 
 
 def _write(folder: Path, results: dict, settings: dict, formats=("png",)) -> list[Path]:

@@ -316,3 +316,23 @@ def test_quiet_silences_qpbenchmark_too(tmp_path, capfd):
     err = capfd.readouterr().err
     assert err == ""
     assert (tmp_path / "qpbenchmark" / "qpbenchmark_results.csv").stat().st_size > 0
+
+
+def test_the_regularization_study_is_a_section_of_the_report(tmp_path, monkeypatch):
+    """``--regularization``: the study's table and figure join the bench's report and its
+    files are among the run's (the study itself is tested in test_regularization)."""
+    from cardan_forces.experiments import regularization
+
+    from cardan_forces.cli import main
+
+    def fake(folder, formats=("png",)):
+        (folder / "regularization.md").write_text("## What regularization costs\n\n| R |\n")
+        (folder / "regularization.png").write_bytes(b"png")
+        return [folder / "regularization.md", folder / "regularization.png"]
+
+    monkeypatch.setattr(regularization, "study", fake)
+    assert main(["bench", "--quick", "--formulation", "min_norm", "--solver", "numpy-kkt",
+                 "--regularization", "--out", str(tmp_path)]) == 0
+    report = (tmp_path / "report.md").read_text()
+    assert "## What regularization costs" in report
+    assert "](regularization.png)" in report
