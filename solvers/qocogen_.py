@@ -6,9 +6,12 @@ pattern, so a solve has no symbolic work and no Python between iterations. This 
 generates it once per structure, compiles it with a small driver that solves every
 instant of a batch in one C call (each instant's numbers replace the last), with a
 line search that computes QOCO's bisected step in closed form (:data:`STEP`), and keeps
-the shared library in a user cache directory named by a hash of the structure: a later
-process loads it instead of compiling it again (a compilation is reported in the
-``compile`` stage and by :func:`compile_seconds`, never in a solve's time).
+the shared library in a user cache directory named by a hash of the structure, its
+nonzero patterns beside it: a later process loads it instead of compiling it again, and
+a batch of other instants whose nonzeros a cached solver's patterns hold (the union
+over fewer instants of the same problem) is solved by that solver, its extra entries
+zeros (a compilation is reported in the ``compile`` stage and by
+:func:`compile_seconds`, never in a solve's time).
 
 It is registered only as ``qocogen-reduced`` (``Backend.reduced_only``): on the full
 form the equality rows are dense, so the unrolled factor is large (several times the
@@ -234,13 +237,35 @@ def _version() -> str:
     return dist_version("qocogen")
 
 
-def _key(dims, patterns) -> str:
-    """The structure's name in the cache: a hash of everything the library depends on."""
-    digest = hashlib.sha256(repr((dims, CFLAGS, DRIVER, PROTOTYPE, STEP, _version())).encode())
-    for pattern in patterns:
-        if pattern is not None:
-            digest.update(pattern.indptr.tobytes() + b"|" + pattern.indices.tobytes())
-    return digest.hexdigest()[:24]
+def _family(dims) -> str:
+    """The name shared by every cached solver of these dimensions and this code (its
+    sparsity patterns apart).
+    """
+    text = repr((dims, CFLAGS, DRIVER, PROTOTYPE, STEP, _version()))
+    return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+def _key(dims, masks) -> str:
+    """The structure's name in the cache: its family, then a hash of its patterns."""
+    digest = hashlib.sha256(b"".join(np.packbits(m).tobytes() + b"|" for m in masks))
+    return f"{_family(dims)}-{digest.hexdigest()[:12]}"
+
+
+def _covering(dims, masks) -> tuple[Path, list[np.ndarray]] | None:
+    """A cached solver of the same family whose patterns hold every nonzero of
+    ``masks`` (a batch of other instants of the same problem may have fewer), with its
+    own masks; ``None`` if none. Its extra entries are solved as zeros.
+    """
+    for index in sorted(cache_dir().glob(f"{_family(dims)}-*.npz")):
+        try:
+            with np.load(index) as saved:
+                theirs = [saved[f"m{k}"] for k in range(len(masks))]
+        except (OSError, ValueError, KeyError):  # cut short or foreign: not a candidate
+            continue
+        fits = all(t.shape == m.shape and not np.any(m & ~t) for t, m in zip(theirs, masks))
+        if fits and index.with_suffix(".so").exists():
+            return index.with_suffix(".so"), theirs
+    return None
 
 
 def _build(target: Path, dims, patterns) -> None:
@@ -281,22 +306,38 @@ def _exact_steps(cone: Path) -> None:
         "bisection_search", "cardan_boundary_step")) + STEP)
 
 
-def _library(dims, patterns) -> tuple[ctypes.CDLL, float]:
-    """The compiled solver of this structure (loaded, from the cache, or built) and the
+def _library(dims, masks) -> tuple[ctypes.CDLL, list[np.ndarray], float]:
+    """The compiled solver of this structure (loaded, from the cache, or built), the
+    masks of its patterns (the batch's, or a cached solver's that covers them) and the
     seconds spent building and loading it now (0 when this process had it already).
     """
-    key = _key(dims, patterns)
+    key = _key(dims, masks)
     target = cache_dir() / f"{key}.so"
     if str(target) in _LOADED:
-        return _LOADED[str(target)], 0.0
+        return _LOADED[str(target)], masks, 0.0
     start = time.perf_counter()
     if not target.exists():
-        _build(target, dims, patterns)
-        _COMPILE_S[key] = time.perf_counter() - start
-    library = ctypes.CDLL(str(target))
-    library.cardan_solve_batch.restype = ctypes.c_int
-    _LOADED[str(target)] = library
-    return library, time.perf_counter() - start
+        found = _covering(dims, masks)
+        if found is not None:
+            target, masks = found
+        else:
+            _build(target, dims, [_pattern(m)[0] for m in masks])
+            _save_masks(target.with_suffix(".npz"), masks)
+            _COMPILE_S[key] = time.perf_counter() - start
+    if str(target) not in _LOADED:
+        library = ctypes.CDLL(str(target))
+        library.cardan_solve_batch.restype = ctypes.c_int
+        _LOADED[str(target)] = library
+    return _LOADED[str(target)], masks, time.perf_counter() - start
+
+
+def _save_masks(path: Path, masks) -> None:
+    """The masks beside their solver (written to a temporary name, then moved), so a
+    later batch whose nonzeros they cover reuses it.
+    """
+    with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".npz", delete=False) as f:
+        np.savez(f, **{f"m{k}": m for k, m in enumerate(masks)})
+    os.replace(f.name, path)
 
 
 def _options(tol, options: dict) -> np.ndarray:
@@ -335,24 +376,35 @@ def _entries(M: np.ndarray, mask: np.ndarray, rows_of: np.ndarray, T: int):
     return pattern, picked
 
 
-def _data(batch: ConicBatch):
-    """The batch in the generated solver's terms: ``(dims, patterns, values, rows)``;
-    values ``P, c, A, b, G, h`` per instant (matrices as their entries in CSC order of
-    the union of their nonzeros over the instants, ``P`` its upper triangle), rows those
-    of the equality and cone parts.
+def _structure(batch: ConicBatch):
+    """The batch's dimensions and the masks of its matrices' nonzeros over its instants
+    (``P``'s upper triangle, the equality and the cone rows of ``A``).
     """
     T, _, n = batch.A.shape
     eq, cone, nonneg, sizes = layout(batch.cones)
+    P = _stacked_P(batch, n)
+    nonzero = np.any(np.asarray(batch.A) != 0, axis=0)
+    masks = [np.triu(np.any(P != 0, axis=0)), nonzero[eq], nonzero[cone]]
+    return (n, len(cone), len(eq), nonneg, tuple(sizes)), masks, (eq, cone)
+
+
+def _stacked_P(batch: ConicBatch, n: int) -> np.ndarray:
     P = np.zeros((1, n, n)) if batch.P is None else np.asarray(batch.P, float)
-    P = P if P.ndim == 3 else P[None]
+    return P if P.ndim == 3 else P[None]
+
+
+def _data(batch: ConicBatch, masks, rows):
+    """The batch's values in the generated solver's terms, ``P, c, A, b, G, h`` per
+    instant: matrices as their entries in CSC order of ``masks`` (the solver's
+    patterns), rows those of the equality and cone parts.
+    """
+    T, _, n = batch.A.shape
+    eq, cone = rows
     A, b = np.asarray(batch.A, float), np.asarray(batch.b, float)
-    nonzero = np.any(A != 0, axis=0)
-    parts = (_entries(P, np.triu(np.any(P != 0, axis=0)), np.arange(n), T),
-             _entries(A, nonzero[eq], eq, T), _entries(A, nonzero[cone], cone, T))
-    patterns, entries = zip(*parts)
-    values = (entries[0], np.ascontiguousarray(batch.q, float), entries[1],
-              np.take(b, eq, axis=1), entries[2], np.take(b, cone, axis=1))
-    return (n, len(cone), len(eq), nonneg, tuple(sizes)), list(patterns), values, (eq, cone)
+    entries = [_entries(M, mask, at, T)[1] for M, mask, at in
+               zip((_stacked_P(batch, n), A, A), masks, (np.arange(n), eq, cone))]
+    return (entries[0], np.ascontiguousarray(batch.q, float), entries[1],
+            np.take(b, eq, axis=1), entries[2], np.take(b, cone, axis=1))
 
 
 def _statuses(codes: np.ndarray, info: np.ndarray) -> tuple[np.ndarray, tuple[str, ...]]:
@@ -396,10 +448,13 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     """
     start = time.perf_counter()
     chosen = _options(tol, options)
-    dims, patterns, values, (eq, cone) = _data(batch)
-    laid_out = time.perf_counter()
-    library, compile_s = _library(dims, patterns)
+    dims, masks, (eq, cone) = _structure(batch)
+    found = time.perf_counter()
+    library, masks, compile_s = _library(dims, masks)
     loaded = time.perf_counter()
+    values = _data(batch, masks, (eq, cone))
+    laid_out = time.perf_counter()
+    layout_s = (found - start) + (laid_out - loaded)
     out = _run(library, dims, values, chosen)
     again = np.flatnonzero(out[4] != 1)  # not "solved" by the solver's own status
     if len(again) and not set(REFINED) & set(options):
@@ -414,9 +469,9 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     duals[:, eq], duals[:, cone] = y, z
     status, messages = _statuses(codes, info)
     return BatchOutcome(status=status, z=x, y=duals, iterations=iterations.astype(int),
-                        setup_s=laid_out - start, solve_s=solved - loaded, messages=messages,
-                        stages={"layout": laid_out - start, "compile": compile_s,
-                                "solve": solved - loaded})
+                        setup_s=layout_s, solve_s=solved - laid_out, messages=messages,
+                        stages={"layout": layout_s, "compile": compile_s,
+                                "solve": solved - laid_out})
 
 
 def backends() -> list[Backend]:

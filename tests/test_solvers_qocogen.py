@@ -58,6 +58,29 @@ def test_nearest_point_of_a_line(fresh_cache):
     assert np.all(result.optimality.within(ACCEPT))
 
 
+def _nearest_on(a: float, level: float) -> Conic:
+    """:func:`_nearest` on the line ``x1 + a x2 = level`` (``a = 0``: one nonzero fewer)."""
+    problem = _nearest(level)
+    A, checks = problem.A.copy(), problem.checks
+    A[0, 1] = a
+    checks = ForceChecks(A=A[:1].copy(), b=checks.b, names=checks.names,
+                         unilateral=checks.unilateral)
+    return Conic(checks=checks, formulation="ref", P=None, q=problem.q, A=A, b=problem.b,
+                 cones=problem.cones)
+
+
+def test_a_cached_solver_whose_pattern_covers_a_batch_is_reused(fresh_cache):
+    """A batch with a nonzero fewer (other instants of the same problem) is solved by the
+    cached solver of the fuller pattern, not compiled again; its answer is its own."""
+    from cardan_forces.solvers import qocogen_
+
+    qocogen_.solve_batch(fbatch.conic_batch([_nearest_on(1.0, 2.0)], [0]))
+    sparser = qocogen_.solve_batch(fbatch.conic_batch([_nearest_on(0.0, 2.0)], [0]),
+                                   tol=TOL)
+    assert len(list(fresh_cache.glob("qocogen/*.so"))) == 1
+    assert sparser.z[0] == pytest.approx([2.0, 0.0, 1.0], abs=1e-6)  # (c, 0), t = 3 - c
+
+
 def test_a_structure_is_compiled_once(fresh_cache):
     from cardan_forces.solvers import qocogen_
 
@@ -142,8 +165,10 @@ def test_unsolved_instants_are_solved_again_refined(fresh_cache, monkeypatch,
     batch = fbatch.conic_batch([_nearest(c) for c in (2.0, 1.0, 0.5)], [0, 1, 2])
     options = {"iter_ref_iters": 0} if caller_sets_refinement else {}
     result = qocogen_.solve_batch(batch, **options)
-    dims, patterns, values, _ = qocogen_._data(batch)
-    alone = real(qocogen_._library(dims, patterns)[0], dims, [v[1:2] for v in values],
+    dims, masks, rows = qocogen_._structure(batch)
+    library, masks, _ = qocogen_._library(dims, masks)
+    values = qocogen_._data(batch, masks, rows)
+    alone = real(library, dims, [v[1:2] for v in values],
                  qocogen_._options(None, qocogen_.REFINED))
     first = (3, qocogen_.DEFAULTS["iter_ref_iters"], qocogen_.DEFAULTS["bisect_iters"])
     if caller_sets_refinement:
