@@ -27,7 +27,7 @@ from cardan_forces.formulations import FORMULATIONS
 from scipy.ndimage import uniform_filter1d
 from scipy.signal import savgol_filter
 
-from .figures_draw import PENALTY, SMOOTHED, Panel, plot_grid
+from .figures_draw import OPEN, PENALTY, SMOOTHED, Panel, plot_grid
 from .figures_draw import read_csv as read_csv  # the figures' CSV reader, with write_csv
 
 SMOOTH_S = 0.1
@@ -100,16 +100,41 @@ def smooth_speed(values: np.ndarray, t: np.ndarray, window_s: float = SPEED_SMOO
 def write_csv(path: Path, columns: dict[str, np.ndarray]) -> Path:
     """Write equal-length columns with a header row; full double precision, written
     whole (:func:`~cardan_forces.experiments.files.replacing`). A number not known
-    (NaN: not solved, not computed) is an empty cell; ``inf``/``-inf`` is only an open
-    side of a rigid set (``*_set_max``/``*_set_min``: unbounded).
+    (NaN: not solved, not computed) is an empty cell, and so is the open side of a rigid
+    set, which its ``*_set_open`` column names (:func:`open_sides`): no cell holds an
+    infinity. :func:`~.figures_draw.read_csv` gives the columns back as they were.
     """
     path.parent.mkdir(parents=True, exist_ok=True)
+    columns = open_sides(columns)
     data = np.column_stack([np.asarray(v, float) for v in columns.values()])
     with files.replacing(path, newline="") as f:
         f.write(",".join(columns) + "\n")
         f.writelines(",".join("" if np.isnan(v) else f"{v:.10g}" for v in row) + "\n"
                      for row in data)
     return path
+
+
+def open_sides(columns: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """``columns`` with each rigid set's ``q_set_min``/``q_set_max`` finite or NaN and,
+    after them, ``q_set_open`` (:data:`~.figures_draw.OPEN`: 0 closed, 1 open above, -1
+    open below, 2 open on both sides; NaN where the set is not known).
+    """
+    out = {}
+    for name, values in columns.items():
+        if name.endswith("_set_min"):
+            low = np.asarray(values, float)
+            out[name] = np.where(np.isneginf(low), np.nan, low)
+            continue
+        if not name.endswith("_set_max"):
+            out[name] = values
+            continue
+        q, high = name.removesuffix("_set_max"), np.asarray(values, float)
+        low = np.asarray(columns[f"{q}_set_min"], float)
+        above, below = np.isposinf(high), np.isneginf(low)
+        out[name] = np.where(above, np.nan, high)
+        code = above * OPEN["above"] + below * OPEN["below"] + (above & below) * 2.0
+        out[f"{q}_set_open"] = np.where(np.isnan(low) | np.isnan(high), np.nan, code)
+    return out
 
 
 def _with_smoothed(columns: dict[str, np.ndarray], t: np.ndarray, speeds: bool = False
@@ -246,7 +271,8 @@ def fig14(op: Operator, histories: dict[str, np.ndarray],
           formats=("png",)) -> Path:
     """Fig. 14 (15 with horizontal gravity): the input shaft's bearing loads per method,
     with the rigid solution set's interval (``bounds``: quantity -> (low, high), NaN where
-    not computed, inf where unbounded). ``stem``: the files' name (default ``figNN``).
+    not computed, inf where unbounded; written as :func:`open_sides` says). ``stem``:
+    the files' name (default ``figNN``).
     """
     t, scene_name = op.t, op.scene.name
     columns = {"t": t}

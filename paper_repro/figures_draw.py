@@ -70,12 +70,25 @@ class Panel:
         return found.group(0)[1:-1] if found else ""
 
 
+OPEN = {"above": 1.0, "below": -1.0}
+"""Codes of a figure CSV's ``*_set_open`` column: a rigid set open above, below (both:
+their sum plus 2, i.e. 2; closed: 0)."""
+
+
 def read_csv(path: Path) -> dict[str, np.ndarray]:
     """Read a figure's CSV (``figures.write_csv``: empty cells not known) back into
-    named columns.
+    named columns, each rigid set's open sides as ``-inf``/``inf`` again (its
+    ``*_set_open`` column read and dropped).
     """
     data = np.genfromtxt(path, delimiter=",", names=True, deletechars="")
-    return {name: data[name] for name in data.dtype.names}
+    cols = {name: data[name] for name in data.dtype.names}
+    for name in [n for n in cols if n.endswith("_set_open")]:
+        q, code = name.removesuffix("_set_open"), cols.pop(name)
+        cols[f"{q}_set_min"] = np.where(np.isin(code, (OPEN["below"], 2.0)), -np.inf,
+                                        cols[f"{q}_set_min"])
+        cols[f"{q}_set_max"] = np.where(np.isin(code, (OPEN["above"], 2.0)), np.inf,
+                                        cols[f"{q}_set_max"])
+    return cols
 
 
 def plot_grid(csv: Path, panels: list[Panel], title: str, ncols: int, formats=("png",),

@@ -88,8 +88,8 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str
         "",
         "Each figure's CSV holds one column per quantity and method; the PNG is drawn from "
         "it. An instant whose record is not `solved` is an empty cell in the CSV, as is a "
-        "rigid-set bound not computed there; `inf` (`-inf`) in a `*_set_max` (`*_set_min`) "
-        "column means that side of the rigid set is open (unbounded). Every verdict on the "
+        "rigid-set bound not computed there or on an open side; `*_set_open` says which "
+        "(0 closed, 1 open above, -1 open below, 2 open on both sides). Every verdict on the "
         "paper's text states its criterion; a verdict that the two halves of the run do not "
         "both give is **undecided**.",
     ]

@@ -73,8 +73,9 @@ def test_a_command_that_writes_files_ends_saying_where(tmp_path, capsys, argv, n
 
 
 def test_a_figure_csv_leaves_unknown_numbers_empty_and_marks_open_sides(tmp_path):
-    """NaN (not solved, not computed) is an empty cell; an open side of a rigid set is
-    ``inf``/``-inf`` and only there; reading the file back gives the same columns."""
+    """NaN (not solved, not computed) is an empty cell, and so is an open side of a
+    rigid set, named by its ``_set_open`` code; no cell holds an infinity; reading the
+    file back gives the same columns."""
     import numpy as np
     from cardan_forces.paper_repro import figures
 
@@ -84,8 +85,10 @@ def test_a_figure_csv_leaves_unknown_numbers_empty_and_marks_open_sides(tmp_path
                "load_set_max": np.array([np.inf, np.nan, 3.0])}
     path = figures.write_csv(tmp_path / "fig.csv", columns)
     lines = path.read_text().splitlines()
-    assert lines[2] == "0.5,,,"
-    assert lines[1] == "0,1.5,-inf,inf"
+    assert lines[0] == "t,load_positive,load_set_min,load_set_max,load_set_open"
+    assert lines[1] == "0,1.5,,,2"  # open on both sides
+    assert lines[2] == "0.5,,,,"  # not known
+    assert lines[3] == "1,-2.25e-300,0,3,0"  # closed
     back = figures.read_csv(path)
     for name, values in columns.items():
         np.testing.assert_array_equal(back[name], values)
