@@ -300,7 +300,7 @@ def _count():
 
 
 @kernel(inline="always")
-def _newton(run, t_new, c, args, again):
+def _newton(t_new, c, jac, factors, vec, clock, counts, contacts, args, again):
     """SciPy's ``solve_bdf_system``: the simplified Newton iteration of one step from
     the prediction (:class:`Vectors` ``predict``, ``psi``, ``scale``) into ``y`` and
     ``d = y - y_predict``; (converged, iterations). As CVODE
@@ -309,7 +309,6 @@ def _newton(run, t_new, c, args, again):
     iteration restarts from the same prediction (after a fresh Jacobian), whose
     right-hand side is kept in ``f_predict`` from the first start.
     """
-    vec, clock, counts = run.work.vectors, run.clock, run.counts
     y_predict, scale, psi = vec.predict, vec.scale, vec.psi
     y, d, dy, f = vec.y, vec.d, vec.dy, vec.f
     n = y.shape[0]
@@ -322,7 +321,7 @@ def _newton(run, t_new, c, args, again):
             f[:] = vec.f_predict
         else:
             counts.fev[0] += 1
-            _rhs_into(t_new, y, args, run.work.contacts, f)
+            _rhs_into(t_new, y, args, contacts, f)
             if iterations == 1:
                 vec.f_predict[:] = f
         finite = True
@@ -331,7 +330,7 @@ def _newton(run, t_new, c, args, again):
             dy[i] = c * f[i] - psi[i] - d[i]
         if not finite:
             break
-        _solve(run.jac, c, run.factors, dy, vec.solve_q, vec.solve_r)
+        _solve(jac, c, factors, dy, vec.solve_q, vec.solve_r)
         dy_norm = _norm(dy, scale)
         rate = dy_norm / dy_norm_old if dy_norm_old > 0.0 else -1.0
         if rate >= 0.0 and (rate >= 1.0 or rate ** (NEWTON_MAXITER - iterations + 1)
@@ -365,7 +364,7 @@ def _predict(d, order, alpha, gamma, atol, rtol, vec):
 
 
 @kernel(inline="always")
-def _attempt(run, t_bound, atol, rtol, args):
+def _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
     """SciPy's ``BDF._step_impl`` up to the accepted step: shrink the step until Newton
     converges (with a fresh Jacobian once per step) and the error test passes; returns
     (t_new, Newton iterations) with the new state, its difference from the prediction
@@ -373,10 +372,9 @@ def _attempt(run, t_bound, atol, rtol, args):
     ``t_new = nan`` with the status set when the step would fall below the spacing of
     floats at ``t``.
     """
-    clock, counts, d, jac, work = run.clock, run.counts, run.d, run.jac, run.work
     t, h_abs, order = clock.t[0], clock.h[0], counts.order[0]
     gamma, alpha, error_const = _COEFFS[0], _COEFFS[1], _COEFFS[2]
-    vec, rescale = work.vectors, work.rescale
+    vec, rescale, contacts = work.vectors, work.rescale, work.contacts
     min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
     if h_abs < min_step:
         _change_d(d, order, min_step / h_abs, rescale)
@@ -395,13 +393,14 @@ def _attempt(run, t_bound, atol, rtol, args):
         c, again = h_abs / alpha[order], False
         while True:
             if counts.has_lu[0] == 0 or abs(c / clock.c[0] - 1.0) > LU_KEEP:
-                _factor(jac, c, run.factors)
+                _factor(jac, c, factors)
                 counts.nlu[0] += 1
                 counts.has_lu[0], clock.c[0], clock.rate[0] = 1, c, 1.0
-            converged, n_iter = _newton(run, t_new, c, args, again)
+            converged, n_iter = _newton(t_new, c, jac, factors, vec, clock, counts, contacts,
+                                        args, again)
             if converged or counts.jac_current[0] == 1:
                 break
-            _jacobian_into(t_new, vec.predict, args, jac, run.factors.linked, work.contacts,
+            _jacobian_into(t_new, vec.predict, args, jac, factors.linked, contacts,
                            work.jacobian)
             counts.jev[0] += 1
             counts.has_lu[0], counts.jac_current[0], again = 0, 1, True
@@ -425,18 +424,18 @@ def _attempt(run, t_bound, atol, rtol, args):
 
 
 @kernel(inline="always")
-def _step(run, t_bound, atol, rtol, args):
+def _step(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
     """One accepted step of SciPy's ``BDF``: :func:`_attempt`, then the differences
     updated and, after ``order + 1`` steps of one size, the order and step chosen
     from the error estimates of the orders either side.
     """
-    clock, counts, d = run.clock, run.counts, run.d
     counts.jac_current[0] = 0
-    t_new, n_iter = _attempt(run, t_bound, atol, rtol, args)
+    t_new, n_iter = _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol,
+                             args)
     if np.isnan(t_new):
         return
     order, error_const = counts.order[0], _COEFFS[2]
-    dd, scale = run.work.vectors.d, run.work.vectors.scale
+    dd, scale = work.vectors.d, work.vectors.scale
     counts.steps[0] += 1
     counts.equal[0] += 1
     clock.t[0] = t_new
@@ -461,7 +460,7 @@ def _step(run, t_bound, atol, rtol, args):
     counts.order[0] = order + delta
     factor = min(MAX_FACTOR, safety * best)
     clock.h[0] *= factor
-    _change_d(d, order + delta, factor, run.work.rescale)
+    _change_d(d, order + delta, factor, work.rescale)
     counts.equal[0] = 0
 
 
@@ -487,17 +486,18 @@ def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
     finite) or a step that falls below the spacing of numbers ends the run with that
     status: it never raises and never loops on a NaN.
     """
-    clock, counts = run.clock, run.counts
+    clock, counts, d, jac, factors, work = run.clock, run.counts, run.d, run.jac, \
+        run.factors, run.work
     if not (np.isfinite(clock.t[0]) and np.isfinite(clock.h[0])):
         counts.status[0] = NOT_FINITE
     while counts.status[0] == RUNNING and clock.t[0] < t_stop:
-        _step(run, t_bound, atol, rtol, args)
+        _step(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args)
         if counts.status[0] != RUNNING:
             break
         t = clock.t[0]
         while counts.out[0] < t_out.shape[0] and t_out[counts.out[0]] <= t:
             at = counts.out[0]
-            _dense(run.d, t, clock.h[0], counts.order[0], t_out[at], out[at])
+            _dense(d, t, clock.h[0], counts.order[0], t_out[at], out[at])
             counts.out[0] += 1
         if t >= t_bound:
             counts.status[0] = FINISHED

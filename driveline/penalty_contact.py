@@ -156,41 +156,42 @@ def _local(frames, ka, kb, geometry, c, work):
     bodies ``ka`` and ``kb`` with geometry row ``geometry[c]`` (``s, e, j, u``): the
     offset ``p`` of a's point from b's, the axes ``ea`` (on a) and ``ub`` (on b), the
     relative velocity ``rel`` of a's material point at ``p`` against b's, and the arms
-    of the points from a's and b's centres. Element by element, no views of rows: in the
-    right-hand side's loop over contacts each view costs its array's reference count
-    twice.
+    of the points from a's and b's centres.
     """
-    _offset(frames, ka, kb, geometry, c, work)
-    _relative(frames, ka, kb, geometry, c, work)
+    _offset(frames.centre, frames.rot, ka, kb, geometry, c, work.p, work.ea, work.ub,
+            work.arm, work.arm_b)
+    _relative(frames.vel, frames.rate, frames.omega, ka, kb, geometry, c, work.p, work.rel)
 
 
 @kernel(inline="always")
-def _offset(frames, ka, kb, geometry, c, work):
-    """:func:`_local`'s geometry: ``p``, ``ea``, ``ub`` and the arms (not ``rel``)."""
-    centre, rot = frames.centre, frames.rot
-    p, ea, ub = work.p, work.ea, work.ub
-    for i in range(3):  # arm, arm_b kept in registers
+def _offset(centre, rot, ka, kb, geometry, c, p, ea, ub, arm_a, arm_b):
+    """:func:`_local`'s geometry: ``p``, ``ea``, ``ub`` and the arms (not ``rel``), from
+    the frames' ``centre`` and ``rot``. Element by element, and the arrays handed in
+    (not a named tuple's fields taken here): in the right-hand side's loop over contacts
+    each view or field taken costs its array's reference count twice.
+    """
+    for i in range(3):  # the arms' components kept in registers
         a0, a1, a2 = rot[ka, i, 0], rot[ka, i, 1], rot[ka, i, 2]
         b0, b1, b2 = rot[kb, i, 0], rot[kb, i, 1], rot[kb, i, 2]
-        arm = a0 * geometry[c, 0] + a1 * geometry[c, 1] + a2 * geometry[c, 2]
-        arm_b = b0 * geometry[c, 6] + b1 * geometry[c, 7] + b2 * geometry[c, 8]
+        to_a = a0 * geometry[c, 0] + a1 * geometry[c, 1] + a2 * geometry[c, 2]
+        to_b = b0 * geometry[c, 6] + b1 * geometry[c, 7] + b2 * geometry[c, 8]
         ea[i] = a0 * geometry[c, 3] + a1 * geometry[c, 4] + a2 * geometry[c, 5]
         ub[i] = b0 * geometry[c, 9] + b1 * geometry[c, 10] + b2 * geometry[c, 11]
-        work.arm[i], work.arm_b[i] = arm, arm_b
-        p[i] = centre[ka, i] + arm - centre[kb, i] - arm_b
+        arm_a[i], arm_b[i] = to_a, to_b
+        p[i] = centre[ka, i] + to_a - centre[kb, i] - to_b
 
 
 @kernel(inline="always")
-def _relative(frames, ka, kb, geometry, c, work):
-    """:func:`_local`'s relative velocity ``rel``, after :func:`_offset`."""
-    vel, rate, omega = frames.vel, frames.rate, frames.omega
-    p, rel = work.p, work.rel
+def _relative(vel, rate, omega, ka, kb, geometry, c, p, rel):
+    """:func:`_local`'s relative velocity ``rel``, after :func:`_offset` (``p``), from
+    the frames' ``vel``, ``rate`` and ``omega``.
+    """
     for i in range(3):
         rel[i] = (vel[ka, i] - vel[kb, i]
-                      + rate[ka, i, 0] * geometry[c, 0] + rate[ka, i, 1] * geometry[c, 1]
-                      + rate[ka, i, 2] * geometry[c, 2]
-                      - rate[kb, i, 0] * geometry[c, 6] - rate[kb, i, 1] * geometry[c, 7]
-                      - rate[kb, i, 2] * geometry[c, 8])
+                  + rate[ka, i, 0] * geometry[c, 0] + rate[ka, i, 1] * geometry[c, 1]
+                  + rate[ka, i, 2] * geometry[c, 2]
+                  - rate[kb, i, 0] * geometry[c, 6] - rate[kb, i, 1] * geometry[c, 7]
+                  - rate[kb, i, 2] * geometry[c, 8])
     # - omega_b x p
     rel[0] += -1.0 * (omega[kb, 1] * p[2] - omega[kb, 2] * p[1])
     rel[1] += -1.0 * (omega[kb, 2] * p[0] - omega[kb, 0] * p[2])
@@ -248,19 +249,22 @@ def _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force,
     (global, about their centres) and write its penetration, push and force on ``a``.
     The geometry of :meth:`penalty._Model.contacts`, one contact at a time, the relative
     velocity and the law only for those that touch; ``work``: the :class:`Local` rows.
+    Every field is taken once, before the loop.
     """
     p, ea, ub, rel, arm, arm_b, normal = work.p, work.ea, work.ub, work.rel, work.arm, \
         work.arm_b, work.normal
+    centre, vel, rot = frames.centre, frames.vel, frames.rot
+    rate, omega = frames.rate, frames.omega
     for c in range(topology.shape[0]):
         ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
-        _offset(frames, ka, kb, geometry, c, work)
+        _offset(centre, rot, ka, kb, geometry, c, p, ea, ub, arm, arm_b)
         depth[c] = _depth(p, ea, ub, radial, laws[c, 0], normal)
         if depth[c].real <= 0.0:  # out of touch: no force (eq. 75)
             push[c] = 0.0
             for i in range(3):
                 on_a[c, i] = 0.0
             continue
-        _relative(frames, ka, kb, geometry, c, work)
+        _relative(vel, rate, omega, ka, kb, geometry, c, p, rel)
         push[c] = _pressed(depth[c], ea, rel, radial, laws[c], d_max, normal)
         for i in range(3):
             on_a[c, i] = normal[i]  # now the force on a
