@@ -81,42 +81,27 @@ _COEFFS = np.stack([_GAMMA, _ALPHA, _ERROR_CONST])
 
 
 RUNNING, FINISHED, STEP_TOO_SMALL, NOT_FINITE = 0, 1, 2, 3
-"""A run's status (:class:`Counts` ``status``)."""
+"""A run's status (:data:`COUNTS` ``status``)."""
 MESSAGES = {FINISHED: "finished", STEP_TOO_SMALL: "required step size is less than spacing "
             "between numbers", NOT_FINITE: "the right-hand side is not finite"}
 
 
-class Clock(NamedTuple):
-    """A run's times (s), one float each (arrays of one, so that compiled code can
-    change them): the time ``t`` reached, the step ``h`` to try next, the ``c`` (step
-    over the formula's coefficient) of the LU held, and the last Newton ``rate`` seen
-    with it.
-    """
+CLOCK = np.dtype([("t", np.float64), ("h", np.float64), ("c", np.float64),
+                  ("rate", np.float64)])
+"""A run's times (s), the fields of one record: the time ``t`` reached, the step ``h``
+to try next, the ``c`` (step over the formula's coefficient) of the LU held, and the
+last Newton ``rate`` seen with it. A record (compiled code reads and writes its fields
+by name in place), not a named tuple of arrays: every array a kernel is handed costs a
+reference count, and the step's kernels hand these down at every step."""
 
-    t: np.ndarray
-    h: np.ndarray
-    c: np.ndarray
-    rate: np.ndarray
-
-
-class Counts(NamedTuple):
-    """A run's integers (arrays of one int64 each): the formula's ``order``, the steps
-    taken at ``equal`` size, whether an LU is held (``has_lu``) and the Jacobian is at
-    the current step (``jac_current``), the numbers of ``steps``, right-hand sides
-    (``fev``), Jacobians (``jev``) and factorizations (``nlu``), the ``status``
-    (:data:`RUNNING` ...), and the rows of the output filled (``out``).
-    """
-
-    order: np.ndarray
-    equal: np.ndarray
-    has_lu: np.ndarray
-    jac_current: np.ndarray
-    steps: np.ndarray
-    fev: np.ndarray
-    jev: np.ndarray
-    nlu: np.ndarray
-    status: np.ndarray
-    out: np.ndarray
+COUNTS = np.dtype([(name, np.int64) for name in (
+    "order", "equal", "has_lu", "jac_current", "steps", "fev", "jev", "nlu", "status",
+    "out")])
+"""A run's integers, the fields of one record (as :data:`CLOCK`): the formula's
+``order``, the steps taken at ``equal`` size, whether an LU is held (``has_lu``) and
+the Jacobian is at the current step (``jac_current``), the numbers of ``steps``,
+right-hand sides (``fev``), Jacobians (``jev``) and factorizations (``nlu``), the
+``status`` (:data:`RUNNING` ...), and the rows of the output filled (``out``)."""
 
 
 class Vectors(NamedTuple):
@@ -162,13 +147,14 @@ class Work(NamedTuple):
 
 
 class Run(NamedTuple):
-    """A run between calls of :func:`advance`: its :class:`Clock` and :class:`Counts`,
+    """A run between calls of :func:`advance`: its ``clock`` (:data:`CLOCK`) and
+    ``counts`` (:data:`COUNTS`), each an array of one record,
     the backward differences ``d`` (MAX_ORDER + 3, n), the Jacobian ``jac`` (n, n), the
     :class:`Factors` of ``I - c J`` and the :class:`Work` arrays.
     """
 
-    clock: Clock
-    counts: Counts
+    clock: np.ndarray
+    counts: np.ndarray
     d: np.ndarray
     jac: np.ndarray
     factors: Factors
@@ -242,11 +228,12 @@ def initial_step(t0, y0, t_bound, atol, rtol, counts, args):
     """SciPy's ``select_initial_step`` for a first-order estimate (Hairer, Norsett and
     Wanner, Solving ODEs I, sec. II.4); returns it and ``f(t0, y0)``. Its two
     right-hand sides are :func:`rhs`'s (one compiled copy; the integrator's own is
-    inlined into its Newton iteration). Counts them in ``counts`` (:class:`Counts`).
+    inlined into its Newton iteration). Counts them in ``counts`` (a :data:`COUNTS`
+    record).
     """
     scale = atol + rtol * np.abs(y0)
     n_shafts, bodies, topology, geometry, laws, loads = args
-    counts.fev[0] += 2
+    counts.fev += 2
     f0 = rhs(t0, y0, n_shafts, bodies, topology, geometry, laws, loads)
     d0, d1 = _norm(y0, scale), _norm(f0, scale)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
@@ -278,25 +265,19 @@ def start(t0, y0, t_bound, atol, rtol, args):
                         old=np.zeros((MAX_ORDER + 1, n))),
         contacts=new_contact_state(y0, nb, args[2].shape[0]),
         jacobian=new_jacobian_scratch(nb, n))
-    counts = Counts(order=np.ones(1, dtype=np.int64), equal=_count(), has_lu=_count(),
-                    jac_current=_count(), steps=_count(), fev=_count(), jev=_count(),
-                    nlu=_count(), status=_count(), out=_count())
+    counts_record, clock_record = np.zeros(1, dtype=COUNTS), np.zeros(1, dtype=CLOCK)
+    counts, clock = counts_record[0], clock_record[0]
+    counts.order = 1
     h, f0 = initial_step(t0, y0, t_bound, atol, rtol, counts, args)
     d = np.zeros((MAX_ORDER + 3, n))
     d[0], d[1] = y0, f0 * h
-    counts.jev[0] += 1
+    counts.jev += 1
     jac = np.empty((n, n))
     _jacobian_into(t0, y0, args, jac, linked, work.contacts, work.jacobian)
-    counts.jac_current[0] = 1
-    clock = Clock(t=np.full(1, t0), h=np.full(1, h), c=np.full(1, h), rate=np.ones(1))
-    return Run(clock=clock, counts=counts, d=d, jac=jac, factors=new_factors(linked),
-               work=work)
-
-
-@kernel(inline="always")
-def _count():
-    """A counter (or flag) of :class:`Counts`: one int64, zero."""
-    return np.zeros(1, dtype=np.int64)
+    counts.jac_current = 1
+    clock.t, clock.h, clock.c, clock.rate = t0, h, h, 1.0
+    return Run(clock=clock_record, counts=counts_record, d=d, jac=jac,
+               factors=new_factors(linked), work=work)
 
 
 @kernel(inline="always")
@@ -320,7 +301,7 @@ def _newton(t_new, c, jac, factors, vec, clock, counts, contacts, args, again):
         if iterations == 1 and again:
             f[:] = vec.f_predict
         else:
-            counts.fev[0] += 1
+            counts.fev += 1
             _rhs_into(t_new, y, args, contacts, f)
             if iterations == 1:
                 vec.f_predict[:] = f
@@ -340,9 +321,9 @@ def _newton(t_new, c, jac, factors, vec, clock, counts, contacts, args, again):
             y[i] += dy[i]
             d[i] += dy[i]
         if rate >= 0.0:
-            clock.rate[0] = rate
+            clock.rate = rate
         if dy_norm == 0.0 or (rate >= 0.0 and rate / (1.0 - rate) * dy_norm < NEWTON_TOL) or (
-                rate < 0.0 and min(1.0, clock.rate[0]) * dy_norm < NEWTON_TOL):
+                rate < 0.0 and min(1.0, clock.rate) * dy_norm < NEWTON_TOL):
             converged = True
             break
         dy_norm_old = dy_norm
@@ -372,42 +353,42 @@ def _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
     ``t_new = nan`` with the status set when the step would fall below the spacing of
     floats at ``t``.
     """
-    t, h_abs, order = clock.t[0], clock.h[0], counts.order[0]
+    t, h_abs, order = clock.t, clock.h, counts.order
     gamma, alpha, error_const = _COEFFS[0], _COEFFS[1], _COEFFS[2]
     vec, rescale, contacts = work.vectors, work.rescale, work.contacts
     min_step = 10.0 * abs(np.nextafter(t, np.inf) - t)
     if h_abs < min_step:
         _change_d(d, order, min_step / h_abs, rescale)
-        h_abs, counts.equal[0] = min_step, 0
+        h_abs, counts.equal = min_step, 0
     while True:
         if not h_abs >= min_step:  # also a NaN step: a state gone bad
-            counts.status[0] = STEP_TOO_SMALL if h_abs < min_step else NOT_FINITE
+            counts.status = STEP_TOO_SMALL if h_abs < min_step else NOT_FINITE
             return np.nan, 0
         t_new = t + h_abs
         if t_new > t_bound:
             t_new = t_bound
             _change_d(d, order, (t_new - t) / h_abs, rescale)
-            counts.equal[0] = 0
+            counts.equal = 0
         h_abs = t_new - t
         _predict(d, order, alpha, gamma, atol, rtol, vec)
         c, again = h_abs / alpha[order], False
         while True:
-            if counts.has_lu[0] == 0 or abs(c / clock.c[0] - 1.0) > LU_KEEP:
+            if counts.has_lu == 0 or abs(c / clock.c - 1.0) > LU_KEEP:
                 _factor(jac, c, factors)
-                counts.nlu[0] += 1
-                counts.has_lu[0], clock.c[0], clock.rate[0] = 1, c, 1.0
+                counts.nlu += 1
+                counts.has_lu, clock.c, clock.rate = 1, c, 1.0
             converged, n_iter = _newton(t_new, c, jac, factors, vec, clock, counts, contacts,
                                         args, again)
-            if converged or counts.jac_current[0] == 1:
+            if converged or counts.jac_current == 1:
                 break
             _jacobian_into(t_new, vec.predict, args, jac, factors.linked, contacts,
                            work.jacobian)
-            counts.jev[0] += 1
-            counts.has_lu[0], counts.jac_current[0], again = 0, 1, True
+            counts.jev += 1
+            counts.has_lu, counts.jac_current, again = 0, 1, True
         if not converged:
             h_abs *= 0.5
             _change_d(d, order, 0.5, rescale)
-            counts.equal[0], counts.has_lu[0] = 0, 0
+            counts.equal, counts.has_lu = 0, 0
             continue
         safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
         y_new, scale = vec.y, vec.scale
@@ -415,37 +396,33 @@ def _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
             scale[i] = atol[i] + rtol * abs(y_new[i])
         error_norm = _scaled_norm(error_const[order], vec.d, scale)
         if error_norm <= 1.0:
-            clock.h[0] = h_abs
+            clock.h = h_abs
             return t_new, n_iter
         factor = max(MIN_FACTOR, safety * error_norm ** (-1.0 / (order + 1)))
         h_abs *= factor
         _change_d(d, order, factor, rescale)  # the LU stays: Newton converged with it
-        counts.equal[0] = 0
+        counts.equal = 0
 
 
 @kernel(inline="always")
-def _step(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
-    """One accepted step of SciPy's ``BDF``: :func:`_attempt`, then the differences
-    updated and, after ``order + 1`` steps of one size, the order and step chosen
-    from the error estimates of the orders either side.
+def _accept(t_new, n_iter, clock, counts, d, dd, scale, rescale):
+    """The rest of one accepted step of SciPy's ``BDF`` after :func:`_attempt` (which
+    reached ``t_new`` in ``n_iter`` Newton iterations, the new state's difference from
+    the prediction in ``dd``, its error scale in ``scale``): the differences updated
+    and, after ``order + 1`` steps of one size, the order and step chosen from the
+    error estimates of the orders either side.
     """
-    counts.jac_current[0] = 0
-    t_new, n_iter = _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol,
-                             args)
-    if np.isnan(t_new):
-        return
-    order, error_const = counts.order[0], _COEFFS[2]
-    dd, scale = work.vectors.d, work.vectors.scale
-    counts.steps[0] += 1
-    counts.equal[0] += 1
-    clock.t[0] = t_new
+    order, error_const = counts.order, _COEFFS[2]
+    counts.steps += 1
+    counts.equal += 1
+    clock.t = t_new
     for k in range(dd.shape[0]):
         d[order + 2, k] = dd[k] - d[order + 1, k]
         d[order + 1, k] = dd[k]
     for i in range(order, -1, -1):
         for k in range(dd.shape[0]):
             d[i, k] += d[i + 1, k]
-    if counts.equal[0] < order + 1:
+    if counts.equal < order + 1:
         return
     safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
     norm = _scaled_norm(error_const[order], dd, scale)
@@ -457,11 +434,11 @@ def _step(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
         factor = np.inf if value == 0.0 else value ** (-1.0 / (order + k))
         if factor > best:
             best, delta = factor, k - 1
-    counts.order[0] = order + delta
+    counts.order = order + delta
     factor = min(MAX_FACTOR, safety * best)
-    clock.h[0] *= factor
-    _change_d(d, order + delta, factor, work.rescale)
-    counts.equal[0] = 0
+    clock.h *= factor
+    _change_d(d, order + delta, factor, rescale)
+    counts.equal = 0
 
 
 @kernel()
@@ -484,20 +461,26 @@ def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
     ``run.counts``.
     A time or step that is not a number (the right-hand side at the start was not
     finite) or a step that falls below the spacing of numbers ends the run with that
-    status: it never raises and never loops on a NaN.
+    status: it never raises and never loops on a NaN. A step is :func:`_attempt` and
+    :func:`_accept`, both inlined here (handing ``work`` down once a step).
     """
-    clock, counts, d, jac, factors, work = run.clock, run.counts, run.d, run.jac, \
+    clock, counts, d, jac, factors, work = run.clock[0], run.counts[0], run.d, run.jac, \
         run.factors, run.work
-    if not (np.isfinite(clock.t[0]) and np.isfinite(clock.h[0])):
-        counts.status[0] = NOT_FINITE
-    while counts.status[0] == RUNNING and clock.t[0] < t_stop:
-        _step(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args)
-        if counts.status[0] != RUNNING:
+    if not (np.isfinite(clock.t) and np.isfinite(clock.h)):
+        counts.status = NOT_FINITE
+    vec = work.vectors
+    while counts.status == RUNNING and clock.t < t_stop:
+        counts.jac_current = 0
+        t_new, n_iter = _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol,
+                                 args)
+        if not np.isnan(t_new):
+            _accept(t_new, n_iter, clock, counts, d, vec.d, vec.scale, work.rescale)
+        if counts.status != RUNNING:
             break
-        t = clock.t[0]
-        while counts.out[0] < t_out.shape[0] and t_out[counts.out[0]] <= t:
-            at = counts.out[0]
-            _dense(d, t, clock.h[0], counts.order[0], t_out[at], out[at])
-            counts.out[0] += 1
+        t = clock.t
+        while counts.out < t_out.shape[0] and t_out[counts.out] <= t:
+            at = counts.out
+            _dense(d, t, clock.h, counts.order, t_out[at], out[at])
+            counts.out += 1
         if t >= t_bound:
-            counts.status[0] = FINISHED
+            counts.status = FINISHED

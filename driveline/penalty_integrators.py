@@ -86,21 +86,21 @@ def run_compiled(model, t0, y0, t, atol, states, marks: Marks):
     end, args = float(t.max()), model.kernel_args
     out = np.full((len(later), len(y0)), np.nan)
     run = kernels.start(t0, y0, end, atol, RTOL, args)
-    counts, clock = run.counts, run.clock
+    counts, clock = run.counts, run.clock  # arrays of one record each
     stops = np.append(np.arange(t0 + marks.every, end, marks.every), end)
     for stop in stops:
         kernels.advance(run, stop, end, atol, RTOL, args, t[later], out)
-        if counts.status[0] != kernels.RUNNING:
+        if counts["status"][0] != kernels.RUNNING:
             break
-        marks.reached(clock.t[0])
-    marks.reached(clock.t[0])
+        marks.reached(clock["t"][0])
+    marks.reached(clock["t"][0])
     states[later] = out
-    ok = counts.status[0] == kernels.FINISHED and np.all(np.isfinite(out))
-    message = kernels.MESSAGES.get(int(counts.status[0]), "failed")
+    ok = counts["status"][0] == kernels.FINISHED and np.all(np.isfinite(out))
+    message = kernels.MESSAGES.get(int(counts["status"][0]), "failed")
     if not ok and message == "finished":
         message = "the state is not finite"
-    totals = (counts.steps[0], counts.jev[0], counts.nlu[0], counts.fev[0])
-    return (0 if ok else -1), (f"{message} at t = {clock.t[0]:.6g} s" if not ok
+    totals = (counts["steps"][0], counts["jev"][0], counts["nlu"][0], counts["fev"][0])
+    return (0 if ok else -1), (f"{message} at t = {clock['t'][0]:.6g} s" if not ok
                                else message), tuple(int(c) for c in totals)
 
 

@@ -14,10 +14,12 @@ This module is their public face; the kernels live by concern:
   :func:`advance`): the whole integration runs compiled, the kernels called with no
   Python in between.
 
-**Named state.** Every array the kernels share is a field of a named tuple (numba
-compiles their field access to the same loads as a positional index): the frames and
-contact kinematics (:class:`~.penalty_contact.ContactState`), the Jacobian's scratch,
-the factors, and a run's clock, counters and work arrays (:class:`~.penalty_bdf.Run`).
+**Named state.** Every array the kernels share is a field of a named tuple: the frames
+and contact kinematics (:class:`~.penalty_contact.ContactState`), the Jacobian's
+scratch, the factors, a run's work arrays (:class:`~.penalty_bdf.Run`); a run's clock
+and counters are the named fields of one record each (:data:`~.penalty_bdf.CLOCK`,
+:data:`~.penalty_bdf.COUNTS`). Each array a kernel is handed costs a reference count
+each way, so the hot kernels take the arrays they use, not whole tuples.
 
 **Inlined calls.** A compiled call takes and drops a reference to every array it is
 handed, one atomic count each way, and the integrator hands its state down as tuples
