@@ -51,6 +51,7 @@ from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.images import format_list, save
 from cardan_forces.experiments.study import solve_over_time, value_ranges
+from cardan_forces.formulations import where
 
 INSTANTS = 41
 """Instants by default (each costs a few warm LPs per bearing whose radial load is free)."""
@@ -62,9 +63,9 @@ DIRECTIONS = 64
 """Directions of the radial plane along which the greatest radial load is sought: the
 answer is within ``1 / cos(pi / 64) - 1 = 0.12 %`` above the true one."""
 
-SELECTIONS = ("positive", "compliance", "compliance_hertz")
-"""The members of the rigid set whose lives are reported, each by the study layer's
-default backend."""
+SELECTIONS = where(design=True)
+"""The members of the rigid set whose lives are reported (the formulation records'
+``design``), each by the study layer's default backend."""
 
 NOT_RUN = {
     "penalty": "not run: its average needs a simulation of seconds of the released line "
@@ -284,7 +285,7 @@ def _release(motion) -> dict:
 
 # ---------------------------------------------------------------------------- output
 
-MARKS = {"positive": "o", "compliance": "s", "compliance_hertz": "^"}
+MARKS = dict(zip(SELECTIONS, "os^Dv<>"))
 """Each selection's marker on the figure."""
 
 

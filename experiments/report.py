@@ -38,6 +38,7 @@ from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import format_list, save
 from cardan_forces.experiments.study import interval_history, solve_over_time
+from cardan_forces.formulations import SELECTION
 from cardan_forces.formulations.convex import NotApplicable
 
 from cardan_forces.commands import UsageError
@@ -61,10 +62,6 @@ def default_instants(scene) -> int:
     span = float(grid[-1] - grid[0])
     wanted = math.ceil(PER_PERIOD * span * omega / math.pi) + 1
     return int(min(len(grid), max(INSTANTS, wanted)))
-
-
-SELECTION = "positive"
-"""The formulation drawn as lines, by the study layer's default backend."""
 
 
 def histories(op: Operator, progress=None) -> dict[str, np.ndarray]:

@@ -52,15 +52,16 @@ from cardan_forces.experiments.life import loads as bearing_loads
 from cardan_forces.experiments.life import rated
 from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.experiments.sweep_exec import connect
-from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations.convex import contact_laws
 from cardan_forces.formulations.problems import QP, Conic
 from threadpoolctl import threadpool_limits
 
 from cardan_forces.commands import UsageError
 
-RUN = ("compliance", "compliance_hertz")
-"""The formulations each sample solves."""
+RUN = where(compliant=True)
+"""The formulations each sample solves: those whose contacts have a stiffness (the
+records' ``compliant``), on which a misfit does work."""
 
 INSTANTS = 11
 """Instants per sample by default."""

@@ -52,7 +52,10 @@ class Formulation:
     figures by default; ``beside_penalty``: compared with the penalty simulation on the
     released line; ``job_cost``: relative CPU cost of a run over the whole time grid by
     its default backend (the paper figures' worker queue starts the dearest first);
-    ``exported``: in the default export set (a QP that qpbenchmark takes).
+    ``exported``: in the default export set (a QP that qpbenchmark takes);
+    ``compliant``: its contacts have a stiffness (a compliance law), so a seat misfit
+    enters as work on them (``cardan tolerances``); ``design``: a physical selection
+    whose loads the design answers report (``cardan life``).
     """
 
     name: str
@@ -67,6 +70,8 @@ class Formulation:
     beside_penalty: bool = False
     job_cost: float = 1.0
     exported: bool = False
+    compliant: bool = False
+    design: bool = False
 
     def __call__(self, op, i: int):
         """The problem at instant ``i`` of ``op``."""
@@ -98,7 +103,8 @@ REGISTRY: tuple[Formulation, ...] = (
                 physical=False, backends=("numpy-kkt",), least_norm_batch=True),
     Formulation("positive", positive, (QP,), "positive (least norm, end faces push)",
                 physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
-                target_rate=1e5, drawn=True, beside_penalty=True, exported=True),
+                target_rate=1e5, drawn=True, beside_penalty=True, exported=True,
+                design=True),
     Formulation("min_max", min_max, (Conic,),
                 "min_max (comparison only: both end faces of a pair may push)",
                 physical=False, backends=("clarabel",), drawn=True, job_cost=2.0),
@@ -113,9 +119,10 @@ REGISTRY: tuple[Formulation, ...] = (
     Formulation("compliance", compliance, (QP, Conic), "compliance (linear contact stiffness)",
                 physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
                 target_rate=1e5, drawn=True, beside_penalty=True, job_cost=0.5,
-                exported=True),
+                exported=True, compliant=True, design=True),
     Formulation("compliance_hertz", _hertz, (Conic,), "compliance_hertz (Hertz contact law)",
-                physical=True, backends=("clarabel",), beside_penalty=True, job_cost=2.7),
+                physical=True, backends=("clarabel",), beside_penalty=True, job_cost=2.7,
+                compliant=True, design=True),
 )
 
 FORMULATIONS: dict[str, Formulation] = {f.name: f for f in REGISTRY}

@@ -16,7 +16,7 @@ from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.penalty import PenaltyResult, simulate_penalty
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.study import History, solve_over_time
-from cardan_forces.formulations import where
+from cardan_forces.formulations import BASELINE, where
 from cardan_forces.solvers import Status
 
 METHODS = where(drawn=True)
@@ -32,7 +32,7 @@ def history(op: Operator, method: str, solver: str | None = None,
     from its own initial-value procedure (eqs. 63-74) where that fails.
     """
     say = None if progress is None else (lambda m: progress(f"repro: {m}"))
-    paper = method == "paper"  # the others need no restart: their checks come at once
+    paper = method == BASELINE  # the others need no restart: their checks come at once
     return solve_over_time(op, method, solver, warm=paper, restart=paper, progress=say)
 
 

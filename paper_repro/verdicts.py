@@ -19,7 +19,7 @@ from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.kinematics import kinematics
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.environment import number_text
-from cardan_forces.formulations import SELECTION
+from cardan_forces.formulations import BASELINE, SELECTION
 from scipy.stats import binomtest
 
 from . import figures
@@ -102,7 +102,7 @@ def _fig13_notes(op: Operator, hist: dict[str, History]) -> list[str]:
         lines.append(f"- |{label}|: peak {peak:.1f} N over the rigid methods; largest "
                      f"difference from `{ref}`: {spread:.1f} N")
     lines += _both_faces_note(op, hist)
-    if PENALTY in mags and "paper" in mags:
+    if PENALTY in mags and BASELINE in mags:
         return lines + _frequency_note(op, mags) + _larger_note(op, mags)
     return lines + ["- the paper's text on Fig. 13 (penalty vs the paper's method): not "
                     "judged, the run draws only " + ", ".join(f"`{m}`" for m in mags)]
@@ -137,8 +137,8 @@ def _frequency_note(op: Operator, mags) -> list[str]:
     """The paper: the ADAMS forces vary at a higher frequency than its method's."""
     def rough(ok):
         r = {m: np.nanmedian([np.nanmean(np.abs(np.diff(values[ok], 2)))
-                              for values in mags[m].values()]) for m in ("paper", "penalty")}
-        return r["penalty"] / r["paper"]
+                              for values in mags[m].values()]) for m in (BASELINE, "penalty")}
+        return r["penalty"] / r[BASELINE]
 
     verdict, values = _verdict(rough, _settled(op.t), lambda r: r >= 2.0, lambda r: r <= 0.5)
     return [f"- paper's text: the ADAMS forces vary at a higher frequency. Mean |second "
@@ -154,7 +154,7 @@ def _larger_note(op: Operator, mags) -> list[str]:
     ok = _settled(op.t)
     block = max(1, int(round(SMOOTH_S / np.median(np.diff(op.t))))) if len(op.t) > 1 else 1
     smooth = {k: moving_average(v, op.t)[ok] for k, v in mags["penalty"].items()}
-    share, n, p, rel = _sign_test([mags["paper"][k][ok] - smooth[k] for k in smooth],
+    share, n, p, rel = _sign_test([mags[BASELINE][k][ok] - smooth[k] for k in smooth],
                                   list(smooth.values()), block)
     if n and p < SIGNIFICANCE and share > 0.5:
         verdict = "agrees" if rel <= 0.25 else "disagrees (larger, but not slightly)"
@@ -187,7 +187,7 @@ def _bearing_notes(op: Operator, hist: dict[str, History], bounds, number: int
                             for m in rigid]) if rigid else np.nan
         lines.append(f"- {q}: the rigid set is unbounded at {100 * unbounded:.0f} % of the "
                      f"instants checked; the rigid methods differ by up to {spread:.1f} N")
-    if PENALTY not in loads or "paper" not in loads:
+    if PENALTY not in loads or BASELINE not in loads:
         return lines + [f"- the paper's text on Fig. {number} (penalty vs the paper's "
                         "method): not judged, the run draws only "
                         + ", ".join(f"`{m}`" for m in loads)], {}
@@ -203,12 +203,12 @@ def _penalty_bearing_notes(op: Operator, loads, number: int
     avg = {q: moving_average(loads["penalty"][q], op.t) for q in loads["penalty"]}
 
     def radial(ok):  # the larger |log10| of the penalty / paper ratio of median loads
-        return max(abs(np.log10(np.nanmedian(avg[q][ok]) / np.nanmedian(loads["paper"][q][ok])))
+        return max(abs(np.log10(np.nanmedian(avg[q][ok]) / np.nanmedian(loads[BASELINE][q][ok])))
                    for q in avg if q.endswith("_radial"))
 
     def axial(ok):  # median |difference| over the median paper-method axial load (>= 1 N)
-        return (np.nanmedian(np.abs(avg["axial"][ok] - loads["paper"]["axial"][ok]))
-                / max(np.nanmedian(np.abs(loads["paper"]["axial"][ok])), 1.0))
+        return (np.nanmedian(np.abs(avg["axial"][ok] - loads[BASELINE]["axial"][ok]))
+                / max(np.nanmedian(np.abs(loads[BASELINE]["axial"][ok])), 1.0))
 
     ok = _settled(op.t)
     lines = [f"- penalty ({SMOOTH_S:g} s average) against the paper method after "
