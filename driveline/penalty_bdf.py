@@ -331,11 +331,10 @@ def _newton(t_new, c, jac, factors, vec, clock, counts, contacts, args, again):
 
 
 @kernel(inline="always")
-def _predict(d, order, alpha, gamma, atol, rtol, vec):
-    """The prediction ``y_predict`` of the next step, its error scale and ``psi`` (the
-    differences' share of the BDF equation) into ``vec`` (:class:`Vectors`).
+def _predict(d, order, alpha, gamma, atol, rtol, y_predict, scale, psi):
+    """The prediction ``y_predict`` of the next step, its error ``scale`` and ``psi``
+    (the differences' share of the BDF equation), into those (:class:`Vectors`' rows).
     """
-    y_predict, scale, psi = vec.predict, vec.scale, vec.psi
     for i in range(d.shape[1]):
         y_predict[i], psi[i] = d[0, i], 0.0
         for j in range(1, order + 1):
@@ -370,7 +369,7 @@ def _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
             _change_d(d, order, (t_new - t) / h_abs, rescale)
             counts.equal = 0
         h_abs = t_new - t
-        _predict(d, order, alpha, gamma, atol, rtol, vec)
+        _predict(d, order, alpha, gamma, atol, rtol, vec.predict, vec.scale, vec.psi)
         c, again = h_abs / alpha[order], False
         while True:
             if counts.has_lu == 0 or abs(c / clock.c - 1.0) > LU_KEEP:

@@ -374,9 +374,17 @@ def rhs(t, y, n_shafts, bodies, topology, geometry, laws, loads):
 @kernel(inline="always")
 def _rhs_into(t, y, args, state, dy):
     """:func:`rhs` into ``dy``, with ``args`` its model arguments (as one tuple, in
-    :func:`rhs`'s order) and ``state`` a :class:`ContactState` to fill.
+    :func:`rhs`'s order) and ``state`` a :class:`ContactState` to fill: the steps of
+    :func:`_contacts_into` with its fields taken once here (each level a tuple is
+    handed down costs a reference count per array, and this runs at every Newton
+    iteration).
     """
     n_shafts, bodies, topology, geometry, laws, loads = args
-    _contacts_into(y, bodies, topology, geometry, laws, loads[11], state)
-    _bodies(t, y, state.frames.rot, state.force, state.moment, n_shafts, bodies, loads, dy,
-            state.local.spare, state.local.spare_b)
+    force, moment, frames, local = state.force, state.moment, state.frames, state.local
+    force[:] = 0.0
+    moment[:] = 0.0
+    _frames(y, bodies[:, 4:], frames)
+    _contacts(frames, topology, geometry, laws, loads[11], state.depth, state.push,
+              state.on_a, force, moment, local)
+    _bodies(t, y, frames.rot, force, moment, n_shafts, bodies, loads, dy, local.spare,
+            local.spare_b)
