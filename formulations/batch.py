@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import FORMULATIONS
-from .problems import LS, QP, Conic, ForceChecks, residuals_batch
+from .problems import LCP, LS, QP, Conic, ForceChecks, residuals_batch
 
 
 @dataclass(frozen=True)
@@ -113,30 +113,30 @@ def build_problems(op, formulation: str, instants=None) -> list:
 
 
 def least_norm_batch(op, formulation: str, instants=None) -> LeastNormBatch:
-    """The least-norm family as one stacked problem (``ValueError`` for the others)."""
+    """The least-norm family as one stacked problem (``ValueError`` for the others):
+    weights from the formulation record's ``batch_weights`` (unit without), end faces
+    signed unless its problems are least squares (which let them pull).
+    """
     instants = _instants(op, instants)
-    first = FORMULATIONS[formulation](op, int(instants[0]))
-    if not FORMULATIONS[formulation].least_norm_batch or not _diagonal_qp(formulation, first):
+    record = FORMULATIONS[formulation]
+    first = record(op, int(instants[0]))
+    if not record.least_norm_batch or not _diagonal(first):
         raise ValueError(f"{formulation!r} is not a diagonal least norm on this scene")
     A, b = op.A[instants], op.b[instants]
-    if formulation == "min_norm_scaled":  # reference length 1 m: moment rows unchanged
-        weights = np.einsum("tij,tij->tj", A, A)
-    elif formulation == "compliance":
-        weights = np.broadcast_to(np.diag(first.P), (len(A), first.n))
-    else:
-        weights = None
+    weights = record.batch_weights(A, first) if record.batch_weights else None
     c = first.checks
-    signed = (np.asarray(op.unilateral, bool) if formulation != "min_norm_scaled"
-              and formulation != "min_norm" else np.zeros(len(op.names), bool))
+    signed = (np.zeros(len(op.names), bool) if isinstance(first, LS)
+              else np.asarray(op.unilateral, bool))
     checks = CheckBatch(A=A, b=b, names=c.names, unilateral=np.asarray(c.unilateral, bool),
                         pairs=c.pairs, cones=c.cones)
     return LeastNormBatch(formulation, instants, A, b, weights, signed, checks)
 
 
-def _diagonal_qp(formulation: str, problem) -> bool:
-    if formulation != "compliance":
-        return True
-    return isinstance(problem, QP) and not np.any(problem.P - np.diag(np.diag(problem.P)))
+def _diagonal(problem) -> bool:
+    """A least squares, an LCP or a QP with a diagonal ``P`` (not a conic form)."""
+    if isinstance(problem, QP):
+        return not np.any(problem.P - np.diag(np.diag(problem.P)))
+    return isinstance(problem, (LS, LCP))
 
 
 def as_conic(problem):

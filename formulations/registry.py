@@ -12,6 +12,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from .convex import (
     compliance,
     friction,
@@ -53,6 +55,8 @@ class Formulation:
     released line; ``job_cost``: relative CPU cost of a run over the whole time grid by
     its default backend (the paper figures' worker queue starts the dearest first);
     ``exported``: in the default export set (a QP that qpbenchmark takes);
+    ``batch_weights(A, first)``: the least-norm batch's weights from the stacked
+    ``A`` (T, m, n) and the first instant's problem (``None``: unit weights);
     ``compliant``: its contacts have a stiffness (a compliance law), so a seat misfit
     enters as work on them (``cardan tolerances``); ``design``: a physical selection
     whose loads the design answers report (``cardan life``).
@@ -70,6 +74,7 @@ class Formulation:
     beside_penalty: bool = False
     job_cost: float = 1.0
     exported: bool = False
+    batch_weights: Callable[..., np.ndarray] | None = None
     compliant: bool = False
     design: bool = False
 
@@ -81,6 +86,18 @@ class Formulation:
     def exportable(self) -> bool:
         """Its problems are QPs or conic problems (a solver-independent file form)."""
         return all(issubclass(cls, (LS, QP, Conic)) for cls in self.problem)
+
+
+def _column_norms(A: np.ndarray, first) -> np.ndarray:
+    """``min_norm_scaled``'s weights at each instant: the squared norms of ``A``'s
+    columns (reference length 1 m: the moment rows as they are).
+    """
+    return np.einsum("tij,tij->tj", A, A)
+
+
+def _stiffness_weights(A: np.ndarray, first) -> np.ndarray:
+    """``compliance``'s weights: its ``P``'s diagonal (the same at every instant)."""
+    return np.broadcast_to(np.diag(first.P), (len(A), first.n))
 
 
 def _hertz(op, i: int):
@@ -100,7 +117,8 @@ REGISTRY: tuple[Formulation, ...] = (
                 target_rate=1e5, beside_penalty=True, job_cost=0.6, exported=True),
     Formulation("min_norm_scaled", min_norm_scaled, (LS,),
                 "min_norm_scaled (least norm, moments per reference length)",
-                physical=False, backends=("numpy-kkt",), least_norm_batch=True),
+                physical=False, backends=("numpy-kkt",), least_norm_batch=True,
+                batch_weights=_column_norms),
     Formulation("positive", positive, (QP,), "positive (least norm, end faces push)",
                 physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
                 target_rate=1e5, drawn=True, beside_penalty=True, exported=True,
@@ -119,7 +137,8 @@ REGISTRY: tuple[Formulation, ...] = (
     Formulation("compliance", compliance, (QP, Conic), "compliance (linear contact stiffness)",
                 physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
                 target_rate=1e5, drawn=True, beside_penalty=True, job_cost=0.5,
-                exported=True, compliant=True, design=True),
+                exported=True, batch_weights=_stiffness_weights, compliant=True,
+                design=True),
     Formulation("compliance_hertz", _hertz, (Conic,), "compliance_hertz (Hertz contact law)",
                 physical=True, backends=("clarabel",), beside_penalty=True, job_cost=2.7,
                 compliant=True, design=True),
