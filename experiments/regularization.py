@@ -33,6 +33,7 @@ import numpy as np
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
+from cardan_forces.formulations import SELECTION, where
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.solvers import newton_
 from cardan_forces.solvers.batch import finalize_batch
@@ -42,7 +43,11 @@ from . import files
 from .images import save
 
 SCENES = ("paper", "propshaft")
-SOFTENED = ("positive", "compliance")
+SOFTENED = where(design=True, least_norm_batch=True)
+"""The formulations softened: the design answers' selections the newton family
+batches (``positive``, ``compliance``)."""
+MEMBER = where(compliant=True, least_norm_batch=True)[0]
+"""The compliance member of the rigid set the softened answers are measured against."""
 LADDER = (1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 0.0)
 """Softenings ``R`` of the study (0: the rigid answer)."""
 INSTANTS = 101
@@ -63,7 +68,7 @@ def operator(name: str, instants: int = INSTANTS):
 
 def measure(op, ladder=LADDER, softened=SOFTENED) -> list[dict]:
     """One row per formulation and softening on the operator's instants (module doc)."""
-    member = solve_batch(fbatch.least_norm_batch(op, "compliance"), "numpy-batched").x
+    member = solve_batch(fbatch.least_norm_batch(op, MEMBER), "numpy-batched").x
     rows = []
     for formulation in softened:
         batch = fbatch.least_norm_batch(op, formulation)
@@ -108,9 +113,9 @@ def mujoco_row(op) -> dict | None:
     keep = op.t >= settle_s({"default": found})
     if not keep.any() or tuple(found.names) != tuple(op.names):
         return None
-    residuals = fbatch.least_norm_batch(op, "positive").checks.residuals(found.forces)
+    residuals = fbatch.least_norm_batch(op, SELECTION).checks.residuals(found.forces)
     primal = np.max(list(residuals.values()), axis=0)[keep]
-    member = solve_batch(fbatch.least_norm_batch(op, "compliance"), "numpy-batched").x[keep]
+    member = solve_batch(fbatch.least_norm_batch(op, MEMBER), "numpy-batched").x[keep]
     return _measures(op.scene.name, "MuJoCo (default softness)", float("nan"),
                      found.forces[keep], primal, member, found.wall_s / len(op.t),
                      float("nan"), float("nan"))

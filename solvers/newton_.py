@@ -56,6 +56,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LCP, Conic, LastMade
 
@@ -149,11 +150,12 @@ def _scalars(signed) -> Groups:
 
 
 def supports(problem) -> bool:
-    """Whether the family solves ``problem``: the ``lcp`` (through ``positive``, from its
-    force checks) or a conic problem of contact energies (:func:`parse`).
+    """Whether the family solves ``problem``: the package's LCP (``positive`` as a
+    complementarity problem, solved through ``positive`` from its force checks) or a
+    conic problem of contact energies (:func:`parse`).
     """
     if isinstance(problem, LCP):
-        return (problem.formulation == "lcp"
+        return (problem.formulation in FORMULATIONS
                 and problem.n == int(np.sum(problem.checks.unilateral)))
     return _layout_of(problem) is not None
 
