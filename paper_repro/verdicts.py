@@ -185,8 +185,10 @@ def _bearing_notes(op: Operator, hist: dict[str, History], bounds, number: int
         unbounded = np.mean(np.isinf(hi[ok]) | np.isinf(lo[ok])) if ok.any() else np.nan
         spread = np.nanmax([np.nanmax(np.abs(loads[m][q] - loads[rigid[0]][q]))
                             for m in rigid]) if rigid else np.nan
-        lines.append(f"- {q}: the rigid set is unbounded at {100 * unbounded:.0f} % of the "
-                     f"instants checked; the rigid methods differ by up to {spread:.1f} N")
+        lines.append(f"- {q}: the rigid set is unbounded at "
+                     f"{number_text(100 * unbounded, '.0f', 'none')} % of the instants "
+                     f"checked; the rigid methods differ by up to "
+                     f"{number_text(spread, '.1f')} N")
     if PENALTY not in loads or BASELINE not in loads:
         return lines + [f"- the paper's text on Fig. {number} (penalty vs the paper's "
                         "method): not judged, the run draws only "
@@ -203,14 +205,19 @@ def _penalty_bearing_notes(op: Operator, loads, number: int
     avg = {q: moving_average(loads["penalty"][q], op.t) for q in loads["penalty"]}
 
     def radial(ok):  # the larger |log10| of the penalty / paper ratio of median loads
-        return max(abs(np.log10(np.nanmedian(avg[q][ok]) / np.nanmedian(loads[BASELINE][q][ok])))
+        return max(abs(np.log10(np.median(avg[q][ok]) / np.median(loads[BASELINE][q][ok])))
                    for q in avg if q.endswith("_radial"))
 
     def axial(ok):  # median |difference| over the median paper-method axial load (>= 1 N)
-        return (np.nanmedian(np.abs(avg["axial"][ok] - loads[BASELINE]["axial"][ok]))
-                / max(np.nanmedian(np.abs(loads[BASELINE]["axial"][ok])), 1.0))
+        return (np.median(np.abs(avg["axial"][ok] - loads[BASELINE]["axial"][ok]))
+                / max(np.median(np.abs(loads[BASELINE]["axial"][ok])), 1.0))
 
-    ok = _settled(op.t)
+    # settled instants where the average is defined (its window fits) and both are known
+    known = [np.isfinite(v) for source in (avg, loads[BASELINE]) for v in source.values()]
+    ok = _settled(op.t) & np.logical_and.reduce(known)
+    if not ok.any():
+        return [f"- penalty against the paper method: no settled instant where the "
+                f"{SMOOTH_S:g} s average is defined (the run is too short)"], {}
     lines = [f"- penalty ({SMOOTH_S:g} s average) against the paper method after "
              f"{SETTLED_S:g} s: |log10| of the larger ratio of median radial loads "
              f"{radial(ok):.3f}; median |axial difference| / median paper-method axial load "
