@@ -98,7 +98,7 @@ pins slide on eq. 75's ``f = 0`` while pressed, the clamp's kink makes steps fai
 ``propshaft`` (8 bodies, 104 states) takes about twice the steps: the
 end faces of its cross-pins carry the axial load of the slip joint's segments, pressed
 by ~0.5 um, and eq. 75's ``f >= 0`` switches them on and off while still pressed
-(100 times in 20 ms), whenever the damping term outweighs the spring's ~16 N. Its
+(100 times in 0.02 s of simulated time), whenever the damping term outweighs the spring's ~16 N. Its
 Jacobian is exact (tested as ``paper``'s); the spline's contacts do not switch.
 
 **Where.** This module holds the physics above, the contacts' builder and the run;
@@ -298,7 +298,7 @@ def simulate_penalty(
     Starts from the rigid model's state at the start: shafts at rest positions, turned
     and spinning as :func:`~cardan_forces.driveline.dynamics.simulate` says, cross-pins centred in
     their clearances. ``method``: one of :data:`METHODS`. ``atol_m`` is the absolute
-    tolerance on positions (m; velocities get ``atol_m / 1 ms``): 1e-7 and 1e-8 give the
+    tolerance on positions (m; velocities get ``atol_m / 0.001 s``): 1e-7 and 1e-8 give the
     same statistics of forces and speeds on ``paper-penalty``. ``damping_length_unit_m``:
     the unit of "c_max = 1 % of K" (module docstring). ``progress(t)`` is called every
     ``progress_every_s`` of simulated time. ``kernel``: ``numba`` (compiled, see

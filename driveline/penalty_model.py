@@ -371,7 +371,7 @@ class Model:
 
     def tolerances(self, atol_m: float) -> tuple[np.ndarray, np.ndarray]:
         """Absolute tolerances and the Jacobian's complex steps per state component:
-        ``atol_m`` on displacements and quaternions, ``atol_m / 1 ms`` on speeds.
+        ``atol_m`` on displacements and quaternions, ``atol_m / 0.001 s`` on speeds.
         """
         nb = self.n_bodies
         atol = np.concatenate([np.full(7 * nb, atol_m), np.full(6 * nb, atol_m / _TAU_S)])

@@ -14,7 +14,7 @@ At sampled instants, for the engine's forces ``x_e`` under each softness setting
   nothing to do with the machine.
 
 The softness settings (:data:`SETTINGS`) vary MuJoCo's ``solref`` time constant over
-0.5-8 ms, its damping ratio 0.3-1, ``solimp``'s impedance (0.9, 0.95) to (0.99, 0.999)
+0.0005-0.008 s, its damping ratio 0.3-1, ``solimp``'s impedance (0.9, 0.95) to (0.99, 0.999)
 and width 1 mm to 1 um, all bearings alike; the relative softness of the input
 and output shafts' bearings (one shaft's time constant 4 times the other's); and the
 integration step (MuJoCo's coarsest, half the time constant, against 1/8). Instants
@@ -46,8 +46,8 @@ import cardan_forces as cf
 
 SETTINGS = (
     Softness(label="default"),
-    Softness(timeconst_s=0.0005, label="timeconst 0.5 ms"),
-    Softness(timeconst_s=0.008, label="timeconst 8 ms"),
+    Softness(timeconst_s=0.0005, label="timeconst 0.0005 s"),
+    Softness(timeconst_s=0.008, label="timeconst 0.008 s"),
     Softness(dampratio=0.3, label="dampratio 0.3"),
     Softness(dmin=0.99, dmax=0.999, label="solimp 0.99/0.999"),
     Softness(width_m=1e-6, label="solimp width 1 um"),

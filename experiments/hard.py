@@ -185,7 +185,7 @@ CASES = (
                 initial_speed_rad_s=1.0)),
     Case("gravity-horizontal", "gravity +9.8 m/s^2 along +y, normal to the articulation plane",
          _fixed(gravity_m_s2=(0.0, 9.8, 0.0))),
-    Case("speed-1000", "initial speed 1000 rad/s (instants over 2 ms: 0.2 rad apart)",
+    Case("speed-1000", "initial speed 1000 rad/s (instants over 0.002 s: 0.2 rad apart)",
          _fixed(initial_speed_rad_s=1000.0), stop_s=0.002),
 )
 

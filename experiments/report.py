@@ -103,7 +103,7 @@ def write_csv(op: Operator, h: dict[str, np.ndarray], path: Path,
 class EngineOverlay:
     """MuJoCo's forces at the report's instants under its default softness, from a
     forward simulation of the scene's window, and how they sit in the rigid set. Each
-    is read at the engine step nearest its instant (at most half a step away, 0.125 ms
+    is read at the engine step nearest its instant (at most half a step away, 1.25e-4 s
     on ``paper``: an instant off the scene's grid adds ~1e-5 of the load to the
     determinate error).
 

@@ -35,8 +35,8 @@ from .rigid_set import bearing_quantities, set_bounds
 from .runs import _Runs
 
 ENGINE_S = 0.5
-"""MuJoCo's window (s from the start): its settling (80 ms at the softest setting drawn)
-and some 100 ms of each load's swing, short enough for every setting to stay a small
+"""MuJoCo's window (s from the start): its settling (0.08 s at the softest setting drawn)
+and some 0.1 s of each load's swing, short enough for every setting to stay a small
 part of the run."""
 ENGINE_INSTANTS = 3
 """Instants of MuJoCo's window, after its settling, set against every component's

@@ -74,8 +74,8 @@ def _report(scene: Scene, motion: Motion, sections, quick: bool, fig15: list[str
            if ENGINE in methods else ""),
         f"- **timings** (measured by this run): total wall {seconds:.1f} s (target <= 120 s "
         "for all figures with the penalty simulation); motion "
-        + ", ".join(f"{1e3 * s:.0f} ms" for _, _, s, _ in runs.motions)
-        + " (target <= 50 ms for 1001 instants); penalty simulation "
+        + ", ".join(f"{s:.3f} s" for _, _, s, _ in runs.motions)
+        + " (target <= 0.05 s for 1001 instants); penalty simulation "
         + (", ".join(penalty_s)
            + f" s per simulated second (target <= {PENALTY_TARGET_S:g})" if penalty_s
            else "not run")
