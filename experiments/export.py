@@ -45,7 +45,7 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LS, QP, Conic
 from cardan_forces.solvers.conversions import convert
 
-from cardan_forces.commands import UsageError
+from cardan_forces.commands import UsageError, whole_number
 
 from . import files
 
@@ -217,16 +217,6 @@ def run(args) -> int:
     return 0
 
 
-def _count(text: str) -> int:
-    """A whole number in [1, the most instants a scene's grid may have] (argparse type;
-    the scene's own grid is checked in :func:`collect`).
-    """
-    if not text.isdigit() or not 1 <= int(text) <= MAX_INSTANTS:
-        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to {MAX_INSTANTS}, "
-                                         f"got {text!r}")
-    return int(text)
-
-
 def _module(text: str) -> str:
     """A Python module name (argparse type): qpbenchmark imports the test set by it."""
     if not text.isidentifier():
@@ -244,7 +234,7 @@ def add_parser(subparsers) -> None:
                    help="one formulation (repeatable) among "
                         f"{', '.join(EXPORTABLE)}; default {', '.join(QP_FORMULATIONS)} "
                         "(QPs only: no conic file)")
-    p.add_argument("--instants", type=_count, default=INSTANTS,
+    p.add_argument("--instants", type=whole_number(1, MAX_INSTANTS), default=INSTANTS,
                    help=f"evenly spaced instants per scene (default {INSTANTS})")
     p.add_argument("--out", default="results/export", help="output folder (default %(default)s)")
     p.add_argument("--name", dest="module", type=_module, default="cardan_qp",

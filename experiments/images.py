@@ -59,6 +59,26 @@ def save(fig, stem: Path, formats=("png",)) -> list[Path]:
     return paths
 
 
+def write_study(out: Path, stem: str, write_csv, text: str, figure, formats=("png",)
+                ) -> list[Path]:
+    """A study's outputs into ``out``: ``stem.csv`` (``write_csv(path)``), ``stem.md``
+    (``text``) and the figure ``figure()`` draws in each of ``formats``, each file
+    whole; their paths.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, whatever display there is
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(out / f"{stem}.csv")
+    files.write_text(out / f"{stem}.md", text)
+    fig = figure()
+    images = save(fig, out / stem, formats)
+    plt.close(fig)
+    return [out / f"{stem}.csv", out / f"{stem}.md", *images]
+
+
 def problems(fig) -> list[str]:
     """What in the drawn ``fig`` breaks the print rules (module doc), one line each;
     empty when it keeps them all.

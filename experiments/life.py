@@ -32,7 +32,6 @@ selection's mark); ``--json`` prints the whole answer as strict JSON instead.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 from pathlib import Path
@@ -49,9 +48,11 @@ from cardan_forces.driveline.scene import SceneError
 from cardan_forces.experiments import files
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import json_text, number_text
-from cardan_forces.experiments.images import format_list, save
+from cardan_forces.experiments.images import format_list, write_study
 from cardan_forces.experiments.study import solve_over_time, value_ranges
 from cardan_forces.formulations import where
+
+from cardan_forces.commands import whole_number
 
 INSTANTS = 41
 """Instants by default (each costs a few warm LPs per bearing whose radial load is free)."""
@@ -388,30 +389,8 @@ def figure(answer: dict):
 
 def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
     """``life.csv``, ``life.md`` and ``life.<format>`` into ``out``; their paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out.mkdir(parents=True, exist_ok=True)
-    write_csv(answer, out / "life.csv")
-    files.write_text(out / "life.md", markdown(answer))
-    fig = figure(answer)
-    images = save(fig, out / "life", formats)
-    plt.close(fig)
-    return [out / "life.csv", out / "life.md", *images]
-
-
-def _instants(text: str) -> int:
-    """``--instants``: a whole number in [2, :data:`MAX_INSTANTS`]."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 2 <= value <= MAX_INSTANTS:
-        raise argparse.ArgumentTypeError(f"expected a whole number in [2, {MAX_INSTANTS}], "
-                                         f"got {text!r}")
-    return value
+    return write_study(out, "life", lambda path: write_csv(answer, path), markdown(answer),
+                       lambda: figure(answer), formats)
 
 
 def add_parser(subparsers) -> None:
@@ -419,7 +398,7 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("life", help="ISO 281 bearing life of each selection and over "
                               "the rigid solution set (CSV, Markdown, figure; --json)")
     p.add_argument("scene", help="built-in name or TOML path")
-    p.add_argument("--instants", type=_instants, default=INSTANTS,
+    p.add_argument("--instants", type=whole_number(2, MAX_INSTANTS), default=INSTANTS,
                    help=f"instants over the scene's window (default {INSTANTS})")
     p.add_argument("--out", default="results/life", help="output folder (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",),

@@ -41,7 +41,7 @@ from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.formulations import SELECTION
 from cardan_forces.formulations.convex import NotApplicable
 
-from cardan_forces.commands import UsageError
+from cardan_forces.commands import UsageError, whole_number
 
 INSTANTS = 41
 """The fewest instants of the report by default (each costs two LPs per component)."""
@@ -480,7 +480,7 @@ def add_parser(subparsers) -> None:
                               "with the rigid solution set (CSV, PNG, Markdown)")
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     p.add_argument("--out", default="results/report", help="output folder (default %(default)s)")
-    p.add_argument("--instants", type=_count, default=None,
+    p.add_argument("--instants", type=whole_number(2, MAX_INSTANTS), default=None,
                    help=f"instants over the scene's window (default: {PER_PERIOD} per period "
                    "of the intermediate shaft's twice-per-revolution fluctuation at the "
                    f"input's highest speed, at least {INSTANTS}, at most the scene's grid)")
@@ -495,19 +495,6 @@ def add_parser(subparsers) -> None:
                    "(cardan engine varies it). Refused for a scene MuJoCo cannot express "
                    "(e.g. quasi-static)")
     p.set_defaults(func=run)
-
-
-def _count(text: str) -> int:
-    import argparse
-
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 2 <= value <= MAX_INSTANTS:
-        raise argparse.ArgumentTypeError(f"expected a whole number from 2 to {MAX_INSTANTS}, "
-                                         f"got {text!r}")
-    return value
 
 
 def run(args) -> int:

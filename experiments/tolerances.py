@@ -28,7 +28,6 @@ computes only the samples the file lacks, and a sample in it twice is read once.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import dataclasses
 import functools
@@ -47,7 +46,7 @@ from cardan_forces.experiments import files
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments import tolerance_store as store
 from cardan_forces.experiments.environment import json_text, number_text
-from cardan_forces.experiments.images import format_list, save
+from cardan_forces.experiments.images import format_list, write_study
 from cardan_forces.experiments.life import loads as bearing_loads
 from cardan_forces.experiments.life import rated
 from cardan_forces.experiments.study import interval_history, solve_over_time
@@ -57,7 +56,7 @@ from cardan_forces.formulations.convex import contact_laws
 from cardan_forces.formulations.problems import QP, Conic
 from threadpoolctl import threadpool_limits
 
-from cardan_forces.commands import UsageError
+from cardan_forces.commands import UsageError, whole_number
 
 RUN = where(compliant=True)
 """The formulations each sample solves: those whose contacts have a stiffness (the
@@ -483,32 +482,8 @@ def figure(answer: dict):
 
 def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
     """``tolerances.csv``, ``tolerances.md`` and ``tolerances.<format>``; their paths."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out.mkdir(parents=True, exist_ok=True)
-    write_csv(answer, out / "tolerances.csv")
-    files.write_text(out / "tolerances.md", markdown(answer))
-    fig = figure(answer)
-    images = save(fig, out / "tolerances", formats)
-    plt.close(fig)
-    return [out / "tolerances.csv", out / "tolerances.md", *images]
-
-
-def _whole(least: int, most: int):
-    """An argparse type: a whole number in ``[least, most]``."""
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            value = least - 1
-        if not least <= value <= most:
-            raise argparse.ArgumentTypeError(f"expected a whole number in [{least}, {most}], "
-                                             f"got {text!r}")
-        return value
-    return parse
+    return write_study(out, "tolerances", lambda path: write_csv(answer, path), markdown(answer),
+                       lambda: figure(answer), formats)
 
 
 def add_parser(subparsers) -> None:
@@ -516,11 +491,11 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("tolerances", help="Monte Carlo of the loads the scene's "
                               "tolerances put into the line (compliance and Hertz solves)")
     p.add_argument("scene", help="built-in name or TOML path")
-    p.add_argument("--samples", type=_whole(1, MAX_SAMPLES), required=True,
+    p.add_argument("--samples", type=whole_number(1, MAX_SAMPLES), required=True,
                    help=f"samples (at most {MAX_SAMPLES})")
-    p.add_argument("--instants", type=_whole(2, 2001), default=INSTANTS,
+    p.add_argument("--instants", type=whole_number(2, 2001), default=INSTANTS,
                    help=f"instants over the scene's window (default {INSTANTS})")
-    p.add_argument("--seed", type=_whole(0, 2 ** 63 - 1), default=0,
+    p.add_argument("--seed", type=whole_number(0, 2 ** 63 - 1), default=0,
                    help="the study's seed (default 0); sample k draws from (seed, k)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help='run on this Dask scheduler (pip install -e ".[dask]")')

@@ -10,12 +10,30 @@ progress lines on stderr, the check of ``--t`` against a scene's span and JSON o
 
 from __future__ import annotations
 
+import argparse
+
 from cardan_forces.experiments import progress as progress_bars
 from cardan_forces.experiments.environment import json_text
 
 
 class UsageError(ValueError):
     """A command-line request that cannot be carried out (exit code 2)."""
+
+
+def whole_number(least: int, most: int):
+    """An argparse type: a whole number from ``least`` to ``most`` (a size, a count, a
+    seed), refused with one line before any work.
+    """
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = least - 1
+        if not least <= value <= most:
+            raise argparse.ArgumentTypeError(f"expected a whole number from {least} to "
+                                             f"{most}, got {text!r}")
+        return value
+    return parse
 
 
 def progress(message: str) -> None:
