@@ -33,7 +33,23 @@ MESSAGE_CHARS = 300
 
 
 class StoreError(SweepError):
-    """An existing ``sweep.csv`` that cannot be read back (exit code 2)."""
+    """An existing store (``sweep.csv``, a study's samples) that cannot be read back, or
+    of another study (exit code 2).
+    """
+
+
+def complete_lines(path: Path, what: str) -> tuple[str, bool]:
+    """A store's text up to its last complete line, and whether a line was cut short
+    (by a run killed while appending); :class:`StoreError` if it is not text (``what``:
+    the kind of file, for the message).
+    """
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise StoreError(f"{path} is not a {what} (not UTF-8 text); choose another --out "
+                         "or remove it") from None
+    whole = text if text.endswith("\n") else text[: text.rfind("\n") + 1]
+    return whole, whole != text
 
 
 def spell(value, spec: str = ".10g") -> str:
@@ -83,12 +99,7 @@ def read_rows(path: Path) -> list[Row]:
     """
     if not path.exists():
         return []
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError:
-        raise StoreError(f"{path} is not a sweep CSV (not UTF-8 text); choose another --out "
-                         "or remove it") from None
-    whole = text if text.endswith("\n") else text[: text.rfind("\n") + 1]
+    whole, cut = complete_lines(path, "sweep CSV")
     reader = csv.DictReader(io.StringIO(whole))
     try:
         if reader.fieldnames is not None and tuple(reader.fieldnames) != COLUMNS:
@@ -103,7 +114,7 @@ def read_rows(path: Path) -> list[Row]:
             raise
         raise StoreError(f"{path}, line {reader.line_num}: not a sweep row ({err}); choose "
                          "another --out or remove it") from None
-    if whole != text or len(rows) != whole.count("\n") - 1:
+    if cut or len(rows) != whole.count("\n") - 1:
         with files.replacing(path, newline="") as f:
             append(f, rows, header=True)
     return rows

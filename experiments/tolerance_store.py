@@ -16,15 +16,12 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import json_safe
-from cardan_forces.experiments.sweep_point import SweepError
+from cardan_forces.experiments.sweep_store import StoreError, complete_lines
 
 NAME = "samples.jsonl"
 """The store's file name inside ``--out``."""
-
-
-class StoreError(SweepError):
-    """A ``samples.jsonl`` that cannot be read back, or of another study (exit code 2)."""
 
 
 def line(value: dict) -> str:
@@ -38,12 +35,7 @@ def read(path: Path, study: dict) -> dict[int, dict]:
     """
     if not path.exists():
         return {}
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError:
-        raise StoreError(f"{path} is not a sample file (not UTF-8 text); choose another "
-                         "--out or remove it") from None
-    whole = text if text.endswith("\n") else text[: text.rfind("\n") + 1]
+    whole, cut = complete_lines(path, "sample file")
     lines = whole.splitlines()
     try:
         head = json.loads(lines[0]) if lines else None
@@ -59,8 +51,8 @@ def read(path: Path, study: dict) -> dict[int, dict]:
         if not isinstance(sample, dict) or not isinstance(sample.get("index"), int):
             raise StoreError(f"{path}: a line that is not a sample; choose another --out")
         found.setdefault(sample["index"], sample)
-    if whole != text:
-        path.write_text(whole, encoding="utf-8")
+    if cut:  # the file rewritten whole, without the line cut short
+        files.write_text(path, whole)
     return found
 
 
