@@ -43,9 +43,10 @@ try:
         """
         kwargs.setdefault("error_model", "numpy")
         made = numba.njit(*args, **kwargs)
+        options = repr(sorted((k, v) for k, v in kwargs.items() if k != "cache"))
         if args and callable(args[0]):
-            return _rebuilding(made, depends)
-        return lambda function: _rebuilding(made(function), depends)
+            return _rebuilding(made, depends, options)
+        return lambda function: _rebuilding(made(function), depends, options)
 
     class _RebuildingCache(FunctionCache):
         """numba's on-disk cache of one function, where a cache file that cannot be read
@@ -55,19 +56,20 @@ try:
         written anew, with one warning per process.
 
         Its index key holds, besides numba's (signature, CPU, bytecode), the hash of
-        the files the function ``depends`` on (:func:`_files_hash`): a cache written
-        before any of them changed is not found, and the function compiles again.
+        the files the function ``depends`` on (:func:`_files_hash`) and the compile
+        options (the error model among them, which numba's key leaves out): a cache
+        written before any of them changed is not found, and the function compiles
+        again.
         """
 
-        def __init__(self, py_func, depends=()):
+        def __init__(self, py_func, depends=(), options=""):
             super().__init__(py_func)
             self._depends_hash = _files_hash(py_func.__code__.co_filename, tuple(depends))
+            self._options = options
 
         def _index_key(self, sig, codegen):
             key = super()._index_key(sig, codegen)
-            if not self._depends_hash:
-                return key  # numba's own key: caches written before stay valid
-            return (*key[:2], (*key[2], self._depends_hash))
+            return (*key[:2], (*key[2], self._depends_hash, self._options))
 
         def load_overload(self, sig, target_context):
             try:
@@ -93,12 +95,13 @@ _WARNED: list[str] = []
 """The cache files already reported as unreadable in this process (one warning)."""
 
 
-def _rebuilding(dispatcher, depends=()):
+def _rebuilding(dispatcher, depends=(), options=""):
     """``dispatcher`` with its disk cache (if it has one) replaced by a
-    :class:`_RebuildingCache` of the same function, keyed also by ``depends``.
+    :class:`_RebuildingCache` of the same function, keyed also by ``depends`` and the
+    compile ``options``.
     """
     if type(getattr(dispatcher, "_cache", None)) is FunctionCache:
-        dispatcher._cache = _RebuildingCache(dispatcher.py_func, depends)
+        dispatcher._cache = _RebuildingCache(dispatcher.py_func, depends, options)
     return dispatcher
 
 

@@ -61,6 +61,41 @@ def test_a_kernel_is_compiled_again_when_a_file_it_depends_on_changes(tmp_path):
     assert _run(tmp_path, cache) == (3.0, True)
 
 
+RATIO = '''
+import os
+
+from cardan_forces.driveline.compiled import njit
+
+
+@njit(cache=True, error_model=os.environ["ERROR_MODEL"])
+def ratio(x, y):
+    return x / y
+
+
+try:
+    value = ratio(1.0, 0.0)
+except ZeroDivisionError:
+    value = "raised"
+print(value, ratio.stats.cache_hits.get(ratio.signatures[0], 0))
+'''
+
+
+def test_a_kernel_compiled_with_other_options_is_not_loaded_from_the_cache(tmp_path):
+    """numba's own key leaves the error model out: the same source, cached under
+    Python's model (raising on a division by zero), is not loaded for NumPy's (inf),
+    nor back."""
+    pytest.importorskip("numba")
+    cache = tmp_path / "numba_cache"
+    (tmp_path / "kernel_module.py").write_text(RATIO)
+    for model, expected in (("python", "raised"), ("numpy", "inf"), ("python", "raised")):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), PYTHONPATH=str(tmp_path),
+                   ERROR_MODEL=model)
+        done = subprocess.run([sys.executable, "-c", "import kernel_module"], env=env,
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.split()[0] == expected
+
+
 def test_a_declared_dependency_that_does_not_exist_fails_at_import(tmp_path):
     """A kernel that names a missing file fails when its module is imported (a
     declaration that could never invalidate anything is an error, not a no-op)."""
