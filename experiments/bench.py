@@ -113,7 +113,7 @@ def evaluate(measured: dict, ladder, wall_s: float | None) -> dict:
     """Every metric of the report from the measured rows."""
     summary = metrics.summarize(measured["rows"], measured["setup"])
     success = metrics.success(measured["acc_rows"],
-                              sorted({*ladder, metrics.MIN_MAX_LEVEL}, reverse=True))
+                              sorted({*ladder, *metrics.target_levels()}, reverse=True))
     return measured | {
         "summary": summary, "points": metrics.pareto(measured["acc_rows"]),
         "success": success, "profiles": metrics.profiles(measured["acc_rows"], ladder),

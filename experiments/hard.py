@@ -37,7 +37,7 @@ from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
 from cardan_forces.experiments import files, progress
 from cardan_forces.experiments.environment import json_number, json_text, number_text
 from cardan_forces.experiments.study import History, solve_over_time
-from cardan_forces.formulations import FORMULATIONS, default_backends
+from cardan_forces.formulations import BASELINE, FORMULATIONS, default_backends
 from cardan_forces.formulations.convex import NotApplicable as NotApplicableProblem
 from cardan_forces.solvers import ACCEPT, Residuals, backends_for
 
@@ -192,17 +192,17 @@ CASES = (
 _RANK = "its 34x34 Jacobian is singular everywhere (rank 33 of 34, the closed loop)"
 
 KNOWN_FAILURES: dict[tuple[str, str], str] = {
-    ("base", "paper"): "the paper's 34 equations are singular where a trunnion pair "
+    ("base", BASELINE): "the paper's 34 equations are singular where a trunnion pair "
         "carries no radial load (gravity along the input shaft at rest, in "
         "paper-fig15-axial): eq. 33 is 0/0 there, fsolve and root(lm) stall",
-    ("torque-0", "paper"): "with no torque the driving trunnions of uj1 carry no radial "
+    ("torque-0", BASELINE): "with no torque the driving trunnions of uj1 carry no radial "
         "load, so their contact angles, and with them the rim points of eqs. 33-36, are "
         "0/0; fsolve reports 'converged' far from equilibrium and root(lm) stalls; " + _RANK,
-    ("surface-contact", "paper"): "theta1 = theta2 makes eq. 33 divide by zero; fsolve "
+    ("surface-contact", BASELINE): "theta1 = theta2 makes eq. 33 divide by zero; fsolve "
         "makes no progress and root(lm) stalls",
-    ("articulation-89", "paper"): "at 89 deg the Jacobian's condition reaches 1e18-1e19; "
+    ("articulation-89", BASELINE): "at 89 deg the Jacobian's condition reaches 1e18-1e19; "
         "fsolve makes no progress at the first instants and root(lm) stalls; " + _RANK,
-    ("mass-1e6", "paper"): "with the intermediate shaft 1e6 times heavier the Jacobian "
+    ("mass-1e6", BASELINE): "with the intermediate shaft 1e6 times heavier the Jacobian "
         "loses rank (27-29 of 34) and the residual stalls above the bar",
 }
 """``(case, formulation) -> reason`` where no backend gives a solved record at every

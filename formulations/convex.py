@@ -156,23 +156,24 @@ def contacts(op: Operator) -> list[list[int]]:
     return [list(law.columns) for law in contact_laws(op)]
 
 
-def min_norm(op: Operator, i: int) -> LS:
-    _no_bounds(op, "min_norm")
+def min_norm(op: Operator, i: int, name: str = "") -> LS:
+    _no_bounds(op, name)
     A, b = equalities(op, i)
-    return LS(checks=checks(op, i, signs=False, pairs=False), formulation="min_norm", A=A, b=b)
+    return LS(checks=checks(op, i, signs=False, pairs=False), formulation=name, A=A, b=b)
 
 
-def min_norm_scaled(op: Operator, i: int, reference_length_m: float = 1.0) -> LS:
-    _no_bounds(op, "min_norm_scaled")
+def min_norm_scaled(op: Operator, i: int, name: str = "",
+                    reference_length_m: float = 1.0) -> LS:
+    _no_bounds(op, name)
     A = op.A[i].copy()
     A[op.moment_rows] /= reference_length_m
     weights = np.linalg.norm(A, axis=0) ** 2
     A, b = equalities(op, i)
-    return LS(checks=checks(op, i, signs=False, pairs=False), formulation="min_norm_scaled",
+    return LS(checks=checks(op, i, signs=False, pairs=False), formulation=name,
               A=A, b=b, weights=weights)
 
 
-def positive(op: Operator, i: int) -> QP:
+def positive(op: Operator, i: int, name: str = "") -> QP:
     """Unknowns in units of ``||b||`` (as ``min_max``): interior-point QP solvers keep
     their relative accuracy from zero to very large loads.
     """
@@ -181,13 +182,13 @@ def positive(op: Operator, i: int) -> QP:
     A, b = equalities(op, i)
     scale = _load_scale(b)
     G = slip_rows(op, i)
-    return QP(checks=checks(op, i), formulation="positive",
+    return QP(checks=checks(op, i), formulation=name,
               to_forces=Scaled(scale), P=np.eye(n), q=np.zeros(n),
               A=A, b=b / scale, lb=lb, G=G if len(G) else None,
               h=np.zeros(len(G)) if len(G) else None)
 
 
-def min_max(op: Operator, i: int) -> Conic:
+def min_max(op: Operator, i: int, name: str = "") -> Conic:
     """Variables ``z = (x, t) / ||b||`` (forces in units of the load, which keeps the
     interior-point iterates well scaled); cones: equality, end faces >= 0, one SOC per
     contact. An end face's ``|x| <= t`` stays a cone here: as the linear row ``x <= t``
@@ -216,22 +217,22 @@ def min_max(op: Operator, i: int) -> Conic:
     P[:n, :n] = MIN_MAX_NORM_WEIGHT * np.eye(n)
     q = np.zeros(n + 1)
     q[t] = 1.0
-    return Conic(checks=checks(op, i, pairs=False), formulation="min_max",
+    return Conic(checks=checks(op, i, pairs=False), formulation=name,
                  to_forces=Scaled(scale, n), P=P, q=q, A=np.vstack(blocks),
                  b=np.concatenate(rhs), cones=tuple(cones), null_space=_padded(basis, 1))
 
 
-def lcp(op: Operator, i: int) -> LCP:
+def lcp(op: Operator, i: int, name: str = "") -> LCP:
     """``positive`` as ``0 <= lam ⟂ M lam + q >= 0`` with ``M = N_u N_u'``, ``q = x0_u``.
 
     With ``x = x0 + N y`` (``N'x0 = 0``), ``positive`` is ``min 1/2 y'y`` s.t.
     ``N_u y + x0_u >= 0``; its KKT conditions give ``y = N_u' lam`` and the LCP.
     """
-    _no_bounds(op, "lcp")
+    _no_bounds(op, name)
     d = determinacy(op, i)
     x0, N = d.min_norm, d.null_basis
     Nu = N[op.unilateral]
-    return LCP(checks=checks(op, i), formulation="lcp",
+    return LCP(checks=checks(op, i), formulation=name,
                to_forces=NullSpaceMap(x0, N, tuple(np.flatnonzero(op.unilateral).tolist())),
                M=Nu @ Nu.T, q=x0[op.unilateral])
 
@@ -265,7 +266,7 @@ class NullSpaceMap:
         return np.array([m.x0 for m in maps]) + np.matmul(N, y)[:, :, 0]
 
 
-def socp_face(op: Operator, i: int) -> Conic:
+def socp_face(op: Operator, i: int, name: str = "") -> Conic:
     """``positive`` with each end face also carrying a moment ``m`` normal to its
     trunnion axis, inside its centre-of-pressure cone ``||m|| <= rt f``: the paper's
     rim contact (eqs. 33-36, 42-43) made convex. The face may press anywhere on its
@@ -280,11 +281,11 @@ def socp_face(op: Operator, i: int) -> Conic:
     """
     extra = [(members, _cone(spec)) for c in op.contacts
              for members, spec in c.element_kind.rim_moments(op, i, c)]
-    return _extended(op, i, extra, "socp_face",
+    return _extended(op, i, extra, name,
                      idle=_idle_faces(op, determinacy(op, i).min_norm))
 
 
-def friction(op: Operator, i: int) -> Conic:
+def friction(op: Operator, i: int, name: str = "") -> Conic:
     """``positive`` plus Coulomb friction in the joints (the scene's ``friction``
     effect, coefficient ``friction_coefficient``); rolling bearings take none.
 
@@ -302,13 +303,13 @@ def friction(op: Operator, i: int) -> Conic:
     """
     scene = op.scene
     if not scene.has("friction"):
-        raise NotApplicable("formulation 'friction' needs a scene whose effects include "
+        raise NotApplicable(f"formulation {name!r} needs a scene whose effects include "
                             "'friction'")
     mu = scene.contact.friction_coefficient
     frameless = determinacy(op, i).min_norm
     extra = [(members, _cone(spec)) for c in op.contacts
              for members, spec in c.element_kind.friction_forces(op, i, c, frameless, mu)]
-    return _extended(op, i, extra, "friction", idle=_idle_faces(op, frameless))
+    return _extended(op, i, extra, name, idle=_idle_faces(op, frameless))
 
 
 def _cone(spec: dict):
@@ -395,7 +396,8 @@ def contact_laws(op: Operator) -> tuple[Law, ...]:
     return tuple(law for c in op.contacts for law in c.element_kind.laws(c, op.scene))
 
 
-def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None = None):
+def compliance(op: Operator, i: int, name: str = "", law: str = "linear",
+               clearance: bool | None = None):
     """Least complementary energy ``sum phi*_c(f_c) + gap_c ||f_c||`` on ``A x = b`` with
     end faces >= 0 (Menabrea): the member of the rigid set that a compliant world picks.
 
@@ -424,7 +426,6 @@ def compliance(op: Operator, i: int, law: str = "linear", clearance: bool | None
     is_bearing = [not law.hertz for law in given]  # a linear law
     A, b = equalities(op, i)
     m, n = A.shape
-    name = "compliance" if law == "linear" else "compliance_hertz"
     sb = _load_scale(b)
     b = b / sb
     if law == "linear" and not use_gaps:

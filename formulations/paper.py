@@ -357,7 +357,8 @@ def _start(op: Operator, i: int, lay: _Layout) -> np.ndarray:
     return z
 
 
-def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = None) -> PaperNLS:
+def build_paper(op: Operator, i: int, name: str = "", rim: bool = True,
+                scene: Scene | None = None) -> PaperNLS:
     """The paper's system (eqs. 49-62) at instant ``i`` of ``op``.
 
     ``scene`` (default: the operator's) supplies the shaft axes for the bearing angles
@@ -396,7 +397,7 @@ def build_paper(op: Operator, i: int, rim: bool = True, scene: Scene | None = No
                              pairs=op.pairs)
         to_forces = _PaperForces(t)
     return PaperNLS(
-        checks=checks, formulation="paper", to_forces=to_forces,
+        checks=checks, formulation=name, to_forces=to_forces,
         fun=fun, jac=jac, z0=_start(op, i, lay), unknown_names=lay.names,
         paper_residual=lambda z: float(np.linalg.norm(fun(z))) / scale,
         rim=rim, radial=lay.mag, angles=lay.ang, end_faces=lay.fb.ravel(),

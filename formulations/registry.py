@@ -59,7 +59,12 @@ class Formulation:
     ``A`` (T, m, n) and the first instant's problem (``None``: unit weights);
     ``compliant``: its contacts have a stiffness (a compliance law), so a seat misfit
     enters as work on them (``cardan tolerances``); ``design``: a physical selection
-    whose loads the design answers report (``cardan life``).
+    whose loads the design answers report (``cardan life``); ``success_target``:
+    ``(level, rate)``, the bench wants its best backend to solve at least ``rate`` of
+    the instants at accuracy ``level`` (``None``: no such target).
+
+    The builder is called with the record's ``name`` (``build(op, i, name=...)``), which
+    its problems carry as their ``formulation``: each name is spelled here only.
     """
 
     name: str
@@ -77,10 +82,11 @@ class Formulation:
     batch_weights: Callable[..., np.ndarray] | None = None
     compliant: bool = False
     design: bool = False
+    success_target: tuple[float, float] | None = None
 
     def __call__(self, op, i: int):
-        """The problem at instant ``i`` of ``op``."""
-        return self.build(op, i)
+        """The problem at instant ``i`` of ``op``, named after this record."""
+        return self.build(op, i, name=self.name)
 
     @property
     def exportable(self) -> bool:
@@ -100,9 +106,9 @@ def _stiffness_weights(A: np.ndarray, first) -> np.ndarray:
     return np.broadcast_to(np.diag(first.P), (len(A), first.n))
 
 
-def _hertz(op, i: int):
+def _hertz(op, i: int, name: str = ""):
     """``compliance`` with Hertz's law (exponent 3/2 for the joints' line contacts)."""
-    return compliance(op, i, law="hertz")
+    return compliance(op, i, name, law="hertz")
 
 
 _DAQP_FIRST = ("qpsolvers-daqp", "clarabel")
@@ -125,7 +131,8 @@ REGISTRY: tuple[Formulation, ...] = (
                 design=True),
     Formulation("min_max", min_max, (Conic,),
                 "min_max (comparison only: both end faces of a pair may push)",
-                physical=False, backends=("clarabel",), drawn=True, job_cost=2.0),
+                physical=False, backends=("clarabel",), drawn=True, job_cost=2.0,
+                success_target=(1e-6, 0.9)),
     Formulation("socp_face", socp_face, (Conic,),
                 "socp_face (end faces with a centre-of-pressure cone)",
                 physical=True, backends=("clarabel",)),

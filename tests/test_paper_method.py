@@ -9,6 +9,7 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments.hard import CASES
 from cardan_forces.experiments.paper_method import multistart, solve_paper
+from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import socp_face
 from cardan_forces.formulations.paper import build_paper
 
@@ -44,7 +45,7 @@ def test_square_system_and_names(op):
         "input.bearing.near.angle", "input.axial_sum",
     )
     assert "uj1.theta1" in problem.unknown_names and "uj2.f8" in problem.unknown_names
-    assert problem.formulation == "paper"
+    assert FORMULATIONS["paper"](op, 0).formulation == "paper"  # the registry names it
 
 
 def test_without_rim_the_paper_rows_are_the_operator(op):
