@@ -462,10 +462,10 @@ def figure(answer: dict):
     for ax, name in zip(axes.ravel(), names):
         lin, hz = answer["loads"][RUN[0]][name], answer["loads"][RUN[1]][name]
         ax.fill_between(t, lin["P5"], lin["P95"], color="C0", alpha=0.3,
-                        label="compliance: 5-95 % of samples")
-        ax.plot(t, lin["P50"], color="C0", label="compliance: median")
-        ax.plot(t, hz["P50"], "--", color="C1", label="compliance_hertz: median")
-        ax.plot(t, lin["nominal"], ":", color="k", label="nominal line (compliance)")
+                        label=f"{RUN[0]}: 5-95 % of samples")
+        ax.plot(t, lin["P50"], color="C0", label=f"{RUN[0]}: median")
+        ax.plot(t, hz["P50"], "--", color="C1", label=f"{RUN[1]}: median")
+        ax.plot(t, lin["nominal"], ":", color="k", label=f"nominal line ({RUN[0]})")
         ax.set_title(name.removeprefix("P:"), fontsize=9)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("P [N]" if name.startswith("P:") else "force [N]")

@@ -137,12 +137,12 @@ def print_table(name, result, ranges, member, starts=None, n_starts=0) -> None:
         words = EMPTY if state == "infeasible" else \
             f"{state} (the LP solver could not decide whether forces exist)"
         print(f"rigid set: {words}: no component has a value or an interval")
-    print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; 'positive': the least-"
+    print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; '{SIGNED}': the least-"
           f"norm solution with end faces >= 0 ({backend}), one member of the rigid set, in N "
           "(N m for a slip joint's bending and torque); interval over all solutions with end "
           "faces >= 0 (-inf/+inf: unbounded)")
     width = max(24, *(len(n) for n in result.names))
-    print(f"{'component':{width}s} {'determinate':>11s} {'positive N':>14s} {'min N':>12s} "
+    print(f"{'component':{width}s} {'determinate':>11s} {SIGNED + ' N':>14s} {'min N':>12s} "
           f"{'max N':>12s}")
     if starts is not None:
         print(f"paper method (fsolve, end faces on the axis) from {n_starts} random "
