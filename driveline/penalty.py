@@ -125,7 +125,8 @@ from .penalty_model import Model, contact_law
 from .scene import Scene, SceneError
 
 __all__ = ["COMPILED", "ContactRows", "DAMPING_LENGTH_UNIT_M", "FALLBACK", "KERNELS", "METHODS",
-           "PenaltyResult", "cache_folder", "contact_law", "simulate_penalty"]
+           "PenaltyResult", "RELEASED", "cache_folder", "contact_law", "released",
+           "simulate_penalty"]
 
 COMPILED = "BDF-numba"
 DAMPING_LENGTH_UNIT_M = 1e-3
@@ -140,6 +141,22 @@ FALLBACK = "LSODA"
 (its message then says both)."""
 KERNELS = ("numba", "numpy")
 """Right-hand sides: compiled (:mod:`penalty_kernels`) or the NumPy array model."""
+
+RELEASED = frozenset({"clearance", "crosspin_inertia", "penalty_dynamics"})
+"""Effects that turn a scene into its penalty-contact (ADAMS-style) counterpart."""
+
+
+def released(scene: Scene) -> Scene:
+    """``scene`` with every joint released (``paper`` gives ``paper-penalty``'s model):
+    the same bodies, loads and clearances, contacts by penalty forces (eqs. 75-78).
+    SceneError (from the scene's validation) when the scene is quasi-static.
+    """
+    if scene.has("penalty_dynamics"):
+        return scene
+    return scene.with_changes(
+        name=f"{scene.name}-penalty", effects=scene.effects | RELEASED,
+        description=f"{scene.description}; joints released (penalty contacts)")
+
 
 @dataclass(frozen=True)
 class PenaltyResult:

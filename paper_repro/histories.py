@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 from cardan_forces.driveline.equilibrium import Operator
-from cardan_forces.driveline.penalty import PenaltyResult, simulate_penalty
+from cardan_forces.driveline.penalty import PenaltyResult, released, simulate_penalty
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.study import History, solve_over_time
 from cardan_forces.formulations import BASELINE, where
@@ -34,22 +34,6 @@ def history(op: Operator, method: str, solver: str | None = None,
     say = None if progress is None else (lambda m: progress(f"repro: {m}"))
     paper = method == BASELINE  # the others need no restart: their checks come at once
     return solve_over_time(op, method, solver, warm=paper, restart=paper, progress=say)
-
-
-RELEASED = frozenset({"clearance", "crosspin_inertia", "penalty_dynamics"})
-"""Effects that turn a scene into its penalty-contact (ADAMS-style) counterpart."""
-
-
-def released(scene: Scene) -> Scene:
-    """``scene`` with every joint released (``paper`` gives ``paper-penalty``'s model):
-    the same bodies, loads and clearances, contacts by penalty forces (eqs. 75-78).
-    SceneError (from the scene's validation) when the scene is quasi-static.
-    """
-    if scene.has("penalty_dynamics"):
-        return scene
-    return scene.with_changes(
-        name=f"{scene.name}-penalty", effects=scene.effects | RELEASED,
-        description=f"{scene.description}; joints released (penalty contacts)")
 
 
 def run_penalty(scene: Scene, times, progress: Callable[[str], None] | None = None
