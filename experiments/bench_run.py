@@ -237,18 +237,19 @@ def run_batched(prepared: Prepared, solver: str, instants=None, tol=None,
         spent += runs[-1][0]
     wall, result = min(runs, key=lambda run: run[0])
     T = len(batch.instants)
-    other = wall - result.setup_s - result.solve_s - result.checks_s
-    split = {"build_s": 0.0, "convert_s": (result.setup_s + max(other, 0.0)) / T,
-             "solve_s": result.solve_s / T, "checks_s": result.checks_s / T}
+    setup, solve, checks = result.setup_s[0], result.solve_s[0], result.checks_s[0]
+    other = wall / T - setup - solve - checks  # per instant, as the results' times
+    split = {"build_s": 0.0, "convert_s": setup + max(other, 0.0), "solve_s": solve,
+             "checks_s": checks}
     rows = [_row(prepared.name, solver, "batched", i, prepared.op.t[i], result.status[k],
                  wall / T, split, {key: v[k] for key, v in result.residuals.items()},
                  {key: v[k] for key, v in result.optimality.items()},
-                 int(result.iterations[k]), result.messages[k] if result.messages else "")
+                 result.iterations[k], result.message[k])
             for k, i in enumerate(batch.instants)]
     stages = {stage: seconds / T for stage, seconds in result.stages.items()}
     once = {f"{stage}, once": seconds for stage, seconds in warm_up.stages.items()
             if stage in ONCE_STAGES and seconds > 0}
-    return rows, stages | {"checks": result.checks_s / T} | once
+    return rows, stages | {"checks": checks} | once
 
 
 def _is_batched(solver: str) -> bool:

@@ -3,8 +3,10 @@
 A batched backend returns a :class:`BatchOutcome` for a formulation's batch
 (:mod:`cardan_forces.formulations.batch`); :func:`finalize_batch` judges it with the
 same residual code (``residuals_batch``), the same status rule (:func:`~.record.judge`)
-and the same optimality measures (:mod:`.optimality`) as a per-instant record, one
-array per measure; :meth:`BatchRecord.record` gives instant ``k`` as a :class:`Record`.
+and the same optimality measures (:mod:`.optimality`) as a per-instant record, into the
+:class:`~.record.Results` a per-instant run gives (one column per field; ``results[k]``
+instant ``k``'s :class:`~.record.Record`; the backend's own split of the batch's time
+in ``stages``).
 """
 
 from __future__ import annotations
@@ -17,7 +19,16 @@ from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LastMade, map_all
 
 from .optimality import combine, multipliers, stacked_measures, unique_optimum
-from .record import Optimality, Record, Residuals, Status, confirm, judge
+from .record import (
+    Optimality,
+    Residuals,
+    Results,
+    Status,
+    as_status,
+    confirm,
+    judge,
+    statuses,
+)
 from .stacking import stacked_batch
 
 
@@ -40,53 +51,6 @@ class BatchOutcome:
     solve_s: float
     stages: dict[str, float] = field(default_factory=dict)
     messages: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class BatchRecord:
-    """The records of T instants as arrays (see :class:`~.record.Record` for the fields).
-
-    ``setup_s``, ``solve_s`` and ``checks_s`` are for the whole batch; ``stages`` the
-    backend's own split of them; ``z`` the solver's variable (T, nz), ``y`` the
-    multipliers the optimality was measured with (solver's or recovered);
-    ``residuals`` and ``optimality`` hold one array per measure.
-    """
-
-    formulation: str
-    solver: str
-    instants: np.ndarray
-    names: tuple[str, ...]
-    status: np.ndarray
-    x: np.ndarray
-    residuals: Residuals
-    optimality: Optimality
-    iterations: np.ndarray
-    duals: str
-    setup_s: float
-    solve_s: float
-    checks_s: float
-    stages: dict[str, float]
-    messages: tuple[str, ...]
-    z: np.ndarray | None = None
-    y: np.ndarray | None = None
-
-    def within(self, level: float) -> np.ndarray:
-        """Per instant: an answer with every optimality measure <= ``level``."""
-        return np.isin(self.status, Status.answered()) & self.optimality.within(level)
-
-    def record(self, k: int) -> Record:
-        """Instant ``k`` as a per-instant record (times are the batch's per instant)."""
-        T = len(self.instants)
-        return Record(
-            formulation=self.formulation, solver=self.solver, status=str(self.status[k]),
-            x=self.x[k], names=self.names, iterations=int(self.iterations[k]),
-            setup_s=self.setup_s / T, solve_s=self.solve_s / T,
-            residuals=self.residuals.at(k),
-            message=self.messages[k] if self.messages else "",
-            optimality=self.optimality.at(k),
-            duals=self.duals, gap_kind="duality", checks_s=self.checks_s / T,
-            z=None if self.z is None or not self.z.size else self.z[k],
-            y=None if self.y is None else self.y[k])
 
 
 def _forces(batch, outcome: BatchOutcome, answered: np.ndarray) -> np.ndarray:
@@ -154,11 +118,13 @@ def _unique(batch) -> bool:
 
 
 def finalize_batch(batch, solver: str, outcome: BatchOutcome,
-                   reference: np.ndarray | None = None) -> BatchRecord:
-    """Judge a batched outcome like :func:`~.record.finalize` judges one instant.
+                   reference: np.ndarray | None = None) -> Results:
+    """Judge a batched outcome like :func:`~.checks.finalize_all` judges T instants.
 
     ``reference`` (T, n): reference forces, giving ``distance`` where the optimum is
-    unique (:func:`~.optimality.unique_optimum`).
+    unique (:func:`~.optimality.unique_optimum`). The results' forces ``x`` and the
+    solver's ``z`` and ``y`` are (T, .) arrays (every instant has the batch's names);
+    a measure no instant has is ``None``; the times are the batch's over T.
     """
     began = time.perf_counter()
     status = np.asarray(outcome.status, object).copy()
@@ -180,13 +146,19 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
         if _unique(batch):
             optimality = Optimality(**optimality, distance=distance)
     status = confirm(status, optimality, source)
-    return BatchRecord(
-        formulation=batch.formulation, solver=solver, instants=batch.instants,
-        names=batch.checks.names, status=status.astype(str), x=x, residuals=residuals,
-        optimality=optimality, iterations=np.asarray(outcome.iterations, int), duals=source,
-        setup_s=outcome.setup_s, solve_s=outcome.solve_s,
-        checks_s=time.perf_counter() - began, stages=dict(outcome.stages),
-        messages=tuple(outcome.messages), z=np.asarray(outcome.z), y=y)
+    T = len(x)
+    per = np.array([outcome.setup_s, outcome.solve_s, time.perf_counter() - began]) / T
+    return Results(
+        solver=solver, formulation=(batch.formulation,) * T, names=(batch.checks.names,) * T,
+        status=statuses([as_status(s) or Status.FAILED for s in status]), x=x,
+        residuals=residuals, optimality=optimality, solver_optimality=Optimality(),
+        iterations=tuple(np.asarray(outcome.iterations, int).tolist()),
+        objective=(None,) * T, message=tuple(outcome.messages) or ("",) * T,
+        duals=(source,) * T, gap_kind=("duality",) * T,
+        solver_status=statuses([as_status(s) for s in outcome.status]),
+        setup_s=np.full(T, per[0]), solve_s=np.full(T, per[1]), checks_s=np.full(T, per[2]),
+        wall_s=np.full(T, per.sum()), z=np.asarray(outcome.z),
+        y=(None,) * T if y is None else y, stages=dict(outcome.stages))
 
 
 def supports_batch(backend, batch) -> bool:
@@ -195,5 +167,5 @@ def supports_batch(backend, batch) -> bool:
         backend.supports(batch))
 
 
-__all__ = ["BatchOutcome", "BatchRecord", "ConicBatch", "LeastNormBatch", "finalize_batch",
+__all__ = ["BatchOutcome", "ConicBatch", "LeastNormBatch", "finalize_batch",
            "supports_batch"]

@@ -28,6 +28,7 @@ from .record import (
     Residuals,
     Results,
     Status,
+    as_status,
     confirm,
     judge,
     statuses,
@@ -163,21 +164,13 @@ class _Started:
                 self.note(k, "ValueError: solver returned NaN or inf")
 
 
-def _status(given) -> Status | None:
-    """A status as an adapter gives it (the value or the member), ``None`` if unknown."""
-    try:
-        return Status(given)
-    except (ValueError, TypeError):
-        return None
-
-
 def _start_all(problems, outcomes, n: int | None = None) -> _Started:
     """:class:`_Started` of every outcome: its status (an unknown one is ``failed``)
     and, where it has an answer, its forces by ``problem.to_forces`` (``n``: the number
     of forces of every problem, where one structure fixes it).
     """
     T = len(problems)
-    status = [_status(o.status) for o in outcomes]
+    status = [as_status(o.status) for o in outcomes]
     started = _Started([], [], [None] * T, [o.message or "" for o in outcomes])
     answered = [k for k, s in enumerate(status) if s is not None and s.has_answer]
     X = _stacked_forces(problems, outcomes, answered, n)

@@ -291,8 +291,12 @@ class Results(Sequence):
     ``None`` where not known), the times (s) (T,) floats; ``residuals``,
     ``optimality`` and ``solver_optimality`` hold (T,) arrays, NaN marking a measure an
     instant has none of (a missing ``reference``, a ``distance`` where the optimum is
-    not unique, a ``solver_optimality`` without the solver's multipliers). Tuples where
-    the values are objects of their own shape (forces ``x``, ``z``, ``y``, names).
+    not unique, a ``solver_optimality`` without the solver's multipliers), ``None`` a
+    measure no instant has. Tuples where the values are objects of their own shape
+    (forces ``x``, ``z``, ``y``, names); a batched run, whose instants share one shape,
+    holds ``x``, ``z`` and ``y`` as (T, .) arrays, its times as the batch's over T and
+    ``stages``, the backend's own split of the whole batch's time (s; empty for a run
+    instant by instant).
 
     It is a sequence of records: ``results[k]`` is instant ``k``'s :class:`Record`, made
     when asked for.
@@ -302,7 +306,7 @@ class Results(Sequence):
     formulation: tuple[str, ...]
     names: tuple[tuple[str, ...], ...]
     status: np.ndarray
-    x: tuple[np.ndarray, ...]
+    x: tuple[np.ndarray, ...] | np.ndarray
     residuals: Residuals
     optimality: Optimality
     solver_optimality: Optimality
@@ -316,10 +320,11 @@ class Results(Sequence):
     solve_s: np.ndarray
     checks_s: np.ndarray
     wall_s: np.ndarray
-    z: tuple[np.ndarray | None, ...]
-    y: tuple[np.ndarray | None, ...]
+    z: tuple[np.ndarray | None, ...] | np.ndarray
+    y: tuple[np.ndarray | None, ...] | np.ndarray
     t: np.ndarray | None = None
     """The instants (s) the answers are for, where a solve over time set them."""
+    stages: Mapping[str, float] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.status)
@@ -344,6 +349,18 @@ class Results(Sequence):
             solver_status=self.solver_status[k],
             solver_optimality=Optimality(**solver_view) if solver_view else None,
             wall_s=float(self.wall_s[k]), t=None if self.t is None else float(self.t[k]))
+
+    def within(self, level: float) -> np.ndarray:
+        """Per instant, :meth:`Record.within`: an answer, and every measure the instant
+        has <= ``level`` (NaN: a measure it has none of).
+        """
+        answered = np.array([s.has_answer for s in self.status], bool).reshape(len(self))
+        present = [np.asarray(v, float) for v in self.optimality.values()]
+        if not present:
+            return np.zeros(len(self), bool)
+        v = np.array(present)
+        has = ~np.isnan(v)
+        return answered & np.all((v <= level) | ~has, axis=0) & has.any(axis=0)
 
     def at(self, t) -> Results:
         """The same results told the instants ``t`` (s) they answer."""
@@ -379,6 +396,14 @@ class Results(Sequence):
             setup_s=floats("setup_s"), solve_s=floats("solve_s"),
             checks_s=floats("checks_s"), wall_s=floats("wall_s"), z=column("z"),
             y=column("y"), t=None if None in t else np.array(t, float))
+
+
+def as_status(given) -> Status | None:
+    """A status as an adapter gives it (the value or the member), ``None`` if unknown."""
+    try:
+        return Status(given)
+    except (ValueError, TypeError):
+        return None
 
 
 def statuses(values) -> np.ndarray:

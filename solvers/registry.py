@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from . import plugins, reduced_, settings
-from .batch import BatchOutcome, BatchRecord, ConicBatch, finalize_batch
+from .batch import BatchOutcome, ConicBatch, finalize_batch
 from .checks import Stacks, failed_record, finalize_all
 from .conversions import convert, reachable
 from .plugins import InvalidBackend, blame
@@ -519,9 +519,9 @@ def _batches(backend: Backend, batch) -> bool | str:
 
 
 def solve_batch(batch, solver: str, tol: float | None = None,
-                reference: np.ndarray | None = None, **options) -> BatchRecord:
-    """Solve every instant of ``batch`` at once with backend ``solver``: the records of
-    all instants as arrays, judged as :func:`solve` judges one (failures are records).
+                reference: np.ndarray | None = None, **options) -> Results:
+    """Solve every instant of ``batch`` at once with backend ``solver``: the results of
+    all instants as columns, judged as :func:`solve` judges one (failures are records).
     """
     backend = get(solver)
     supported = _batches(backend, batch)

@@ -324,8 +324,8 @@ def test_a_batched_plugin_that_answers_nonsense_is_a_failed_batch(broken, op, na
     assert name in registry.batch_backends(batch)
     record = registry.solve_batch(batch, name)
     assert list(record.status) == ["failed"]
-    assert record.messages[0].startswith(f"plugin entry point {name.replace('-', '_')}: ")
-    assert said in record.messages[0]
+    assert record.message[0].startswith(f"plugin entry point {name.replace('-', '_')}: ")
+    assert said in record.message[0]
 
 
 def test_cardan_bench_runs_beside_broken_plugins(broken, tmp_path, capsys):

@@ -51,7 +51,7 @@ def test_nearest_point_of_a_line(fresh_cache):
     levels = (2.0, 1.0)
     batch = fbatch.conic_batch([_nearest(c) for c in levels], [0, 1])
     result = solve_batch(batch, SOLVER, tol=TOL)
-    assert set(result.status) == {"solved"}, result.messages
+    assert set(result.status) == {"solved"}, result.message
     for k, c in enumerate(levels):
         expected = [3 - (3 - c) / 2, -(3 - c) / 2, (3 - c) / np.sqrt(2)]
         assert result.z[k] == pytest.approx(expected, abs=1e-6)
@@ -95,7 +95,7 @@ def test_a_structure_is_compiled_once(fresh_cache):
 def test_unknown_option_is_a_failed_batch():
     batch = fbatch.conic_batch([_nearest(2.0)], [0])
     result = solve_batch(batch, SOLVER, not_a_setting=1)
-    assert set(result.status) == {"failed"} and "not_a_setting" in result.messages[0]
+    assert set(result.status) == {"failed"} and "not_a_setting" in result.message[0]
 
 
 @pytest.fixture(scope="module")

@@ -203,7 +203,7 @@ def test_batched_reduced_agrees_with_full(problems, name):
     _need("moreau-reduced")
     batch = fbatch.conic_batch(problems[name], INSTANTS)
     full, reduced = (solve_batch(batch, s, tol=TOL) for s in ("moreau", "moreau-reduced"))
-    assert set(reduced.status) == {"solved"}, reduced.messages
+    assert set(reduced.status) == {"solved"}, reduced.message
     for k, problem in enumerate(batch.problems):
         ours = objective_value(problem, reduced.z[k])
         assert ours == pytest.approx(objective_value(problem, full.z[k]), rel=AGREE,
