@@ -200,8 +200,9 @@ def misfit_problem(problem, op: Operator, d: np.ndarray, gaps: dict[int, float] 
     weight = problem.P[loads[column], loads[column]] * k / sb
     q = problem.q.copy()
     q[:n] -= weight * d
-    for j, gap in (gaps or {}).items():
-        q[loads[j]] = weight * gap
+    for j, gap in (gaps or {}).items():  # a pair's held column has no cone: its partner's
+        if j in loads:
+            q[loads[j]] = weight * gap
     return dataclasses.replace(problem, q=q)
 
 
