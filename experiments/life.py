@@ -8,8 +8,11 @@ cycle's mean load ``Pm`` over the revolutions of the bearing's shaft (the motion
 speed) and ``L10`` in millions of revolutions and in hours at the window's mean speed,
 
 - for each physical selection of :data:`SELECTIONS` (``positive``, ``compliance``,
-  ``compliance_hertz``; :data:`NOT_RUN` says why the penalty simulation and MuJoCo are
-  not among them), and
+  ``compliance_hertz``) and the simulated ones (:mod:`~cardan_forces.experiments.
+  life_runs`): MuJoCo's forces where it is installed and can express the scene (unless
+  ``--no-engine``), the penalty-contact simulation's average with ``--penalty`` (a
+  simulation of the whole window; a dynamic scene); the answer says why one is not
+  run, and
 - over the rigid set (:func:`load_envelope`): the least and the greatest ``P`` at each
   instant over every rigid solution, hence ``L10`` from its worst to its best. ``P``
   grows with the radial load ``Fr`` and with the axial load's magnitude ``|Fa|``, so its
@@ -49,6 +52,7 @@ from cardan_forces.experiments import files
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.images import format_list, write_study
+from cardan_forces.experiments.life_runs import ENGINE, PENALTY, engine_history, penalty_history
 from cardan_forces.experiments.study import solve_over_time, value_ranges
 from cardan_forces.formulations import where
 
@@ -68,13 +72,13 @@ SELECTIONS = where(design=True)
 """The members of the rigid set whose lives are reported (the formulation records'
 ``design``), each by the study layer's default backend."""
 
-NOT_RUN = {
-    "penalty": "not run: its average needs a simulation of seconds of the released line "
-               "at a small step (cardan repro runs it for the paper's scenes)",
-    "mujoco": "not run: a forward simulation of the whole window per scene (cardan report "
-              "--engine draws its forces beside the rigid set)",
+NOT_ASKED = {
+    PENALTY: "not run: ask for it with --penalty (a simulation of the released line over "
+             "the window; its first run compiles the simulation's kernels)",
+    ENGINE: "not run: left out by --no-engine",
 }
-"""The selections not computed here, and why."""
+"""Why a simulated selection (:mod:`~cardan_forces.experiments.life_runs`) is not among
+the answer's selections when it was not asked for."""
 
 OPEN = "no finite worst case: the closed loop's self-stress is free"
 """What the answer says where the set is open above along a closed loop."""
@@ -184,18 +188,26 @@ def p_ends(rating, env: dict, b: int) -> tuple[np.ndarray, np.ndarray]:
     return lo, np.where(np.isnan(env["fr_hi"][:, b]), np.nan, hi)
 
 
-def life(rating, p_values: np.ndarray, revs: np.ndarray, span_s: float) -> dict:
-    """``Pm`` (N), ``L10`` (million revolutions) and ``L10_h`` (hours) of a load history."""
-    pm = iso.mean_load(p_values, revs, iso.exponent(rating))
+def life(rating, p_values: np.ndarray, revs: np.ndarray, span_s: float,
+         keep: np.ndarray | None = None) -> dict:
+    """``Pm`` (N), ``L10`` (million revolutions) and ``L10_h`` (hours) of a load history;
+    with ``keep``, ``Pm`` over those instants only (``L10_h`` still at the whole
+    window's mean speed).
+    """
+    kept = slice(None) if keep is None else keep
+    pm = iso.mean_load(p_values[kept], revs[kept], iso.exponent(rating))
     l10 = iso.rating_life(rating, pm)
     return {"Pm_N": pm, "L10_Mrev": l10, "L10_h": iso.life_hours(l10, revs, span_s)}
 
 
-def study(scene_spec: str, instants: int = INSTANTS, progress=None) -> dict:
+def study(scene_spec: str, instants: int = INSTANTS, progress=None, penalty: bool = False,
+          engine: bool = True) -> dict:
     """The whole answer of ``cardan life`` for one scene, as JSON-ready data (non-finite
     numbers are the encoder's ``null``): the instants, each rated bearing's ``P`` over
-    time, ``Pm`` and ``L10`` per selection and over the set, the selections not run,
-    and where the set is open, why and the release that bounds it.
+    time, ``Pm`` and ``L10`` per selection and over the set, the selections not run and
+    why, and where the set is open, why and the release that bounds it. ``penalty`` and
+    ``engine`` add the simulated selections (:mod:`~cardan_forces.experiments.
+    life_runs`) where the scene allows them.
     """
     scene = load_scene(scene_spec)
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
@@ -203,6 +215,8 @@ def study(scene_spec: str, instants: int = INSTANTS, progress=None) -> dict:
     op = build_operator(motion)
     bearings = rated(op)
     chosen = {name: solve_over_time(op, name) for name in SELECTIONS}
+    simulated, not_run = _simulated(op, penalty, engine, progress)
+    chosen.update({name: history for name, (history, _) in simulated.items()})
     say = None if progress is None else progress
     with bars.ticks(len(op.t), "life: intervals", "instant", say) as tick:
         env = load_envelope(op, bearings, progress=tick)
@@ -213,9 +227,10 @@ def study(scene_spec: str, instants: int = INSTANTS, progress=None) -> dict:
     return {
         "scene": scene.name, "t_s": t, "directions": DIRECTIONS,
         "direction_error": 1.0 / math.cos(math.pi / DIRECTIONS) - 1.0,
-        "selections": {name: {"solver": h.solver, "solved": h.solved, "instants": len(h.t)}
+        "selections": {name: {"solver": h.solver, "solved": h.solved, "instants": len(h.t),
+                              **({"about": simulated[name][1]} if name in simulated else {})}
                        for name, h in chosen.items()},
-        "not_run": dict(NOT_RUN),
+        "not_run": not_run,
         "unrated": [c.element for c in op.bearings() if c not in [r[0] for r in bearings]],
         "bearings": entries, "open": unbounded,
         "open_reason": _open_reason(motion, op) if unbounded else None,
@@ -223,13 +238,43 @@ def study(scene_spec: str, instants: int = INSTANTS, progress=None) -> dict:
     }
 
 
+def _simulated(op: Operator, penalty: bool, engine: bool, progress) -> tuple[dict, dict]:
+    """The simulated selections run (name: (history, what it is)) and those not run
+    (name: why), in the order penalty, MuJoCo.
+    """
+    ran, not_run = {}, {}
+    for name, asked, run in ((PENALTY, penalty, lambda: penalty_history(op, progress)),
+                             (ENGINE, engine, lambda: engine_history(op))):
+        if not asked:
+            not_run[name] = NOT_ASKED[name]
+            continue
+        if progress:
+            progress(f"life: {name} simulation of {op.scene.name} ...")
+        history, words = run()
+        if history is None:
+            not_run[name] = words
+        else:
+            ran[name] = (history, words)
+    return ran, not_run
+
+
 def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
-    """One bearing's part of :func:`study`'s answer."""
+    """One bearing's part of :func:`study`'s answer: per selection ``P``, the radial
+    and axial loads ``Fr``, ``Fa`` it comes from (N), at how many instants ``|Fa| > e
+    Fr`` (``P = X Fr + Y |Fa|``), ``Pm`` and ``L10``. A simulated selection's ``Pm`` is
+    over the instants it has (the others left out, their count said); a rigid one's is
+    NaN where an instant was not solved.
+    """
     revs = iso.revolutions(motion.omega[contact.shaft], op.t)
     selections = {}
     for name, history in chosen.items():
-        p = iso.equivalent_load(rating, *loads(op, contact, history.forces))
-        selections[name] = {"P_N": p, **life(rating, p, revs, span),
+        fr, fa = loads(op, contact, history.forces)
+        p = iso.equivalent_load(rating, fr, fa)
+        keep = np.isfinite(p) if name in (PENALTY, ENGINE) else None
+        with np.errstate(invalid="ignore"):
+            axial = int(np.sum(np.abs(fa) > iso.factors(rating, fa)[2] * fr))
+        selections[name] = {"P_N": p, "Fr_N": fr, "Fa_N": fa, "axial_instants": axial,
+                            **life(rating, p, revs, span, keep),
                             "unsolved_instants": int(np.isnan(p).sum())}
     lo, hi = p_ends(rating, env, b)
     worst, best = life(rating, hi, revs, span), life(rating, lo, revs, span)
@@ -238,7 +283,8 @@ def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
         "bearing": contact.element, "kind": contact.kind.removeprefix("bearing-"),
         "rating": {"type": rating.type, "contact_angle_deg": rating.contact_angle_deg,
                    "C_N": rating.C_N, "C0_N": rating.C0_N, "p": iso.exponent(rating),
-                   "X_Y_e": "given" if rating.X is not None else "ISO 281 tables"},
+                   "X_Y_e": ([rating.X, rating.Y, rating.e] if rating.X is not None
+                             else "ISO 281 tables")},
         "revolutions": float(revs.sum()),
         "mean_speed_rpm": float(revs.sum() / span * 60.0) if span > 0 else math.nan,
         "selections": selections,
@@ -286,7 +332,7 @@ def _release(motion) -> dict:
 
 # ---------------------------------------------------------------------------- output
 
-MARKS = dict(zip(SELECTIONS, "os^Dv<>"))
+MARKS = dict(zip((*SELECTIONS, PENALTY, ENGINE), "os^Dv<>"))
 """Each selection's marker on the figure."""
 
 
@@ -329,8 +375,11 @@ def markdown(answer: dict) -> str:
         lines.append(f"| {e['bearing']} | {e['rating']['type']} | " + " | ".join(cells) +
                      f" | {'0 (open)' if e['interval']['open'] else _life_text(worst)} | "
                      f"{_life_text(best)} | {e['interval']['ends']} |")
+    lines += _split_lines(answer)
     lines += ["", f"Radial directions: {answer['directions']} (greatest radial load within "
               f"{100 * answer['direction_error']:.2f} % above the true one)."]
+    lines += [f"- {name}: {sel['about']}" for name, sel in answer["selections"].items()
+              if "about" in sel]
     lines += [f"- {name}: {why}" for name, why in answer["not_run"].items()]
     if answer["unrated"]:
         lines.append(f"- no catalogue data (no life): {', '.join(answer['unrated'])}")
@@ -339,6 +388,24 @@ def markdown(answer: dict) -> str:
         lines += ["", f"**{answer['open_reason']}.** The release that bounds it: "
                   f"{release['words']} ({', '.join(release['labels']) or 'none'})."]
     return "\n".join(lines) + "\n"
+
+
+def _split_lines(answer: dict) -> list[str]:
+    """Per bearing that carries axial load beyond ``e`` in some selection: at how many
+    instants ``P = X Fr + Y |Fa|`` in each, and the factors where the scene gives them.
+    """
+    lines = []
+    for e in answer["bearings"]:
+        counts = {n: s["axial_instants"] for n, s in e["selections"].items()}
+        if not any(counts.values()):
+            continue
+        factors = e["rating"]["X_Y_e"]
+        given = ("X, Y, e from ISO 281's tables" if isinstance(factors, str) else
+                 "X {:g}, Y {:g}, e {:g} as the scene gives them".format(*factors))
+        lines.append(f"- {e['bearing']}: P = X Fr + Y |Fa| (|Fa| > e Fr) at "
+                     + ", ".join(f"{k} ({n})" for n, k in counts.items())
+                     + f" of {len(answer['t_s'])} instants; {given}.")
+    return [""] + lines if lines else []
 
 
 def figure(answer: dict):
@@ -403,6 +470,12 @@ def add_parser(subparsers) -> None:
     p.add_argument("--out", default="results/life", help="output folder (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",),
                    help="comma-separated image formats (default png; any of png,svg,pdf)")
+    p.add_argument("--penalty", action="store_true",
+                   help="also rate the penalty-contact simulation's average (a simulation "
+                        "of the released line over the window; dynamic scenes)")
+    p.add_argument("--no-engine", dest="engine", action="store_false",
+                   help="leave out MuJoCo's forces (run by default where installed and the "
+                        "scene is expressible)")
     p.add_argument("--json", action="store_true",
                    help="print the whole answer as strict JSON on stdout (no files)")
     p.set_defaults(func=run)
@@ -410,7 +483,8 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     """The answer as JSON, or the files written (their paths on stdout)."""
-    answer = study(args.scene, args.instants, progress=bars.line)
+    answer = study(args.scene, args.instants, progress=bars.line, penalty=args.penalty,
+                   engine=args.engine)
     if not answer["bearings"]:
         bars.line(f"life: scene {answer['scene']} rates no bearing (no catalogue data)")
     if args.json:

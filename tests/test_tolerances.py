@@ -113,6 +113,22 @@ def test_every_sampled_load_lies_in_its_rigid_interval(tmp_path, effects):
         assert sample["outside"] == {form: 0 for form in tol.RUN}
 
 
+def test_a_bearing_pair_takes_sampled_clearances(tmp_path, capsys):
+    """axle-pinion calls for clearance and its pinion's O pair is one cone in the conic
+    compliance form: samples with seat offsets and clearances solve at every instant,
+    stay in the rigid set, and the command's JSON is strict."""
+    spec = _scene(tmp_path, "axle-pinion", "pair", seat=5e-5, clearance=5e-6)
+    for index in range(2):
+        sample = tol.run_sample(tol.Task(spec, 5, index, INSTANTS))
+        assert sample["solved"] == {form: INSTANTS for form in tol.RUN}
+        assert sample["outside"] == {form: 0 for form in tol.RUN}
+        assert all(set(lives) >= {"pinion.tail", "pinion.head"}
+                   for lives in sample["L10_Mrev"].values())
+    assert main(["tolerances", "axle-pinion", "--samples", "2", "--instants", "2",
+                 "--out", str(tmp_path / "json"), "--json", "--quiet"]) == 0
+    assert _strict(capsys.readouterr().out)["stored"] == 2
+
+
 def test_an_articulation_tolerance_moves_the_geometry(tmp_path):
     spec = _scene(tmp_path, "propshaft", "angles", angle=0.5)
     scene, op, _, _ = tol.nominal(spec, INSTANTS)
