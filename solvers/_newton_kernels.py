@@ -1,14 +1,17 @@
 """Compiled Newton method of the ``newton`` family (numba, extra ``numba``).
 
 The same method as :func:`._newton_numpy.newton_numpy`, its NumPy reference, one instant
-after the other (warm-started from the instant before where asked), with every array
-of an instant in scratch allocated once per call. Two places differ in how, not what:
-the left null space of ``E`` comes from the Cholesky factor of the nominal Hessian
-``H0`` (a pivot below ``NULL_RTOL`` of its diagonal entry marks a row dependent on the
+after the other (warm-started from the instants before where asked), its state named
+(:mod:`._newton_state`) and allocated once per call. Two places differ in how, not
+what: the left null space of ``E`` comes from a Cholesky factor with dependent rows
+skipped (a pivot below ``NULL_RTOL`` of its diagonal entry marks a row dependent on the
 rows before it; its null vector solves the leading block, then the vectors are made
-orthonormal) where the reference takes ``H0``'s eigenvectors, and a warm start's fit
-of ``u`` to the deformations is weighted by ``H0``'s slopes where the reference takes
-plain least squares. Both span the same subspace and reach the same optimum.
+orthonormal) where the reference takes ``H0``'s eigenvectors, and a per-instant fit of
+``u`` to given deformations is weighted by ``H0``'s slopes where the reference takes
+plain least squares. Both span the same subspace and reach the same optimum. A warm
+instant of a chain factors no ``H0``: the factor of its first step's Hessian gives the
+null space where that is the instant before's (:func:`_warm`), so a step of the chain
+costs one factor.
 
 Nothing raises on numbers: non-finite data end with status 3, a factor that is not
 positive definite with status 4 (:data:`._newton_numpy.REASONS`). No fastmath: every
@@ -21,15 +24,18 @@ from __future__ import annotations
 import numpy as np
 
 from ..driveline.compiled import HAVE_NUMBA, njit
+from ._newton_state import Data, Scratch
 
 if not HAVE_NUMBA:  # an optional extra: the caller takes the NumPy reference
     raise ImportError("numba is not installed")
 
 
-DENSE = 0.6
+DENSE = 0.3
 """Share of ``E``'s entries inside the columns' spans from which a Hessian is summed by
-one BLAS product (the conic forms' rotated rows) rather than by rank-one updates over
-the spans (the operator's rows: a contact loads two bodies of the line)."""
+one BLAS product rather than by rank-one updates over the spans: the short updates of
+the operator's rows (a contact loads two bodies of the line, about half the rows of
+``paper``) already take longer than the product of all rows, the conic forms' rotated
+rows are dense."""
 
 
 @njit(cache=True)
@@ -70,69 +76,6 @@ def _unit(dg, w, signed, norm, out):
 
 
 @njit(cache=True)
-def _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, U, dg,
-           unit):
-    """At ``u``: ``d = E'u``, the forces ``f``, per contact ``ratio``, ``slope``, its
-    direction ``U_c`` and ``Y_c = E_c U_c`` (G, m).
-    """
-    nv, m = Et.shape
-    for j in range(nv):
-        acc = 0.0
-        for i in range(span[j, 0], span[j, 1]):
-            acc += Et[j, i] * u[i]
-        d[j] = acc
-    for c in range(members.shape[0]):
-        w = 0
-        for j in range(members.shape[1]):
-            if mask[c, j] > 0:
-                dg[j] = d[members[c, j]]
-                w += 1
-        r, slope[c], ratio[c], s, norm = _contact(dg, w, signed[c], n[c], k[c], g[c])
-        _unit(dg, w, signed[c], norm, unit)
-        for i in range(m):
-            Y[c, i] = 0.0
-        for j in range(w):
-            col = members[c, j]
-            f[col] = r * unit[j]
-            U[c, j] = unit[j]
-            for i in range(span[col, 0], span[col, 1]):
-                Y[c, i] += Et[col, i] * unit[j]
-
-
-@njit(cache=True)
-def _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift, V, nk, rho, H, terms):
-    """``H = sum_c E_c H_c E_c' + shift I + rho V V'``; ``span[j]``: the rows where
-    column ``j`` can be nonzero. ``H_c = slope u u' + ratio (I - u u')`` is ``w``
-    rank-one terms: ``Y_c = E_c u`` and ``E_c h`` for the columns ``h`` of the
-    Householder reflection that maps ``e_1`` onto ``-+u`` (the rest are an orthonormal
-    basis of ``u``'s complement). ``terms``: ``(B, ranges, dense)``, the terms' rows
-    scaled by their roots and summed as ``B'B`` (one BLAS product where the columns are
-    dense, rank-one updates over their rows where they are not).
-    """
-    B, ranges, dense = terms
-    m, t = Et.shape[1], 0
-    for c in range(members.shape[0]):
-        w, lo, hi, length = 0, m, 0, 0.0
-        for p in range(members.shape[1]):
-            if mask[c, p] > 0:
-                col = members[c, p]
-                lo, hi = min(lo, span[col, 0]), max(hi, span[col, 1])
-                length += U[c, p] * U[c, p]
-                w += 1
-        if length == 0.0:  # no direction (an exactly unloaded linear contact): ratio I
-            for p in range(w):
-                col = members[c, p]
-                t = _term(B, ranges, t, Et[col], ratio[c], span[col, 0], span[col, 1])
-            continue
-        if slope[c] != 0.0:
-            t = _term(B, ranges, t, Y[c], slope[c], lo, hi)
-        if ratio[c] != 0.0 and w > 1:
-            t = _complement(Et, span, members[c], U[c], w, lo, hi, ratio[c], z, B, ranges, t)
-    _sum_terms(B, ranges, t, dense, H)
-    _finish(H, shift, V, nk, rho)
-
-
-@njit(cache=True)
 def _term(B, ranges, t, a, scale, lo, hi):
     """Row ``t`` of ``B``: ``sqrt(scale) a`` on rows ``lo:hi`` (0 elsewhere); ``t + 1``."""
     root = np.sqrt(scale)
@@ -157,43 +100,12 @@ def _sum_terms(B, ranges, count, dense, H):
 
 
 @njit(cache=True)
-def _complement(Et, span, cols, u, w, lo, hi, ratio, z, B, ranges, t):
-    """The terms of ``ratio E_c (I - u u') E_c'``: the reflection's columns 2..w."""
-    v0 = u[0] + (1.0 if u[0] >= 0 else -1.0)
-    vv = v0 * v0
-    for j in range(1, w):
-        vv += u[j] * u[j]
-    for q in range(1, w):
-        for i in range(lo, hi):
-            z[i] = 0.0
-        for j in range(w):
-            vj = v0 if j == 0 else u[j]
-            h = (1.0 if j == q else 0.0) - 2.0 * vj * u[q] / vv
-            for i in range(span[cols[j], 0], span[cols[j], 1]):
-                z[i] += Et[cols[j], i] * h
-        t = _term(B, ranges, t, z, ratio, lo, hi)
-    return t
-
-
-@njit(cache=True)
 def _rank_one(H, a, scale, lo, hi):
     """``H += scale a a'`` on the lower triangle of rows and columns ``lo:hi``."""
     for i in range(lo, hi):
         ai = scale * a[i]
         for j in range(lo, i + 1):
             H[i, j] += ai * a[j]
-
-
-@njit(cache=True)
-def _finish(H, shift, V, nk, rho):
-    """Add ``shift I + rho V V'`` to the lower triangle of ``H`` and mirror it."""
-    m = H.shape[0]
-    for i in range(m):
-        H[i, i] += shift
-        for j in range(i + 1):
-            for q in range(nk):
-                H[i, j] += rho * V[i, q] * V[j, q]
-            H[j, i] = H[i, j]
 
 
 @njit(cache=True)
@@ -249,40 +161,6 @@ def _solve(L, rhs, x, dependent, upto):
 
 
 @njit(cache=True)
-def _null_space(H0, L, dependent, V, rhs, x, rtol):
-    """Orthonormal null vectors of ``H0`` into ``V``'s first columns; returns their
-    count, or -1 where the factor fails. Each dependent row ``p`` gives ``v_p = 1``,
-    ``v_I = -H0_II^-1 H0_Ip`` over the independent rows before it.
-    """
-    m = H0.shape[0]
-    if not _cholesky(H0, L, dependent, rtol):
-        return -1
-    nk = 0
-    for p in range(m):
-        if not dependent[p]:
-            continue
-        for i in range(m):
-            rhs[i] = -H0[i, p]
-        _solve(L, rhs, x, dependent, p)
-        for i in range(m):
-            V[i, nk] = x[i] if i < p else 0.0
-        V[p, nk] = 1.0
-        for q in range(nk):  # modified Gram-Schmidt against the vectors before
-            dot = 0.0
-            for i in range(m):
-                dot += V[i, q] * V[i, nk]
-            for i in range(m):
-                V[i, nk] -= dot * V[i, q]
-        dot = 0.0
-        for i in range(m):
-            dot += V[i, nk] * V[i, nk]
-        for i in range(m):
-            V[i, nk] /= np.sqrt(dot)
-        nk += 1
-    return nk
-
-
-@njit(cache=True)
 def _project(v, V, nk):
     """``v - V V'v`` in place."""
     for q in range(nk):
@@ -293,54 +171,211 @@ def _project(v, V, nk):
             v[i] -= dot * V[i, q]
 
 
+
+
 @njit(cache=True)
-def _nominal(Et, span, e, members, mask, n, k, H0, terms):
-    """``H0`` (:func:`._newton_numpy.nominal`) into ``H0`` (summed as :func:`_hessian`
-    sums its terms); returns ``rho``, its mean diagonal.
-    """
-    B, ranges, dense = terms
-    m, t = Et.shape[1], 0
-    F = 0.0
+def _finish(H, shift, V, nk, rho):
+    """Add ``shift I + rho V V'`` to the lower triangle of ``H`` and mirror it."""
+    m = H.shape[0]
     for i in range(m):
-        F += e[i] * e[i]
-    F = max(np.sqrt(F), 1e-300)
-    for c in range(members.shape[0]):
-        c0 = n[c] * F ** (1.0 - 1.0 / n[c]) / k[c]
-        for p in range(members.shape[1]):
-            if mask[c, p] > 0:
-                col = members[c, p]
-                t = _term(B, ranges, t, Et[col], c0, span[col, 0], span[col, 1])
-    _sum_terms(B, ranges, t, dense, H0)
+        H[i, i] += shift
+        for j in range(i + 1):
+            for q in range(nk):
+                H[i, j] += rho * V[i, q] * V[j, q]
+            H[j, i] = H[i, j]
+
+
+@njit(cache=True)
+def _norm(v):
+    """``max(||v||, 1e-300)``."""
+    acc = 0.0
+    for x in v:
+        acc += x * x
+    return max(np.sqrt(acc), 1e-300)
+
+
+@njit(cache=True)
+def _gather(d, delta, t, x_members, x_mask, out):
+    """One contact's deformations ``d + t delta`` into ``out``; returns its width."""
+    w = 0
+    for j in range(len(x_members)):
+        if x_mask[j] > 0:
+            out[j] = d[x_members[j]] + t * delta[x_members[j]]
+            w += 1
+    return w
+
+
+@njit(cache=True)
+def _state(x: Data, c, s: Scratch, u):
+    """At ``u``: ``s.d = E'u`` and the contacts there (:func:`_contacts`)."""
+    nv = x.Et.shape[0]
+    for j in range(nv):
+        acc = 0.0
+        for i in range(x.span[j, 0], x.span[j, 1]):
+            acc += x.Et[j, i] * u[i]
+        s.d[j] = acc
+    _contacts(x, c, s, s.d)
+
+
+@njit(cache=True)
+def _contacts(x: Data, c, s: Scratch, d):
+    """At deformations ``d``: the forces ``s.f``, per contact ``s.ratio``, ``s.slope``
+    and its direction ``s.U[q]``.
+    """
+    for q in range(c.members.shape[0]):
+        w = _gather(d, d, 0.0, c.members[q], c.mask[q], s.dg)
+        r, s.slope[q], s.ratio[q], _, norm = _contact(s.dg, w, c.signed[q], c.n[q],
+                                                      x.k[q], x.g[q])
+        _unit(s.dg, w, c.signed[q], norm, s.U[q])
+        for j in range(w):
+            s.f[c.members[q, j]] = r * s.U[q, j]
+
+
+@njit(cache=True)
+def _hessian(x: Data, c, s: Scratch, shift, nk, rho):
+    """``s.H = sum_q E_q H_q E_q' + shift I + rho V V'`` (``V``'s first ``nk`` columns).
+    ``H_q = slope u u' + ratio (I - u u') = ratio I + (slope - ratio) u u'`` sums as
+    rank-one terms: ``ratio`` times each column of ``E_q`` and ``slope - ratio`` times
+    ``E_q u``, both >= 0 for every law of the family (``slope / ratio = n s / (s - g)
+    >= 1``; rounding clamped), summed by :func:`_sum_terms`.
+    """
+    m, t = x.Et.shape[1], 0
+    for q in range(c.members.shape[0]):
+        lo, hi = m, 0
+        s.z[:] = 0.0
+        for p in range(c.members.shape[1]):
+            if c.mask[q, p] > 0:
+                col = c.members[q, p]
+                a, b = x.span[col, 0], x.span[col, 1]
+                lo, hi = min(lo, a), max(hi, b)
+                if s.ratio[q] != 0.0:
+                    t = _term(s.B, s.ranges, t, x.Et[col], s.ratio[q], a, b)
+                for i in range(a, b):
+                    s.z[i] += x.Et[col, i] * s.U[q, p]
+        extra = s.slope[q] - s.ratio[q]
+        if extra > 0.0:
+            t = _term(s.B, s.ranges, t, s.z, extra, lo, hi)
+    _sum_terms(s.B, s.ranges, t, s.dense, s.H)
+    _finish(s.H, shift, s.V, nk, rho)
+
+
+@njit(cache=True)
+def _nominal_slope(c, q, F, k):
+    """Contact ``q``'s slope at the load ``F``: ``c0 = n F^(1 - 1/n) / k``."""
+    return c.n[q] * F ** (1.0 - 1.0 / c.n[q]) / k[q]
+
+
+@njit(cache=True)
+def _nominal(x: Data, c, s: Scratch):
+    """``H0`` (:func:`._newton_numpy.nominal`) into ``s.H0`` (summed as
+    :func:`_hessian` sums its terms); returns ``rho``, its mean diagonal.
+    """
+    m, t = x.Et.shape[1], 0
+    F = _norm(x.e)
+    for q in range(c.members.shape[0]):
+        c0 = _nominal_slope(c, q, F, x.k)
+        for p in range(c.members.shape[1]):
+            if c.mask[q, p] > 0:
+                col = c.members[q, p]
+                t = _term(s.B, s.ranges, t, x.Et[col], c0, x.span[col, 0], x.span[col, 1])
+    _sum_terms(s.B, s.ranges, t, s.dense, s.H0)
     trace = 0.0
     for i in range(m):
-        trace += H0[i, i]
+        trace += s.H0[i, i]
         for j in range(i):
-            H0[j, i] = H0[i, j]
+            s.H0[j, i] = s.H0[i, j]
     return max(trace / m, 1e-300)
 
 
 @njit(cache=True)
-def _slope(d, delta, t, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg, unit):
+def _rho(x: Data, c):
+    """``H0``'s mean diagonal without ``H0``: ``sum_q c0_q ||E_q||_F^2 / m``."""
+    F, acc = _norm(x.e), 0.0
+    for q in range(c.members.shape[0]):
+        c0 = _nominal_slope(c, q, F, x.k)
+        for p in range(c.members.shape[1]):
+            if c.mask[q, p] > 0:
+                col = c.members[q, p]
+                for i in range(x.span[col, 0], x.span[col, 1]):
+                    acc += c0 * x.Et[col, i] * x.Et[col, i]
+    return max(acc / x.Et.shape[1], 1e-300)
+
+
+@njit(cache=True)
+def _null_space(M, s: Scratch, rtol):
+    """Factor ``M`` into ``s.L``, its rows below ``rtol`` skipped as dependent, and its
+    null vectors, orthonormal, into ``s.V``'s first columns; returns their count, or -1
+    where the factor fails. Each dependent row ``p`` gives ``v_p = 1``, ``v_I = -M_II^-1
+    M_Ip`` over the independent rows before it.
+    """
+    m = M.shape[0]
+    if not _cholesky(M, s.L, s.dependent, rtol):
+        return -1
+    nk = 0
+    for p in range(m):
+        if not s.dependent[p]:
+            continue
+        for i in range(m):
+            s.rhs[i] = -M[i, p]
+        _solve(s.L, s.rhs, s.du, s.dependent, p)
+        for i in range(m):
+            s.V[i, nk] = s.du[i] if i < p else 0.0
+        s.V[p, nk] = 1.0
+        for q in range(nk):  # modified Gram-Schmidt against the vectors before
+            dot = 0.0
+            for i in range(m):
+                dot += s.V[i, q] * s.V[i, nk]
+            for i in range(m):
+                s.V[i, nk] -= dot * s.V[i, q]
+        length = _norm(s.V[:, nk])
+        for i in range(m):
+            s.V[i, nk] /= length
+        nk += 1
+    return nk
+
+
+@njit(cache=True)
+def _in_left_null_space(x: Data, s: Scratch, nk, rtol):
+    """Whether ``V``'s first ``nk`` columns are null vectors of ``E'``: ``||E'v||^2 <=
+    rtol ||E||_F^2 / m`` each (a direction only an idle contact would resist is not).
+    """
+    nv, m = x.Et.shape
+    if nk == 0:
+        return True
+    scale = 0.0
+    for j in range(nv):
+        for i in range(x.span[j, 0], x.span[j, 1]):
+            scale += x.Et[j, i] * x.Et[j, i]
+    for q in range(nk):
+        acc = 0.0
+        for j in range(nv):
+            dot = 0.0
+            for i in range(x.span[j, 0], x.span[j, 1]):
+                dot += x.Et[j, i] * s.V[i, q]
+            acc += dot * dot
+        if not acc <= rtol * scale / m:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _slope(x: Data, c, s: Scratch, t, u, du, e_du, rho_soft):
     """``Phi``'s first and second derivative along ``du`` at ``u + t du``
-    (``delta = E'du``, ``e_du = e'du``).
+    (``s.delta = E'du``, ``e_du = e'du``).
     """
     first = -e_du
     second = 0.0
     for i in range(len(u)):
         first += rho_soft * (u[i] + t * du[i]) * du[i]
         second += rho_soft * du[i] * du[i]
-    for c in range(members.shape[0]):
-        w = 0
-        for j in range(members.shape[1]):
-            if mask[c, j] > 0:
-                dg[j] = d[members[c, j]] + t * delta[members[c, j]]
-                w += 1
-        r, slope, ratio, s, norm = _contact(dg, w, signed[c], n[c], k[c], g[c])
-        _unit(dg, w, signed[c], norm, unit)
+    for q in range(c.members.shape[0]):
+        w = _gather(s.d, s.delta, t, c.members[q], c.mask[q], s.dg)
+        r, slope, ratio, _, norm = _contact(s.dg, w, c.signed[q], c.n[q], x.k[q], x.g[q])
+        _unit(s.dg, w, c.signed[q], norm, s.unit)
         along, length = 0.0, 0.0
         for j in range(w):
-            dj = delta[members[c, j]]
-            along += unit[j] * dj
+            dj = s.delta[c.members[q, j]]
+            along += s.unit[j] * dj
             length += dj * dj
         first += r * along
         second += ratio * length + (slope - ratio) * along * along
@@ -348,20 +383,17 @@ def _slope(d, delta, t, u, du, e_du, rho_soft, members, mask, signed, n, k, g, d
 
 
 @njit(cache=True)
-def _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg,
-                 unit, ls_rtol, ls_max):
+def _line_search(x: Data, c, s: Scratch, u, du, e_du, rho_soft, p):
     """:func:`._newton_numpy.line_search`: the exact step length (0 where the slope at 0 is
     not negative).
     """
-    start, _ = _slope(d, delta, 0.0, u, du, e_du, rho_soft, members, mask, signed, n, k,
-                      g, dg, unit)
+    start, _ = _slope(x, c, s, 0.0, u, du, e_du, rho_soft)
     if not start < 0:
         return 0.0
     lo, hi, t = 0.0, np.inf, 1.0
-    for _ in range(ls_max):
-        first, second = _slope(d, delta, t, u, du, e_du, rho_soft, members, mask, signed,
-                               n, k, g, dg, unit)
-        if abs(first) <= ls_rtol * abs(start):
+    for _ in range(p.ls_max):
+        first, second = _slope(x, c, s, t, u, du, e_du, rho_soft)
+        if abs(first) <= p.ls_rtol * abs(start):
             return t
         if first < 0:
             lo = t
@@ -375,197 +407,190 @@ def _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g
 
 
 @njit(cache=True)
-def _finite(Et, e, k, g):
+def _finite(x: Data):
     """Whether one instant's data are finite and its stiffnesses positive."""
-    for x in Et.ravel():
-        if not np.isfinite(x):
+    for v in x.Et.ravel():
+        if not np.isfinite(v):
             return False
-    for x in e:
-        if not np.isfinite(x):
+    for v in x.e:
+        if not np.isfinite(v):
             return False
-    for c in range(len(k)):
-        if not (np.isfinite(k[c]) and np.isfinite(g[c]) and k[c] > 0):
+    for q in range(len(x.k)):
+        if not (np.isfinite(x.k[q]) and np.isfinite(x.g[q]) and x.k[q] > 0):
             return False
     return True
 
 
 @njit(cache=True)
-def _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u):
-    """``u`` whose deformations fit ``hint`` in ``H0``'s weights: ``(E D0 E') u = E D0
-    hint`` through ``L`` (the factor of ``H0 + rho V V' + mu I``).
+def _fit(x: Data, c, s: Scratch, hint, weights, u):
+    """``u`` whose deformations fit ``hint`` in the contacts' ``weights``: ``(E W E') u
+    = E W hint`` through ``s.L`` (the factor of ``E W E'``, its dependent rows skipped),
+    ``W`` the contacts' Hessians: ``H0``'s (``weights`` None) or those at ``hint``
+    (``H_q d_q = slope_q d_q`` there, ``weights`` the slopes).
     """
-    m = Et.shape[1]
-    F = 0.0
-    for i in range(m):
-        F += e[i] * e[i]
-    F = max(np.sqrt(F), 1e-300)
-    for i in range(m):
-        rhs[i] = 0.0
-    for c in range(members.shape[0]):
-        c0 = n[c] * F ** (1.0 - 1.0 / n[c]) / k[c]
-        for p in range(members.shape[1]):
-            if mask[c, p] > 0:
-                col = members[c, p]
-                for i in range(span[col, 0], span[col, 1]):
-                    rhs[i] += c0 * Et[col, i] * hint[col]
-    _solve(L, rhs, u, dependent, m)
+    m = x.Et.shape[1]
+    F = _norm(x.e)
+    s.rhs[:] = 0.0
+    for q in range(c.members.shape[0]):
+        c0 = _nominal_slope(c, q, F, x.k) if weights is None else weights[q]
+        for p in range(c.members.shape[1]):
+            if c.mask[q, p] > 0:
+                col = c.members[q, p]
+                for i in range(x.span[col, 0], x.span[col, 1]):
+                    s.rhs[i] += c0 * x.Et[col, i] * hint[col]
+    _solve(s.L, s.rhs, u, s.dependent, m)
 
 
 @njit(cache=True)
-def _gradient(Et, span, e, f, u, rho_soft, V, nk, grad):
-    """``(I - V V')(E f - e + rho_soft u)`` into ``grad``; returns its norm."""
-    nv, m = Et.shape
+def _gradient(x: Data, s: Scratch, u, rho_soft, nk):
+    """``(I - V V')(E f - e + rho_soft u)`` into ``s.grad``; returns its norm."""
+    nv, m = x.Et.shape
     for i in range(m):
-        grad[i] = -e[i] + rho_soft * u[i]
+        s.grad[i] = -x.e[i] + rho_soft * u[i]
     for j in range(nv):
-        for i in range(span[j, 0], span[j, 1]):
-            grad[i] += Et[j, i] * f[j]
-    _project(grad, V, nk)
-    norm = 0.0
+        for i in range(x.span[j, 0], x.span[j, 1]):
+            s.grad[i] += x.Et[j, i] * s.f[j]
+    _project(s.grad, s.V, nk)
+    acc = 0.0
     for i in range(m):
-        norm += grad[i] * grad[i]
-    return np.sqrt(norm)
+        acc += s.grad[i] * s.grad[i]
+    return np.sqrt(acc)
 
 
 @njit(cache=True)
-def _start(Et, span, e, groups, k, g, hints, use_hint, null_rtol, s, terms, u):
-    """An instant's start: ``H0``, its null space ``V`` and the first step's factor
-    ``L`` (``H0``'s, its dependent rows skipped: a right-hand side orthogonal to ``V``
-    has a solution there, which the caller projects out of ``V``) in the scratch ``s``,
-    ``u`` cold (0) or fitted to the first of ``hints`` (the deformations to start
-    from, and another or ``None``: then the fit of the two with the smaller gradient).
-    Returns ``(code, rho, nk)``: a nonzero code ends the instant (3 non-finite data, 4
-    no factor).
+def _start(x: Data, c, p, s: Scratch, hint, use_hint, u):
+    """A cold start: ``H0``, its null space ``V`` and its factor in ``s.L`` (dependent
+    rows skipped: a right-hand side orthogonal to ``V`` has a solution there, which the
+    caller projects out of ``V``); ``u`` 0, or fitted to the deformations ``hint``.
+    Returns ``(code, rho, nk, factored)``: a nonzero code ends the instant (3
+    non-finite data, 4 no factor); ``factored``: ``s.L`` is the first step's factor.
     """
-    members, mask, signed, n = groups
-    H0, _, L, V, dependent, rhs, du = s[:7]
-    hint, other = hints
-    m = Et.shape[1]
-    if not _finite(Et, e, k, g):
-        return 3, 0.0, 0
-    rho = _nominal(Et, span, e, members, mask, n, k, H0, terms)
-    nk = _null_space(H0, L, dependent, V, rhs, du, null_rtol)
+    if not _finite(x):
+        return 3, 0.0, 0, False
+    rho = _nominal(x, c, s)
+    nk = _null_space(s.H0, s, p.null_rtol)
     if nk < 0:
-        return 4, rho, 0
-    for i in range(m):
-        u[i] = 0.0
+        return 4, rho, 0, False
+    u[:] = 0.0
     if use_hint:
-        _fit(Et, span, e, hint, members, mask, n, k, L, dependent, rhs, u)
-        _project(u, V, nk)
-    if use_hint and other is not None:
-        first = _start_gradient(Et, span, e, groups, k, g, V, nk, s, u)
-        _fit(Et, span, e, other, members, mask, n, k, L, dependent, rhs, du)
-        _project(du, V, nk)
-        if _start_gradient(Et, span, e, groups, k, g, V, nk, s, du) < first:
-            for i in range(m):
-                u[i] = du[i]
-    return 0, rho, nk
+        _fit(x, c, s, hint, None, u)
+        _project(u, s.V, nk)
+    return 0, rho, nk, not use_hint
 
 
 @njit(cache=True)
-def _start_gradient(Et, span, e, groups, k, g, V, nk, s, u):
-    """``||(I - V V')(E f - e)||`` at ``u`` (a start's measure, in the scratch ``s``)."""
-    members, mask, signed, n = groups
-    _, _, _, _, _, _, _, grad, d, f, _, ratio, slope, Y, U, _, dg, unit = s
-    _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, U, dg, unit)
-    return _gradient(Et, span, e, f, u, 0.0, V, nk, grad)
-
-
-@njit(cache=True)
-def _instant(Et, span, e, groups, k, g, hints, use_hint, tol, max_iter, soften, params, s,
-             terms, u):
-    """One instant into ``u``; returns ``(status, iterations)`` (``groups``: members,
-    mask, signed, n; ``s``, ``terms``: the scratch of :func:`newton`).
+def _warm(x: Data, c, p, s: Scratch, hint, u, nk_before):
+    """A warm start from deformations ``hint`` (a chain's extrapolation): unsoftened,
+    the Hessian at ``hint`` (no ``H0``) gives the null space ``V`` through its factor,
+    dependent rows skipped, where that is ``E'``'s left null space of the dimension
+    the instant before had, and ``u`` is fitted to ``hint`` in its weights (:func:`_fit`);
+    else :func:`_start` fits ``u`` in ``H0``'s. Returns as :func:`_start`.
     """
-    members, mask, signed, n = groups
-    H0, H, L, V, dependent, rhs, du, grad, d, f, delta, ratio, slope, Y, U, z, dg, unit = s
-    null_rtol, reg_rtol, ls_rtol, ls_max, stall = params
-    m = Et.shape[1]
-    code, rho, nk = _start(Et, span, e, groups, k, g, hints, use_hint, null_rtol, s, terms,
-                           u)
-    if code:
-        return code, 0
-    rho_soft, shift = soften * rho, reg_rtol * rho
-    scale = 0.0
-    for i in range(m):
-        scale += e[i] * e[i]
-    scale = max(np.sqrt(scale), 1e-300)
-    for it in range(max_iter + 1):
-        _state(Et, span, u, members, mask, signed, n, k, g, d, f, ratio, slope, Y, U, dg,
-               unit)
-        norm = _gradient(Et, span, e, f, u, rho_soft, V, nk, grad)
+    if not _finite(x):
+        return 3, 0.0, 0, False
+    if p.soften == 0.0:
+        rho = _rho(x, c)
+        _contacts(x, c, s, hint)
+        _hessian(x, c, s, p.reg_rtol * rho, 0, rho)
+        nk = _null_space(s.H, s, p.null_rtol)
+        if nk == nk_before and _in_left_null_space(x, s, nk, p.null_rtol):
+            _fit(x, c, s, hint, s.slope, u)
+            _project(u, s.V, nk)
+            return 0, rho, nk, True
+    return _start(x, c, p, s, hint, True, u)
+
+
+@njit(cache=True)
+def _iterate(x: Data, c, p, s: Scratch, u, rho, nk, factored):
+    """Newton's method from ``u`` (``factored``: ``s.L`` holds the first step's factor);
+    returns ``(status, iterations)``.
+    """
+    rho_soft, shift = p.soften * rho, p.reg_rtol * rho
+    m = x.Et.shape[1]
+    scale = _norm(x.e)
+    for it in range(p.max_iter + 1):
+        _state(x, c, s, u)
+        norm = _gradient(x, s, u, rho_soft, nk)
         if not np.isfinite(norm):
             return 3, it
-        if norm <= tol * scale:
+        if norm <= p.tol * scale:
             return 0, it
-        if it == max_iter:
+        if it == p.max_iter:
             break
-        if it > 0 or use_hint:
-            _hessian(Et, span, members, mask, ratio, slope, Y, U, z, shift + rho_soft, V, nk,
-                     rho, H, terms)
-            if not _cholesky(H, L, dependent, 0.0):
+        if it > 0 or not factored:
+            _hessian(x, c, s, shift + rho_soft, nk, rho)
+            if not _cholesky(s.H, s.L, s.dependent, 0.0):
                 return 4, it
         for i in range(m):
-            rhs[i] = -grad[i]
-        _solve(L, rhs, du, dependent, m)
-        _project(du, V, nk)  # (H0's factor skips its dependent rows: held out here)
-        t = _step(Et, span, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol,
-                  ls_max)
-        if t == 0.0:  # no decrease left: rounding, solved if within STALL tol
-            return (0 if norm <= stall * tol * scale else 2), it
-    return 1, max_iter
+            s.rhs[i] = -s.grad[i]
+        _solve(s.L, s.rhs, s.du, s.dependent, m)
+        _project(s.du, s.V, nk)  # (a factor with dependent rows skipped: held out here)
+        if _step(x, c, s, u, rho_soft, p) == 0.0:  # no decrease left: rounding
+            return (0 if norm <= p.stall * p.tol * scale else 2), it
+    return 1, p.max_iter
 
 
 @njit(cache=True)
-def _step(Et, span, e, u, du, d, delta, rho_soft, groups, k, g, dg, unit, ls_rtol,
-          ls_max):
-    """The line search along ``du`` from ``u`` and the move; returns the length."""
-    members, mask, signed, n = groups
-    nv, m = Et.shape
+def _step(x: Data, c, s: Scratch, u, rho_soft, p):
+    """The line search along ``s.du`` from ``u`` and the move; returns the length."""
+    nv, m = x.Et.shape
     e_du = 0.0
     for i in range(m):
-        e_du += e[i] * du[i]
+        e_du += x.e[i] * s.du[i]
     for j in range(nv):
         acc = 0.0
-        for i in range(span[j, 0], span[j, 1]):
-            acc += Et[j, i] * du[i]
-        delta[j] = acc
-    t = _line_search(d, delta, u, du, e_du, rho_soft, members, mask, signed, n, k, g, dg,
-                     unit, ls_rtol, int(ls_max))
+        for i in range(x.span[j, 0], x.span[j, 1]):
+            acc += x.Et[j, i] * s.du[i]
+        s.delta[j] = acc
+    t = _line_search(x, c, s, u, s.du, e_du, rho_soft, p)
     for i in range(m):
-        u[i] += t * du[i]
+        u[i] += t * s.du[i]
     return t
 
 
 @njit(cache=True)
-def newton(Et, span, e, members, mask, signed, n, k, g, d0, start, chain, tol, max_iter,
-           soften, params):
+def _scratch(nv, m, G, w, dense):
+    """A :class:`Scratch` for ``m`` rows, ``nv`` columns and ``G`` contacts of width
+    ``w``.
+    """
+    return Scratch(np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)),
+                   np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
+                   np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G), np.zeros(G),
+                   np.zeros((G, w)), np.zeros(m), np.zeros(w), np.zeros(w),
+                   np.zeros((nv + G, m)), np.zeros((nv + G, 2), np.int64), dense)
+
+
+@njit(cache=True)
+def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
     """:func:`._newton_numpy.newton_numpy` compiled: ``(u, d, status, iterations)``. ``Et``
     (T, nv, m) holds ``E'`` (a column of ``E`` a contiguous row), ``span`` (nv, 2) the
-    rows ``[lo, hi)`` where each column can be nonzero at any instant.
+    rows ``[lo, hi)`` where each column can be nonzero at any instant; ``contacts`` a
+    :class:`._newton_state.Contacts`, ``params`` a :class:`._newton_state.Params`.
     """
     T, nv, m = Et.shape
-    G, w = members.shape
-    scratch = (np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)),
-               np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
-               np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G), np.zeros(G),
-               np.zeros((G, m)), np.zeros((G, w)), np.zeros(m), np.zeros(w), np.zeros(w))
     covered = 0
     for j in range(nv):
         covered += span[j, 1] - span[j, 0]
-    terms = (np.zeros((nv, m)), np.zeros((nv, 2), np.int64), covered >= DENSE * nv * m)
+    s = _scratch(nv, m, contacts.members.shape[0], contacts.members.shape[1],
+                 covered >= DENSE * nv * m)
     u_out, d_out = np.zeros((T, m)), np.zeros((T, nv))
     status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
-    groups = (members, mask, signed, n)
+    hint = np.zeros(nv)
+    nk = 0
     for i in range(T):
-        warm = chain and i > 0
-        hints = (d0[i], None)
-        if warm:  # the answer before, or extrapolated linearly from the two before
-            hints = ((2.0 * d_out[i - 1] - d_out[i - 2], d_out[i - 1]) if i > 1 else
-                     (d_out[i - 1], None))
-        status[i], iters[i] = _instant(Et[i], span, e[i], groups, k[i], g[i], hints,
-                                       warm or start[i], tol, max_iter, soften, params,
-                                       scratch, terms, u_out[i])
+        x = Data(Et[i], span, e[i], k[i], g[i])
+        if chain and i > 0 and status[i - 1] == 0:  # the answer before, extrapolated
+            earlier = i - 2 if i > 1 and status[i - 2] == 0 else i - 1
+            hint[:] = 2.0 * d_out[i - 1] - d_out[earlier]
+            code, rho, nk, factored = _warm(x, contacts, params, s, hint, u_out[i], nk)
+        else:
+            code, rho, nk, factored = _start(x, contacts, params, s, d0[i], start[i],
+                                             u_out[i])
+        if code:
+            status[i] = code
+        else:
+            status[i], iters[i] = _iterate(x, contacts, params, s, u_out[i], rho, nk,
+                                           factored)
         for j in range(nv):
             acc = 0.0
             for r in range(span[j, 0], span[j, 1]):

@@ -21,8 +21,10 @@ NULL_RTOL = 1e-10
 marks a row dependent on the rows before it (a left null direction of ``E``)."""
 REG_RTOL = 1e-13
 """``mu / rho``: the shift that keeps a step's factor positive definite."""
-LS_RTOL = 1e-10
-"""The line search stops at a slope below this fraction of its start's."""
+LS_RTOL = 1e-3
+"""The line search stops at a slope below this fraction of its start's (MuJoCo's
+``ls_tolerance`` is 1e-2): near the optimum the full step is there at once, and a
+tighter fraction only chases rounding in the slope."""
 STALL = 100.0
 """Where the line search finds no decrease left (rounding), the instant counts as
 solved if ``||grad|| <= STALL tol ||e||`` (1e-10 at the default ``TOL``: the package's
@@ -154,8 +156,9 @@ def newton_numpy(E, e, groups: Groups, k, g, d0=None, start=None, chain=False,
     """The method at T instants, one after the other (the kernel's NumPy reference).
 
     ``E`` (T, m, nv), ``e`` (T, m), ``k``, ``g`` (T, G); ``d0`` (T, nv) deformations to
-    start from where ``start`` (T,) is set; ``chain``: each instant after the first
-    starts from the answer before it. Returns ``u`` (T, m), ``d`` (T, nv), status codes
+    start from where ``start`` (T,) is set; ``chain``: each instant after a solved one
+    starts from the linear extrapolation of the deformations of the two before (fitted
+    by least squares). Returns ``u`` (T, m), ``d`` (T, nv), status codes
     and iterations (T,).
     """
     T, m, nv = E.shape
@@ -163,23 +166,16 @@ def newton_numpy(E, e, groups: Groups, k, g, d0=None, start=None, chain=False,
     status, iters = np.zeros(T, np.int64), np.zeros(T, np.int64)
     for i in range(T):
         hint = d0[i] if start is not None and start[i] else None
-        if chain and i:  # the answer before, or extrapolated from the two before
-            hint = (2.0 * d_out[i - 1] - d_out[i - 2], d_out[i - 1]) if i > 1 else d_out[
-                i - 1]
+        if chain and i and status[i - 1] == 0:  # the answer before, extrapolated
+            earlier = d_out[i - 2] if i > 1 and status[i - 2] == 0 else d_out[i - 1]
+            hint = 2.0 * d_out[i - 1] - earlier
         u_out[i], status[i], iters[i] = _one(E[i], e[i], groups, k[i], g[i], hint, tol,
                                              max_iter, soften)
         d_out[i] = E[i].T @ u_out[i]
     return u_out, d_out, status, iters
 
 
-def _fitted(E, e, groups, k, g, project, hint):
-    """``u`` whose deformations fit ``hint`` (least squares, out of the null space); of
-    a pair of hints, the fit with the smaller gradient.
-    """
-    fits = [project @ np.linalg.lstsq(E.T, h, rcond=None)[0]
-            for h in (hint if isinstance(hint, tuple) else (hint,))]
-    return min(fits, key=lambda u: np.linalg.norm(
-        project @ (E @ forces(E.T @ u, groups, k, g) - e)))
+
 
 
 def _one(E, e, groups, k, g, hint, tol, max_iter, soften):
@@ -191,7 +187,8 @@ def _one(E, e, groups, k, g, hint, tol, max_iter, soften):
     V = null_basis(H0)
     project = np.eye(len(e)) - V @ V.T
     rho_soft = soften * rho
-    u = np.zeros(len(e)) if hint is None else _fitted(E, e, groups, k, g, project, hint)
+    u = (np.zeros(len(e)) if hint is None  # else deformations fitted by least squares
+         else project @ np.linalg.lstsq(E.T, hint, rcond=None)[0])
     scale = max(float(np.linalg.norm(e)), 1e-300)
     for it in range(max_iter + 1):
         d = E.T @ u

@@ -76,6 +76,7 @@ from ._newton_numpy import (
     groups_of,
     newton_numpy,
 )
+from ._newton_state import Contacts, Params
 from .batch import BatchOutcome
 from .record import Outcome
 from .registry import Backend
@@ -104,12 +105,12 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
     T, m, nv = E.shape
     d0 = np.zeros((T, nv)) if d0 is None else np.ascontiguousarray(d0, float)
     start = np.zeros(T, np.bool_) if start is None else np.asarray(start, np.bool_)
+    contacts = Contacts(groups.members, groups.mask, groups.signed, groups.n)
+    params = Params(float(tol), int(max_iter), float(soften), NULL_RTOL, REG_RTOL, LS_RTOL,
+                    int(LS_MAX), STALL)
     return kernel(np.ascontiguousarray(np.swapaxes(E, 1, 2), float), spans(E),
-                  np.ascontiguousarray(e, float),
-                  groups.members, groups.mask, groups.signed, groups.n,
-                  np.ascontiguousarray(k, float), np.ascontiguousarray(g, float), d0, start,
-                  bool(chain), float(tol), int(max_iter), float(soften),
-                  (NULL_RTOL, REG_RTOL, LS_RTOL, float(LS_MAX), STALL))
+                  np.ascontiguousarray(e, float), contacts, np.ascontiguousarray(k, float),
+                  np.ascontiguousarray(g, float), d0, start, bool(chain), params)
 
 
 def spans(E) -> np.ndarray:
