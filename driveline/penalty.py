@@ -422,12 +422,12 @@ def _load_compiled(scene: Scene, kernel: str, method: str, damping_length_unit_m
     begin = _time.perf_counter()
     model = _Model(scene, damping_length_unit_m)
     y0, t0 = model.initial_state(), scene.time.start_s
-    kernels.rhs(t0, y0, *model.kernel_args)
+    kernels.rhs(t0, y0, model.arrays)
     model.jacobian_compiled(t0, y0)
     if method == COMPILED:
         atol, _ = model.tolerances(1e-8)
-        run = kernels.start(t0, y0, t0 + 1e-6, atol, RTOL, model.kernel_args)
-        kernels.advance(run, t0, t0 + 1e-6, atol, RTOL, model.kernel_args, np.zeros(0),
+        run = kernels.start(t0, y0, t0 + 1e-6, atol, RTOL, model.arrays)
+        kernels.advance(run, t0, t0 + 1e-6, atol, RTOL, model.arrays, np.zeros(0),
                         np.zeros((0, len(y0))))
     _LOADED.add(key)
     return _time.perf_counter() - begin

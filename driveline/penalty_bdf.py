@@ -224,7 +224,7 @@ def _change_d(d, order, factor, rescale):
 
 
 @kernel()
-def initial_step(t0, y0, t_bound, atol, rtol, counts, args):
+def initial_step(t0, y0, t_bound, atol, rtol, counts, model):
     """SciPy's ``select_initial_step`` for a first-order estimate (Hairer, Norsett and
     Wanner, Solving ODEs I, sec. II.4); returns it and ``f(t0, y0)``. Its two
     right-hand sides are :func:`rhs`'s (one compiled copy; the integrator's own is
@@ -232,13 +232,12 @@ def initial_step(t0, y0, t_bound, atol, rtol, counts, args):
     record).
     """
     scale = atol + rtol * np.abs(y0)
-    n_shafts, bodies, topology, geometry, laws, loads = args
     counts.fev += 2
-    f0 = rhs(t0, y0, n_shafts, bodies, topology, geometry, laws, loads)
+    f0 = rhs(t0, y0, model)
     d0, d1 = _norm(y0, scale), _norm(f0, scale)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
     h0 = min(h0, t_bound - t0)
-    f1 = rhs(t0 + h0, y0 + h0 * f0, n_shafts, bodies, topology, geometry, laws, loads)
+    f1 = rhs(t0 + h0, y0 + h0 * f0, model)
     d2 = _norm(f1 - f0, scale) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:
         h1 = max(1e-6, h0 * 1e-3)
@@ -248,13 +247,13 @@ def initial_step(t0, y0, t_bound, atol, rtol, counts, args):
 
 
 @kernel()
-def start(t0, y0, t_bound, atol, rtol, args):
+def start(t0, y0, t_bound, atol, rtol, model):
     """A run's state at ``t0`` (a :class:`Run`) for :func:`advance`: its first step
     (:func:`initial_step`), differences ``D`` and Jacobian, and every scratch array a
     step needs, made here once: a step allocates nothing.
     """
-    n, nb = y0.shape[0], args[1].shape[0]
-    linked = _linked(nb, args[2])
+    n, nb = y0.shape[0], model.mass.shape[0]
+    linked = _linked(nb, model.topology)
     vectors = np.zeros((10, n))
     rescale = np.zeros((3, MAX_ORDER + 1, MAX_ORDER + 1))
     work = Work(
@@ -263,17 +262,17 @@ def start(t0, y0, t_bound, atol, rtol, args):
                         solve_q=vectors[8], solve_r=vectors[9]),
         rescale=Rescale(r=rescale[0], u=rescale[1], ru=rescale[2],
                         old=np.zeros((MAX_ORDER + 1, n))),
-        contacts=new_contact_state(y0, nb, args[2].shape[0]),
+        contacts=new_contact_state(y0, nb, model.topology.shape[0]),
         jacobian=new_jacobian_scratch(nb, n))
     counts_record, clock_record = np.zeros(1, dtype=COUNTS), np.zeros(1, dtype=CLOCK)
     counts, clock = counts_record[0], clock_record[0]
     counts.order = 1
-    h, f0 = initial_step(t0, y0, t_bound, atol, rtol, counts, args)
+    h, f0 = initial_step(t0, y0, t_bound, atol, rtol, counts, model)
     d = np.zeros((MAX_ORDER + 3, n))
     d[0], d[1] = y0, f0 * h
     counts.jev += 1
     jac = np.empty((n, n))
-    _jacobian_into(t0, y0, args, jac, linked, work.contacts, work.jacobian)
+    _jacobian_into(t0, y0, model, jac, linked, work.contacts, work.jacobian)
     counts.jac_current = 1
     clock.t, clock.h, clock.c, clock.rate = t0, h, h, 1.0
     return Run(clock=clock_record, counts=counts_record, d=d, jac=jac,
@@ -281,7 +280,7 @@ def start(t0, y0, t_bound, atol, rtol, args):
 
 
 @kernel(inline="always")
-def _newton(t_new, c, jac, factors, vec, clock, counts, contacts, args, again):
+def _newton(t_new, c, jac, factors, vec, clock, counts, contacts, model, again):
     """SciPy's ``solve_bdf_system``: the simplified Newton iteration of one step from
     the prediction (:class:`Vectors` ``predict``, ``psi``, ``scale``) into ``y`` and
     ``d = y - y_predict``; (converged, iterations). As CVODE
@@ -302,7 +301,7 @@ def _newton(t_new, c, jac, factors, vec, clock, counts, contacts, args, again):
             f[:] = vec.f_predict
         else:
             counts.fev += 1
-            _rhs_into(t_new, y, args, contacts, f)
+            _rhs_into(t_new, y, model, contacts, f)
             if iterations == 1:
                 vec.f_predict[:] = f
         finite = True
@@ -344,7 +343,7 @@ def _predict(d, order, alpha, gamma, atol, rtol, y_predict, scale, psi):
 
 
 @kernel(inline="always")
-def _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
+def _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol, model):
     """SciPy's ``BDF._step_impl`` up to the accepted step: shrink the step until Newton
     converges (with a fresh Jacobian once per step) and the error test passes; returns
     (t_new, Newton iterations) with the new state, its difference from the prediction
@@ -377,10 +376,10 @@ def _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol, args):
                 counts.nlu += 1
                 counts.has_lu, clock.c, clock.rate = 1, c, 1.0
             converged, n_iter = _newton(t_new, c, jac, factors, vec, clock, counts, contacts,
-                                        args, again)
+                                        model, again)
             if converged or counts.jac_current == 1:
                 break
-            _jacobian_into(t_new, vec.predict, args, jac, factors.linked, contacts,
+            _jacobian_into(t_new, vec.predict, model, jac, factors.linked, contacts,
                            work.jacobian)
             counts.jev += 1
             counts.has_lu, counts.jac_current, again = 0, 1, True
@@ -453,7 +452,7 @@ def _dense(d, t, h, order, tq, out):
 
 
 @kernel()
-def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
+def advance(run, t_stop, t_bound, atol, rtol, model, t_out, out):
     """Step the run (:func:`start`'s :class:`Run`) until ``t >= t_stop`` (or
     ``t_bound``, the end, where the status becomes finished), filling the rows of ``out``
     at the sorted instants ``t_out`` as they are passed; the status and counters are in
@@ -471,7 +470,7 @@ def advance(run, t_stop, t_bound, atol, rtol, args, t_out, out):
     while counts.status == RUNNING and clock.t < t_stop:
         counts.jac_current = 0
         t_new, n_iter = _attempt(clock, counts, d, jac, factors, work, t_bound, atol, rtol,
-                                 args)
+                                 model)
         if not np.isnan(t_new):
             _accept(t_new, n_iter, clock, counts, d, vec.d, vec.scale, work.rescale)
         if counts.status != RUNNING:

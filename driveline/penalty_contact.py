@@ -5,7 +5,8 @@ of :mod:`cardan_forces.driveline.penalty_model`, written as loops over bodies an
 contacts and compiled by numba (:mod:`.penalty_kernels` tells the whole story). The
 state of one evaluation lives in named tuples of arrays made once per run
 (:class:`Frames`, :class:`Local`, :class:`ContactState`): the integrator's right-hand
-sides then allocate nothing.
+sides then allocate nothing. The model itself is one named tuple, :class:`ModelArrays`,
+the kernels' one model argument, read by field name.
 
 Every kernel of the penalty modules is compiled by :data:`kernel`: its disk cache is
 keyed also by the contents of all of them (:data:`KERNEL_FILES`), so an edit of any
@@ -29,6 +30,35 @@ keyed by all of their contents, as one file was before."""
 kernel = partial(njit, cache=True, depends=KERNEL_FILES)
 """The penalty modules' ``njit``: cached, and compiled again when any of
 :data:`KERNEL_FILES` changes."""
+
+
+class ModelArrays(NamedTuple):
+    """The released line's model as the compiled kernels take it (one argument, its
+    fields read by name; made by :class:`~.penalty_model.Model`).
+
+    Per body (``nb``: shaft segments first, then cross-pins): ``mass`` (kg), principal
+    ``inertia`` (nb, 3) (kg m^2, body axes), ``rest_centre`` (nb, 3) (m, global). Per
+    contact, one row each: ``topology`` (m, 3) int: body ``a``, body ``b`` (the ground:
+    ``nb``), radial (1) or end face (0); ``geometry`` (m, 12): ``s``, ``e`` (point and
+    axis on ``a``), ``j``, ``u`` (on ``b``), body coordinates (m); ``laws`` (m, 4):
+    offset (the clearance, m), stiffness, exponent, ``c_max`` of the contact law (eqs.
+    75-78). Loads: ``gravity`` (3,) (m/s^2), ``input_torque`` and ``load_torque`` (4,):
+    mean, amplitude, frequency, phase of the torque about the first shaft's axis and
+    against the last's (N m); ``n_shafts`` the shaft segments; ``d_max`` the depth of
+    full damping (m).
+    """
+
+    n_shafts: int
+    mass: np.ndarray
+    inertia: np.ndarray
+    rest_centre: np.ndarray
+    topology: np.ndarray
+    geometry: np.ndarray
+    laws: np.ndarray
+    gravity: np.ndarray
+    input_torque: np.ndarray
+    load_torque: np.ndarray
+    d_max: float
 
 
 class Frames(NamedTuple):
@@ -278,18 +308,14 @@ def _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force,
 
 
 @kernel()
-def contact_forces(y, bodies, topology, geometry, laws, d_max):
+def contact_forces(y, model):
     """Per contact: penetration ``d`` (m), push ``f >= 0`` (N), the force on body ``a``
     (global, N); per body the net contact force and moment about its centre (global);
-    the :class:`Frames`.
-
-    ``bodies`` (nb, 7): mass, principal inertias, rest centre. ``topology`` (m, 3): body
-    ``a``, body ``b`` (the ground: nb), radial (1) or face (0). ``geometry`` (m, 12):
-    ``s``, ``e`` (on ``a``), ``j``, ``u`` (on ``b``), body coordinates. ``laws`` (m, 4):
-    offset (clearance), stiffness, exponent, ``c_max``.
+    the :class:`Frames`. ``model``: :class:`ModelArrays`.
     """
-    state = new_contact_state(y, bodies.shape[0], topology.shape[0])
-    _contacts_into(y, bodies, topology, geometry, laws, d_max, state)
+    state = new_contact_state(y, model.mass.shape[0], model.topology.shape[0])
+    _contacts_into(y, model.rest_centre, model.topology, model.geometry, model.laws,
+                   model.d_max, state)
     return state.depth, state.push, state.on_a, state.force, state.moment, state.frames
 
 
@@ -314,23 +340,26 @@ def new_local(dtype):
 
 
 @kernel(inline="always")
-def _contacts_into(y, bodies, topology, geometry, laws, d_max, state):
-    """:func:`contact_forces` into ``state`` (:class:`ContactState`)."""
+def _contacts_into(y, rest_centre, topology, geometry, laws, d_max, state):
+    """:func:`contact_forces` into ``state`` (:class:`ContactState`), the model's arrays
+    handed one by one (:class:`ModelArrays`' fields).
+    """
     state.force[:] = 0.0
     state.moment[:] = 0.0
-    _frames(y, bodies[:, 4:], state.frames)
+    _frames(y, rest_centre, state.frames)
     _contacts(state.frames, topology, geometry, laws, d_max, state.depth, state.push,
               state.on_a, state.force, state.moment, state.local)
 
 
 @kernel(inline="always")
-def _bodies(t, y, rot, force, moment, n_shafts, bodies, loads, dy, jw, dw):
+def _bodies(t, y, rot, force, moment, n_shafts, mass, inertia, gravity, input_torque,
+            load_torque, dy, jw, dw):
     """Newton-Euler equations of every body into ``dy``, given the net contact force and
-    moment; the torques added here (``moment`` is changed); ``jw``, ``dw``: (3,)
-    scratch.
+    moment; the torques added here (``moment`` is changed); the model's arrays as
+    :class:`ModelArrays` names them; ``jw``, ``dw``: (3,) scratch.
     """
-    nb = bodies.shape[0]
-    torque_in, torque_load = harmonic(loads[3:7], t), harmonic(loads[7:11], t)
+    nb = mass.shape[0]
+    torque_in, torque_load = harmonic(input_torque, t), harmonic(load_torque, t)
     for i in range(3):  # a shaft's axis is its body frame's second column
         moment[0, i] += torque_in * rot[0, i, 1]
         moment[n_shafts - 1, i] -= torque_load * rot[n_shafts - 1, i, 1]
@@ -339,15 +368,15 @@ def _bodies(t, y, rot, force, moment, n_shafts, bodies, loads, dy, jw, dw):
         w0, w1, w2 = y[w], y[w + 1], y[w + 2]
         for i in range(3):
             dy[3 * k + i] = y[7 * nb + 3 * k + i]
-            dy[7 * nb + 3 * k + i] = force[k, i] / bodies[k, 0] + loads[i]
-            jw[i] = bodies[k, 1 + i] * y[w + i]
+            dy[7 * nb + 3 * k + i] = force[k, i] / mass[k] + gravity[i]
+            jw[i] = inertia[k, i] * y[w + i]
             dw[i] = rot[k, 0, i] * moment[k, 0] + rot[k, 1, i] * moment[k, 1] \
                 + rot[k, 2, i] * moment[k, 2]
         dw[0] += -1.0 * (w1 * jw[2] - w2 * jw[1])  # - w x J w
         dw[1] += -1.0 * (w2 * jw[0] - w0 * jw[2])
         dw[2] += -1.0 * (w0 * jw[1] - w1 * jw[0])
         for i in range(3):
-            dy[w + i] = dw[i] / bodies[k, 1 + i]
+            dy[w + i] = dw[i] / inertia[k, i]
         q0, q1, q2, q3 = y[q], y[q + 1], y[q + 2], y[q + 3]
         dy[q] = -0.5 * (q1 * w0 + q2 * w1 + q3 * w2)
         for i in range(3):
@@ -358,33 +387,30 @@ def _bodies(t, y, rot, force, moment, n_shafts, bodies, loads, dy, jw, dw):
 
 
 @kernel()
-def rhs(t, y, n_shafts, bodies, topology, geometry, laws, loads):
+def rhs(t, y, model):
     """Newton-Euler equations of every body at time ``t`` (s), state ``y``:
     ``x' = v``, ``q' = q (0, w) / 2``, ``m v' = F + m g``, ``J w' + w x J w = R^T M``
-    (body axes). ``loads``: gravity (3), the input torque law (4: mean, amplitude,
-    frequency, phase) about the first shaft's axis, the load torque law (4) against the
-    last shaft's, ``d_max``.
+    (body axes), of the model ``model`` (:class:`ModelArrays`).
     """
     dy = np.empty_like(y)
-    _rhs_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads),
-              new_contact_state(y, bodies.shape[0], topology.shape[0]), dy)
+    _rhs_into(t, y, model, new_contact_state(y, model.mass.shape[0],
+                                             model.topology.shape[0]), dy)
     return dy
 
 
 @kernel(inline="always")
-def _rhs_into(t, y, args, state, dy):
-    """:func:`rhs` into ``dy``, with ``args`` its model arguments (as one tuple, in
-    :func:`rhs`'s order) and ``state`` a :class:`ContactState` to fill: the steps of
+def _rhs_into(t, y, model, state, dy):
+    """:func:`rhs` into ``dy``, ``state`` a :class:`ContactState` to fill: the steps of
     :func:`_contacts_into` with its fields taken once here (each level a tuple is
     handed down costs a reference count per array, and this runs at every Newton
     iteration).
     """
-    n_shafts, bodies, topology, geometry, laws, loads = args
     force, moment, frames, local = state.force, state.moment, state.frames, state.local
     force[:] = 0.0
     moment[:] = 0.0
-    _frames(y, bodies[:, 4:], frames)
-    _contacts(frames, topology, geometry, laws, loads[11], state.depth, state.push,
-              state.on_a, force, moment, local)
-    _bodies(t, y, frames.rot, force, moment, n_shafts, bodies, loads, dy, local.spare,
+    _frames(y, model.rest_centre, frames)
+    _contacts(frames, model.topology, model.geometry, model.laws, model.d_max, state.depth,
+              state.push, state.on_a, force, moment, local)
+    _bodies(t, y, frames.rot, force, moment, model.n_shafts, model.mass, model.inertia,
+            model.gravity, model.input_torque, model.load_torque, dy, local.spare,
             local.spare_b)

@@ -83,13 +83,13 @@ def run_compiled(model, t0, y0, t, atol, states, marks: Marks):
     """
     order = np.argsort(t)
     later = order[t[order] > t0]
-    end, args = float(t.max()), model.kernel_args
+    end, arrays = float(t.max()), model.arrays
     out = np.full((len(later), len(y0)), np.nan)
-    run = kernels.start(t0, y0, end, atol, RTOL, args)
+    run = kernels.start(t0, y0, end, atol, RTOL, arrays)
     counts, clock = run.counts, run.clock  # arrays of one record each
     stops = np.append(np.arange(t0 + marks.every, end, marks.every), end)
     for stop in stops:
-        kernels.advance(run, stop, end, atol, RTOL, args, t[later], out)
+        kernels.advance(run, stop, end, atol, RTOL, arrays, t[later], out)
         if counts["status"][0] != kernels.RUNNING:
             break
         marks.reached(clock["t"][0])

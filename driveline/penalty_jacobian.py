@@ -89,20 +89,20 @@ def _rotation_rates(q, rot, out):
 
 
 @kernel()
-def jacobian(t, y, n_shafts, bodies, topology, geometry, laws, loads):
+def jacobian(t, y, model):
     """``df/dy`` (exact to round-off) by the chain rule: per contact in touch, the
     derivative of its force on ``a`` with respect to its local kinematics (``p, ea, ub,
     rel``: :func:`_push_rates`), times their derivatives with respect to
     the 13 states of each of its two bodies (:func:`_local_rates`, :func:`_contact_rows`);
     then the bodies' Newton-Euler equations differentiated by hand (:func:`_body_rates`).
-    Arguments as :func:`rhs`. A contact out of touch (no push in the contacts'
-    evaluation) is skipped before its kinematics; one on the ground has only ``a``'s 13
-    columns.
+    Arguments as :func:`rhs` (``model``: :class:`~.penalty_contact.ModelArrays`). A
+    contact out of touch (no push in the contacts' evaluation) is skipped before its
+    kinematics; one on the ground has only ``a``'s 13 columns.
     """
-    n, nb = y.shape[0], bodies.shape[0]
+    n, nb = y.shape[0], model.mass.shape[0]
     jac = np.empty((n, n))
-    _jacobian_into(t, y, (n_shafts, bodies, topology, geometry, laws, loads), jac,
-                   _linked(nb, topology), new_contact_state(y, nb, topology.shape[0]),
+    _jacobian_into(t, y, model, jac, _linked(nb, model.topology),
+                   new_contact_state(y, nb, model.topology.shape[0]),
                    new_jacobian_scratch(nb, n))
     return jac
 
@@ -119,16 +119,17 @@ def new_jacobian_scratch(nb, n):
 
 
 @kernel()
-def _jacobian_into(t, y, args, jac, linked, state, own):
+def _jacobian_into(t, y, model, jac, linked, state, own):
     """:func:`jacobian` into ``jac`` (the integrator's own array: no new matrix per
-    Jacobian), with ``args`` the model arguments of :func:`rhs` as one tuple,
-    ``linked`` the bodies' :func:`_linked`, ``state`` the contacts'
-    :class:`ContactState` (shared with the right-hand side: each evaluation fills it
-    anew) and ``own`` a :class:`JacobianScratch`, all made once per run.
+    Jacobian), with ``model`` the :class:`~.penalty_contact.ModelArrays`, ``linked`` the
+    bodies' :func:`_linked`, ``state`` the contacts' :class:`ContactState` (shared with
+    the right-hand side: each evaluation fills it anew) and ``own`` a
+    :class:`JacobianScratch`, all made once per run.
     """
-    n_shafts, bodies, topology, geometry, laws, loads = args
-    nb, m = bodies.shape[0], topology.shape[0]
-    _contacts_into(y, bodies, topology, geometry, laws, loads[11], state)
+    mass, topology, geometry, laws, d_max = (model.mass, model.topology, model.geometry,
+                                             model.laws, model.d_max)
+    nb, m = mass.shape[0], topology.shape[0]
+    _contacts_into(y, model.rest_centre, topology, geometry, laws, d_max, state)
     pushes, moment, frames = state.push, state.moment, state.frames
     rot = frames.rot
     # dloc: d(p, ea, ub, rel, arm, arm_b)/d(states of a, then b); rows: d(force on a,
@@ -144,9 +145,9 @@ def _jacobian_into(t, y, args, jac, linked, state, own):
             continue  # out of touch (or pulled off by the damping): no force, no rate
         ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
         _local(frames, ka, kb, geometry, c, work)
-        depth, push = _push(work.p, work.ea, work.ub, work.rel, radial, laws[c], loads[11],
+        depth, push = _push(work.p, work.ea, work.ub, work.rel, radial, laws[c], d_max,
                             work.normal)
-        _push_rates(work.p, work.ea, work.ub, work.rel, radial, laws[c], loads[11], depth,
+        _push_rates(work.p, work.ea, work.ub, work.rel, radial, laws[c], d_max, depth,
                     push, grad, rates)
         _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work, dloc, cols)
         width = 13 if kb == nb else 26  # the ground's columns stay zero
@@ -156,12 +157,13 @@ def _jacobian_into(t, y, args, jac, linked, state, own):
             if col < 0:
                 continue
             for i in range(3):
-                jac[7 * nb + 3 * ka + i, col] += rows[0, i, k] / bodies[ka, 0]
+                jac[7 * nb + 3 * ka + i, col] += rows[0, i, k] / mass[ka]
                 dmoment[ka, i, col] += rows[1, i, k]
                 if kb < nb:
-                    jac[7 * nb + 3 * kb + i, col] -= rows[0, i, k] / bodies[kb, 0]
+                    jac[7 * nb + 3 * kb + i, col] -= rows[0, i, k] / mass[kb]
                     dmoment[kb, i, col] += rows[2, i, k]
-    _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac, linked)
+    _body_rates(t, y, model.n_shafts, model.inertia, model.input_torque, model.load_torque,
+                rot, drot, moment, dmoment, jac, linked)
 
 
 @kernel(inline="always")
@@ -330,13 +332,15 @@ def _cross_into(a0, a1, a2, b0, b1, b2, dloc, col):
 
 
 @kernel(inline="always")
-def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, jac,
-                linked):
+def _body_rates(t, y, n_shafts, inertias, input_torque, load_torque, rot, drot, moment,
+                dmoment, jac, linked):
     """The rows of ``x' = v``, ``q' = q (0, w) / 2`` and ``w' = J^-1 (R^T M - w x J w)``
     (with the torques' rates added to ``dmoment``); ``moment``: the net contact moments;
-    ``dmoment`` is zero outside the columns of the ``linked`` bodies (:func:`_linked`).
+    ``dmoment`` is zero outside the columns of the ``linked`` bodies (:func:`_linked`);
+    the model's arrays as :class:`~.penalty_contact.ModelArrays` names them.
     """
-    torque_in, torque_load = harmonic(loads[3:7], t), harmonic(loads[7:11], t)
+    nb = inertias.shape[0]
+    torque_in, torque_load = harmonic(input_torque, t), harmonic(load_torque, t)
     total = moment[:nb].copy()
     for i in range(3):
         total[0, i] += torque_in * rot[0, i, 1]
@@ -349,7 +353,7 @@ def _body_rates(t, y, nb, n_shafts, bodies, loads, rot, drot, moment, dmoment, j
                     dmoment[k, i, q + kq] += torque_in * drot[k, kq, i, 1]
                 if k == n_shafts - 1:
                     dmoment[k, i, q + kq] -= torque_load * drot[k, kq, i, 1]
-        inertia = bodies[k, 1:4]
+        inertia = inertias[k]
         wk, qk = y[w:w + 3], y[q:q + 4]
         for i in range(3):
             jac[u + i, v + i] = 1.0

@@ -14,7 +14,8 @@ This module is their public face; the kernels live by concern:
   :func:`advance`): the whole integration runs compiled, the kernels called with no
   Python in between.
 
-**Named state.** Every array the kernels share is a field of a named tuple: the frames
+**Named state.** Every array the kernels share is a field of a named tuple: the model
+(:class:`~.penalty_contact.ModelArrays`, the kernels' one model argument), the frames
 and contact kinematics (:class:`~.penalty_contact.ContactState`), the Jacobian's
 scratch, the factors, a run's work arrays (:class:`~.penalty_bdf.Run`); a run's clock
 and counters are the named fields of one record each (:data:`~.penalty_bdf.CLOCK`,
@@ -54,11 +55,12 @@ from .penalty_bdf import (
     advance,
     start,
 )
-from .penalty_contact import contact_forces, rhs
+from .penalty_contact import ModelArrays, contact_forces, rhs
 from .penalty_jacobian import jacobian
 
-__all__ = ["COMPLEX_STEP", "FINISHED", "HAVE_NUMBA", "MESSAGES", "NOT_FINITE", "RUNNING",
-           "STEP_TOO_SMALL", "Run", "advance", "contact_forces", "jacobian", "rhs", "start"]
+__all__ = ["COMPLEX_STEP", "FINISHED", "HAVE_NUMBA", "MESSAGES", "ModelArrays", "NOT_FINITE",
+           "RUNNING", "STEP_TOO_SMALL", "Run", "advance", "contact_forces", "jacobian", "rhs",
+           "start"]
 
 COMPLEX_STEP = 1e-30
 """Imaginary step (per unit of a quantity's scale) of the NumPy model's Jacobian; far

@@ -154,7 +154,7 @@ class Model:
         inner = c.b < nb
         self.links[c.a[inner], c.b[inner]] = self.links[c.b[inner], c.a[inner]] = True
         self.jacobian_columns = self._colour()
-        self.kernel_args = self._packed(scene)
+        self.arrays = self._packed(scene)
 
     def _start_frames(self) -> np.ndarray:
         """(bodies, 3, 3): each body's frame at the start (body to global). Shaft bodies:
@@ -181,18 +181,25 @@ class Model:
         frame = self.start_frames[body]
         return frame.T @ (point - self.rest_centre[body] if vector is None else vector)
 
-    def _packed(self, scene: Scene) -> tuple:
-        """The model as the compiled kernels take it (:mod:`penalty_kernels`)."""
-        c, law = self.c, harmonic_law
-        return (
-            self.n_shafts,
-            np.column_stack([self.mass, self.inertia, self.rest_centre]),
-            np.column_stack([c.a, c.b, c.radial]).astype(np.int64),
-            np.column_stack([c.s, c.e, c.j, c.u]),
-            np.column_stack([c.offset, c.stiffness, c.exponent, c.c_max]).astype(float),
-            np.array([*self.gravity, *law(scene.input_torque), *law(scene.load_torque),
-                      self.d_max], float),
-        )
+    def _packed(self, scene: Scene) -> kernels.ModelArrays:
+        """The model as the compiled kernels take it (:mod:`penalty_kernels`), fields by
+        name; each array contiguous and of one dtype (one compiled signature).
+        """
+        c = self.c
+
+        def floats(*columns):
+            return np.ascontiguousarray(np.column_stack(columns), dtype=float)
+
+        return kernels.ModelArrays(
+            n_shafts=int(self.n_shafts), mass=np.array(self.mass, float),
+            inertia=floats(self.inertia), rest_centre=floats(self.rest_centre),
+            topology=np.ascontiguousarray(np.column_stack([c.a, c.b, c.radial]), np.int64),
+            geometry=floats(c.s, c.e, c.j, c.u),
+            laws=floats(c.offset, c.stiffness, c.exponent, c.c_max),
+            gravity=np.array(self.gravity, float),
+            input_torque=np.array(harmonic_law(scene.input_torque), float),
+            load_torque=np.array(harmonic_law(scene.load_torque), float),
+            d_max=float(self.d_max))
 
     def _contact_map(self) -> tuple[sparse.csr_matrix, np.ndarray]:
         """The sparse linear map (and constant) from the bodies' :data:`_FEATURES` to,
@@ -392,8 +399,8 @@ class Model:
     def rhs_compiled(self, t: float, y: np.ndarray) -> np.ndarray:
         """:meth:`rhs` at one state by the compiled kernel."""
         self.n_calls += 1
-        return kernels.rhs(t, y, *self.kernel_args)
+        return kernels.rhs(t, y, self.arrays)
 
     def jacobian_compiled(self, t: float, y: np.ndarray) -> np.ndarray:
         """:meth:`jacobian` by the compiled kernel (exact, by the chain rule)."""
-        return kernels.jacobian(t, y, *self.kernel_args)
+        return kernels.jacobian(t, y, self.arrays)

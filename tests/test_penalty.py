@@ -160,8 +160,7 @@ def test_compiled_kernels_equal_the_numpy_model(model, seed):
         assert np.abs(compiled - reference)[rows].max() <= rel * np.abs(reference[rows]).max()
     _, step = model.tolerances(1e-8)
     assert _close(model.jacobian_compiled(t, y), model.jacobian(t, y, step), 1e-11)
-    depth, push, force, _, _, _ = penalty.kernels.contact_forces(y, *model.kernel_args[1:5],
-                                                                  model.d_max)
+    depth, push, force, _, _, _ = penalty.kernels.contact_forces(y, model.arrays)
     d, f, on_a, _ = model.contacts(model.bodies(y[:, None]))
     assert np.allclose(depth, d[:, 0], rtol=0, atol=1e-15)
     assert np.abs(push - f[:, 0]).max() <= 1e-12 * np.abs(f).max()
@@ -218,7 +217,7 @@ def test_compiled_jacobian_is_exact_on_slip_joints_and_floating_bearings(name):
     within femtometres of touching (the state depends on the integration before it).
     """
     model = penalty._Model(_released(name), penalty.DAMPING_LENGTH_UNIT_M)
-    kernels, args = penalty.kernels, model.kernel_args
+    kernels, args = penalty.kernels, model.arrays
     y0, (atol, step) = model.initial_state(), model.tolerances(1e-8)
     out = np.full((1, len(y0)), np.nan)
     run = kernels.start(0.0, y0, 0.02, atol, 1e-10, args)
@@ -239,7 +238,7 @@ def test_bodies_without_a_shared_contact_do_not_couple(model):
     _, step = model.tolerances(1e-8)
     jac = model.jacobian(0.0, y, step)
     nb = model.n_bodies
-    linked = penalty_jacobian._linked(nb, model.kernel_args[2])
+    linked = penalty_jacobian._linked(nb, model.arrays.topology)
 
     def states(j):  # displacement, quaternion, velocity, rate of body j
         return np.r_[3 * j:3 * j + 3, 3 * nb + 4 * j:3 * nb + 4 * j + 4,
@@ -267,7 +266,7 @@ def test_structured_newton_solve_equals_a_dense_solve(model, c, by_blocks):
     y = _pressed_state(model, 1)
     jac = model.jacobian_compiled(0.0, y)
     n, nb = len(y), model.n_bodies
-    factors = penalty_linear.new_factors(penalty_jacobian._linked(nb, model.kernel_args[2]))
+    factors = penalty_linear.new_factors(penalty_jacobian._linked(nb, model.arrays.topology))
     assert len(factors.chain.order) == nb  # paper's bodies form a chain
     if not by_blocks:
         chain = factors.chain
