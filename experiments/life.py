@@ -80,6 +80,10 @@ NOT_ASKED = {
 """Why a simulated selection (:mod:`~cardan_forces.experiments.life_runs`) is not among
 the answer's selections when it was not asked for."""
 
+LIGHT_LOAD = 0.05
+"""``P / C`` at or below which a bearing's load is light (the bearing makers' classes,
+e.g. SKF's: light ``P <= 0.05 C``, normal up to ``0.1 C``, heavy above)."""
+
 OPEN = "no finite worst case: the closed loop's self-stress is free"
 """What the answer says where the set is open above along a closed loop."""
 
@@ -276,6 +280,7 @@ def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
         selections[name] = {"P_N": p, "Fr_N": fr, "Fa_N": fa, "axial_instants": axial,
                             **life(rating, p, revs, span, keep),
                             "unsolved_instants": int(np.isnan(p).sum())}
+    peaks = [np.nanmax(s["P_N"]) for s in selections.values() if np.isfinite(s["P_N"]).any()]
     lo, hi = p_ends(rating, env, b)
     worst, best = life(rating, hi, revs, span), life(rating, lo, revs, span)
     determinate = bool(env["radial_determinate"][:, b].all())
@@ -288,6 +293,7 @@ def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
         "revolutions": float(revs.sum()),
         "mean_speed_rpm": float(revs.sum() / span * 60.0) if span > 0 else math.nan,
         "selections": selections,
+        "peak_P_over_C": float(max(peaks, default=math.nan)) / rating.C_N,
         "interval": {
             "P_min_N": lo, "P_max_N": hi, "Pm_N": [best["Pm_N"], worst["Pm_N"]],
             "L10_Mrev": [worst["L10_Mrev"], best["L10_Mrev"]],
@@ -375,7 +381,7 @@ def markdown(answer: dict) -> str:
         lines.append(f"| {e['bearing']} | {e['rating']['type']} | " + " | ".join(cells) +
                      f" | {'0 (open)' if e['interval']['open'] else _life_text(worst)} | "
                      f"{_life_text(best)} | {e['interval']['ends']} |")
-    lines += _split_lines(answer)
+    lines += _split_lines(answer) + _load_lines(answer)
     lines += ["", f"Radial directions: {answer['directions']} (greatest radial load within "
               f"{100 * answer['direction_error']:.2f} % above the true one)."]
     lines += [f"- {name}: {sel['about']}" for name, sel in answer["selections"].items()
@@ -408,18 +414,39 @@ def _split_lines(answer: dict) -> list[str]:
     return [""] + lines if lines else []
 
 
+def _load_lines(answer: dict) -> list[str]:
+    """The greatest ``P`` of any selection against its bearing's ``C``, and where every
+    bearing's is below :data:`LIGHT_LOAD`, that the lives are long because the loads
+    are light.
+    """
+    ratios = {e["bearing"]: e["peak_P_over_C"] for e in answer["bearings"]
+              if math.isfinite(e["peak_P_over_C"])}
+    if not ratios:
+        return []
+    top = max(ratios, key=ratios.get)
+    line = (f"Loads against the ratings: the greatest P of any selection is "
+            f"{100 * ratios[top]:.2g} % of C ({top}).")
+    if ratios[top] <= LIGHT_LOAD:
+        line += (f" Every bearing is lightly loaded (P <= {LIGHT_LOAD:g} C): ISO 281's "
+                 "L10 = (C/P)^p makes these lives long because the scene's loads are "
+                 "light, not because of the bearings.")
+    return ["", line]
+
+
 def figure(answer: dict):
     """Each bearing's ``L10`` (h) interval over the rigid set as a bar between end
     ticks (one tick where it is a point), each selection's as a mark; an open worst
     case as a bar from the axis' left edge, labelled.
     """
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
     entries = answer["bearings"]
     fig, ax = plt.subplots(figsize=(8.0, 1.6 + 0.55 * max(len(entries), 1)))
     values = [v for e in entries for v in (*e["interval"]["L10_h"],
               *(s["L10_h"] for s in e["selections"].values())) if 0 < v < math.inf]
-    left, shown = min(values, default=1.0) / 100.0, set()
+    left = 10.0 ** math.floor(math.log10(min(values, default=1.0) / 100.0))  # a decade
+    shown = set()
     for k, e in enumerate(entries):
         worst, best = e["interval"]["L10_h"]
         lo = left if e["interval"]["open"] or not worst > 0 else worst
@@ -438,6 +465,8 @@ def figure(answer: dict):
                         mfc="none", label=None if name in shown else name)
                 shown.add(name)
     ax.set_xscale("log")
+    ax.xaxis.set_minor_formatter(NullFormatter())  # a span under two decades: no crowding
+    ax.set_xlim(left, 10.0 ** math.ceil(math.log10(ax.dataLim.intervalx[1])))  # decades
     ax.set_yticks(range(len(entries)), [e["bearing"] for e in entries])
     ax.set_ylim(-0.7, len(entries) - 0.3)
     ax.set_xlabel("basic rating life L10 [h]")
