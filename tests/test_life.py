@@ -262,3 +262,17 @@ def test_axle_pinion_tapered_pair_by_its_catalogue_factors():
             (rating["rating"]["C_N"] / entry["Pm_N"]) ** (10 / 3), rel=1e-12)
         axial += entry["axial_instants"]
     assert axial > 0
+
+
+def test_light_loads_are_said_to_make_the_long_lives(propshaft):
+    """peak_P_over_C is the greatest P of any selection over C; life.md says the loads
+    are light only where every bearing's is at most 5 % of C."""
+    for entry in propshaft["bearings"]:
+        peak = max(np.nanmax(s["P_N"]) for s in entry["selections"].values())
+        assert entry["peak_P_over_C"] == pytest.approx(peak / entry["rating"]["C_N"])
+    assert max(e["peak_P_over_C"] for e in propshaft["bearings"]) <= life.LIGHT_LOAD
+    assert "lightly loaded" in life.markdown(propshaft)
+    heavy = {**propshaft, "bearings": [{**e, "peak_P_over_C": 0.2}
+                                       for e in propshaft["bearings"]]}
+    text = life.markdown(heavy)
+    assert "is 20 % of C" in text and "lightly loaded" not in text
