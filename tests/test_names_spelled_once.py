@@ -1,12 +1,15 @@
-"""Each formulation's name is spelled once, in the formulation registry: the package's
-source holds no string equal to a formulation's name elsewhere, except where the same
-word names something else (a built-in scene, a scene effect, a solver family).
+"""Each formulation's name is spelled once, in the formulation registry, and each
+element kind's in its own module: the package's source holds no string equal to such a
+name elsewhere, except where the same word names something else (a built-in scene, a
+scene effect, a solver family) or is a scene's default.
 """
 
 import ast
 from pathlib import Path
 
 import pytest
+from cardan_forces.driveline.elements.base import LINK_KINDS, RELEASES
+from cardan_forces.driveline.elements.registry import BEARING_KINDS
 from cardan_forces.formulations import BASELINE, FORMULATIONS, SELECTION
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,22 +38,29 @@ ALLOWED = {
 }
 """``(file, name) -> why`` that string there is not the formulation."""
 
+KIND_NAMES = {*BEARING_KINDS, *LINK_KINDS, *RELEASES}
+"""The element kinds' names: a bearing's ``kind`` in a scene, the links' kinds, the
+releases'."""
+ELEMENTS = Path("driveline/elements")
+KIND_DEFAULTS = {Path("driveline/scene.py"), Path("driveline/loading.py")}
+"""Where a bearing's kind is defaulted (``locating``, a scene's default, not a switch)."""
 
-def _spelled() -> set[tuple[Path, str, int]]:
-    """Every string constant of the package equal to a formulation's name, with its line."""
+
+def _spelled(names) -> set[tuple[Path, str, int]]:
+    """Every string constant of the package equal to one of ``names``, with its line."""
     found = set()
     for package in PACKAGES:
         for path in sorted((ROOT / package).rglob("*.py")):
             where = path.relative_to(ROOT)
             for node in ast.walk(ast.parse(path.read_text(), str(where))):
-                if isinstance(node, ast.Constant) and node.value in FORMULATIONS:
+                if isinstance(node, ast.Constant) and node.value in names:
                     found.add((where, node.value, node.lineno))
     return found
 
 
 @pytest.fixture(scope="module")
 def spelled():
-    return _spelled()
+    return _spelled(FORMULATIONS)
 
 
 def test_no_formulation_name_outside_the_registry(spelled):
@@ -69,6 +79,14 @@ def test_the_scan_sees_the_registry(spelled):
 def test_allowed_spellings_still_exist(spelled):
     """An allowance with no spelling left goes (the list stays what the source holds)."""
     assert set(ALLOWED) <= {(p, name) for p, name, _ in spelled}
+
+
+def test_no_element_kind_name_outside_its_module():
+    spelled = _spelled(KIND_NAMES)
+    stray = sorted((str(p), name, line) for p, name, line in spelled
+                   if ELEMENTS not in p.parents and p not in KIND_DEFAULTS)
+    assert stray == []
+    assert set(BEARING_KINDS) <= {name for p, name, _ in spelled if ELEMENTS in p.parents}
 
 
 def test_problems_carry_the_record_name(paper):
