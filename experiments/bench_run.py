@@ -312,11 +312,17 @@ def _warm_up(prepared: Prepared, solvers: list[str]) -> None:
     """One untimed run of the formulation's first per-instant backend (its default where
     it is among ``solvers``) over :data:`WARM_UP_INSTANTS` instants: a process's first
     pass over a formulation's code and arrays (cold code, fresh memory) cost its checks
-    more than the next pass did, on whichever backend came first.
+    more than the next pass did, on whichever backend came first. Every other
+    per-instant backend solves one instant untimed: a compiled backend's first call
+    compiles (or loads) its kernels, which no timed row should hold.
     """
-    chosen = _preferred(prepared.name, [s for s in solvers if not _is_batched(s)])
+    per_instant = [s for s in solvers if not _is_batched(s)]
+    chosen = _preferred(prepared.name, per_instant)
     if chosen is not None:
         run_instants(prepared, chosen, prepared.instants[:WARM_UP_INSTANTS])
+    for solver in per_instant:
+        if solver != chosen:
+            run_instants(prepared, solver, prepared.instants[:1])
 
 
 def _report_progress(rows: list[dict]) -> None:

@@ -318,8 +318,14 @@ def _null_space(M, s: Scratch, rtol):
         for i in range(m):
             s.rhs[i] = -M[i, p]
         _solve(s.L, s.rhs, s.du, s.dependent, p)
+        for i in range(p):  # one step of iterative refinement: M_II v_I + M_Ip = 0
+            acc = M[i, p]
+            for j in range(p):
+                acc += M[i, j] * s.du[j]
+            s.rhs[i] = -acc
+        _solve(s.L, s.rhs, s.grad, s.dependent, p)
         for i in range(m):
-            s.V[i, nk] = s.du[i] if i < p else 0.0
+            s.V[i, nk] = s.du[i] + s.grad[i] if i < p else 0.0
         s.V[p, nk] = 1.0
         for q in range(nk):  # modified Gram-Schmidt against the vectors before
             dot = 0.0
@@ -422,17 +428,15 @@ def _finite(x: Data):
 
 
 @njit(cache=True)
-def _fit(x: Data, c, s: Scratch, hint, weights, u):
-    """``u`` whose deformations fit ``hint`` in the contacts' ``weights``: ``(E W E') u
-    = E W hint`` through ``s.L`` (the factor of ``E W E'``, its dependent rows skipped),
-    ``W`` the contacts' Hessians: ``H0``'s (``weights`` None) or those at ``hint``
-    (``H_q d_q = slope_q d_q`` there, ``weights`` the slopes).
+def _fit(x: Data, c, s: Scratch, hint, u):
+    """``u`` whose deformations fit ``hint`` in ``H0``'s weights: ``(E D0 E') u = E D0
+    hint`` through ``s.L`` (``H0``'s factor, its dependent rows skipped).
     """
     m = x.Et.shape[1]
     F = _norm(x.e)
     s.rhs[:] = 0.0
     for q in range(c.members.shape[0]):
-        c0 = _nominal_slope(c, q, F, x.k) if weights is None else weights[q]
+        c0 = _nominal_slope(c, q, F, x.k)
         for p in range(c.members.shape[1]):
             if c.mask[q, p] > 0:
                 col = c.members[q, p]
@@ -473,31 +477,51 @@ def _start(x: Data, c, p, s: Scratch, hint, use_hint, u):
         return 4, rho, 0, False
     u[:] = 0.0
     if use_hint:
-        _fit(x, c, s, hint, None, u)
+        _fit(x, c, s, hint, u)
         _project(u, s.V, nk)
     return 0, rho, nk, not use_hint
 
 
 @njit(cache=True)
 def _warm(x: Data, c, p, s: Scratch, hint, u, nk_before):
-    """A warm start from deformations ``hint`` (a chain's extrapolation): unsoftened,
-    the Hessian at ``hint`` (no ``H0``) gives the null space ``V`` through its factor,
-    dependent rows skipped, where that is ``E'``'s left null space of the dimension
-    the instant before had, and ``u`` is fitted to ``hint`` in its weights (:func:`_fit`);
-    else :func:`_start` fits ``u`` in ``H0``'s. Returns as :func:`_start`.
+    """A chain's start from deformations ``hint`` (:func:`._newton_numpy.linearized`):
+    unsoftened, the Hessian at ``hint`` (no ``H0``) gives the null space ``V`` through
+    its factor, dependent rows skipped, where that is ``E'``'s left null space of the
+    dimension the instant before had; ``u`` solves the law linearized there
+    (:func:`_linearized`) and the factor serves the first step. Else :func:`_start`
+    fits ``u`` to ``hint`` in ``H0``'s weights. Returns as :func:`_start`.
     """
     if not _finite(x):
         return 3, 0.0, 0, False
     if p.soften == 0.0:
         rho = _rho(x, c)
         _contacts(x, c, s, hint)
-        _hessian(x, c, s, p.reg_rtol * rho, 0, rho)
+        _hessian(x, c, s, 0.0, 0, rho)  # unshifted: a shift would hide a dependent row
         nk = _null_space(s.H, s, p.null_rtol)
         if nk == nk_before and _in_left_null_space(x, s, nk, p.null_rtol):
-            _fit(x, c, s, hint, s.slope, u)
+            _linearized(x, c, s, hint, nk, u)
             _project(u, s.V, nk)
             return 0, rho, nk, True
     return _start(x, c, p, s, hint, True, u)
+
+
+@njit(cache=True)
+def _linearized(x: Data, c, s: Scratch, hint, nk, u):
+    """``u`` of the contacts' law linearized at ``hint``: ``H u = e + E (W hint -
+    f(hint))`` through ``s.L`` (``H_q d_q = slope_q d_q``; ``s.f``, ``s.slope`` at
+    ``hint``).
+    """
+    m = x.Et.shape[1]
+    s.rhs[:] = x.e
+    for q in range(c.members.shape[0]):
+        for p in range(c.members.shape[1]):
+            if c.mask[q, p] > 0:
+                col = c.members[q, p]
+                a = s.slope[q] * hint[col] - s.f[col]
+                for i in range(x.span[col, 0], x.span[col, 1]):
+                    s.rhs[i] += x.Et[col, i] * a
+    _project(s.rhs, s.V, nk)  # (e's part along V: no force does work there)
+    _solve(s.L, s.rhs, u, s.dependent, m)
 
 
 @njit(cache=True)
@@ -561,6 +585,24 @@ def _scratch(nv, m, G, w, dense):
 
 
 @njit(cache=True)
+def _extrapolate(d_out, status, i, order, hint):
+    """``hint``: the deformations at instant ``i`` extrapolated by the polynomial through
+    the last ``p <= order`` solved instants before it, one after the other
+    (:func:`._newton_numpy.extrapolate`).
+    """
+    p = 1
+    while p < order and i - p - 1 >= 0 and status[i - p - 1] == 0:
+        p += 1
+    hint[:] = 0.0
+    weight = 1.0
+    for j in range(1, p + 1):  # (-1)^(j+1) binomial(p, j)
+        weight = weight * (p - j + 1) / j
+        sign = 1.0 if j % 2 == 1 else -1.0
+        for col in range(len(hint)):
+            hint[col] += sign * weight * d_out[i - j, col]
+
+
+@njit(cache=True)
 def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
     """:func:`._newton_numpy.newton_numpy` compiled: ``(u, d, status, iterations)``. ``Et``
     (T, nv, m) holds ``E'`` (a column of ``E`` a contiguous row), ``span`` (nv, 2) the
@@ -579,9 +621,8 @@ def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
     nk = 0
     for i in range(T):
         x = Data(Et[i], span, e[i], k[i], g[i])
-        if chain and i > 0 and status[i - 1] == 0:  # the answer before, extrapolated
-            earlier = i - 2 if i > 1 and status[i - 2] == 0 else i - 1
-            hint[:] = 2.0 * d_out[i - 1] - d_out[earlier]
+        if chain and i > 0 and status[i - 1] == 0:
+            _extrapolate(d_out, status, i, params.extrapolation, hint)
             code, rho, nk, factored = _warm(x, contacts, params, s, hint, u_out[i], nk)
         else:
             code, rho, nk, factored = _start(x, contacts, params, s, d0[i], start[i],

@@ -157,8 +157,11 @@ def numbers(lay: Layout, P_diag, q, A, b):
     (T, rows, n_z), ``b`` (T, rows)).
     """
     held = b[:, lay.held_rows] / A[:, lay.held_rows, lay.held]
-    # E gathered as its transpose (the kernel's layout) from A's rows, in one pass
-    E = np.swapaxes(np.swapaxes(A, 1, 2)[:, lay.force[:, None], lay.eq[None, :]], 1, 2)
+    # E gathered as its transpose (the kernel's layout, contiguous) in one flat take
+    T, rows, n_z = A.shape
+    flat = (lay.eq[None, :] * n_z + lay.force[:, None]).ravel()
+    Et = np.reshape(A, (T, rows * n_z)).take(flat, axis=1)
+    E = np.swapaxes(Et.reshape(T, len(lay.force), len(lay.eq)), 1, 2)
     e = b[:, lay.eq] - np.einsum("tmh,th->tm", A[:, lay.eq[:, None], lay.held[None, :]],
                                  held)
     power = lay.c_idx >= 0

@@ -37,6 +37,7 @@ class Params(NamedTuple):
     ls_rtol: float
     ls_max: int
     stall: float
+    extrapolation: int
 
 
 class Data(NamedTuple):

@@ -24,10 +24,9 @@ from .record import (
     Residuals,
     Results,
     Status,
-    as_status,
+    as_statuses,
     confirm,
     judge,
-    statuses,
 )
 from .stacking import stacked_batch
 
@@ -150,12 +149,12 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
     per = np.array([outcome.setup_s, outcome.solve_s, time.perf_counter() - began]) / T
     return Results(
         solver=solver, formulation=(batch.formulation,) * T, names=(batch.checks.names,) * T,
-        status=statuses([as_status(s) or Status.FAILED for s in status]), x=x,
+        status=as_statuses(status, Status.FAILED), x=x,
         residuals=residuals, optimality=optimality, solver_optimality=Optimality(),
         iterations=tuple(np.asarray(outcome.iterations, int).tolist()),
         objective=(None,) * T, message=tuple(outcome.messages) or ("",) * T,
         duals=(source,) * T, gap_kind=("duality",) * T,
-        solver_status=statuses([as_status(s) for s in outcome.status]),
+        solver_status=as_statuses(outcome.status),
         setup_s=np.full(T, per[0]), solve_s=np.full(T, per[1]), checks_s=np.full(T, per[2]),
         wall_s=np.full(T, per.sum()), z=np.asarray(outcome.z),
         y=(None,) * T if y is None else y, stages=dict(outcome.stages))

@@ -31,7 +31,9 @@ work along a direction (idle end faces, open clearances), whose step the line se
 then bounds. The line search minimizes ``Phi`` along the step exactly (a safeguarded
 Newton iteration on the slope, ``O(n)`` an evaluation). A cold start takes its first
 step with ``H0``; a warm start fits ``u`` to the deformations ``d`` of a neighbouring
-answer (in a batch's chain, extrapolated linearly from the two answers before). The
+answer; an instant of a batch's chain solves the contacts' law linearized at the
+deformations extrapolated by a polynomial through the answers before, and that
+Hessian's factor, the only one where the start is close, serves the first step. The
 iteration stops when ``||(I - V V') grad|| <= tol ||e||`` (or at rounding, where no
 decrease is left, within ``STALL tol``).
 
@@ -62,6 +64,7 @@ from cardan_forces.formulations.problems import LCP, Conic, LastMade
 
 from ._newton_layout import answer, numbers, parse_batch, parse_conic
 from ._newton_numpy import (
+    EXTRAPOLATION,
     LS_MAX,
     LS_RTOL,
     MAX_ITER,
@@ -107,7 +110,7 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
     start = np.zeros(T, np.bool_) if start is None else np.asarray(start, np.bool_)
     contacts = Contacts(groups.members, groups.mask, groups.signed, groups.n)
     params = Params(float(tol), int(max_iter), float(soften), NULL_RTOL, REG_RTOL, LS_RTOL,
-                    int(LS_MAX), STALL)
+                    int(LS_MAX), STALL, int(EXTRAPOLATION))
     return kernel(np.ascontiguousarray(np.swapaxes(E, 1, 2), float), spans(E),
                   np.ascontiguousarray(e, float), contacts, np.ascontiguousarray(k, float),
                   np.ascontiguousarray(g, float), d0, start, bool(chain), params)

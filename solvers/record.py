@@ -406,6 +406,16 @@ def as_status(given) -> Status | None:
         return None
 
 
+def as_statuses(given, default: Status | None = None) -> np.ndarray:
+    """:func:`as_status` of each of ``given`` (``default`` where unknown) as
+    :func:`statuses` holds them, each distinct value converted once (a batch's T
+    instants share a few).
+    """
+    given = list(given)
+    known = {value: as_status(value) or default for value in set(given)}
+    return statuses([known[value] for value in given])
+
+
 def statuses(values) -> np.ndarray:
     """Statuses (or ``None``) as a (T,) object array of the members themselves (numpy
     would make an array of ``Status``, a ``str``, an array of strings).

@@ -174,6 +174,49 @@ def test_compiled_kernel_equals_numpy_reference(paper_op, chain):
 
 @pytest.mark.compiled
 @pytest.mark.parametrize("compiled", (False, True))
+def test_extrapolation_is_exact_on_cubics(compiled):
+    """A chain's start is exact where the deformations are a cubic in the instant, and
+    takes only the solved instants just before (a failed one cuts the polynomial).
+    """
+    t = np.arange(8.0)[:, None]
+    d = 0.5 - 2.0 * t + 0.3 * t**2 - 0.01 * t**3 + np.array([[0.0, 1.0]])
+    status = np.zeros(8, np.int64)
+    if compiled:
+        kernels = pytest.importorskip("cardan_forces.solvers._newton_kernels")
+
+        def extrapolate(d_out, status, i):
+            hint = np.zeros(d_out.shape[1])
+            kernels._extrapolate(d_out, status, i, method.EXTRAPOLATION, hint)
+            return hint
+    else:
+        extrapolate = method.extrapolate
+    np.testing.assert_allclose(extrapolate(d, status, 6), d[6], rtol=1e-12)
+    status[3] = 1  # two solved instants before 6: a straight line through them
+    np.testing.assert_allclose(extrapolate(d, status, 6), 2.0 * d[5] - d[4], rtol=1e-12)
+
+
+@pytest.mark.compiled
+def test_chain_through_a_change_of_the_null_space(paper_op):
+    """A chained instant whose left null space grows (a row made a multiple of
+    another) is not taken from the instant before's: the compiled chain still equals
+    the reference at every instant.
+    """
+    pytest.importorskip("numba")
+    batch = fbatch.least_norm_batch(paper_op, "positive")
+    E, b = batch.A.copy(), batch.b.copy()
+    E[3, 7], b[3, 7] = 2.0 * E[3, 8], 2.0 * b[3, 8]
+    groups = nt._scalars(batch.signed)
+    k = np.ones((len(E), E.shape[2]))
+    ref = nt.solve_duals(E, b, groups, k, 0.0 * k, chain=True, compiled=False)
+    mine = nt.solve_duals(E, b, groups, k, 0.0 * k, chain=True, compiled=True)
+    assert np.array_equal(ref[2], mine[2]) and not np.any(mine[2])
+    f_ref, f_mine = (method.forces(d, groups, k, 0.0 * k) for d in (ref[1], mine[1]))
+    np.testing.assert_allclose(f_mine, f_ref, atol=1e-9 * np.abs(f_ref).max(), rtol=0)
+    assert np.linalg.norm(E[3].T @ mine[0][3]) > 0  # a real instant, not a skipped one
+
+
+@pytest.mark.compiled
+@pytest.mark.parametrize("compiled", (False, True))
 def test_non_finite_data_end_as_a_failed_instant(paper_op, compiled):
     if compiled:
         pytest.importorskip("numba")
