@@ -41,8 +41,6 @@ TAUS = np.logspace(0.0, 3.0, 61)
 """The profile's abscissa: time ratio to the fastest successful backend, 1 to 1000."""
 
 
-PAPER_RATIO = 20.0
-"""Wanted speed-up of every conic formulation's best run over the paper's method."""
 GLUE_SHARE = 0.25
 """Largest share of a per-instant conic solve spent outside the solver."""
 WALL_S = 180.0
@@ -274,7 +272,7 @@ def targets(summary: list[dict], success_rows: list[dict], conic: set[str],
     for name in sorted(conic):
         run = best.get(name)
         ratio = run and paper and run["instants_per_s"] / paper["instants_per_s"]
-        out.append(_target(f"{name} best run / paper", ratio, PAPER_RATIO,
+        out.append(_target(f"{name} best run / paper", ratio, FORMULATIONS[name].paper_ratio,
                            run and f"{run['solver']} {run['mode']}"))
         cold = [e for e in summary if e["formulation"] == name and e["mode"] == "cold"
                 and e["solver"] == "clarabel"]
@@ -282,7 +280,7 @@ def targets(summary: list[dict], success_rows: list[dict], conic: set[str],
             glue = 1.0 - cold[0]["solver_share"]
             out.append(_target(f"{name} glue share (clarabel per instant)", glue, GLUE_SHARE,
                                "build + conversion + checks + dispatch", below=True))
-    out += _success_targets(success_rows)
+    out += _success_targets(success_rows) + _newton_targets(summary)
     for mode, label in (("cold", "per-instant"), ("batched", "batched")):
         runs = [e for e in summary if e["mode"] == mode]
         worst = max(runs, key=lambda e: e["split_s"]["checks_s"], default=None)
@@ -291,6 +289,25 @@ def targets(summary: list[dict], success_rows: list[dict], conic: set[str],
                            worst and f"{worst['formulation']} {worst['solver']}"
                            + (_first_pass(runs) if mode == "cold" else ""), below=True))
     out.append(_target("wall time of the run (s)", wall_s, WALL_S, None, below=True))
+    return out
+
+
+def _newton_targets(summary: list[dict]) -> list[dict]:
+    """One target per formulation with a ``newton_share``: the ``newton`` family's best
+    batched rate over ``numpy-batched``'s (both solving every instant).
+    """
+    out = []
+    for record in FORMULATIONS.values():
+        if record.newton_share is None:
+            continue
+        runs = [e for e in summary if e["formulation"] == record.name
+                and e["mode"] == "batched" and e["success_rate"] == 1.0]
+        mine = max((e for e in runs if e["solver"].startswith("newton")),
+                   key=lambda e: e["instants_per_s"], default=None)
+        theirs = next((e for e in runs if e["solver"] == "numpy-batched"), None)
+        share = mine and theirs and mine["instants_per_s"] / theirs["instants_per_s"]
+        out.append(_target(f"{record.name} newton / numpy-batched (batched)", share,
+                           record.newton_share, mine and mine["solver"]))
     return out
 
 

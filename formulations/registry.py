@@ -61,7 +61,10 @@ class Formulation:
     enters as work on them (``cardan tolerances``); ``design``: a physical selection
     whose loads the design answers report (``cardan life``); ``success_target``:
     ``(level, rate)``, the bench wants its best backend to solve at least ``rate`` of
-    the instants at accuracy ``level`` (``None``: no such target).
+    the instants at accuracy ``level`` (``None``: no such target); ``paper_ratio``: the
+    speed-up over the paper's method the bench wants of its best run (a conic one's);
+    ``newton_share``: the share of ``numpy-batched``'s rate the bench wants of the
+    ``newton`` family's best batched run (a least-norm one's; ``None``: no such target).
 
     The builder is called with the record's ``name`` (``build(op, i, name=...)``), which
     its problems carry as their ``formulation``: each name is spelled here only.
@@ -83,6 +86,8 @@ class Formulation:
     compliant: bool = False
     design: bool = False
     success_target: tuple[float, float] | None = None
+    paper_ratio: float = 20.0
+    newton_share: float | None = None
 
     def __call__(self, op, i: int):
         """The problem at instant ``i`` of ``op``, named after this record."""
@@ -128,7 +133,7 @@ REGISTRY: tuple[Formulation, ...] = (
     Formulation("positive", positive, (QP,), "positive (least norm, end faces push)",
                 physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
                 target_rate=1e5, drawn=True, beside_penalty=True, exported=True,
-                design=True),
+                design=True, newton_share=0.5),
     Formulation("min_max", min_max, (Conic,),
                 "min_max (comparison only: both end faces of a pair may push)",
                 physical=False, backends=("clarabel",), drawn=True, job_cost=2.0,
@@ -145,10 +150,10 @@ REGISTRY: tuple[Formulation, ...] = (
                 physical=True, backends=_DAQP_FIRST, least_norm_batch=True,
                 target_rate=1e5, drawn=True, beside_penalty=True, job_cost=0.5,
                 exported=True, batch_weights=_stiffness_weights, compliant=True,
-                design=True),
+                design=True, newton_share=0.5),
     Formulation("compliance_hertz", _hertz, (Conic,), "compliance_hertz (Hertz contact law)",
                 physical=True, backends=("clarabel",), beside_penalty=True, job_cost=2.7,
-                compliant=True, design=True),
+                compliant=True, design=True, paper_ratio=50.0),
 )
 
 FORMULATIONS: dict[str, Formulation] = {f.name: f for f in REGISTRY}
