@@ -11,7 +11,7 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
-from ._newton_numpy import Groups, evaluate, forces, groups_of
+from ._newton_numpy import Groups, evaluate, groups_of, spread
 from .optimality import cone_layout
 
 
@@ -182,7 +182,7 @@ def answer(lay: Layout, A, P_diag, q, u, d, k, g, held):
     dg = d[:, grp.members] * grp.mask
     s = np.where(grp.signed, dg[..., 0], np.sqrt(np.einsum("tgw,tgw->tg", dg, dg)))
     z, y = np.zeros((T, n_z)), np.zeros((T, rows))
-    z[:, lay.force] = forces(d, grp, k, g)
+    z[:, lay.force] = spread(r, unit, grp, d.shape)
     z[:, lay.held] = held
     y[:, lay.eq] = -u
     cone, power, sign = lay.soc_row >= 0, lay.c_idx >= 0, lay.nn_row >= 0

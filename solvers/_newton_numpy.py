@@ -91,7 +91,14 @@ def evaluate(d, groups: Groups, k, g):
 def forces(d, groups: Groups, k, g) -> np.ndarray:
     """The forces (..., nv) at deformations ``d`` (every column is in one contact)."""
     r, _, _, unit, _ = evaluate(d, groups, k, g)
-    f = np.zeros(np.shape(d))
+    return spread(r, unit, groups, np.shape(d))
+
+
+def spread(r, unit, groups: Groups, shape) -> np.ndarray:
+    """The forces (``shape``: (..., nv)) of contacts with loads ``r`` (..., G) along
+    their directions ``unit`` (..., G, w).
+    """
+    f = np.zeros(shape)
     real = groups.mask > 0
     f[..., groups.members[real]] = (r[..., None] * unit)[..., real]
     return f
