@@ -49,11 +49,12 @@ def _classify(value: float, agree, disagree) -> str:
 def _verdict(stat, ok: np.ndarray, agree, disagree) -> tuple[str, str]:
     """Judge ``stat(mask)`` on the settled instants ``ok``, and again on each half of
     them: a verdict that the two halves of the run do not both give is ``undecided``
-    (the data cannot tell). Returns the verdict and the values, for the report.
+    (the data cannot tell; a half without an instant has no value). Returns the verdict
+    and the values, for the report.
     """
     idx = np.flatnonzero(ok)
     halves = [np.isin(np.arange(len(ok)), part) for part in np.array_split(idx, 2)]
-    whole, *parts = (stat(mask) for mask in (ok, *halves))
+    whole, *parts = (stat(mask) if mask.any() else np.nan for mask in (ok, *halves))
     verdict = _classify(whole, agree, disagree)
     if verdict != "undecided" and any(_classify(v, agree, disagree) != verdict
                                       for v in parts):
