@@ -23,12 +23,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..driveline.compiled import HAVE_NUMBA, njit
+from ..driveline.compiled import HAVE_NUMBA
 from ._newton_state import Data, Scratch
 
 if not HAVE_NUMBA:  # an optional extra: the caller takes the NumPy reference
     raise ImportError("numba is not installed")
 
+from ._newton_linalg import (  # noqa: E402 (numba only)
+    _cholesky,
+    _finish,
+    _norm,
+    _null_space,
+    _project,
+    _solve,
+    _sum_terms,
+    _term,
+    kernel,
+)
 
 DENSE = 0.3
 """Share of ``E``'s entries inside the columns' spans from which a Hessian is summed by
@@ -38,7 +49,7 @@ the operator's rows (a contact loads two bodies of the line, about half the rows
 rows are dense."""
 
 
-@njit(cache=True)
+@kernel
 def _contact(dg, w, signed, n, k, g):
     """One contact at deformations ``dg`` (its first ``w`` entries): ``(r, slope, ratio,
     s, norm)`` as :func:`._newton_numpy.evaluate`'s.
@@ -63,7 +74,7 @@ def _contact(dg, w, signed, n, k, g):
     return r, slope, ratio, s, norm
 
 
-@njit(cache=True)
+@kernel
 def _unit(dg, w, signed, norm, out):
     """The contact's direction into ``out`` (``[1]`` for a pushing column)."""
     for j in range(w):
@@ -75,126 +86,7 @@ def _unit(dg, w, signed, norm, out):
             out[j] = 0.0
 
 
-@njit(cache=True)
-def _term(B, ranges, t, a, scale, lo, hi):
-    """Row ``t`` of ``B``: ``sqrt(scale) a`` on rows ``lo:hi`` (0 elsewhere); ``t + 1``."""
-    root = np.sqrt(scale)
-    for i in range(B.shape[1]):
-        B[t, i] = root * a[i] if lo <= i < hi else 0.0
-    ranges[t, 0], ranges[t, 1] = lo, hi
-    return t + 1
-
-
-@njit(cache=True)
-def _sum_terms(B, ranges, count, dense, H):
-    """``H = B'B`` over the first ``count`` rows (at least its lower triangle)."""
-    if dense and count > 0:
-        rows = B[:count]
-        np.dot(rows.T, rows, H)
-        return
-    for i in range(H.shape[0]):
-        for j in range(i + 1):
-            H[i, j] = 0.0
-    for t in range(count):
-        _rank_one(H, B[t], 1.0, ranges[t, 0], ranges[t, 1])
-
-
-@njit(cache=True)
-def _rank_one(H, a, scale, lo, hi):
-    """``H += scale a a'`` on the lower triangle of rows and columns ``lo:hi``."""
-    for i in range(lo, hi):
-        ai = scale * a[i]
-        for j in range(lo, i + 1):
-            H[i, j] += ai * a[j]
-
-
-@njit(cache=True)
-def _cholesky(H, L, dependent, rtol):
-    """Lower Cholesky factor of ``H`` into ``L``. With ``rtol > 0`` a pivot below ``rtol``
-    of its diagonal entry marks the row dependent (``dependent[p]``, its row and column
-    of ``L`` zero); with ``rtol = 0`` such a pivot is a failure. Returns whether it
-    succeeded (every pivot finite and positive, or marked).
-    """
-    m = H.shape[0]
-    for p in range(m):
-        dependent[p] = False
-        acc = H[p, p]
-        for q in range(p):
-            acc -= L[p, q] * L[p, q]
-        if rtol > 0 and acc <= rtol * H[p, p]:
-            dependent[p] = True
-            for j in range(m):
-                L[j, p] = 0.0
-                L[p, j] = 0.0
-            continue
-        if not acc > 0 or not np.isfinite(acc):
-            return False
-        L[p, p] = np.sqrt(acc)
-        for j in range(p + 1, m):
-            acc = H[j, p]
-            for q in range(p):
-                acc -= L[j, q] * L[p, q]
-            L[j, p] = acc / L[p, p]
-        for j in range(p):
-            L[j, p] = 0.0
-    return True
-
-
-@njit(cache=True)
-def _solve(L, rhs, x, dependent, upto):
-    """``x = (L L')^-1 rhs`` over the rows below ``upto`` not ``dependent``."""
-    for i in range(upto):
-        if dependent[i]:
-            x[i] = 0.0
-            continue
-        acc = rhs[i]
-        for q in range(i):
-            acc -= L[i, q] * x[q]
-        x[i] = acc / L[i, i]
-    for i in range(upto - 1, -1, -1):
-        if dependent[i]:
-            continue
-        acc = x[i]
-        for q in range(i + 1, upto):
-            acc -= L[q, i] * x[q]
-        x[i] = acc / L[i, i]
-
-
-@njit(cache=True)
-def _project(v, V, nk):
-    """``v - V V'v`` in place."""
-    for q in range(nk):
-        dot = 0.0
-        for i in range(len(v)):
-            dot += V[i, q] * v[i]
-        for i in range(len(v)):
-            v[i] -= dot * V[i, q]
-
-
-
-
-@njit(cache=True)
-def _finish(H, shift, V, nk, rho):
-    """Add ``shift I + rho V V'`` to the lower triangle of ``H`` and mirror it."""
-    m = H.shape[0]
-    for i in range(m):
-        H[i, i] += shift
-        for j in range(i + 1):
-            for q in range(nk):
-                H[i, j] += rho * V[i, q] * V[j, q]
-            H[j, i] = H[i, j]
-
-
-@njit(cache=True)
-def _norm(v):
-    """``max(||v||, 1e-300)``."""
-    acc = 0.0
-    for x in v:
-        acc += x * x
-    return max(np.sqrt(acc), 1e-300)
-
-
-@njit(cache=True)
+@kernel
 def _gather(d, delta, t, x_members, x_mask, out):
     """One contact's deformations ``d + t delta`` into ``out``; returns its width."""
     w = 0
@@ -205,7 +97,7 @@ def _gather(d, delta, t, x_members, x_mask, out):
     return w
 
 
-@njit(cache=True)
+@kernel
 def _state(x: Data, c, s: Scratch, u):
     """At ``u``: ``s.d = E'u`` and the contacts there (:func:`_contacts`)."""
     nv = x.Et.shape[0]
@@ -217,7 +109,7 @@ def _state(x: Data, c, s: Scratch, u):
     _contacts(x, c, s, s.d)
 
 
-@njit(cache=True)
+@kernel
 def _contacts(x: Data, c, s: Scratch, d):
     """At deformations ``d``: the forces ``s.f``, per contact ``s.ratio``, ``s.slope``
     and its direction ``s.U[q]``.
@@ -231,7 +123,7 @@ def _contacts(x: Data, c, s: Scratch, d):
             s.f[c.members[q, j]] = r * s.U[q, j]
 
 
-@njit(cache=True)
+@kernel
 def _hessian(x: Data, c, s: Scratch, shift, nk, rho):
     """``s.H = sum_q E_q H_q E_q' + shift I + rho V V'`` (``V``'s first ``nk`` columns).
     ``H_q = slope u u' + ratio (I - u u') = ratio I + (slope - ratio) u u'`` sums as
@@ -259,13 +151,13 @@ def _hessian(x: Data, c, s: Scratch, shift, nk, rho):
     _finish(s.H, shift, s.V, nk, rho)
 
 
-@njit(cache=True)
+@kernel
 def _nominal_slope(c, q, F, k):
     """Contact ``q``'s slope at the load ``F``: ``c0 = n F^(1 - 1/n) / k``."""
     return c.n[q] * F ** (1.0 - 1.0 / c.n[q]) / k[q]
 
 
-@njit(cache=True)
+@kernel
 def _nominal(x: Data, c, s: Scratch):
     """``H0`` (:func:`._newton_numpy.nominal`) into ``s.H0`` (summed as
     :func:`_hessian` sums its terms); returns ``rho``, its mean diagonal.
@@ -287,7 +179,7 @@ def _nominal(x: Data, c, s: Scratch):
     return max(trace / m, 1e-300)
 
 
-@njit(cache=True)
+@kernel
 def _rho(x: Data, c):
     """``H0``'s mean diagonal without ``H0``: ``sum_q c0_q ||E_q||_F^2 / m``."""
     F, acc = _norm(x.e), 0.0
@@ -301,46 +193,7 @@ def _rho(x: Data, c):
     return max(acc / x.Et.shape[1], 1e-300)
 
 
-@njit(cache=True)
-def _null_space(M, s: Scratch, rtol):
-    """Factor ``M`` into ``s.L``, its rows below ``rtol`` skipped as dependent, and its
-    null vectors, orthonormal, into ``s.V``'s first columns; returns their count, or -1
-    where the factor fails. Each dependent row ``p`` gives ``v_p = 1``, ``v_I = -M_II^-1
-    M_Ip`` over the independent rows before it.
-    """
-    m = M.shape[0]
-    if not _cholesky(M, s.L, s.dependent, rtol):
-        return -1
-    nk = 0
-    for p in range(m):
-        if not s.dependent[p]:
-            continue
-        for i in range(m):
-            s.rhs[i] = -M[i, p]
-        _solve(s.L, s.rhs, s.du, s.dependent, p)
-        for i in range(p):  # one step of iterative refinement: M_II v_I + M_Ip = 0
-            acc = M[i, p]
-            for j in range(p):
-                acc += M[i, j] * s.du[j]
-            s.rhs[i] = -acc
-        _solve(s.L, s.rhs, s.grad, s.dependent, p)
-        for i in range(m):
-            s.V[i, nk] = s.du[i] + s.grad[i] if i < p else 0.0
-        s.V[p, nk] = 1.0
-        for q in range(nk):  # modified Gram-Schmidt against the vectors before
-            dot = 0.0
-            for i in range(m):
-                dot += s.V[i, q] * s.V[i, nk]
-            for i in range(m):
-                s.V[i, nk] -= dot * s.V[i, q]
-        length = _norm(s.V[:, nk])
-        for i in range(m):
-            s.V[i, nk] /= length
-        nk += 1
-    return nk
-
-
-@njit(cache=True)
+@kernel
 def _in_left_null_space(x: Data, s: Scratch, nk, rtol):
     """Whether ``V``'s first ``nk`` columns are null vectors of ``E'``: ``||E'v||^2 <=
     rtol ||E||_F^2 / m`` each (a direction only an idle contact would resist is not).
@@ -364,7 +217,7 @@ def _in_left_null_space(x: Data, s: Scratch, nk, rtol):
     return True
 
 
-@njit(cache=True)
+@kernel
 def _slope(x: Data, c, s: Scratch, t, u, du, e_du, rho_soft):
     """``Phi``'s first and second derivative along ``du`` at ``u + t du``
     (``s.delta = E'du``, ``e_du = e'du``).
@@ -388,7 +241,7 @@ def _slope(x: Data, c, s: Scratch, t, u, du, e_du, rho_soft):
     return first, second
 
 
-@njit(cache=True)
+@kernel
 def _line_search(x: Data, c, s: Scratch, u, du, e_du, rho_soft, p):
     """:func:`._newton_numpy.line_search`: the exact step length (0 where the slope at 0 is
     not negative).
@@ -412,7 +265,7 @@ def _line_search(x: Data, c, s: Scratch, u, du, e_du, rho_soft, p):
     return lo if hi == np.inf else 0.5 * (lo + hi)
 
 
-@njit(cache=True)
+@kernel
 def _finite(x: Data):
     """Whether one instant's data are finite and its stiffnesses positive (``v * 0`` is
     0 for a finite ``v``, NaN for any other: one sum, no branch per entry).
@@ -430,7 +283,7 @@ def _finite(x: Data):
     return True
 
 
-@njit(cache=True)
+@kernel
 def _fit(x: Data, c, s: Scratch, hint, u):
     """``u`` whose deformations fit ``hint`` in ``H0``'s weights: ``(E D0 E') u = E D0
     hint`` through ``s.L`` (``H0``'s factor, its dependent rows skipped).
@@ -448,7 +301,7 @@ def _fit(x: Data, c, s: Scratch, hint, u):
     _solve(s.L, s.rhs, u, s.dependent, m)
 
 
-@njit(cache=True)
+@kernel
 def _gradient(x: Data, s: Scratch, u, rho_soft, nk):
     """``(I - V V')(E f - e + rho_soft u)`` into ``s.grad``; returns its norm."""
     nv, m = x.Et.shape
@@ -464,7 +317,7 @@ def _gradient(x: Data, s: Scratch, u, rho_soft, nk):
     return np.sqrt(acc)
 
 
-@njit(cache=True)
+@kernel
 def _start(x: Data, c, p, s: Scratch, hint, use_hint, u):
     """A cold start: ``H0``, its null space ``V`` and its factor in ``s.L`` (dependent
     rows skipped: a right-hand side orthogonal to ``V`` has a solution there, which the
@@ -485,7 +338,7 @@ def _start(x: Data, c, p, s: Scratch, hint, use_hint, u):
     return 0, rho, nk, not use_hint
 
 
-@njit(cache=True)
+@kernel
 def _warm(x: Data, c, p, s: Scratch, hint, u, nk_before):
     """A chain's start from deformations ``hint`` (:func:`._newton_numpy.linearized`):
     unsoftened, the Hessian at ``hint`` (no ``H0``) gives the null space ``V`` through
@@ -508,7 +361,7 @@ def _warm(x: Data, c, p, s: Scratch, hint, u, nk_before):
     return _start(x, c, p, s, hint, True, u)
 
 
-@njit(cache=True)
+@kernel
 def _linearized(x: Data, c, s: Scratch, hint, nk, u):
     """``u`` of the contacts' law linearized at ``hint``: ``H u = e + E (W hint -
     f(hint))`` through ``s.L`` (``H_q d_q = slope_q d_q``; ``s.f``, ``s.slope`` at
@@ -527,7 +380,7 @@ def _linearized(x: Data, c, s: Scratch, hint, nk, u):
     _solve(s.L, s.rhs, u, s.dependent, m)
 
 
-@njit(cache=True)
+@kernel
 def _iterate(x: Data, c, p, s: Scratch, u, rho, nk, factored):
     """Newton's method from ``u`` (``factored``: ``s.L`` holds the first step's factor);
     returns ``(status, iterations)``.
@@ -557,7 +410,7 @@ def _iterate(x: Data, c, p, s: Scratch, u, rho, nk, factored):
     return 1, p.max_iter
 
 
-@njit(cache=True)
+@kernel
 def _step(x: Data, c, s: Scratch, u, rho_soft, p):
     """The line search along ``s.du`` from ``u`` and the move; returns the length."""
     nv, m = x.Et.shape
@@ -575,7 +428,7 @@ def _step(x: Data, c, s: Scratch, u, rho_soft, p):
     return t
 
 
-@njit(cache=True)
+@kernel
 def _scratch(nv, m, G, w, dense):
     """A :class:`Scratch` for ``m`` rows, ``nv`` columns and ``G`` contacts of width
     ``w``.
@@ -587,7 +440,7 @@ def _scratch(nv, m, G, w, dense):
                    np.zeros((nv + G, m)), np.zeros((nv + G, 2), np.int64), dense)
 
 
-@njit(cache=True)
+@kernel
 def _extrapolate(d_out, status, i, order, hint):
     """``hint``: the deformations at instant ``i`` extrapolated by the polynomial through
     the last ``p <= order`` solved instants before it, one after the other
@@ -605,7 +458,7 @@ def _extrapolate(d_out, status, i, order, hint):
             hint[col] += sign * weight * d_out[i - j, col]
 
 
-@njit(cache=True)
+@kernel
 def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
     """:func:`._newton_numpy.newton_numpy` compiled: ``(u, d, status, iterations)``. ``Et``
     (T, nv, m) holds ``E'`` (a column of ``E`` a contiguous row), ``span`` (nv, 2) the
