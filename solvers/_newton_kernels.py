@@ -152,24 +152,27 @@ def _hessian(x: Data, c, s: Scratch, shift, nk, rho):
 
 
 @kernel
-def _nominal_slope(c, q, F, k):
-    """Contact ``q``'s slope at the load ``F``: ``c0 = n F^(1 - 1/n) / k``."""
-    return c.n[q] * F ** (1.0 - 1.0 / c.n[q]) / k[q]
+def _nominal_weights(x: Data, c, out):
+    """Each column's slope at the load ``F = ||e||`` into ``out`` (nv,): ``c0 = n
+    F^(1 - 1/n) / k`` of its contact (:func:`._newton_numpy.nominal`).
+    """
+    F = _norm(x.e)
+    for q in range(c.members.shape[0]):
+        c0 = c.n[q] * F ** (1.0 - 1.0 / c.n[q]) / x.k[q]
+        for p in range(c.members.shape[1]):
+            if c.mask[q, p] > 0:
+                out[c.members[q, p]] = c0
 
 
 @kernel
 def _nominal(x: Data, c, s: Scratch):
-    """``H0`` (:func:`._newton_numpy.nominal`) into ``s.H0`` (summed as
-    :func:`_hessian` sums its terms); returns ``rho``, its mean diagonal.
+    """``H0 = sum_j c0_j E_j E_j'`` into ``s.H0`` (summed as :func:`_hessian` sums its
+    terms); returns ``rho``, its mean diagonal.
     """
-    m, t = x.Et.shape[1], 0
-    F = _norm(x.e)
-    for q in range(c.members.shape[0]):
-        c0 = _nominal_slope(c, q, F, x.k)
-        for p in range(c.members.shape[1]):
-            if c.mask[q, p] > 0:
-                col = c.members[q, p]
-                t = _term(s.B, s.ranges, t, x.Et[col], c0, x.span[col, 0], x.span[col, 1])
+    (nv, m), t = x.Et.shape, 0
+    _nominal_weights(x, c, s.weights)
+    for j in range(nv):
+        t = _term(s.B, s.ranges, t, x.Et[j], s.weights[j], x.span[j, 0], x.span[j, 1])
     _sum_terms(s.B, s.ranges, t, s.dense, s.H0)
     trace = 0.0
     for i in range(m):
@@ -180,16 +183,13 @@ def _nominal(x: Data, c, s: Scratch):
 
 
 @kernel
-def _rho(x: Data, c):
-    """``H0``'s mean diagonal without ``H0``: ``sum_q c0_q ||E_q||_F^2 / m``."""
-    F, acc = _norm(x.e), 0.0
-    for q in range(c.members.shape[0]):
-        c0 = _nominal_slope(c, q, F, x.k)
-        for p in range(c.members.shape[1]):
-            if c.mask[q, p] > 0:
-                col = c.members[q, p]
-                for i in range(x.span[col, 0], x.span[col, 1]):
-                    acc += c0 * x.Et[col, i] * x.Et[col, i]
+def _rho(x: Data, c, s: Scratch):
+    """``H0``'s mean diagonal without ``H0``: ``sum_j c0_j ||E_j||^2 / m``."""
+    _nominal_weights(x, c, s.weights)
+    acc = 0.0
+    for j in range(x.Et.shape[0]):
+        for i in range(x.span[j, 0], x.span[j, 1]):
+            acc += s.weights[j] * x.Et[j, i] * x.Et[j, i]
     return max(acc / x.Et.shape[1], 1e-300)
 
 
@@ -288,17 +288,13 @@ def _fit(x: Data, c, s: Scratch, hint, u):
     """``u`` whose deformations fit ``hint`` in ``H0``'s weights: ``(E D0 E') u = E D0
     hint`` through ``s.L`` (``H0``'s factor, its dependent rows skipped).
     """
-    m = x.Et.shape[1]
-    F = _norm(x.e)
+    _nominal_weights(x, c, s.weights)
     s.rhs[:] = 0.0
-    for q in range(c.members.shape[0]):
-        c0 = _nominal_slope(c, q, F, x.k)
-        for p in range(c.members.shape[1]):
-            if c.mask[q, p] > 0:
-                col = c.members[q, p]
-                for i in range(x.span[col, 0], x.span[col, 1]):
-                    s.rhs[i] += c0 * x.Et[col, i] * hint[col]
-    _solve(s.L, s.rhs, u, s.dependent, m)
+    for j in range(x.Et.shape[0]):
+        a = s.weights[j] * hint[j]
+        for i in range(x.span[j, 0], x.span[j, 1]):
+            s.rhs[i] += a * x.Et[j, i]
+    _solve(s.L, s.rhs, u, s.dependent, x.Et.shape[1])
 
 
 @kernel
@@ -350,7 +346,7 @@ def _warm(x: Data, c, p, s: Scratch, hint, u, nk_before):
     if not _finite(x):
         return 3, 0.0, 0, False
     if p.soften == 0.0:
-        rho = _rho(x, c)
+        rho = _rho(x, c, s)
         _contacts(x, c, s, hint)
         _hessian(x, c, s, 0.0, 0, rho)  # unshifted: a shift would hide a dependent row
         nk = _null_space(s.H, s, p.null_rtol)
@@ -435,8 +431,8 @@ def _scratch(nv, m, G, w, dense):
     """
     return Scratch(np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)),
                    np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
-                   np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G), np.zeros(G),
-                   np.zeros((G, w)), np.zeros(m), np.zeros(w), np.zeros(w),
+                   np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G),
+                   np.zeros(G), np.zeros((G, w)), np.zeros(m), np.zeros(w), np.zeros(w),
                    np.zeros((nv + G, m)), np.zeros((nv + G, 2), np.int64), dense)
 
 

@@ -82,6 +82,8 @@ class Scratch(NamedTuple):
     """(nv,) the forces at ``d``."""
     delta: np.ndarray
     """(nv,) ``E'du``."""
+    weights: np.ndarray
+    """(nv,) each column's slope in ``H0``."""
     ratio: np.ndarray
     """(G,) each contact's ``r / s``."""
     slope: np.ndarray
