@@ -403,13 +403,15 @@ def bench_markdown(path: Path = BENCH_DATA) -> str:
     parts += ["", "## Throughput", "",
               "Instants per second of each formulation x backend (cold: one instant at a "
               "time; warm: warm-started from the previous instant; batched: every instant "
-              "at once), the share solved, and the solver's share of the time.", ""]
+              "at once), the share solved, the solver's iterations per instant and its "
+              "share of the time.", ""]
     rows = sorted(results["throughput"],
                   key=lambda r: (r["formulation"], -(r["instants_per_s"] or 0)))
     parts += _table(["formulation", "backend", "mode", "instants/s", "solved",
-                     "solver share"],
+                     "iterations", "solver share"],
                     [[r["formulation"], r["solver"], r["mode"], r["instants_per_s"],
                       f"{100 * (r['success_rate'] or 0):.0f} %",
+                      "-" if r.get("iterations") is None else f"{r['iterations']:.2f}",
                       "-" if r["solver_share"] is None else f"{100 * r['solver_share']:.0f} %"]
                      for r in rows])
     parts += ["", "## Best backend per formulation", "",

@@ -98,7 +98,7 @@ def summarize(rows: list[dict], setup: dict[str, float]) -> list[dict]:
     """Per formulation x backend x mode: instants, rate, shifted geometric mean of the
     solver's time (``sgm_s``) and of the end-to-end time, success rate (status
     ``solved``), worst equilibrium residual (all / solved instants), mean time split
-    and the solver's share, first message not solved.
+    and the solver's share, mean iterations per instant, first message not solved.
     ``setup``: one-time build per formulation (s).
     """
     out = []
@@ -122,9 +122,18 @@ def summarize(rows: list[dict], setup: dict[str, float]) -> list[dict]:
                                        if r["status"] == "solved"), default=math.inf),
             "split_s": split,
             "solver_share": split["solve_s"] / max(split["time_s"], 1e-12),
+            "iterations": _mean_iterations(group),
             "note": next((m for m in unsolved if m), ""),
         })
     return out
+
+
+def _mean_iterations(group: list[dict]) -> float | None:
+    """The solver's iterations per instant, averaged over the instants that report a
+    count (``None`` where none does).
+    """
+    counts = [r["iterations"] for r in group if r.get("iterations") is not None]
+    return float(np.mean(counts)) if counts else None
 
 
 def pareto(rows: list[dict]) -> list[dict]:

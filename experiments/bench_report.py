@@ -316,18 +316,24 @@ def _throughput(summary) -> list[str]:
     lines = ["", "## Throughput per formulation x backend x mode (time split in us per "
              "instant)", "",
              "| formulation | solver | mode | instants | instants/s | sgm ms (solver) | solved "
-             "| build "
+             "| iterations | build "
              "| conversion | solver | checks | other | solver share |",
-             "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for e in summary:
         s = e["split_s"]
         lines.append(
             f"| {e['formulation']} | {e['solver']} | {e['mode']} | {e['instants']} | "
             f"{e['instants_per_s']:.1f} | {number_text(e['sgm_s'] * 1e3, '.3f')} | "
-            f"{100 * e['success_rate']:.1f}% | {_us(s['build_s'])} | {_us(s['convert_s'])} | "
+            f"{100 * e['success_rate']:.1f}% | {_iterations(e.get('iterations'))} | "
+            f"{_us(s['build_s'])} | {_us(s['convert_s'])} | "
             f"{_us(s['solve_s'])} | {_us(s['checks_s'])} | {_us(s['other_s'])} | "
             f"{100 * e['solver_share']:.0f}% |")
     return lines
+
+
+def _iterations(mean: float | None) -> str:
+    """Mean iterations per instant for the table ("-" where the solver gives none)."""
+    return "-" if mean is None else f"{mean:.2f}"
 
 
 def best_table(summary) -> list[dict]:
