@@ -538,6 +538,7 @@ def json_object(results: dict) -> dict:
                         "setup_s": num(e["setup_s"]),
                         "max_equilibrium": num(e["max_equilibrium"]),
                         "solver_share": num(e["solver_share"]),
+                        "iterations": num(e.get("iterations")),
                         "time_split_s": {k: num(v) for k, v in e["split_s"].items()}}
                        for e in results["summary"]],
         "pareto": [{"formulation": p["formulation"], "solver": p["solver"],

@@ -87,12 +87,12 @@ def _unit(dg, w, signed, norm, out):
 
 
 @kernel
-def _gather(d, delta, t, x_members, x_mask, out):
-    """One contact's deformations ``d + t delta`` into ``out``; returns its width."""
+def _gather(d, members, mask, out):
+    """One contact's deformations ``d[members]`` into ``out``; returns its width."""
     w = 0
-    for j in range(len(x_members)):
-        if x_mask[j] > 0:
-            out[j] = d[x_members[j]] + t * delta[x_members[j]]
+    for j in range(len(members)):
+        if mask[j] > 0:
+            out[j] = d[members[j]]
             w += 1
     return w
 
@@ -115,7 +115,7 @@ def _contacts(x: Data, c, s: Scratch, d):
     and its direction ``s.U[q]``.
     """
     for q in range(c.members.shape[0]):
-        w = _gather(d, d, 0.0, c.members[q], c.mask[q], s.dg)
+        w = _gather(d, c.members[q], c.mask[q], s.dg)
         r, s.slope[q], s.ratio[q], _, norm = _contact(s.dg, w, c.signed[q], c.n[q],
                                                       x.k[q], x.g[q])
         _unit(s.dg, w, c.signed[q], norm, s.U[q])
@@ -183,17 +183,6 @@ def _nominal(x: Data, c, s: Scratch):
 
 
 @kernel
-def _rho(x: Data, c, s: Scratch):
-    """``H0``'s mean diagonal without ``H0``: ``sum_j c0_j ||E_j||^2 / m``."""
-    _nominal_weights(x, c, s.weights)
-    acc = 0.0
-    for j in range(x.Et.shape[0]):
-        for i in range(x.span[j, 0], x.span[j, 1]):
-            acc += s.weights[j] * x.Et[j, i] * x.Et[j, i]
-    return max(acc / x.Et.shape[1], 1e-300)
-
-
-@kernel
 def _in_left_null_space(x: Data, s: Scratch, nk, rtol):
     """Whether ``V``'s first ``nk`` columns are null vectors of ``E'``: ``||E'v||^2 <=
     rtol ||E||_F^2 / m`` each (a direction only an idle contact would resist is not).
@@ -218,40 +207,54 @@ def _in_left_null_space(x: Data, s: Scratch, nk, rtol):
 
 
 @kernel
-def _slope(x: Data, c, s: Scratch, t, u, du, e_du, rho_soft):
-    """``Phi``'s first and second derivative along ``du`` at ``u + t du``
-    (``s.delta = E'du``, ``e_du = e'du``).
+def _slope(x: Data, c, s: Scratch, t, base, quad):
+    """``Phi``'s first and second derivative along the step at length ``t``: ``base +
+    t quad`` and ``quad`` from ``-e'du`` and the softening, then each contact's from its
+    deformations ``s.Dq + t s.Lq`` (:func:`_line_search` gathers them).
     """
-    first = -e_du
-    second = 0.0
-    for i in range(len(u)):
-        first += rho_soft * (u[i] + t * du[i]) * du[i]
-        second += rho_soft * du[i] * du[i]
+    first, second = base + t * quad, quad
     for q in range(c.members.shape[0]):
-        w = _gather(s.d, s.delta, t, c.members[q], c.mask[q], s.dg)
+        w = 0
+        for j in range(c.members.shape[1]):
+            if c.mask[q, j] > 0:
+                s.dg[j] = s.Dq[q, j] + t * s.Lq[q, j]
+                w += 1
         r, slope, ratio, _, norm = _contact(s.dg, w, c.signed[q], c.n[q], x.k[q], x.g[q])
-        _unit(s.dg, w, c.signed[q], norm, s.unit)
-        along, length = 0.0, 0.0
-        for j in range(w):
-            dj = s.delta[c.members[q, j]]
-            along += s.unit[j] * dj
-            length += dj * dj
+        along = 0.0
+        if c.signed[q]:
+            along = s.Lq[q, 0]
+        elif norm > 0:
+            for j in range(w):
+                along += s.dg[j] * s.Lq[q, j]
+            along /= norm
         first += r * along
-        second += ratio * length + (slope - ratio) * along * along
+        second += ratio * s.lengths[q] + (slope - ratio) * along * along
     return first, second
 
 
 @kernel
 def _line_search(x: Data, c, s: Scratch, u, du, e_du, rho_soft, p):
     """:func:`._newton_numpy.line_search`: the exact step length (0 where the slope at 0 is
-    not negative).
+    not negative); each contact's deformations and step gathered once.
     """
-    start, _ = _slope(x, c, s, 0.0, u, du, e_du, rho_soft)
+    udu, dudu = 0.0, 0.0
+    for i in range(len(u)):
+        udu += u[i] * du[i]
+        dudu += du[i] * du[i]
+    base, quad = -e_du + rho_soft * udu, rho_soft * dudu
+    for q in range(c.members.shape[0]):
+        s.lengths[q] = 0.0
+        for j in range(c.members.shape[1]):
+            if c.mask[q, j] > 0:
+                col = c.members[q, j]
+                s.Dq[q, j], s.Lq[q, j] = s.d[col], s.delta[col]
+                s.lengths[q] += s.delta[col] * s.delta[col]
+    start, _ = _slope(x, c, s, 0.0, base, quad)
     if not start < 0:
         return 0.0
     lo, hi, t = 0.0, np.inf, 1.0
     for _ in range(p.ls_max):
-        first, second = _slope(x, c, s, t, u, du, e_du, rho_soft)
+        first, second = _slope(x, c, s, t, base, quad)
         if abs(first) <= p.ls_rtol * abs(start):
             return t
         if first < 0:
@@ -337,7 +340,7 @@ def _start(x: Data, c, p, s: Scratch, hint, use_hint, u):
 @kernel
 def _warm(x: Data, c, p, s: Scratch, hint, u, nk_before):
     """A chain's start from deformations ``hint`` (:func:`._newton_numpy.linearized`):
-    unsoftened, the Hessian at ``hint`` (no ``H0``) gives the null space ``V`` through
+    unsoftened, the Hessian at ``hint`` (no ``H0``) gives ``rho`` and the null space ``V`` through
     its factor, dependent rows skipped, where that is ``E'``'s left null space of the
     dimension the instant before had; ``u`` solves the law linearized there
     (:func:`_linearized`) and the factor serves the first step. Else :func:`_start`
@@ -346,15 +349,27 @@ def _warm(x: Data, c, p, s: Scratch, hint, u, nk_before):
     if not _finite(x):
         return 3, 0.0, 0, False
     if p.soften == 0.0:
-        rho = _rho(x, c, s)
         _contacts(x, c, s, hint)
-        _hessian(x, c, s, 0.0, 0, rho)  # unshifted: a shift would hide a dependent row
+        _hessian(x, c, s, 0.0, 0, 0.0)  # unshifted: a shift would hide a dependent row
+        rho = _mean_diagonal(s.H)
         nk = _null_space(s.H, s, p.null_rtol)
         if nk == nk_before and _in_left_null_space(x, s, nk, p.null_rtol):
             _linearized(x, c, s, hint, nk, u)
             _project(u, s.V, nk)
             return 0, rho, nk, True
     return _start(x, c, p, s, hint, True, u)
+
+
+@kernel
+def _mean_diagonal(H):
+    """``max(trace(H) / m, 1e-300)``: the scale of a chained instant's shift and of its
+    ``rho V V'`` (the Hessian at its start stands for ``H0``, as only the optimum, not
+    those scales, must not depend on the start).
+    """
+    trace = 0.0
+    for i in range(H.shape[0]):
+        trace += H[i, i]
+    return max(trace / H.shape[0], 1e-300)
 
 
 @kernel
@@ -432,7 +447,8 @@ def _scratch(nv, m, G, w, dense):
     return Scratch(np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)), np.zeros((m, m)),
                    np.zeros(m, np.bool_), np.zeros(m), np.zeros(m), np.zeros(m),
                    np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(nv), np.zeros(G),
-                   np.zeros(G), np.zeros((G, w)), np.zeros(m), np.zeros(w), np.zeros(w),
+                   np.zeros(G), np.zeros((G, w)), np.zeros(m), np.zeros(w),
+                   np.zeros((G, w)), np.zeros((G, w)), np.zeros(G),
                    np.zeros((nv + G, m)), np.zeros((nv + G, 2), np.int64), dense)
 
 

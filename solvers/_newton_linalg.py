@@ -32,8 +32,10 @@ changes."""
 def _term(B, ranges, t, a, scale, lo, hi):
     """Row ``t`` of ``B``: ``sqrt(scale) a`` on rows ``lo:hi`` (0 elsewhere); ``t + 1``."""
     root = np.sqrt(scale)
-    for i in range(B.shape[1]):
-        B[t, i] = root * a[i] if lo <= i < hi else 0.0
+    B[t, :lo] = 0.0
+    B[t, hi:] = 0.0
+    for i in range(lo, hi):
+        B[t, i] = root * a[i]
     ranges[t, 0], ranges[t, 1] = lo, hi
     return t + 1
 

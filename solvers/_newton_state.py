@@ -94,8 +94,12 @@ class Scratch(NamedTuple):
     """(m,) a Hessian term's row (``E_q u``)."""
     dg: np.ndarray
     """(w,) one contact's deformations."""
-    unit: np.ndarray
-    """(w,) one contact's direction."""
+    Dq: np.ndarray
+    """(G, w) each contact's deformations at a line search's start."""
+    Lq: np.ndarray
+    """(G, w) each contact's deformations along the step."""
+    lengths: np.ndarray
+    """(G,) ``||Lq||^2`` per contact."""
     B: np.ndarray
     """(nv + G, m) the Hessian's rank-one terms, scaled by their roots."""
     ranges: np.ndarray
