@@ -157,17 +157,24 @@ def numbers(lay: Layout, P_diag, q, A, b):
     (T, rows, n_z), ``b`` (T, rows)).
     """
     held = b[:, lay.held_rows] / A[:, lay.held_rows, lay.held]
-    # E gathered as its transpose (the kernel's layout, contiguous) in one flat take
-    T, rows, n_z = A.shape
-    flat = (lay.eq[None, :] * n_z + lay.force[:, None]).ravel()
-    Et = np.reshape(A, (T, rows * n_z)).take(flat, axis=1)
-    E = np.swapaxes(Et.reshape(T, len(lay.force), len(lay.eq)), 1, 2)
-    e = b[:, lay.eq] - np.einsum("tmh,th->tm", A[:, lay.eq[:, None], lay.held[None, :]],
-                                 held)
+    E = np.swapaxes(block(A, lay.force, lay.eq, transposed=True), 1, 2)
+    e = b[:, lay.eq] - np.einsum("tmh,th->tm", block(A, lay.eq, lay.held), held)
     power = lay.c_idx >= 0
     k = np.where(power, lay.p * q[:, lay.c_idx], P_diag[:, lay.a_idx])
     g = np.where(lay.g_idx >= 0, q[:, lay.g_idx], 0.0)
     return E, e, k, g, held
+
+
+def block(A, first, second, transposed=False) -> np.ndarray:
+    """``A[:, first][:, :, second]`` (T, len(first), len(second)) by one flat take, a
+    contiguous copy (``transposed``: ``first`` indexes ``A``'s columns, ``second`` its
+    rows: the transpose of ``A[:, second][:, :, first]``, as the kernel reads ``E``).
+    """
+    T, rows, n_z = A.shape
+    flat = (second[None, :] * n_z + first[:, None] if transposed
+            else first[:, None] * n_z + second[None, :]).ravel()
+    return np.reshape(A, (T, rows * n_z)).take(flat, axis=1).reshape(
+        T, len(first), len(second))
 
 
 def answer(lay: Layout, A, P_diag, q, u, d, k, g, held):
@@ -204,7 +211,7 @@ def answer(lay: Layout, A, P_diag, q, u, d, k, g, held):
     y[:, at], y[:, at + 1] = c, c * (lay.p[power] - 1.0) * r[:, power] ** lay.p[power]
     y[:, at + 2] = g[:, power] - y0[:, power]
     if len(lay.held):  # the held rows' multipliers from their variables' stationarity
-        rest = np.einsum("tmh,tm->th", A[:, lay.eq[:, None], lay.held[None, :]],
+        rest = np.einsum("tmh,tm->th", block(A, lay.eq, lay.held),
                          y[:, lay.eq])
         y[:, lay.held_rows] = -(rest + P_diag[:, lay.held] * held + q[:, lay.held]) / A[
             :, lay.held_rows, lay.held]
