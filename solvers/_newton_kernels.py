@@ -392,21 +392,21 @@ def _linearized(x: Data, c, s: Scratch, hint, nk, u):
 
 
 @kernel
-def _iterate(x: Data, c, p, s: Scratch, u, rho, nk, factored):
-    """Newton's method from ``u`` (``factored``: ``s.L`` holds the first step's factor);
-    returns ``(status, iterations)``.
+def _iterate(x: Data, c, p, s: Scratch, u, rho, nk, factored, limit):
+    """Newton's method from ``u``, at most ``limit`` steps (``factored``: ``s.L`` holds
+    the first step's factor); returns ``(status, iterations)``.
     """
     rho_soft, shift = p.soften * rho, p.reg_rtol * rho
     m = x.Et.shape[1]
     scale = _norm(x.e)
-    for it in range(p.max_iter + 1):
+    for it in range(limit + 1):
         _state(x, c, s, u)
         norm = _gradient(x, s, u, rho_soft, nk)
         if not np.isfinite(norm):
             return 3, it
         if norm <= p.tol * scale:
             return 0, it
-        if it == p.max_iter:
+        if it == limit:
             break
         if it > 0 or not factored:
             _hessian(x, c, s, shift + rho_soft, nk, rho)
@@ -418,7 +418,26 @@ def _iterate(x: Data, c, p, s: Scratch, u, rho, nk, factored):
         _project(s.du, s.V, nk)  # (a factor with dependent rows skipped: held out here)
         if _step(x, c, s, u, rho_soft, p) == 0.0:  # no decrease left: rounding
             return (0 if norm <= p.stall * p.tol * scale else 2), it
-    return 1, p.max_iter
+    return 1, limit
+
+
+@kernel
+def _instant(x: Data, c, p, s: Scratch, hint, use_hint, u, rho, nk, factored, warm):
+    """Newton's method from a started ``u`` (:func:`_warm`, :func:`_start`); a chain's
+    warm start that has not converged in ``p.warm_iter`` steps (a start across a
+    change of the contacts' states, from which the steps crawl) is abandoned for
+    :func:`_start`'s. Returns ``(status, iterations)``, both attempts' steps counted.
+    """
+    if not warm:
+        return _iterate(x, c, p, s, u, rho, nk, factored, p.max_iter)
+    code, spent = _iterate(x, c, p, s, u, rho, nk, factored, min(p.warm_iter, p.max_iter))
+    if code == 0:
+        return code, spent
+    code, rho, nk, factored = _start(x, c, p, s, hint, use_hint, u)
+    if code:
+        return code, spent
+    code, more = _iterate(x, c, p, s, u, rho, nk, factored, p.max_iter)
+    return code, spent + more
 
 
 @kernel
@@ -489,7 +508,8 @@ def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
     nk = 0
     for i in range(T):
         x = Data(Et[i], span, e[i], k[i], g[i])
-        if chain and i > 0 and status[i - 1] == 0:
+        warm = chain and i > 0 and status[i - 1] == 0
+        if warm:
             _extrapolate(d_out, status, i, params.extrapolation, hint)
             code, rho, nk, factored = _warm(x, contacts, params, s, hint, u_out[i], nk)
         else:
@@ -498,8 +518,8 @@ def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
         if code:
             status[i] = code
         else:
-            status[i], iters[i] = _iterate(x, contacts, params, s, u_out[i], rho, nk,
-                                           factored)
+            status[i], iters[i] = _instant(x, contacts, params, s, d0[i], start[i],
+                                           u_out[i], rho, nk, factored, warm)
         for j in range(nv):
             acc = 0.0
             for r in range(span[j, 0], span[j, 1]):

@@ -15,8 +15,10 @@ import numpy as np
 TOL = 1e-12
 """Default stopping rule: ``||E f - e|| <= TOL ||e||`` (the equilibrium residual, the
 only optimality condition the dual iteration leaves inexact)."""
-MAX_ITER = 60
-"""Newton steps before an instant is left ``inaccurate``."""
+MAX_ITER = 200
+"""Newton steps before an instant is left ``inaccurate``: a Hertz contact at its onset
+(its slope going to 0) makes the steps crawl (``paper-penalty``'s ``compliance_hertz``
+takes up to 75 at an instant where its clearances close)."""
 NULL_RTOL = 1e-10
 """A pivot of ``H0``'s Cholesky factor below this, relative to its diagonal entry,
 marks a row dependent on the rows before it (a left null direction of ``E``)."""
@@ -36,6 +38,12 @@ LS_MAX = 60
 EXTRAPOLATION = 4
 """Solved instants a chain's warm start extrapolates from (a cubic through four): on
 the built-in grids each order fewer costs about a tenth more Newton steps."""
+
+WARM_ITER = 20
+"""Steps a chain's warm start takes before the instant starts again cold: a start
+across a change of the contacts' states (a clearance closing, a cone's load passing
+zero) can make the steps crawl where a cold start converges (on ``axle-pinion``'s
+``compliance`` one instant took 184 steps warm, 25 cold)."""
 
 STATUS = ("solved", "inaccurate", "inaccurate", "failed", "failed")
 """Status codes of :func:`newton_numpy` and the kernel, by index."""
@@ -220,7 +228,8 @@ def linearized(E, e, groups: Groups, k, g, hint, V, rho):
 
 def _one(E, e, groups, k, g, hint, tol, max_iter, soften, warm):
     """One instant of :func:`newton_numpy`: ``(u, status, iterations)``; ``warm``: a
-    chain's (:func:`linearized`, unsoftened), else ``hint`` is fitted by least squares.
+    chain's (:func:`linearized`, unsoftened; a cold start after :data:`WARM_ITER` steps
+    without convergence), else ``hint`` is fitted by least squares.
     """
     if not (np.all(np.isfinite(E)) and np.all(np.isfinite(e)) and np.all(np.isfinite(k))
             and np.all(np.isfinite(g)) and np.all(k > 0)):
@@ -236,7 +245,15 @@ def _one(E, e, groups, k, g, hint, tol, max_iter, soften, warm):
         u, first = project @ np.linalg.lstsq(E.T, hint, rcond=None)[0], None
     else:
         u, first = np.zeros(len(e)), H0
-    return _iterate(E, e, groups, k, g, u, first, V, rho, tol, max_iter, rho_soft)
+    args = (E, e, groups, k, g)
+    if not warm:
+        return _iterate(*args, u, first, V, rho, tol, max_iter, rho_soft)
+    u, code, spent = _iterate(*args, u, first, V, rho, tol, min(WARM_ITER, max_iter),
+                              rho_soft)
+    if code == 0:  # else a start across a change of the contacts' states: cold
+        return u, code, spent
+    u, code, more = _iterate(*args, np.zeros(len(e)), H0, V, rho, tol, max_iter, rho_soft)
+    return u, code, spent + more
 
 
 def _iterate(E, e, groups, k, g, u, first, V, rho, tol, max_iter, rho_soft):

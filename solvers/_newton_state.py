@@ -38,6 +38,7 @@ class Params(NamedTuple):
     ls_max: int
     stall: float
     extrapolation: int
+    warm_iter: int
 
 
 class Data(NamedTuple):

@@ -74,6 +74,7 @@ from ._newton_numpy import (
     STALL,
     STATUS,
     TOL,
+    WARM_ITER,
     Groups,
     forces,
     groups_of,
@@ -110,7 +111,7 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
     start = np.zeros(T, np.bool_) if start is None else np.asarray(start, np.bool_)
     contacts = Contacts(groups.members, groups.mask, groups.signed, groups.n)
     params = Params(float(tol), int(max_iter), float(soften), NULL_RTOL, REG_RTOL, LS_RTOL,
-                    int(LS_MAX), STALL, int(EXTRAPOLATION))
+                    int(LS_MAX), STALL, int(EXTRAPOLATION), int(WARM_ITER))
     return kernel(np.ascontiguousarray(np.swapaxes(E, 1, 2), float), spans(E),
                   np.ascontiguousarray(e, float), contacts, np.ascontiguousarray(k, float),
                   np.ascontiguousarray(g, float), d0, start, bool(chain), params)
