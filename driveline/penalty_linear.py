@@ -130,6 +130,23 @@ def _factor(jac, c, factors):
 
 
 @kernel(inline="always")
+def _six_rows(jac, v, w, vec, lo, hi, shift, t):
+    """The six sums ``t`` plus rows ``v..v+2`` and ``w..w+2`` of ``jac`` (a body's) over
+    columns ``shift + lo .. shift + hi`` times ``vec[lo:hi]``.
+    """
+    t0, t1, t2, t3, t4, t5 = t
+    for j in range(lo, hi):
+        x, col = vec[j], shift + j
+        t0 += jac[v, col] * x
+        t1 += jac[v + 1, col] * x
+        t2 += jac[v + 2, col] * x
+        t3 += jac[w, col] * x
+        t4 += jac[w + 1, col] * x
+        t5 += jac[w + 2, col] * x
+    return t0, t1, t2, t3, t4, t5
+
+
+@kernel(inline="always")
 def _solve(jac, c, factors, b, xq, r):
     """``b <- (I - c J)^-1 b`` from :func:`_factor`'s elimination and ``factors``;
     ``xq``, ``r``: scratch vectors as long as ``b``.
@@ -145,27 +162,14 @@ def _solve(jac, c, factors, b, xq, r):
                              + blocks[k, i, 2] * b[q + 2] + blocks[k, i, 3] * b[q + 3])
     for body in range(nb):  # the body's six rows at once: six independent sums
         v, w = r0 + 3 * body, r0 + 3 * nb + 3 * body
-        t0 = t1 = t2 = t3 = t4 = t5 = 0.0
+        t = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         for k in range(nb):
             if linked[body, k]:
-                for j in range(3 * k, 3 * k + 3):
-                    bj = b[j]
-                    t0 += jac[v, j] * bj
-                    t1 += jac[v + 1, j] * bj
-                    t2 += jac[v + 2, j] * bj
-                    t3 += jac[w, j] * bj
-                    t4 += jac[w + 1, j] * bj
-                    t5 += jac[w + 2, j] * bj
+                t = _six_rows(jac, v, w, b, 3 * k, 3 * k + 3, 0, t)
         for k in range(nb):
             if linked[body, k]:
-                for j in range(4 * k, 4 * k + 4):
-                    xj, col = xq[j], 3 * nb + j
-                    t0 += jac[v, col] * xj
-                    t1 += jac[v + 1, col] * xj
-                    t2 += jac[v + 2, col] * xj
-                    t3 += jac[w, col] * xj
-                    t4 += jac[w + 1, col] * xj
-                    t5 += jac[w + 2, col] * xj
+                t = _six_rows(jac, v, w, xq, 4 * k, 4 * k + 4, 3 * nb, t)
+        t0, t1, t2, t3, t4, t5 = t
         # b_r - M_ru b_u - M_rq A^-1 b_q, M = -c J off the diagonal
         i, e = v - r0, w - r0
         r[i], r[i + 1], r[i + 2] = b[v] + c * t0, b[v + 1] + c * t1, b[v + 2] + c * t2
