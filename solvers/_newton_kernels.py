@@ -100,13 +100,18 @@ def _gather(d, members, mask, out):
 @kernel
 def _state(x: Data, c, s: Scratch, u):
     """At ``u``: ``s.d = E'u`` and the contacts there (:func:`_contacts`)."""
-    nv = x.Et.shape[0]
-    for j in range(nv):
-        acc = 0.0
-        for i in range(x.span[j, 0], x.span[j, 1]):
-            acc += x.Et[j, i] * u[i]
-        s.d[j] = acc
+    _deformations(x.Et, x.span, u, s.d)
     _contacts(x, c, s, s.d)
+
+
+@kernel
+def _deformations(Et, span, u, out):
+    """``out = E'u``, each column of ``E`` over the rows ``span`` it can be nonzero in."""
+    for j in range(Et.shape[0]):
+        acc = 0.0
+        for i in range(span[j, 0], span[j, 1]):
+            acc += Et[j, i] * u[i]
+        out[j] = acc
 
 
 @kernel
@@ -443,15 +448,11 @@ def _instant(x: Data, c, p, s: Scratch, hint, use_hint, u, rho, nk, factored, wa
 @kernel
 def _step(x: Data, c, s: Scratch, u, rho_soft, p):
     """The line search along ``s.du`` from ``u`` and the move; returns the length."""
-    nv, m = x.Et.shape
+    m = x.Et.shape[1]
     e_du = 0.0
     for i in range(m):
         e_du += x.e[i] * s.du[i]
-    for j in range(nv):
-        acc = 0.0
-        for i in range(x.span[j, 0], x.span[j, 1]):
-            acc += x.Et[j, i] * s.du[i]
-        s.delta[j] = acc
+    _deformations(x.Et, x.span, s.du, s.delta)
     t = _line_search(x, c, s, u, s.du, e_du, rho_soft, p)
     for i in range(m):
         u[i] += t * s.du[i]
@@ -520,9 +521,5 @@ def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
         else:
             status[i], iters[i] = _instant(x, contacts, params, s, d0[i], start[i],
                                            u_out[i], rho, nk, factored, warm)
-        for j in range(nv):
-            acc = 0.0
-            for r in range(span[j, 0], span[j, 1]):
-                acc += Et[i, j, r] * u_out[i, r]
-            d_out[i, j] = acc
+        _deformations(Et[i], span, u_out[i], d_out[i])
     return u_out, d_out, status, iters
