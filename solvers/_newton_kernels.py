@@ -238,9 +238,9 @@ def _slope(x: Data, c, s: Scratch, t, base, quad):
 
 
 @kernel
-def _line_search(x: Data, c, s: Scratch, u, du, e_du, rho_soft, p):
-    """:func:`._newton_numpy.line_search`: the exact step length (0 where the slope at 0 is
-    not negative); each contact's deformations and step gathered once.
+def _line_search(x: Data, c, s: Scratch, u, du, e_du, rho_soft, p, start):
+    """:func:`._newton_numpy.line_search`: the exact step length (0 where the slope at 0,
+    ``start``, is not negative); each contact's deformations and step gathered once.
     """
     udu, dudu = 0.0, 0.0
     for i in range(len(u)):
@@ -254,7 +254,6 @@ def _line_search(x: Data, c, s: Scratch, u, du, e_du, rho_soft, p):
                 col = c.members[q, j]
                 s.Dq[q, j], s.Lq[q, j] = s.d[col], s.delta[col]
                 s.lengths[q] += s.delta[col] * s.delta[col]
-    start, _ = _slope(x, c, s, 0.0, base, quad)
     if not start < 0:
         return 0.0
     lo, hi, t = 0.0, np.inf, 1.0
@@ -447,13 +446,16 @@ def _instant(x: Data, c, p, s: Scratch, hint, use_hint, u, rho, nk, factored, wa
 
 @kernel
 def _step(x: Data, c, s: Scratch, u, rho_soft, p):
-    """The line search along ``s.du`` from ``u`` and the move; returns the length."""
+    """The line search along ``s.du`` from ``u`` (its slope at 0 the gradient's along
+    the step) and the move; returns the length.
+    """
     m = x.Et.shape[1]
-    e_du = 0.0
+    e_du, start = 0.0, 0.0
     for i in range(m):
         e_du += x.e[i] * s.du[i]
+        start += s.grad[i] * s.du[i]
     _deformations(x.Et, x.span, s.du, s.delta)
-    t = _line_search(x, c, s, u, s.du, e_du, rho_soft, p)
+    t = _line_search(x, c, s, u, s.du, e_du, rho_soft, p, start)
     for i in range(m):
         u[i] += t * s.du[i]
     return t

@@ -142,9 +142,10 @@ def null_basis(H0) -> np.ndarray:
     return vecs[:, w <= NULL_RTOL * max(float(np.max(np.diag(H0))), 1e-300)]
 
 
-def line_search(d, delta, u, du, e, groups: Groups, k, g, rho_soft) -> float:
-    """The step length ``t >= 0`` minimizing ``Phi(u + t du)`` (``delta = E'du``):
-    safeguarded Newton on the slope, the bracket grown until the slope turns.
+def line_search(d, delta, u, du, e, groups: Groups, k, g, rho_soft, start) -> float:
+    """The step length ``t >= 0`` minimizing ``Phi(u + t du)`` (``delta = E'du``, ``start``
+    the slope at 0, the gradient along ``du``): safeguarded Newton on the slope, the
+    bracket grown until the slope turns.
     """
     def slope(t):
         r, sl, ratio, unit, _ = evaluate(d + t * delta, groups, k, g)
@@ -155,7 +156,6 @@ def line_search(d, delta, u, du, e, groups: Groups, k, g, rho_soft) -> float:
                   + rho_soft * du @ du)
         return first, second
 
-    start = slope(0.0)[0]
     if not start < 0:
         return 0.0
     lo, hi, t = 0.0, np.inf, 1.0
@@ -279,7 +279,7 @@ def _iterate(E, e, groups, k, g, u, first, V, rho, tol, max_iter, rho_soft):
         except np.linalg.LinAlgError:
             return u, 4, it
         du = -np.linalg.solve(factor.T, np.linalg.solve(factor, grad))
-        t = line_search(d, E.T @ du, u, du, e, groups, k, g, rho_soft)
+        t = line_search(d, E.T @ du, u, du, e, groups, k, g, rho_soft, grad @ du)
         if t == 0.0:  # no decrease left: rounding, solved if within STALL tol
             return u, (0 if np.linalg.norm(grad) <= STALL * tol * scale else 2), it
         u = u + t * du
