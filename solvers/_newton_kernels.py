@@ -492,7 +492,7 @@ def _extrapolate(d_out, status, i, order, hint):
             hint[col] += sign * weight * d_out[i - j, col]
 
 
-@kernel
+@kernel(nogil=True)
 def newton(Et, span, e, contacts, k, g, d0, start, chain, params):
     """:func:`._newton_numpy.newton_numpy` compiled: ``(u, d, status, iterations)``. ``Et``
     (T, nv, m) holds ``E'`` (a column of ``E`` a contiguous row), ``span`` (nv, 2) the

@@ -33,9 +33,11 @@ Newton iteration on the slope, ``O(n)`` an evaluation). A cold start takes its f
 step with ``H0``; a warm start fits ``u`` to the deformations ``d`` of a neighbouring
 answer; an instant of a batch's chain solves the contacts' law linearized at the
 deformations extrapolated by a polynomial through the answers before, and that
-Hessian's factor, the only one where the start is close, serves the first step. The
-iteration stops when ``||(I - V V') grad|| <= tol ||e||`` (or at rounding, where no
-decrease is left, within ``STALL tol``).
+Hessian's factor, the only one where the start is close, serves the first step; a
+batch is cut into runs of :data:`RUN` instants, each chained from a cold first instant
+and solved side by side on numba's threads. The iteration stops when ``||(I - V V')
+grad|| <= tol ||e||`` (or at rounding, where no decrease is left, within ``STALL
+tol``).
 
 ``soften`` (option, >= 0): the equilibrium softened as MuJoCo and SAP soften their
 constraints, ``+ soften rho ||u||^2 / 2`` in the dual, i.e. the primal
@@ -55,12 +57,15 @@ any other backend's. The method runs compiled where numba is installed (extra
 
 from __future__ import annotations
 
+import functools
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LCP, Conic, LastMade
+from threadpoolctl import ThreadpoolController
 
 from ._newton_layout import answer, numbers, parse_batch, parse_conic
 from ._newton_numpy import (
@@ -92,7 +97,8 @@ EXTRAS: dict[str, str | None] = {"newton": None, "newton-batched": None,
 def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, tol=TOL,
                 max_iter=MAX_ITER, soften=0.0, compiled=None):
     """:func:`newton_numpy`'s answer, compiled where numba is installed (``compiled``:
-    force one path; ``True`` without numba is an ``ImportError``).
+    force one path; ``True`` without numba is an ``ImportError``); a batch is solved in
+    runs of :data:`RUN` instants, on numba's threads where compiled (:func:`_runs`).
     """
     use = compiled
     if use is None or use:
@@ -104,17 +110,55 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
             use = False
         else:
             use = True
-    if not use:
-        return newton_numpy(E, e, groups, k, g, d0, start, chain, tol, max_iter, soften)
     T, m, nv = E.shape
     d0 = np.zeros((T, nv)) if d0 is None else np.ascontiguousarray(d0, float)
     start = np.zeros(T, np.bool_) if start is None else np.asarray(start, np.bool_)
+    if not use:
+        return _runs(lambda r: newton_numpy(E[r], e[r], groups, k[r], g[r], d0[r], start[r],
+                                            chain, tol, max_iter, soften), T, 1)
     contacts = Contacts(groups.members, groups.mask, groups.signed, groups.n)
     params = Params(float(tol), int(max_iter), float(soften), NULL_RTOL, REG_RTOL, LS_RTOL,
                     int(LS_MAX), STALL, int(EXTRAPOLATION), int(WARM_ITER))
-    return kernel(np.ascontiguousarray(np.swapaxes(E, 1, 2), float), spans(E),
-                  np.ascontiguousarray(e, float), contacts, np.ascontiguousarray(k, float),
-                  np.ascontiguousarray(g, float), d0, start, bool(chain), params)
+    Et, span = np.ascontiguousarray(np.swapaxes(E, 1, 2), float), spans(E)
+    e, k, g = (np.ascontiguousarray(a, float) for a in (e, k, g))
+    return _runs(lambda r: kernel(Et[r], span, e[r], contacts, k[r], g[r], d0[r], start[r],
+                                  bool(chain), params), T, _threads())
+
+
+RUN = 128
+"""Instants per run: a batch is cut into runs of this many consecutive instants, each a
+chain of its own (its first instant cold), solved side by side. The cut does not depend
+on the thread count, so neither does any answer."""
+
+
+def _runs(solve, T: int, threads: int):
+    """``solve(slice)``'s ``(u, d, status, iterations)`` over the runs of ``T`` instants,
+    joined; on up to ``threads`` threads (the compiled kernel releases the GIL), with
+    one BLAS thread (:func:`_blas`) wherever there is more than one run, so that no
+    answer depends on the thread count.
+    """
+    runs = [slice(lo, min(T, lo + RUN)) for lo in range(0, max(T, 1), RUN)]
+    if len(runs) == 1:
+        return solve(runs[0])
+    with (_blas().limit(limits=1, user_api="blas"),
+          ThreadPoolExecutor(max(1, min(threads, len(runs)))) as pool):
+        parts = list(pool.map(solve, runs))
+    return tuple(np.concatenate(x) for x in zip(*parts))
+
+
+@functools.cache
+def _blas() -> ThreadpoolController:
+    """The BLAS libraries loaded by the time a batch is solved. Each run's Hessian
+    product is a small BLAS call; a BLAS running threads of its own for it makes the
+    runs' threads wait on one another.
+    """
+    return ThreadpoolController()
+
+
+def _threads() -> int:
+    """The thread count numba is set to (``NUMBA_NUM_THREADS``, ``numba.set_num_threads``)."""
+    import numba
+    return numba.get_num_threads()
 
 
 def spans(E) -> np.ndarray:

@@ -245,6 +245,33 @@ def test_chain_through_a_change_of_the_null_space(paper_op):
 
 
 @pytest.mark.compiled
+def test_runs_side_by_side_give_the_answers_of_one_thread(paper_op, monkeypatch):
+    """A batch of several runs (:data:`newton_.RUN` instants each, a chain of its own)
+    gives the same answers, bit for bit, on one thread and on three; each run's first
+    instant starts cold, as the reference's does.
+    """
+    pytest.importorskip("numba")
+    batch = fbatch.least_norm_batch(paper_op, "compliance")
+    reps = 2 * nt.RUN // len(batch.A) + 1  # three runs or more
+    E, b = np.tile(batch.A, (reps, 1, 1)), np.tile(batch.b, (reps, 1))
+    groups = nt._scalars(batch.signed)
+    k = np.tile(batch.weights, (reps, 1))
+    answers = []
+    for threads in (1, 3):
+        monkeypatch.setattr(nt, "_threads", lambda n=threads: n)
+        answers.append(nt.solve_duals(E, b, groups, k, 0.0 * k, chain=True))
+    for one, three in zip(*answers):
+        assert np.array_equal(one, three)
+    run = slice(nt.RUN, nt.RUN + 1)  # a run's first instant: as if solved alone, cold
+    alone = nt.solve_duals(E[run], b[run], groups, k[run], 0.0 * k[run], chain=True)
+    assert np.array_equal(alone[0][0], answers[0][0][nt.RUN])
+    ref = nt.solve_duals(E, b, groups, k, 0.0 * k, chain=True, compiled=False)
+    assert not np.any(ref[2]) and np.array_equal(ref[2], answers[0][2])
+    f_ref, f_mine = (method.forces(d, groups, k, 0.0 * k) for d in (ref[1], answers[0][1]))
+    np.testing.assert_allclose(f_mine, f_ref, atol=1e-9 * np.abs(f_ref).max(), rtol=0)
+
+
+@pytest.mark.compiled
 @pytest.mark.parametrize("compiled", (False, True))
 def test_non_finite_data_end_as_a_failed_instant(paper_op, compiled):
     if compiled:
