@@ -19,7 +19,7 @@ import tempfile
 from importlib import metadata
 from pathlib import Path
 
-from cardan_forces.experiments.environment import machine, versions
+from cardan_forces.experiments.environment import machine, threads, versions
 
 DATA = Path(__file__).parent / "data" / "bench.json"
 
@@ -37,6 +37,7 @@ def run_bench(full: bool) -> dict:
         "command": "cardan " + " ".join(c for c in command if c not in ("--json", "--quiet")),
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
         "machine": machine(),
+        "threads": threads(),
         "versions": versions(),
         "cardan_forces": metadata.version("cardan-forces"),
         "results": {k: v for k, v in json.loads(done.stdout).items() if k not in OMITTED},

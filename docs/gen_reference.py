@@ -398,6 +398,7 @@ def bench_markdown(path: Path = BENCH_DATA) -> str:
     results = data["results"]
     parts = _table(["", ""], [["command", f"`{data['command']}`"], ["date", data["date"]],
                               ["machine", data["machine"]],
+                              ["threads", data.get("threads", "not recorded")],
                               ["cardan-forces", data["cardan_forces"]],
                               ["versions", data["versions"]]])
     parts += ["", "## Throughput", "",

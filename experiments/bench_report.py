@@ -12,7 +12,7 @@ from cardan_forces.formulations import BASELINE
 from . import files
 from .bench_metrics import PROFILES, SHIFT_S, TAUS, TIME_LIMIT_S, best_runs
 from .bench_run import CHECK_PASSES
-from .environment import json_number, machine, number_text, versions
+from .environment import json_number, machine, number_text, threads, versions
 
 THROUGHPUT_COLUMNS = ("formulation", "solver", "mode", "instant", "t_s", "status", "time_s",
                       "build_s", "convert_s", "solve_s", "checks_s", "checks_first_s",
@@ -280,6 +280,7 @@ def _header(results, settings) -> list[str]:
         f"# cardan bench: scene {settings['scene']}", "",
         f"- date: {datetime.datetime.now().isoformat(timespec='seconds')}",
         f"- machine: {machine()}",
+        f"- threads: {threads()}",
         f"- versions: {versions()}",
         f"- settings: {settings['instants']} instants ({settings['span']}), budget "
         f"{settings['budget_s']:g} s per per-instant run, accuracy on {settings['samples']} "

@@ -35,6 +35,18 @@ def machine() -> str:
             f"Python {platform.python_version()}")
 
 
+def threads() -> str:
+    """The threads a timed run uses: one BLAS/OpenMP thread per process (the commands
+    set it), and numba's for the ``newton`` family's batches.
+    """
+    try:
+        import numba
+    except ImportError:
+        return "one BLAS/OpenMP thread; numba not installed"
+    return (f"one BLAS/OpenMP thread; the newton family's batches on "
+            f"{numba.get_num_threads()} numba threads")
+
+
 def versions() -> str:
     """Installed versions of NumPy, SciPy, the distributions every available backend
     declares it runs on, and Matplotlib.
