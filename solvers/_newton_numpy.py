@@ -236,13 +236,13 @@ def _one(E, e, groups, k, g, hint, tol, max_iter, soften, warm):
         return np.zeros(len(e)), 3, 0
     H0, rho = nominal(E, e, groups, k)
     V = null_basis(H0)
-    project = np.eye(len(e)) - V @ V.T
     rho_soft = soften * rho
     start = linearized(E, e, groups, k, g, hint, V, rho) if warm and not soften else None
     if start is not None:
         u, first = start
     elif hint is not None:
-        u, first = project @ np.linalg.lstsq(E.T, hint, rcond=None)[0], None
+        u = np.linalg.lstsq(E.T, hint, rcond=None)[0]
+        u, first = u - V @ (V.T @ u), None
     else:
         u, first = np.zeros(len(e)), H0
     args = (E, e, groups, k, g)

@@ -140,9 +140,12 @@ def _runs(solve, T: int, threads: int):
     runs = [slice(lo, min(T, lo + RUN)) for lo in range(0, max(T, 1), RUN)]
     if len(runs) == 1:
         return solve(runs[0])
-    with (_blas().limit(limits=1, user_api="blas"),
-          ThreadPoolExecutor(max(1, min(threads, len(runs)))) as pool):
-        parts = list(pool.map(solve, runs))
+    with _blas().limit(limits=1, user_api="blas"):
+        if threads > 1:
+            with ThreadPoolExecutor(min(threads, len(runs))) as pool:
+                parts = list(pool.map(solve, runs))
+        else:
+            parts = [solve(r) for r in runs]
     return tuple(np.concatenate(x) for x in zip(*parts))
 
 
@@ -150,8 +153,10 @@ def _runs(solve, T: int, threads: int):
 def _blas() -> ThreadpoolController:
     """The BLAS libraries loaded by the time a batch is solved. Each run's Hessian
     product is a small BLAS call; a BLAS running threads of its own for it makes the
-    runs' threads wait on one another.
+    runs' threads wait on one another. The kernels' products call SciPy's BLAS,
+    imported here so that the controller sees it whatever ran before.
     """
+    import scipy.linalg.cython_blas  # noqa: F401 (loaded for the controller to find)
     return ThreadpoolController()
 
 
@@ -290,7 +295,7 @@ def solve_batch(batch, tol=None, soften: float = 0.0, max_iter: int = MAX_ITER,
         z, y = answer(lay, batch.A, P_diag, batch.q, u, d, k, g, held)
     stages["answer"] = time.perf_counter() - clock
     messages = tuple(map(_message, status)) if np.any(status) else ()
-    return BatchOutcome(status=np.array([STATUS[c] for c in status], object), z=z, y=y,
+    return BatchOutcome(status=np.array(STATUS, object)[status], z=z, y=y,
                         iterations=iters, setup_s=stages["setup"],
                         solve_s=stages["newton"] + stages["answer"], stages=stages,
                         messages=messages)
