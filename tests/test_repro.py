@@ -69,6 +69,25 @@ def test_a_method_whose_end_faces_both_push_is_named_not_a_physical_selection():
     assert lines[1].startswith("- `positive`: no pair of end faces pushes at once")
 
 
+@pytest.mark.parametrize("scale", [1.0, 1e3, 1e6])
+def test_faces_pushing_by_a_rounding_of_the_loads_are_no_verdict(scale):
+    """The rule is relative to the loads: both faces at 4e-5 of the largest load (an
+    interior point's idle face, 0.04 N at 1 kN) count as zero at any scale; at 1e-3 of it
+    they push, and the report's number for them is not 0."""
+    class Op:
+        pairs = ((0, 1),)
+        t = np.array([0.0, 0.02])
+
+    for share, flagged in ((4e-5, False), (1e-3, True)):
+        x = scale * np.array([[share, share, 0.3], [0.0, 0.0, 1.0]])
+        hist = {"positive": History("positive", "s", Op.t, x, (), 0.0)}
+        lines = verdicts._both_faces_note(Op, hist)
+        assert lines[0].startswith("- `positive`: both") is flagged, lines
+        if flagged:
+            shown = float(lines[0].split("up to ")[1].split(" N")[0])
+            assert shown == pytest.approx(share * scale, rel=1e-2)
+
+
 def test_fig15_names_the_scene_whose_verdicts_both_agree():
     y, x = load_scene("paper-fig15"), load_scene("paper-fig15-axial")
     _, _, lines = verdicts._fig15_summary([(y, {"radial": "disagrees", "axial": "disagrees"}),
