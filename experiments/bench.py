@@ -25,7 +25,9 @@ package's ``solve`` — conversion, the solver, the checks — split in every ro
 
 Running: :mod:`.bench_run`; metrics: :mod:`.bench_metrics`; output: :mod:`.bench_report`.
 Results go to ``--out``: long-format CSVs, PNGs and ``report.md``; ``--json`` prints one
-strict-JSON object.
+strict-JSON object. A backend whose solver could not be built here (a generated solver:
+no working compiler, an unwritable cache) has failed rows with the reason, and the run
+names it on stderr and ends with exit code 1.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -44,6 +47,7 @@ from cardan_forces.experiments.environment import json_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.problems import LS, QP, Conic
 from cardan_forces.solvers import get as get_backend
+from cardan_forces.solvers.qocogen_ import UNBUILT
 
 from . import bench_metrics as metrics
 from . import bench_report as out
@@ -172,7 +176,19 @@ def run(args) -> int:
         for e in results["summary"]:
             print(f"{e['formulation']:16s} {e['solver']:20s} {e['mode']:7s} "
                   f"{e['instants_per_s']:10.1f}/s  solved {100 * e['success_rate']:5.1f}%")
-    return 0
+    unbuilt = _unbuilt(results["rows"] + results["acc_rows"])
+    for solver, why in unbuilt.items():
+        print(f"bench: {solver} did not run: {why} (its rows are failed records)",
+              file=sys.stderr)
+    return 1 if unbuilt else 0
+
+
+def _unbuilt(rows: list[dict]) -> dict[str, str]:
+    """The backends whose solver could not be built here (a generated solver), each with
+    its reason: their rows are failures of the machine, not results of the solver.
+    """
+    return {r["solver"]: r["message"][r["message"].index(UNBUILT):] for r in rows
+            if UNBUILT in (r["message"] or "")}
 
 
 FIGURES = ("bench_pareto", "bench_profiles")

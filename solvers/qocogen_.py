@@ -211,11 +211,13 @@ def supports(problem) -> bool:
 
 def cache_dir() -> Path:
     """Where compiled solvers are kept: ``$CARDAN_FORCES_CACHE`` or the user's cache
-    directory (``$XDG_CACHE_HOME``, else ``~/.cache``), under ``cardan-forces/qocogen``.
+    directory (``$XDG_CACHE_HOME``, else ``~/.cache``), under ``cardan-forces/qocogen``;
+    always an absolute path, ``~`` expanded (the compiler runs in a folder of its own,
+    where a relative output path would name another file).
     """
     root = os.environ.get("CARDAN_FORCES_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "cardan-forces")
-    return Path(root) / "qocogen"
+        os.environ.get("XDG_CACHE_HOME") or "~/.cache", "cardan-forces")
+    return Path(root).expanduser().absolute() / "qocogen"
 
 
 def compiler() -> str | None:
@@ -223,8 +225,22 @@ def compiler() -> str | None:
     return shutil.which(os.environ.get("CC", "")) or shutil.which("cc") or shutil.which("gcc")
 
 
+UNBUILT = "the generated solver could not be built"
+"""The start of a :class:`BuildError`'s message (how a command tells a batch this
+backend could not run from one it ran and failed)."""
+
+
+class BuildError(RuntimeError):
+    """A structure's solver could not be generated, compiled or loaded here; the message
+    is one line: :data:`UNBUILT` and the first reason given.
+    """
+
+
 _LOADED: dict[str, ctypes.CDLL] = {}
 _COMPILE_S: dict[str, float] = {}
+_UNBUILT: dict[str, str] = {}
+"""The solvers (by cache path) this process could not build, each with its message: a
+later batch of the same structure fails at once, without building it again."""
 
 
 def compile_seconds() -> dict[str, float]:
@@ -291,8 +307,8 @@ def _build(target: Path, dims, patterns) -> None:
                               cwd=source, capture_output=True, text=True)
         if done.returncode:
             errors = [line for line in done.stderr.splitlines() if "error" in line]
-            raise RuntimeError("compiling the generated solver failed: "
-                               + (errors or done.stderr.splitlines() or ["no output"])[0])
+            said = errors or done.stderr.splitlines() or [f"nothing (exit code {done.returncode})"]
+            raise BuildError(f"{UNBUILT}: the C compiler says {said[0]}")
         os.replace(built, target)
 
 
@@ -310,11 +326,26 @@ def _library(dims, masks) -> tuple[ctypes.CDLL, list[np.ndarray], float]:
     """The compiled solver of this structure (loaded, from the cache, or built), the
     masks of its patterns (the batch's, or a cached solver's that covers them) and the
     seconds spent building and loading it now (0 when this process had it already).
+    A structure that cannot be built raises :class:`BuildError`, at once after the first
+    attempt in this process.
     """
     key = _key(dims, masks)
     target = cache_dir() / f"{key}.so"
     if str(target) in _LOADED:
         return _LOADED[str(target)], masks, 0.0
+    if str(target) in _UNBUILT:
+        raise BuildError(_UNBUILT[str(target)])
+    try:
+        return _built(key, target, dims, masks)
+    except Exception as exc:  # any step: the backend cannot run this structure here
+        why = (str(exc) if isinstance(exc, BuildError)
+               else f"{UNBUILT}: {type(exc).__name__}: {exc}")
+        _UNBUILT[str(target)] = " ".join(why.split())
+        raise BuildError(_UNBUILT[str(target)]) from exc
+
+
+def _built(key: str, target: Path, dims, masks):
+    """:func:`_library`'s solver: a covering one of the cache, or built now, loaded."""
     start = time.perf_counter()
     if not target.exists():
         found = _covering(dims, masks)

@@ -336,3 +336,23 @@ def test_the_regularization_study_is_a_section_of_the_report(tmp_path, monkeypat
     report = (tmp_path / "report.md").read_text()
     assert "## What regularization costs" in report
     assert "](regularization.png)" in report
+
+
+def test_a_solver_that_cannot_be_built_ends_the_run_with_exit_1_and_its_reason(
+        tmp_path, monkeypatch, capsys):
+    """A generated solver that cannot be built here (no working compiler): its rows are
+    failed records, and the run says so in one line and exits 1 (not 0 at 0 %)."""
+    if "qocogen-reduced" not in registry.available():
+        pytest.skip("qocogen or a C compiler is not installed")
+    from cardan_forces.solvers.qocogen_ import UNBUILT
+
+    from cardan_forces.cli import main
+
+    monkeypatch.setenv("CARDAN_FORCES_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("CC", "false")
+    assert main(["bench", "--quick", "--quiet", "--formulation", "min_max", "--solver",
+                 "qocogen-reduced", "--out", str(tmp_path / "out")]) == 1
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith(f"bench: qocogen-reduced did not run: {UNBUILT}")
+    rows = _read(tmp_path / "out" / "bench_throughput.csv")
+    assert rows and {r["status"] for r in rows} == {"failed"}

@@ -194,3 +194,72 @@ def test_status_rule_by_table():
                             "failed"]
     assert messages[0] == "" and all("qocogen: " in m for m in messages[1:])
     assert "9" in messages[5]
+
+
+def test_a_relative_cache_folder_builds_and_solves(tmp_path, monkeypatch):
+    """A relative ``CARDAN_FORCES_CACHE`` (resolved against the working folder, not the
+    compiler's): the solver is built into it and solves."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("CARDAN_FORCES_CACHE", "relative")
+    result = solve_batch(fbatch.conic_batch([_nearest(2.0)], [0]), SOLVER, tol=TOL)
+    assert set(result.status) == {"solved"}, result.message
+    assert len(list((tmp_path / "relative" / "qocogen").glob("*.so"))) == 1
+
+
+def _compiler_fails(monkeypatch, tmp_path):
+    monkeypatch.setenv("CC", "false")
+
+
+def _compiler_errs(monkeypatch, tmp_path):
+    script = tmp_path / "cc"
+    script.write_text("#!/bin/sh\necho 'a.c:1: note: first' >&2\n"
+                      "echo 'collect2: error: ld returned 1 exit status' >&2\nexit 1\n")
+    script.chmod(0o755)
+    monkeypatch.setenv("CC", str(script))
+
+
+def _generation_raises(monkeypatch, tmp_path):
+    import qocogen
+
+    def broken(*args, **kwargs):
+        raise ValueError("first line\nsecond line")
+
+    monkeypatch.setattr(qocogen, "generate_solver", broken)
+
+
+def _cache_is_a_file(monkeypatch, tmp_path):
+    (tmp_path / "file").write_text("not a folder")
+    monkeypatch.setenv("CARDAN_FORCES_CACHE", str(tmp_path / "file"))
+
+
+def _loading_fails(monkeypatch, tmp_path):
+    from cardan_forces.solvers import qocogen_
+
+    def refuse(path, *args, **kwargs):
+        raise OSError(f"{path}: cannot open shared object file")
+
+    monkeypatch.setattr(qocogen_.ctypes, "CDLL", refuse)
+
+
+@pytest.mark.parametrize("fault", [_compiler_fails, _compiler_errs, _generation_raises,
+                                   _cache_is_a_file, _loading_fails])
+def test_a_solver_that_cannot_be_built_is_a_failed_batch_with_one_line(
+        fresh_cache, monkeypatch, tmp_path, fault):
+    """Whatever step fails (generation, compilation, the cache folder, loading): every
+    instant is a failed record whose message is one line saying the solver could not
+    be built and why; a second batch of the structure fails at once, not built again."""
+    from cardan_forces.solvers import qocogen_
+
+    fault(monkeypatch, tmp_path)
+    builds = []
+    real = qocogen_._build
+    monkeypatch.setattr(qocogen_, "_build", lambda *a: builds.append(1) or real(*a))
+    batch = fbatch.conic_batch([_nearest(c) for c in (2.0, 1.0)], [0, 1])
+    for _ in range(2):
+        result = solve_batch(batch, SOLVER)
+        assert set(result.status) == {"failed"}
+        (message,) = set(result.message)
+        assert qocogen_.UNBUILT in message and "\n" not in message
+    assert len(builds) <= 1
+    if fault is _compiler_errs:
+        assert message.endswith("collect2: error: ld returned 1 exit status")
