@@ -26,6 +26,10 @@ duty cycle's mean load and ``L10``, from a bearing's catalogue data
   ball and ``10/3`` for roller bearings.
 - Variable load, the duty cycle's mean load: ``Pm = (sum P_i^p n_i / sum n_i)^(1/p)``
   over the revolutions ``n_i`` of each stretch.
+
+Where ``Pm`` or ``L10`` has no finite value (a shaft that does not turn, a load not
+known, no load, an unbounded load), :func:`no_value_reason` says why in words, so that
+no answer carries an undefined number without its reason.
 """
 
 from __future__ import annotations
@@ -144,3 +148,25 @@ def life_hours(l10_mrev: float, revs: np.ndarray, span_s: float) -> float:
     if not total > 0 or not span_s > 0 or math.isnan(l10_mrev):
         return math.nan
     return l10_mrev * MILLION / (total / span_s) / 3600.0
+
+
+def no_value_reason(p_values: np.ndarray, revs: np.ndarray) -> str | None:
+    """Why :func:`mean_load` and :func:`rating_life` of loads ``p_values`` (N) over
+    stretches of ``revs`` revolutions give no finite ``Pm``, ``L10`` or hours, one
+    sentence for each way; ``None`` where every one of them is finite.
+    """
+    p_values, revs = np.asarray(p_values, float), np.asarray(revs, float)
+    turning = revs > 0
+    if not turning.any():
+        return ("no value: the shaft makes no revolution (speed 0), and ISO 281 counts a "
+                "life in revolutions")
+    unknown = int(np.isnan(p_values[turning]).sum())
+    if unknown:
+        return (f"no value: P is not known at {unknown} of the {int(turning.sum())} "
+                "instants the shaft turns at (not solved)")
+    top = float(np.max(p_values[turning]))
+    if math.isinf(top):
+        return "no finite Pm: P is unbounded (no finite greatest load), so L10 is 0"
+    if top <= 0:
+        return "unbounded: the bearing carries no load (P = 0 throughout), so L10 is infinite"
+    return None

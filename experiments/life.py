@@ -1,5 +1,5 @@
-"""``cardan life``: every rated bearing's ISO 281 basic rating life, for each member of
-the rigid solution set the package can pick and over the whole set.
+"""``cardan life``: every rated bearing's ISO 281 basic rating life, for each selection
+the package can compute and over the whole rigid solution set.
 
 For each bearing whose scene gives catalogue data (:class:`~cardan_forces.driveline.
 scene.BearingRating`), at ``--instants`` instants spread over the scene's window: the
@@ -7,12 +7,17 @@ equivalent dynamic load ``P(t)`` (:mod:`cardan_forces.driveline.bearing_life`), 
 cycle's mean load ``Pm`` over the revolutions of the bearing's shaft (the motion's
 speed) and ``L10`` in millions of revolutions and in hours at the window's mean speed,
 
-- for each physical selection of :data:`SELECTIONS` (``positive``, ``compliance``,
-  ``compliance_hertz``) and the simulated ones (:mod:`~cardan_forces.experiments.
-  life_runs`): MuJoCo's forces where it is installed and can express the scene (unless
-  ``--no-engine``), the penalty-contact simulation's average with ``--penalty`` (a
-  simulation of the whole window; a dynamic scene); the answer says why one is not
-  run, and
+- for each selection, each a different kind of answer (:data:`MODELS`): the members of
+  the rigid set :data:`SELECTIONS` (``positive``, ``compliance``,
+  ``compliance_hertz``); MuJoCo's forces (:mod:`~cardan_forces.experiments.life_runs`),
+  a soft-constraint engine's, which lie in the set up to its own residual, where it is
+  installed and can express the scene (unless ``--no-engine``); and with ``--penalty``
+  the penalty-contact simulation's average, a different model (the released line with
+  its clearances) whose forces may lie outside the set (a simulation of the whole
+  window; a dynamic scene). The answer says why one is not run, and for each selection
+  and bearing whether its life lies within the set's interval (:func:`in_set`: its
+  ``Pm`` between the set's least and greatest over the same instants, to
+  :data:`IN_SET_TOL` of the bearing's load), computed, never assumed;
 - over the rigid set (:func:`load_envelope`): the least and the greatest ``P`` at each
   instant over every rigid solution, hence ``L10`` from its worst to its best. ``P``
   grows with the radial load ``Fr`` and with the axial load's magnitude ``|Fa|``, so its
@@ -26,15 +31,20 @@ speed) and ``L10`` in millions of revolutions and in hours at the window's mean 
   the greatest ``Fr`` with the greatest ``|Fa|``, which one rigid solution may not
   reach together: a bound, said so in the answer.
 
-Where the set is open above, the worst case has no finite value: the answer says so
-and names the release the advisor proposes (:func:`~cardan_forces.driveline.release.
-advise`) that bounds it. Written into ``--out``: ``life.csv`` (every ``P`` over time),
+Where a life has no finite value (a load not solved, no load, an open set) the answer
+gives the reason beside it (:func:`~cardan_forces.driveline.bearing_life.
+no_value_reason`); a scene whose rated shafts do not turn over the window is refused
+(ISO 281 counts a life in revolutions). Where the set is open above, the worst case has
+no finite value: the answer says so and names the release the advisor proposes
+(:func:`~cardan_forces.driveline.release.advise`) that bounds it. Written into
+``--out``: ``life.csv`` (every ``P`` over time, the reason beside an empty cell),
 ``life.md`` and the figure ``life.<format>`` (each bearing's life interval with each
 selection's mark); ``--json`` prints the whole answer as strict JSON instead.
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
 import math
 from pathlib import Path
@@ -79,6 +89,21 @@ NOT_ASKED = {
 }
 """Why a simulated selection (:mod:`~cardan_forces.experiments.life_runs`) is not among
 the answer's selections when it was not asked for."""
+
+MODELS = {
+    **{name: "a member of the rigid solution set" for name in SELECTIONS},
+    ENGINE: "a soft-constraint engine: its forces lie in the rigid set up to its own "
+            "residual",
+    PENALTY: "a different model, the released line with its clearances: its forces, "
+             "hence its life, may lie outside the rigid set's",
+}
+"""What each selection is, against the rigid set whose interval the answer gives."""
+
+IN_SET_TOL = 1e-4
+"""How far, relative to a bearing's load scale (its greatest finite ``P`` of any
+selection or of the set's ends), a selection's ``Pm`` may lie beyond the set's and still
+count as within it: above the LP and QP solvers' tolerances (1e-6) and MuJoCo's
+residual (a few 1e-5 of the load on the built-in scenes)."""
 
 LIGHT_LOAD = 0.05
 """``P / C`` at or below which a bearing's load is light (the bearing makers' classes,
@@ -194,14 +219,39 @@ def p_ends(rating, env: dict, b: int) -> tuple[np.ndarray, np.ndarray]:
 
 def life(rating, p_values: np.ndarray, revs: np.ndarray, span_s: float,
          keep: np.ndarray | None = None) -> dict:
-    """``Pm`` (N), ``L10`` (million revolutions) and ``L10_h`` (hours) of a load history;
+    """``Pm`` (N), ``L10`` (million revolutions) and ``L10_h`` (hours) of a load history,
+    and ``reason``: why one of them has no finite value (``None`` where all have one);
     with ``keep``, ``Pm`` over those instants only (``L10_h`` still at the whole
     window's mean speed).
     """
     kept = slice(None) if keep is None else keep
     pm = iso.mean_load(p_values[kept], revs[kept], iso.exponent(rating))
     l10 = iso.rating_life(rating, pm)
-    return {"Pm_N": pm, "L10_Mrev": l10, "L10_h": iso.life_hours(l10, revs, span_s)}
+    reason = iso.no_value_reason(p_values[kept], revs[kept])
+    if reason and revs.sum() > 0 and not revs[kept].sum() > 0:
+        reason = "no value: the shaft turns at none of the instants kept"
+    return {"Pm_N": pm, "L10_Mrev": l10, "L10_h": iso.life_hours(l10, revs, span_s),
+            "reason": reason}
+
+
+def in_set(pm: float, set_pm: tuple[float, float], scale: float) -> dict:
+    """Whether a selection's ``Pm`` lies between the set's least and greatest ``set_pm``
+    (over the same instants) to :data:`IN_SET_TOL` of the load ``scale`` (N):
+    ``inside`` (``None`` where either side has no value, ``why`` then says so) and
+    ``Pm_beyond``, how far beyond the nearer end relative to it (0 inside; negative
+    below the least, a life longer than the set's best).
+    """
+    lo, hi = set_pm
+    if math.isnan(pm) or math.isnan(lo) or math.isnan(hi):
+        side = "the selection's" if math.isnan(pm) else "the set's"
+        return {"inside": None, "Pm_beyond": math.nan,
+                "why": f"not compared: {side} Pm has no value"}
+    slack = IN_SET_TOL * scale
+    end = lo if pm < lo - slack else hi if pm > hi + slack else None
+    if end is None:
+        return {"inside": True, "Pm_beyond": 0.0, "why": None}
+    return {"inside": False, "Pm_beyond": (pm - end) / (end if end > 0 else scale),
+            "why": None}
 
 
 def study(scene_spec: str, instants: int = INSTANTS, progress=None, penalty: bool = False,
@@ -209,15 +259,18 @@ def study(scene_spec: str, instants: int = INSTANTS, progress=None, penalty: boo
     """The whole answer of ``cardan life`` for one scene, as JSON-ready data (non-finite
     numbers are the encoder's ``null``): the instants, each rated bearing's ``P`` over
     time, ``Pm`` and ``L10`` per selection and over the set, the selections not run and
-    why, and where the set is open, why and the release that bounds it. ``penalty`` and
+    why, what each selection is (:data:`MODELS`) and whether its life lies in the set's,
+    and where the set is open, why and the release that bounds it. ``penalty`` and
     ``engine`` add the simulated selections (:mod:`~cardan_forces.experiments.
-    life_runs`) where the scene allows them.
+    life_runs`) where the scene allows them. A scene none of whose rated shafts turns is
+    refused (:class:`SceneError`) before any solve.
     """
     scene = load_scene(scene_spec)
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
     motion = simulate(scene, t)
     op = build_operator(motion)
     bearings = rated(op)
+    _check_turning(scene, motion, op, bearings)
     chosen = {name: solve_over_time(op, name) for name in SELECTIONS}
     simulated, not_run = _simulated(op, penalty, engine, progress)
     chosen.update({name: history for name, (history, _) in simulated.items()})
@@ -232,14 +285,29 @@ def study(scene_spec: str, instants: int = INSTANTS, progress=None, penalty: boo
         "scene": scene.name, "t_s": t, "directions": DIRECTIONS,
         "direction_error": 1.0 / math.cos(math.pi / DIRECTIONS) - 1.0,
         "selections": {name: {"solver": h.solver, "solved": h.solved, "instants": len(h.t),
+                              "model": MODELS[name],
                               **({"about": simulated[name][1]} if name in simulated else {})}
                        for name, h in chosen.items()},
+        "in_set_tol": IN_SET_TOL,
         "not_run": not_run,
         "unrated": [c.element for c in op.bearings() if c not in [r[0] for r in bearings]],
         "bearings": entries, "open": unbounded,
         "open_reason": _open_reason(motion, op) if unbounded else None,
         "release": _release(motion) if unbounded else None,
     }
+
+
+def _check_turning(scene, motion, op: Operator, bearings: list) -> None:
+    """Refuse (:class:`SceneError`, one line) a scene none of whose rated bearings' shafts
+    turns over the window: ISO 281 counts a life in revolutions, so none would have a
+    value.
+    """
+    if bearings and not any(iso.revolutions(motion.omega[c.shaft], op.t).sum() > 0
+                            for c, _ in bearings):
+        raise SceneError(
+            f"scene {scene.name}: no rated bearing's shaft turns from {op.t[0]:g} to "
+            f"{op.t[-1]:g} s (speed 0), and ISO 281 counts a life in revolutions; give the "
+            "scene an initial speed ([initial] speed_rad_s) or a net torque")
 
 
 def _simulated(op: Operator, penalty: bool, engine: bool, progress) -> tuple[dict, dict]:
@@ -263,25 +331,20 @@ def _simulated(op: Operator, penalty: bool, engine: bool, progress) -> tuple[dic
 
 
 def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
-    """One bearing's part of :func:`study`'s answer: per selection ``P``, the radial
-    and axial loads ``Fr``, ``Fa`` it comes from (N), at how many instants ``|Fa| > e
-    Fr`` (``P = X Fr + Y |Fa|``), ``Pm`` and ``L10``. A simulated selection's ``Pm`` is
-    over the instants it has (the others left out, their count said); a rigid one's is
-    NaN where an instant was not solved.
+    """One bearing's part of :func:`study`'s answer: per selection
+    (:func:`_selection_entry`) and over the set ``P``, ``Pm`` and ``L10``, each life's
+    reason where it has no finite value, and whether each selection's lies in the set's.
     """
     revs = iso.revolutions(motion.omega[contact.shaft], op.t)
-    selections = {}
-    for name, history in chosen.items():
-        fr, fa = loads(op, contact, history.forces)
-        p = iso.equivalent_load(rating, fr, fa)
-        keep = np.isfinite(p) if name in (PENALTY, ENGINE) else None
-        with np.errstate(invalid="ignore"):
-            axial = int(np.sum(np.abs(fa) > iso.factors(rating, fa)[2] * fr))
-        selections[name] = {"P_N": p, "Fr_N": fr, "Fa_N": fa, "axial_instants": axial,
-                            **life(rating, p, revs, span, keep),
-                            "unsolved_instants": int(np.isnan(p).sum())}
-    peaks = [np.nanmax(s["P_N"]) for s in selections.values() if np.isfinite(s["P_N"]).any()]
     lo, hi = p_ends(rating, env, b)
+    selections = {name: _selection_entry(op, contact, rating, name, history, revs, span)
+                  for name, history in chosen.items()}
+    peaks = [np.nanmax(s["P_N"]) for s in selections.values() if np.isfinite(s["P_N"]).any()]
+    scale = max([*peaks, *lo[np.isfinite(lo)], *hi[np.isfinite(hi)]], default=0.0)
+    for name, sel in selections.items():
+        keep = np.isfinite(sel["P_N"]) if name in (PENALTY, ENGINE) else None
+        ends = [life(rating, p, revs, span, keep)["Pm_N"] for p in (lo, hi)]
+        sel["in_set"] = in_set(sel["Pm_N"], ends, scale)
     worst, best = life(rating, hi, revs, span), life(rating, lo, revs, span)
     determinate = bool(env["radial_determinate"][:, b].all())
     return {
@@ -298,10 +361,27 @@ def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
             "P_min_N": lo, "P_max_N": hi, "Pm_N": [best["Pm_N"], worst["Pm_N"]],
             "L10_Mrev": [worst["L10_Mrev"], best["L10_Mrev"]],
             "L10_h": [worst["L10_h"], best["L10_h"]],
+            "reason": [worst["reason"], best["reason"]],
             "open": bool(np.isinf(hi).any()),
             "radial_determinate": determinate,
             "ends": _ends_words(determinate, contact.element_kind.slides, env, b)},
     }
+
+
+def _selection_entry(op, contact, rating, name, history, revs, span) -> dict:
+    """One selection's ``P``, the radial and axial loads ``Fr``, ``Fa`` it comes from
+    (N), at how many instants ``|Fa| > e Fr`` (``P = X Fr + Y |Fa|``), ``Pm`` and
+    ``L10`` at one bearing. A simulated selection's ``Pm`` is over the instants it has
+    (the others left out, their count said); a rigid one's has no value where an
+    instant was not solved.
+    """
+    fr, fa = loads(op, contact, history.forces)
+    p = iso.equivalent_load(rating, fr, fa)
+    keep = np.isfinite(p) if name in (PENALTY, ENGINE) else None
+    with np.errstate(invalid="ignore"):
+        axial = int(np.sum(np.abs(fa) > iso.factors(rating, fa)[2] * fr))
+    return {"P_N": p, "Fr_N": fr, "Fa_N": fa, "axial_instants": axial,
+            **life(rating, p, revs, span, keep), "unsolved_instants": int(np.isnan(p).sum())}
 
 
 def _ends_words(determinate: bool, slides: bool, env: dict, b: int) -> str:
@@ -342,20 +422,42 @@ MARKS = dict(zip((*SELECTIONS, PENALTY, ENGINE), "os^Dv<>"))
 """Each selection's marker on the figure."""
 
 
+EMPTY = {
+    "rigid": "not solved at this instant",
+    "simulated": "left out at this instant (life.md's line of the selection says why)",
+    "set": "not solved at this instant (an LP of the set's interval)",
+    "open": "open: the set has no finite greatest P at this instant",
+}
+"""Why a cell of ``life.csv`` is empty, by the series' kind."""
+
+
 def write_csv(answer: dict, path: Path) -> None:
     """Long format: one row per bearing, instant and series (each selection's ``P``,
-    the set's least and greatest); an empty cell where undefined (open or unsolved).
+    the set's least and greatest); an empty cell where undefined, with why in ``note``
+    (:data:`EMPTY`).
     """
     with files.replacing(path, newline="") as f:
         w = csv.writer(f)
-        w.writerow(["t_s", "bearing", "series", "P_N"])
+        w.writerow(["t_s", "bearing", "series", "P_N", "note"])
         for entry in answer["bearings"]:
             series = {name: sel["P_N"] for name, sel in entry["selections"].items()}
             series.update(set_min=entry["interval"]["P_min_N"],
                           set_max=entry["interval"]["P_max_N"])
             for name, values in series.items():
                 for t, p in zip(answer["t_s"], values):
-                    w.writerow([f"{t:.6g}", entry["bearing"], name, number_text(p, ".9g", "")])
+                    w.writerow([f"{t:.6g}", entry["bearing"], name,
+                                number_text(p, ".9g", ""), _empty_note(name, p)])
+
+
+def _empty_note(series: str, p: float) -> str:
+    """``life.csv``'s note: why ``p`` of ``series`` is no number, empty where it is one."""
+    if math.isfinite(p):
+        return ""
+    if math.isinf(p):
+        return EMPTY["open"]
+    kind = ("set" if series.startswith("set_") else
+            "simulated" if series in (PENALTY, ENGINE) else "rigid")
+    return EMPTY[kind]
 
 
 def _life_text(value: float) -> str:
@@ -364,9 +466,19 @@ def _life_text(value: float) -> str:
     return number_text(value, ".4g", "-")
 
 
+def _cell(selection: dict) -> str:
+    """A selection's ``L10`` (h) in life.md's table, marked where it lies outside the
+    set's interval.
+    """
+    outside = " (outside the set)" if selection["in_set"]["inside"] is False else ""
+    return _life_text(selection["L10_h"]) + outside
+
+
 def markdown(answer: dict) -> str:
-    """``life.md``: per bearing ``Pm`` and ``L10`` (h) of each selection and of the set,
-    what the interval's ends are, what was not run, and the release where it is open.
+    """``life.md``: per bearing ``L10`` (h) of each selection and of the set, what each
+    selection is and whether its life lies in the set's interval, why a life has no
+    finite value, what the interval's ends are, what was not run, and the release where
+    the set is open.
     """
     names = list(answer["selections"])
     lines = [f"# Bearing life (ISO 281 L10) of scene {answer['scene']}", "",
@@ -376,17 +488,15 @@ def markdown(answer: dict) -> str:
              " | set worst L10 [h] | set best L10 [h] | set's ends |",
              "|---" * (len(names) + 5) + "|"]
     for e in answer["bearings"]:
-        cells = [_life_text(e["selections"][n]["L10_h"]) for n in names]
+        cells = [_cell(e["selections"][n]) for n in names]
         worst, best = e["interval"]["L10_h"]
         lines.append(f"| {e['bearing']} | {e['rating']['type']} | " + " | ".join(cells) +
                      f" | {'0 (open)' if e['interval']['open'] else _life_text(worst)} | "
                      f"{_life_text(best)} | {e['interval']['ends']} |")
+    lines += _selection_lines(answer) + _reason_lines(answer)
     lines += _split_lines(answer) + _load_lines(answer)
     lines += ["", f"Radial directions: {answer['directions']} (greatest radial load within "
               f"{100 * answer['direction_error']:.2f} % above the true one)."]
-    lines += [f"- {name}: {sel['about']}" for name, sel in answer["selections"].items()
-              if "about" in sel]
-    lines += [f"- {name}: {why}" for name, why in answer["not_run"].items()]
     if answer["unrated"]:
         lines.append(f"- no catalogue data (no life): {', '.join(answer['unrated'])}")
     if answer["open"]:
@@ -394,6 +504,53 @@ def markdown(answer: dict) -> str:
         lines += ["", f"**{answer['open_reason']}.** The release that bounds it: "
                   f"{release['words']} ({', '.join(release['labels']) or 'none'})."]
     return "\n".join(lines) + "\n"
+
+
+def _selection_lines(answer: dict) -> list[str]:
+    """What each selection is and at which bearings its life lies in the set's interval
+    (its ``Pm`` between the set's over the same instants, to the answer's tolerance);
+    then why each selection not run was not.
+    """
+    lines = ["", "Each selection, and whether its life lies within the set's interval (its "
+             "Pm between the set's least and greatest over the same instants, to "
+             f"{answer['in_set_tol']:g} of the bearing's greatest load):"]
+    for name, sel in answer["selections"].items():
+        about = f"{sel['about']}; " if "about" in sel else ""
+        checks = {e["bearing"]: e["selections"][name]["in_set"] for e in answer["bearings"]}
+        check = f" {_in_set_words(checks)}." if checks else ""
+        lines.append(f"- {name}: {about}{sel['model']}.{check}")
+    return lines + [f"- {name}: {why}" for name, why in answer["not_run"].items()]
+
+
+def _in_set_words(checks: dict) -> str:
+    """Where a selection's life lies in the set's interval, where outside (by how much)
+    and where it was not compared, in words.
+    """
+    inside = [b for b, c in checks.items() if c["inside"]]
+    parts = [f"outside at {b} (Pm {100 * abs(c['Pm_beyond']):.3g} % "
+             f"{'below the least' if c['Pm_beyond'] < 0 else 'above the greatest'})"
+             for b, c in checks.items() if c["inside"] is False]
+    parts += [f"at {b} {c['why']}" for b, c in checks.items() if c["inside"] is None]
+    if len(inside) == len(checks):
+        return "Inside at every bearing"
+    if inside:
+        parts.append(f"inside at {', '.join(inside)}")
+    text = "; ".join(parts)
+    return text[:1].upper() + text[1:]
+
+
+def _reason_lines(answer: dict) -> list[str]:
+    """Why each life without a finite value has none (an open worst case is said below
+    the table with the release that bounds it).
+    """
+    lines = []
+    for e in answer["bearings"]:
+        found = [(n, s["reason"]) for n, s in e["selections"].items() if s["reason"]]
+        worst, best = e["interval"]["reason"]
+        found += [("set worst", worst)] if worst and not e["interval"]["open"] else []
+        found += [("set best", best)] if best else []
+        lines += [f"- {e['bearing']}, {name}: {why}." for name, why in found]
+    return ["", "Lives without a finite value:", *lines] if lines else []
 
 
 def _split_lines(answer: dict) -> list[str]:
@@ -496,7 +653,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("scene", help="built-in name or TOML path")
     p.add_argument("--instants", type=whole_number(2, MAX_INSTANTS), default=INSTANTS,
                    help=f"instants over the scene's window (default {INSTANTS})")
-    p.add_argument("--out", default="results/life", help="output folder (default %(default)s)")
+    p.add_argument("--out", type=folder, default="results/life",
+                   help="output folder (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",),
                    help="comma-separated image formats (default png; any of png,svg,pdf)")
     p.add_argument("--penalty", action="store_true",
@@ -508,6 +666,16 @@ def add_parser(subparsers) -> None:
     p.add_argument("--json", action="store_true",
                    help="print the whole answer as strict JSON on stdout (no files)")
     p.set_defaults(func=run)
+
+
+def folder(text: str) -> str:
+    """An argparse type: an output folder, refused with one line when empty or blank
+    (an empty path would write into the current folder).
+    """
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected an output folder, got {text!r} (an "
+                                         "empty path would be the current folder)")
+    return text
 
 
 def run(args) -> int:

@@ -2,6 +2,8 @@
 over the rigid set around every selection, a point where the radial loads are
 determinate, an open worst case named with the release that bounds it, strict JSON."""
 
+import csv
+import dataclasses
 import importlib.util
 import json
 import math
@@ -12,9 +14,10 @@ from cardan_forces.driveline import bearing_life as iso
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
-from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.loading import builtin_text, load_scene
 from cardan_forces.driveline.scene import BearingRating
 from cardan_forces.experiments import life, life_runs
+from cardan_forces.experiments.environment import json_text
 from cardan_forces.experiments.images import problems
 from cardan_forces.experiments.study import solve_over_time
 
@@ -276,3 +279,169 @@ def test_light_loads_are_said_to_make_the_long_lives(propshaft):
                                        for e in propshaft["bearings"]]}
     text = life.markdown(heavy)
     assert "is 20 % of C" in text and "lightly loaded" not in text
+
+
+def _lives(answer: dict):
+    """Every life of an answer: ``(where, Pm, L10 Mrev, L10 h, reason)`` per bearing and
+    selection, and the set's worst and best."""
+    for e in answer["bearings"]:
+        for name, s in e["selections"].items():
+            yield (e["bearing"], name), s["Pm_N"], s["L10_Mrev"], s["L10_h"], s["reason"]
+        i = e["interval"]
+        for k, end in enumerate(("set worst", "set best")):
+            yield ((e["bearing"], end), i["Pm_N"][1 - k], i["L10_Mrev"][k], i["L10_h"][k],
+                   i["reason"][k])
+
+
+def _has_reason_iff_not_finite(answer: dict) -> int:
+    """Every life has a reason exactly where one of its numbers is not finite; how many
+    have one."""
+    found = 0
+    for where, *numbers, reason in _lives(answer):
+        finite = all(math.isfinite(v) for v in numbers)
+        assert finite == (reason is None), (where, numbers, reason)
+        found += reason is not None
+    return found
+
+
+RATING = BearingRating(type="ball", C_N=30e3, C0_N=20e3)
+
+
+@pytest.mark.parametrize("p, revs, keep, words", [
+    ([100.0, 200.0, 300.0], [0.0, 0.0, 0.0], None, "speed 0"),
+    ([100.0, math.nan, 300.0], [1.0, 2.0, 1.0], None, "not known at 1 of the 3"),
+    ([100.0, math.inf, 300.0], [1.0, 2.0, 1.0], None, "unbounded"),
+    ([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], None, "no load"),
+    ([math.nan, math.nan, 300.0], [1.0, 2.0, 0.0], [False, False, True], "none of the"),
+])
+def test_each_way_a_life_has_no_value_carries_its_reason(p, revs, keep, words):
+    """A still shaft, an unknown load, an unbounded one, no load, no instant kept while
+    the shaft turns: each leaves Pm, L10 or its hours without a finite value, and each
+    says why; a load history with a value has no reason."""
+    keep = None if keep is None else np.array(keep)
+    found = life.life(RATING, np.array(p), np.array(revs), 1.0, keep)
+    assert not all(math.isfinite(found[k]) for k in ("Pm_N", "L10_Mrev", "L10_h"))
+    assert words in found["reason"]
+    fine = life.life(RATING, np.array([100.0, 0.0, 300.0]), np.array(revs) + 1.0, 1.0)
+    assert fine["reason"] is None and math.isfinite(fine["L10_h"])
+
+
+def test_every_life_of_an_answer_without_a_value_says_why(propshaft, paper):
+    """In the answers, over every selection and the set's ends: a reason exactly where a
+    number is not finite (paper's open worst cases have one each)."""
+    assert _has_reason_iff_not_finite(propshaft) == 0
+    assert _has_reason_iff_not_finite(paper) == len(paper["bearings"])
+
+
+def _altered(monkeypatch, name: str, change):
+    """study's rigid selection ``name`` with its forces passed through ``change``."""
+    solve = life.solve_over_time
+
+    def altered(op, formulation, *args, **kwargs):
+        history = solve(op, formulation, *args, **kwargs)
+        if formulation != name:
+            return history
+        return dataclasses.replace(history, forces=change(history.forces.copy()))
+    monkeypatch.setattr(life, "solve_over_time", altered)
+
+
+def test_unsolved_and_unloaded_lives_say_why_in_json_and_report(monkeypatch):
+    """A rigid selection not solved at an instant and one carrying no load: null lives in
+    the JSON, each with its reason, and life.md lists them."""
+    def unsolved(forces):
+        forces[1] = np.nan
+        return forces
+    _altered(monkeypatch, "positive", unsolved)
+    answer = life.study("propshaft", 3, engine=False)
+    assert _has_reason_iff_not_finite(answer) == len(answer["bearings"])
+    for entry in _strict(json_text(answer))["bearings"]:
+        positive = entry["selections"]["positive"]
+        assert positive["L10_h"] is None and "not known at 1 of the 3" in positive["reason"]
+    assert life.markdown(answer).count("positive: no value: P is not known at 1 of the 3") \
+        == len(answer["bearings"])
+    monkeypatch.undo()
+    _altered(monkeypatch, "compliance", lambda forces: 0.0 * forces)
+    answer = life.study("propshaft", 3, engine=False)
+    assert _has_reason_iff_not_finite(answer) == len(answer["bearings"])
+    assert "compliance: unbounded: the bearing carries no load" in life.markdown(answer)
+
+
+def test_a_scene_whose_shafts_do_not_turn_is_refused(tmp_path, capsys):
+    """ISO 281 counts a life in revolutions: a scene at speed 0 under balanced torques
+    has none, and is refused with one line, exit code 2, before any solve."""
+    text = builtin_text("propshaft")
+    assert "speed_rad_s = 10.0" in text
+    still = tmp_path / "still.toml"
+    still.write_text(text.replace("speed_rad_s = 10.0", "speed_rad_s = 0.0"))
+    for extra in ([], ["--json"]):
+        assert main(["life", str(still), "--instants", "3", "--quiet", *extra]) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and err.count("\n") == 1 and "speed 0" in err, err
+
+
+def _stand_in(factor: float):
+    """A penalty selection of the positive forces times ``factor``: a model whose loads
+    lie off the rigid set by a known share."""
+    def run(op, progress=None):
+        h = solve_over_time(op, "positive")
+        return dataclasses.replace(h, formulation=life_runs.PENALTY,
+                                   forces=factor * h.forces), "a stand-in"
+    return run
+
+
+@pytest.mark.parametrize("factor, inside", [(0.97, False), (1.03, False),
+                                            (1.0 + 1e-6, True)])
+def test_whether_a_life_lies_in_the_set_is_computed(monkeypatch, factor, inside):
+    """propshaft's set is a point (determinate loads) and its P is homogeneous in the
+    forces: loads 3 % off it put the life outside, by 3 % of Pm and on the right side;
+    1e-6 off, within the tolerance, inside. The report says which, and what the
+    penalty selection is (a different model), never that it is a member of the set."""
+    monkeypatch.setattr(life, "penalty_history", _stand_in(factor))
+    answer = life.study("propshaft", 3, penalty=True, engine=False)
+    for entry in answer["bearings"]:
+        check = entry["selections"]["penalty"]["in_set"]
+        assert check["inside"] is inside, (entry["bearing"], check)
+        assert check["Pm_beyond"] == pytest.approx(0.0 if inside else factor - 1, rel=1e-6)
+        assert all(entry["selections"][n]["in_set"]["inside"] for n in life.SELECTIONS)
+    text = life.markdown(answer)
+    penalty_line = next(line for line in text.splitlines() if line.startswith("- penalty:"))
+    assert life.MODELS["penalty"] in penalty_line and "member" not in penalty_line
+    assert ("Inside at every bearing" in penalty_line) is inside
+    assert text.count("(outside the set)") == (0 if inside else len(answer["bearings"]))
+
+
+def test_in_set_tolerance_sides_and_missing_values():
+    """Within IN_SET_TOL of the load scale is inside; beyond it, the signed share of the
+    nearer end; an open greatest end holds any Pm above the least; a side without a
+    value is not compared, and says so."""
+    tol = life.IN_SET_TOL
+    assert life.in_set(100.0 + 0.5 * tol * 1000, (90.0, 100.0), 1000.0)["inside"]
+    above = life.in_set(100.0 + 2 * tol * 1000, (90.0, 100.0), 1000.0)
+    assert above["inside"] is False and above["Pm_beyond"] == pytest.approx(2 * tol * 10)
+    below = life.in_set(81.0, (90.0, 100.0), 1000.0)
+    assert below["inside"] is False and below["Pm_beyond"] == pytest.approx(-0.1)
+    assert life.in_set(1e9, (90.0, math.inf), 1000.0)["inside"]
+    for pm, ends in ((math.nan, (90.0, 100.0)), (95.0, (math.nan, 100.0))):
+        missing = life.in_set(pm, ends, 1000.0)
+        assert missing["inside"] is None and missing["why"].startswith("not compared")
+
+
+def test_every_empty_csv_cell_says_why(paper, tmp_path):
+    """life.csv: a note exactly where P is empty (paper's open greatest P)."""
+    path = tmp_path / "life.csv"
+    life.write_csv(paper, path)
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert any(r["P_N"] == "" for r in rows)
+    assert all((r["P_N"] == "") == bool(r["note"]) for r in rows)
+
+
+@pytest.mark.parametrize("out", ["", " "])
+def test_an_empty_out_is_refused(out, tmp_path, monkeypatch, capsys):
+    """An empty or blank --out would write into the current folder: one line, exit 2,
+    nothing written."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["life", "propshaft", "--instants", "2", "--out", out, "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("cardan: error:") == 1 and "--out" in err and "Traceback" not in err
+    assert not any(tmp_path.iterdir())
