@@ -25,7 +25,6 @@ from .record import (
     Results,
     Status,
     as_statuses,
-    confirm,
     judge,
 )
 from .stacking import stacked_batch
@@ -133,9 +132,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
     status[bad], answered[bad] = Status.FAILED, False
     x[bad] = np.nan
     residuals = Residuals(**batch.checks.residuals(x))
-    primal = residuals.largest()
-    status = judge(status, primal)
-    optimality, source, y = _optimality(batch, outcome, x, answered, primal.copy())
+    optimality, source, y = _optimality(batch, outcome, x, answered, residuals.largest())
     if reference is not None:
         ref = np.asarray(reference, float)
         distance = (np.linalg.norm(x - ref, axis=1)
@@ -144,7 +141,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
         residuals = Residuals(**residuals, reference=distance)
         if _unique(batch):
             optimality = Optimality(**optimality, distance=distance)
-    status = confirm(status, optimality, source)
+    status = judge(status, optimality, source)
     T = len(x)
     per = np.array([outcome.setup_s, outcome.solve_s, time.perf_counter() - began]) / T
     return Results(

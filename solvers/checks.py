@@ -3,8 +3,8 @@
 :func:`finalize_all` judges the outcomes of many instants at once (one vectorized pass
 per problem structure): the forces by ``problem.to_forces``, their residuals by
 ``problem.checks`` (``ForceChecks``), the package's optimality (:mod:`.optimality`)
-and the solver's (:mod:`.qp_measures`), and the status by the rule of
-:mod:`.record` (:func:`~.record.judge`, :func:`~.record.confirm`). A per-instant loop
+and the solver's (:mod:`.qp_measures`), and the status by the one rule of
+:mod:`.record` (:func:`~.record.judge`). A per-instant loop
 calls it once at its end (``registry.check``); :func:`finalize` is its one-instant case,
 so every path, whatever its length, follows one rule by the same arithmetic.
 """
@@ -29,7 +29,6 @@ from .record import (
     Results,
     Status,
     as_status,
-    confirm,
     judge,
     statuses,
 )
@@ -58,10 +57,11 @@ def finalize(
     optimal_value: float | None = None,
     received=None,
 ) -> Record:
-    """Turn an adapter's outcome into a record, deciding the final status from residuals
-    and measuring optimality (``optimal_value``: the problem's optimal objective from a
-    high-precision solve, for the objective gap of a record without solver duals;
-    ``received``: the problem the backend received, for the solver-optimality view).
+    """Turn an adapter's outcome into a record, measuring its residuals and optimality
+    and deciding the final status from them (``optimal_value``: the problem's optimal
+    objective from a high-precision solve, for the objective gap of a record without
+    solver duals; ``received``: the problem the backend received, for the
+    solver-optimality view).
     One instant of :func:`finalize_all`: one rule for every path.
     """
     return finalize_all([problem], solver, [outcome], references=[reference],
@@ -91,19 +91,18 @@ def finalize_all(problems, solver: str, outcomes, *, references=None, optimal_va
     primal = np.array([found[key] for key in Residuals.KEYS]).reshape(-1, T).max(
         axis=0, initial=-math.inf)
     started.fail_nonfinite(np.flatnonzero(~np.isfinite(primal)).tolist())
-    status = judge(started.status, primal)
-    answered = np.array([s.has_answer for s in status], bool).reshape(T)
+    answered = np.array([s.has_answer for s in started.status], bool).reshape(T)
     views = _optimality_all(problems, outcomes, answered, primal,
                             optimal_values if optimal_values is not None else [None] * T,
                             received, stacks)
     reference, distance = _distances(problems, started.x, references)
     optimality = Optimality(primal=views.primal, dual=views.dual, gap=views.gap,
                             distance=distance)
-    confirmed = confirm(status, optimality, views.duals)
-    columns = _columns(problems, solver, outcomes, started, confirmed, answered,
+    status = judge(started.status, optimality, views.duals)
+    columns = _columns(problems, solver, outcomes, started, status, answered,
                        Residuals(**{k: found[k] for k in Residuals.KEYS}, reference=reference),
                        optimality, views, extra_setup_s)
-    columns["message"] = _messages(started, status, confirmed, found)
+    columns["message"] = _messages(started, status, optimality, found)
     checks_s = np.full(T, (time.perf_counter() - began) / T if T else 0.0)
     before = np.zeros(T) if elapsed_s is None else np.asarray(elapsed_s, float)
     return Results(**columns, checks_s=checks_s, wall_s=before + checks_s)
@@ -458,24 +457,33 @@ def _measured(st: Stacked, z, y, given, as_qp: bool) -> tuple[dict, dict | None]
                                  check_dual_cone=not as_qp)
 
 
-def _messages(started: _Started, status, confirmed, residual: dict) -> list[str]:
+def _messages(started: _Started, status, optimality: Optimality,
+              residual: dict) -> list[str]:
     """Each record's message: the outcome's, with the start's notes and why the
     package changed the solver's status, where it did (``residual``: key -> (T,) array;
     they are never NaN, a non-finite answer's are ``inf``).
     """
     messages = list(started.messages)
-    judged = status != np.array(started.status, object)
-    turned = confirmed != status
-    changed = np.flatnonzero(judged | turned).tolist()
+    reported = np.array(started.status, object)
+    changed = np.flatnonzero(status != reported).tolist()
     if not changed and not started.notes:
         return messages
-    worst = np.argmax([residual[key] for key in Residuals.KEYS], axis=0).tolist()
     for k in sorted(started.notes.keys() | set(changed)):
         notes = started.notes.get(k, [messages[k]] if messages[k] else [])
-        if judged[k]:
-            key = Residuals.KEYS[worst[k]]
-            notes = [*notes, f"{key} residual {residual[key][k]:.1e} > {ACCEPT:.0e}"]
-        if turned[k]:
-            notes = [*notes, "confirmed by the package's primal, dual and gap measures"]
+        if k in changed:
+            notes = [*notes, "confirmed by the package's primal, dual and gap measures"
+                     if status[k] is Status.SOLVED else _above(k, optimality, residual)]
         messages[k] = "; ".join(notes)
     return messages
+
+
+def _above(k: int, optimality: Optimality, residual: dict) -> str:
+    """What keeps instant ``k`` from ``solved``: its worst residual where that is above
+    :data:`~.record.ACCEPT`, else its dual residual or its gap, the first above it.
+    """
+    key = max(Residuals.KEYS, key=lambda name: residual[name][k])
+    if not residual[key][k] <= ACCEPT:
+        return f"{key} residual {residual[key][k]:.1e} > {ACCEPT:.0e}"
+    measured = {"dual residual": float(optimality.dual[k]), "gap": float(optimality.gap[k])}
+    name = next((n for n, v in measured.items() if not v <= ACCEPT), "gap")
+    return f"{name} {measured[name]:.1e} > {ACCEPT:.0e}"

@@ -2,10 +2,11 @@
 
 An adapter reports an :class:`Outcome` in the solver's own variable ``z``; the check
 pass (:mod:`.checks`) maps it to forces, measures its residuals and optimality and
-decides the final :class:`Status` by the one status rule here (:func:`judge`,
-:func:`confirm`). The solver's word is only an upper bound: a reported success whose
-residuals exceed :data:`ACCEPT` becomes ``inaccurate``, and a success with NaN or inf
-output becomes ``failed``.
+decides the final :class:`Status` by the one status rule here (:func:`judge`). The
+solver's word is not taken: an answer is ``solved`` exactly where the package's own
+measures of it, primal residual, dual residual and gap, are all within :data:`ACCEPT`
+(only the primal residual for a root finding, which has no multipliers), else
+``inaccurate``; a success with NaN or inf output becomes ``failed``.
 
 A run's results are columns, :class:`Results` (one array or tuple per field, one entry
 per instant); a per-instant :class:`Record` is made from them on demand.
@@ -78,7 +79,8 @@ _AS_INACCURATE = np.array(Status.INACCURATE, object)
 themselves in its result (a bare member, a ``str``, it would turn into a string)."""
 
 ACCEPT = 1e-6
-"""Largest relative residual (equilibrium, sign, complementarity, cone) of a solved record."""
+"""Largest relative measure of a solved record: each residual (equilibrium, sign,
+complementarity, cone), the dual residual and the gap (:mod:`.optimality`)."""
 
 
 class _Measures(Mapping):
@@ -161,8 +163,10 @@ class Optimality(_Measures):
             return False
         return np.all([np.asarray(v) <= level for v in present], axis=0)
 
-    def confirms(self) -> bool | np.ndarray:
-        """Primal, dual and gap all within :data:`ACCEPT` (``False`` if one is absent)."""
+    def optimal(self) -> bool | np.ndarray:
+        """Primal, dual and gap all within :data:`ACCEPT` (``False`` if one is absent or
+        NaN): the optimality conditions of the module :mod:`.optimality` hold.
+        """
         if self.primal is None or self.dual is None or self.gap is None:
             return False
         return np.all([np.asarray(v, float) <= ACCEPT for v in (self.primal, self.dual,
@@ -439,24 +443,25 @@ def _json_float(value: float) -> float | str:
     return value if math.isfinite(value) else str(value)
 
 
-def judge(status, worst):
-    """The package's status rule, elementwise: a reported ``solved`` whose worst
-    residual exceeds :data:`ACCEPT` becomes ``inaccurate`` (every path, per instant or
-    batched, decides by this one rule).
-    """
-    status, worst = np.asarray(status, object), np.asarray(worst, float)
-    return np.where((status == _AS_SOLVED) & ~(worst <= ACCEPT), _AS_INACCURATE, status)
+def judge(status, optimality: Optimality, duals):
+    """The package's status rule, elementwise: the one place a record is made ``solved``
+    (every path, per instant or batched, decides by it).
 
-
-def confirm(status, optimality: Optimality, duals: str):
-    """The second half of the status rule, elementwise: a solver's ``inaccurate``
-    (Clarabel's ``AlmostSolved``, a stalled iteration) becomes ``solved`` where the
-    package's own measures (primal, dual residual with the solver's or recovered
-    multipliers, and gap) are all within :data:`ACCEPT`. Without multipliers nothing is
-    confirmed: the status stays as the solver and :func:`judge` left it (``duals``:
-    where the multipliers came from, one source for all or one per instant).
+    An answer (the solver's ``solved`` or ``inaccurate``) is ``solved`` exactly where
+    its primal residual, dual residual and gap are all within :data:`ACCEPT`
+    (:meth:`Optimality.optimal`), whatever the solver said: feasibility alone does not
+    make an answer the optimum, and a stalled solver's iterate may be one. Where the
+    record has no multipliers (``duals`` ``"none"``: a root finding, whose only measure
+    is its residual), a reported ``solved`` stays so while its primal residual is
+    within :data:`ACCEPT` and nothing can confirm a reported ``inaccurate``. Every other
+    answer is ``inaccurate``; a status without an answer is kept. ``duals``: where the
+    multipliers came from, one source for all or one per instant.
     """
     status = np.asarray(status, object)
-    with_duals = np.asarray(duals, object) != "none"
-    return np.where((status == _AS_INACCURATE) & optimality.confirms() & with_duals,
-                    _AS_SOLVED, status)
+    reported = status == _AS_SOLVED
+    answered = reported | (status == _AS_INACCURATE)
+    primal = np.asarray(optimality.primal if optimality.primal is not None else np.inf,
+                        float)
+    optimal = np.where(np.asarray(duals, object) != "none", optimality.optimal(),
+                       reported & (primal <= ACCEPT))
+    return np.where(answered, np.where(optimal, _AS_SOLVED, _AS_INACCURATE), status)

@@ -1,16 +1,17 @@
 """Optimality measured from the problem data: dual residual, duality / objective gap,
 distance only where the optimum is unique (the package's relative measures, not
 qpbenchmark's absolute ones); the status rule that uses them, on constructed outcomes
-whose measures are known by hand; the checks of many instants at once against each
-instant alone."""
+whose measures are known by hand (a feasible answer that is not the optimum is never
+solved, for every problem class and path); the checks of many instants at once against
+each instant alone."""
 
 import numpy as np
 import pytest
-from cardan_forces.formulations.problems import LP, QP, Conic, ForceChecks
+from cardan_forces.formulations.problems import LCP, LP, LS, QP, Conic, ForceChecks
 from cardan_forces.solvers import ACCEPT, Backend, Optimality, available, registry, solve
 from cardan_forces.solvers.checks import finalize
 from cardan_forces.solvers.optimality import measures, recover, unique_optimum
-from cardan_forces.solvers.record import Outcome, confirm
+from cardan_forces.solvers.record import Outcome, judge
 from cardan_forces.solvers.reference_problems import references
 
 
@@ -57,9 +58,9 @@ def test_a_feasible_point_that_is_not_optimal_has_a_gap():
     problem = _projection()
     record = finalize(problem, "hand", Outcome("solved", np.array([0.5, 0.5, 0.0])),
                       reference=np.array([0.8, 0.2, 0.0]))
-    assert record.status == "solved"  # primal feasible: the residuals alone accept it
-    assert record.optimality["primal"] <= 1e-15
+    assert record.optimality["primal"] <= 1e-15  # primal feasible, yet not the optimum
     assert max(record.optimality["dual"], record.optimality["gap"]) > 1e-2
+    assert record.status == "inaccurate"
     assert record.optimality["distance"] > 0.3  # unique optimum: the distance is reported
     assert not record.within(1e-6)
 
@@ -118,20 +119,35 @@ def test_min_max_like_problem_solved_by_clarabel_is_optimal_without_a_distance()
     assert record.within(1e-7)
 
 
-def test_confirm_upgrades_inaccurate_only_with_all_measures_within_accept():
+def test_the_rule_asks_primal_dual_and_gap_of_every_answer_whatever_the_solver_said():
     good = Optimality(primal=1e-12, dual=1e-10, gap=1e-9)
-    assert list(confirm(["inaccurate", "failed", "solved"], good, "solver")) == \
-        ["solved", "failed", "solved"]
-    assert confirm("inaccurate", good, "none") == "inaccurate"  # no multipliers: no proof
-    for key in ("primal", "dual", "gap"):
-        for factor, expected in ((0.5, "solved"), (2.0, "inaccurate")):
-            measured = Optimality(**{**good, key: factor * ACCEPT})
-            assert confirm("inaccurate", measured, "solver") == expected
-        assert confirm("inaccurate", Optimality(**{k: v for k, v in good.items() if k != key}),
-                       "solver") == "inaccurate"  # a measure it has not: no proof
-    batch = Optimality(**{k: np.array([v, 10 * ACCEPT]) for k, v in good.items()})
-    assert list(confirm(np.array(["inaccurate"] * 2, object), batch, "solver")) == \
-        ["solved", "inaccurate"]
+    kept = ["failed", "infeasible", "unbounded"]
+    assert list(judge(kept, good, "solver")) == kept  # no answer: nothing to judge
+    for reported in ("solved", "inaccurate"):
+        assert judge(reported, good, "solver") == "solved"
+        for key in ("primal", "dual", "gap"):
+            for value, expected in ((0.5 * ACCEPT, "solved"), (2.0 * ACCEPT, "inaccurate"),
+                                    (np.nan, "inaccurate"), (np.inf, "inaccurate")):
+                measured = Optimality(**{**good, key: value})
+                assert judge(reported, measured, "recovered") == expected
+            absent = Optimality(**{k: v for k, v in good.items() if k != key})
+            assert judge(reported, absent, "solver") == "inaccurate"  # a measure it lacks
+    batch = Optimality(**{k: np.array([v, 10 * ACCEPT, v]) for k, v in good.items()})
+    assert list(judge(np.array(["inaccurate", "solved", "failed"], object), batch,
+                      "solver")) == ["solved", "inaccurate", "failed"]
+
+
+def test_without_multipliers_the_primal_residual_decides_and_nothing_is_confirmed():
+    """A root finding has no dual: its reported solved stands on its residual alone, and
+    its reported inaccurate cannot be confirmed."""
+    assert judge("solved", Optimality(primal=0.5 * ACCEPT), "none") == "solved"
+    assert judge("solved", Optimality(primal=2.0 * ACCEPT), "none") == "inaccurate"
+    assert judge("inaccurate", Optimality(primal=0.0), "none") == "inaccurate"
+    per_instant = np.array(["solver", "none"], object)
+    found = Optimality(primal=np.zeros(2), dual=np.array([1.0, np.nan]),
+                       gap=np.array([1.0, np.nan]))
+    assert list(judge(np.array(["solved"] * 2, object), found, per_instant)) == \
+        ["inaccurate", "solved"]
 
 
 EXACT_Y = np.array([0.4, 0.0, 0.0, 1.4])
@@ -398,3 +414,103 @@ def test_one_cone_violation_for_the_slack_and_the_multipliers():
     assert cone_violation(cones, v[2:], dual=True) == pytest.approx([d, 0.0], abs=1e-12)
     assert cone_violation(cones, v[:2, :] * [1, 1, 1, 0], dual=True) == pytest.approx(
         [0.0, 0.0])
+
+
+def _least_norm() -> LS:
+    """min 1/2||x||^2 on x0 + x1 = 2: x = (1, 1), y = -1 (conic sign)."""
+    return LS(checks=_checks([[1.0, 1.0]], [2.0], [False, False]), formulation="ref",
+              A=np.array([[1.0, 1.0]]), b=np.array([2.0]))
+
+
+def _cone() -> Conic:
+    """min t on u + v = 2, ||(u, v)|| <= t (z = (t, u, v)): z = (sqrt 2, 1, 1)."""
+    return Conic(checks=_checks([[0.0, 1.0, 1.0]], [2.0], [False] * 3), formulation="ref",
+                 q=np.array([1.0, 0.0, 0.0]), A=np.vstack([[0.0, 1, 1], -np.eye(3)]),
+                 b=np.array([2.0, 0, 0, 0]), cones=(("zero", 1), ("soc", 3)))
+
+
+def _complementarity() -> LCP:
+    """z >= 0, w = z + (-1, 1) >= 0, z'w = 0: z = (1, 0); forces z with z0 = 1."""
+    return LCP(checks=_checks([[1.0, 0.0]], [1.0], [True, True]), formulation="ref",
+               M=np.eye(2), q=np.array([-1.0, 1.0]))
+
+
+ROOT2 = np.sqrt(2.0)
+CASES = {
+    # class: (problem, optimum z and y, a feasible answer that is not optimal, its y).
+    # LS: x = (2, 0) with the optimum's y; stationarity and the gap fail (a least norm
+    # has no inequality: feasible and stationary is optimal).
+    "LS": (_least_norm, [1.0, 1.0], [-1.0], [2.0, 0.0], [-1.0]),
+    # QP: x = (0.5, 0.5, 0) with y = (0.7; 0, 0.6, 1.7) >= 0 stationary by hand
+    # (x - c + 0.7 e = y_lb), but y_lb's second row has slack 0.5: gap 0.3 / 0.95.
+    "QP": (_projection, EXACT_Z, EXACT_Y, [0.5, 0.5, 0.0], [0.7, 0.0, 0.6, 1.7]),
+    # Conic: z = (3, 2, 0) inside the cone, y = (0; 1, 0, 0) in K* and stationary
+    # (q + A'y = 0), but not complementary: primal 3, dual 0, gap 1.
+    "Conic": (_cone, [ROOT2, 1.0, 1.0], [-1 / ROOT2, 1.0, -1 / ROOT2, -1 / ROOT2],
+              [3.0, 2.0, 0.0], [0.0, 1.0, 0.0, 0.0]),
+    # LCP: z = (1, 1) gives w = (0, 2) >= 0 and the forces' checks hold, but z'w = 2.
+    "LCP": (_complementarity, [1.0, 0.0], None, [1.0, 1.0], None),
+}
+
+
+@pytest.mark.parametrize("kind", list(CASES))
+@pytest.mark.parametrize("given", [True, False], ids=["solver-duals", "no-duals"])
+def test_a_feasible_answer_that_is_not_the_optimum_is_never_solved(kind, given):
+    """The class of 'solved on residuals alone': tiny residuals and a large gap are not
+    solved, whether the solver reported success and whether it gave multipliers (the
+    package then recovers them, or for an LCP measures its own w); the optimum is."""
+    make, best, best_y, other, other_y = CASES[kind]
+    problem = make()
+    for reported in ("solved", "inaccurate"):
+        record = finalize(problem, "hand", Outcome(reported, np.array(other, float),
+                                                   y=other_y if given else None))
+        assert record.optimality["primal"] <= 1e-15
+        assert max(record.optimality["dual"], record.optimality["gap"]) > 0.1
+        assert record.status == "inaccurate"
+        assert "> 1e-06" in record.message or reported == "inaccurate"
+        optimum = finalize(problem, "hand", Outcome(reported, np.array(best, float),
+                                                    y=best_y if given else None))
+        assert optimum.status == "solved"
+        assert not optimum.message.count("> 1e-06")
+
+
+def test_a_large_gap_with_a_zero_dual_residual_is_named_in_the_message():
+    """The issue's case in miniature: stationary multipliers, feasible answer, the gap
+    alone says it is not the optimum, and the message says so."""
+    _, _, _, other, other_y = CASES["Conic"]
+    record = finalize(_cone(), "hand", Outcome("solved", np.array(other), y=other_y))
+    assert record.optimality["dual"] <= 1e-15 and record.optimality["gap"] > 0.5
+    assert record.status == "inaccurate" and "gap" in record.message
+
+
+def test_batched_paths_judge_a_feasible_answer_that_is_not_optimal_as_each_instant_alone():
+    """A conic batch (QP and cone) and a least-norm batch, the optimum beside a
+    feasible, stationary, non-complementary answer: solved and not, as finalize says."""
+    from cardan_forces.formulations.batch import CheckBatch, LeastNormBatch, conic_batch
+    from cardan_forces.solvers.batch import BatchOutcome, finalize_batch
+
+    def outcome(z, y):
+        return BatchOutcome(status=np.array(["solved"] * 2, object), z=np.array(z, float),
+                            y=None if y is None else np.array(y, float),
+                            iterations=np.zeros(2, int), setup_s=0.0, solve_s=0.0)
+
+    for kind in ("QP", "Conic"):
+        make, best, best_y, other, other_y = CASES[kind]
+        conic = registry.convert(make(), (Conic,))
+        batch = conic_batch([conic] * 2, [0, 1])
+        for ys in ([best_y, other_y], None):
+            result = finalize_batch(batch, "hand", outcome([best, other], ys))
+            assert list(result.status) == ["solved", "inaccurate"]
+            for k, (z, y) in enumerate(zip((best, other), (best_y, other_y))):
+                alone = finalize(conic, "hand", Outcome("solved", np.array(z, float),
+                                                        y=y if ys else None))
+                assert result.record(k).status == alone.status
+    # min 1/2||x||^2 on x0 + x1 = 2, x >= 0 (rows A, then -x_j <= 0): the optimum (1, 1)
+    # with y = (-1; 0, 0), and (2, 0) with y = (0; 2, 0) >= 0, stationary, gap 4 / 2.
+    A, b = np.array([[[1.0, 1.0]]] * 2), np.array([[2.0]] * 2)
+    checks = CheckBatch(A=A, b=b, names=("x0", "x1"), unilateral=np.array([True, True]))
+    batch = LeastNormBatch("ref", np.arange(2), A, b, None, np.array([True, True]), checks)
+    result = finalize_batch(batch, "hand", outcome([[1.0, 1.0], [2.0, 0.0]],
+                                                   [[-1.0, 0.0, 0.0], [0.0, 2.0, 0.0]]))
+    assert result.optimality["dual"][1] <= 1e-15 and result.optimality["gap"][1] > 1.0
+    assert list(result.status) == ["solved", "inaccurate"]

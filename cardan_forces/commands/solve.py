@@ -79,7 +79,8 @@ def print_table(scene: str, t: float, records) -> None:
           "stationarity with the solver's (or recovered) multipliers; gap = duality or "
           "objective gap; dist = distance to the formulation's clarabel answer at tol 1e-10, "
           f"only where the optimum is unique; '-' = undefined; why = what kept a record "
-          f"from 'solved' (a residual above {ACCEPT:g}, or the solver's own word)")
+          f"from 'solved' (a residual, dual or gap above {ACCEPT:g}, or the solver's own "
+          "word)")
     print(f"{'formulation':16s} {'solver':22s} {'status':10s} {'equil':>8s} {'sign':>8s} "
           f"{'compl':>8s} {'cone':>8s} {'dual':>8s} {'gap':>8s} {'dist':>8s} {'ms':>8s}  why")
     for r in records:
@@ -92,15 +93,17 @@ def print_table(scene: str, t: float, records) -> None:
 
 def reason(record, width: int = 60) -> str:
     """Why a record is not ``solved``, in one short line ("" when it is): its first
-    checked residual above :data:`ACCEPT` (the package's rule that turns a solver's
-    "solved" into ``inaccurate``), else the solver's own status and message.
+    checked residual, else its dual residual or gap, above :data:`ACCEPT` (the
+    package's rule that makes an answer ``inaccurate``), else the solver's own status
+    and message.
     """
     if record.status is Status.SOLVED:
         return ""
-    failed = [k for k in Residuals.KEYS if record.residuals.get(k, math.nan) > ACCEPT]
+    measured = {**{k: record.residuals.get(k, math.nan) for k in Residuals.KEYS},
+                **{k: record.optimality.get(k, math.nan) for k in ("dual", "gap")}}
+    failed = [k for k, value in measured.items() if value > ACCEPT]
     if record.status.has_answer and failed:
-        value = record.residuals[failed[0]]
-        return f"{failed[0]} {value:.1e} > {ACCEPT:g}"
+        return f"{failed[0]} {measured[failed[0]]:.1e} > {ACCEPT:g}"
     said = record.solver_status if record.solver_status is not None else record.status
     words = " ".join(str(record.message).split())
     text = f"solver: {said}" + (f": {words}" if words else "")
