@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import datetime
 import math
+import numbers
 from pathlib import Path
 
 from cardan_forces.formulations import BASELINE
@@ -44,8 +45,11 @@ def write_csv(path: Path, rows: list[dict], columns: tuple[str, ...]) -> None:
 
 
 def _cell(value):
-    return number_text(value, ".4g", "") if value is None or isinstance(value, float) \
-        else value
+    """A number as its text, an undefined one (``None``, ``inf``, NaN, of any float
+    type) as an empty cell; integers, flags and text as they are.
+    """
+    real = isinstance(value, numbers.Real) and not isinstance(value, numbers.Integral)
+    return number_text(value, ".4g", "") if value is None or real else value
 
 
 def profile_rows(profiles: list[dict]) -> list[dict]:

@@ -385,7 +385,7 @@ def write(result: EngineStudy, out: Path, mujoco_version: str,
         writer.writerow(["setting", "t", *result.op.names])
         for label, r in result.runs.items():
             for t, x in zip(r.t, r.forces):
-                writer.writerow([label, f"{t:.6g}", *(f"{v:.9g}" for v in x)])
+                writer.writerow([label, f"{t:.6g}", *(number_text(v, ".9g", "") for v in x)])
     files.write_text(out / "engine.md", "\n".join(report_lines(result, mujoco_version)) + "\n")
     return [out / "engine.csv", out / "engine.md", *draw(result, out / "engine", formats)]
 

@@ -25,7 +25,6 @@ its time the simulation's wall time per instant read. Writes ``regularization.cs
 from __future__ import annotations
 
 import argparse
-import csv
 import time
 from pathlib import Path
 
@@ -40,6 +39,8 @@ from cardan_forces.solvers.batch import finalize_batch
 from cardan_forces.solvers.registry import solve_batch
 
 from . import files
+from .bench_report import write_csv
+from .environment import number_text
 from .images import save
 
 SCENES = ("paper", "propshaft")
@@ -124,10 +125,7 @@ def mujoco_row(op) -> dict | None:
 def write(rows: list[dict], folder: Path, formats=("png",)) -> list[Path]:
     """The CSV, the markdown section and the figure of ``rows`` into ``folder``."""
     folder.mkdir(parents=True, exist_ok=True)
-    with files.replacing(folder / "regularization.csv", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
+    write_csv(folder / "regularization.csv", rows, COLUMNS)  # undefined: an empty cell
     files.write_text(folder / "regularization.md", "\n".join(markdown(rows)) + "\n")
     return [folder / "regularization.csv", folder / "regularization.md",
             *draw(rows, folder / "regularization", formats)]
@@ -145,12 +143,7 @@ def markdown(rows: list[dict]) -> list[str]:
              "| scene | formulation | R | time (us) | Newton steps | solved | rigid set "
              "(median / worst) | compliance member (median / worst) |",
              "|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['scene']} | {r['formulation']} | {_g(r['R'])} | "
-                     f"{r['time_us']:.1f} | {_g(r['iterations'])} | "
-                     f"{_g(100 * r['solved_share'])}% | {r['rigid_median']:.1e} / "
-                     f"{r['rigid_worst']:.1e} | {r['compliance_median']:.1e} / "
-                     f"{r['compliance_worst']:.1e} |")
+    lines += [_table_row(r) for r in rows]
     engine = {r["scene"] for r in rows if r["formulation"].startswith("MuJoCo")}
     without = sorted({r["scene"] for r in rows} - engine)
     if without:
@@ -160,8 +153,16 @@ def markdown(rows: list[dict]) -> list[str]:
     return lines
 
 
-def _g(value: float) -> str:
-    return "-" if value != value else f"{value:g}"
+def _table_row(r: dict) -> str:
+    """One row of the section's table; an undefined number (MuJoCo's softening and
+    steps, a measure of no answer) shows as ``-``.
+    """
+    cells = [r["scene"], r["formulation"], number_text(r["R"], "g"),
+             number_text(r["time_us"], ".1f"), number_text(r["iterations"], "g"),
+             number_text(r["solved_share"], ".1%"),
+             *(f"{number_text(r[f'{key}_median'], '.1e')} / "
+               f"{number_text(r[f'{key}_worst'], '.1e')}" for key in ("rigid", "compliance"))]
+    return f"| {' | '.join(cells)} |"
 
 
 def draw(rows: list[dict], stem: Path, formats=("png",)) -> list[Path]:

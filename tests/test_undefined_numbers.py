@@ -115,3 +115,95 @@ def test_sweep_prints_and_writes_no_inf_or_nan(tmp_path, capsys):
     assert bad["max_equilibrium"] is None and bad["peak_joint1_N"] is None
     good = next(r for r in rows if r["status"] == "solved")
     assert 0.0 <= good["max_equilibrium"] < 1e-8
+
+
+def _no_undefined_cells(path) -> None:
+    """No ``inf``/``nan`` in the file, and every cell that reads as a number is finite
+    (text cells, such as a status or ``default``, are left alone)."""
+    _clean(path.read_text(), path.name)
+    with open(path, newline="") as f:
+        for row in csv.DictReader(f):
+            for column, cell in row.items():
+                try:
+                    value = float(cell)
+                except ValueError:
+                    continue
+                assert math.isfinite(value), (path.name, column, cell)
+
+
+def _rows(path) -> list[dict]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def _failing_at_odd_instants():
+    """A least-norm backend that answers at every other instant and fails without an
+    answer at the others (undefined residuals and measures in the bench's rows)."""
+    from cardan_forces.formulations.problems import LS
+    from cardan_forces.solvers.numpy_kkt_ import solve_ls
+    from cardan_forces.solvers.record import Outcome
+    from cardan_forces.solvers.registry import Backend
+
+    calls = []
+
+    def solve(problem, tol=None, initvals=None):
+        calls.append(1)
+        return solve_ls(problem) if len(calls) % 2 else Outcome("failed", None, message="x")
+
+    return Backend(name="half-ls", family="test", distributions=("numpy",), accepts=(LS,),
+                   solve=solve)
+
+
+def _undefined_engine_row(op) -> dict:
+    """An engine's row where every number is undefined (a run that gave no forces)."""
+    from cardan_forces.experiments import regularization
+
+    return {"scene": op.scene.name, "formulation": "MuJoCo (default softness)",
+            **dict.fromkeys(regularization.COLUMNS[2:], math.nan), "time_us": math.inf,
+            "instants": 0}
+
+
+def test_bench_and_regularization_write_no_inf_or_nan(tmp_path, monkeypatch, capsys):
+    """Every CSV a bench run writes, ``regularization.csv`` with it, holds an empty cell
+    where a number is undefined: a backend's failed instants (no residuals, no
+    optimality, no time ratio for a profile none solved), the engine's row (no
+    softening, no Newton steps), each through the writer the run uses; the Markdown
+    shows ``-``."""
+    from cardan_forces.experiments import regularization
+    from cardan_forces.solvers import registry
+
+    registry.available()
+    monkeypatch.setitem(registry._CACHE, "half-ls", _failing_at_odd_instants())
+    study = regularization.study
+    monkeypatch.setattr(regularization, "mujoco_row", _undefined_engine_row)
+    monkeypatch.setattr(regularization, "study", lambda folder, formats: study(
+        folder, scenes=("paper",), instants=5, formats=formats))
+    assert main(["bench", "--quick", "--quiet", "--formulation", "min_norm", "--solver",
+                 "half-ls", "--regularization", "--out", str(tmp_path)]) == 0
+    _clean(capsys.readouterr().out, "stdout")
+    written = sorted(tmp_path.glob("*.csv"))
+    assert {p.name for p in written} >= {"bench_throughput.csv", "bench_accuracy.csv",
+                                         "bench_profiles.csv", "regularization.csv"}
+    for path in written:
+        _no_undefined_cells(path)
+    for name in ("report.md", "regularization.md"):
+        _clean((tmp_path / name).read_text(), name)
+    engine = [r for r in _rows(tmp_path / "regularization.csv")
+              if r["formulation"].startswith("MuJoCo")]
+    assert engine and engine[0]["R"] == engine[0]["time_us"] == ""
+    failed = [r for r in _rows(tmp_path / "bench_throughput.csv") if r["status"] == "failed"]
+    assert failed and all(r["equilibrium"] == "" for r in failed)
+
+
+def test_the_experiments_csv_writer_leaves_every_undefined_float_empty(tmp_path):
+    """Whatever the float type (Python's, NumPy's of any width), an infinity or a NaN is
+    an empty cell; integers, flags and text are kept."""
+    from cardan_forces.experiments.bench_report import write_csv
+
+    values = [math.nan, -math.inf, None, np.float32("nan"), np.float64("inf"),
+              np.float16("-inf"), 1.5, np.float32(2.5), 3, np.int64(4), True, "text"]
+    columns = tuple(f"c{k}" for k in range(len(values)))
+    write_csv(tmp_path / "t.csv", [dict(zip(columns, values))], columns)
+    (row,) = _rows(tmp_path / "t.csv")
+    assert list(row.values()) == ["", "", "", "", "", "", "1.5", "2.5", "3", "4", "True",
+                                  "text"]
