@@ -9,7 +9,8 @@ this module, so that each piece of that knowledge has one home:
   it; :mod:`cardan_forces.formulations.registry`), so
   a missing optional package changes the backend, never the outcome;
 - :func:`solve_over_time`: one formulation with one backend at every instant, as one
-  :class:`History` (a package-judged record per instant);
+  :class:`History` (a package-judged record per instant; the least-norm family by its
+  own batch, the same on any install);
 - :func:`intervals`, :func:`value_range`, :func:`interval_history`: the rigid solution
   set's interval ``[min, max]`` of each force component (DESIGN §2, "Solution sets"),
   consistent by construction: a determinate component's interval is its one value, and
@@ -30,13 +31,21 @@ import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.formulations import FALLBACK, FORMULATIONS
+from cardan_forces.formulations.batch import least_norm_batch
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.checks import Stacks
 from cardan_forces.solvers.ranging import HAVE_HIGHSPY, Ranges, ranges
 from cardan_forces.solvers.record import Results
-from cardan_forces.solvers.registry import Pending, check, solve_unchecked, takes
+from cardan_forces.solvers.registry import (
+    Pending,
+    batches,
+    check,
+    solve_batch,
+    solve_unchecked,
+    takes,
+)
 
 # ---------------------------------------------------------------------------- backends
 
@@ -138,8 +147,12 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
                     least: int = 1, references: dict | None = None,
                     progress: Callable[[str], None] | None = None,
                     stacks: Stacks | None = None, check_passes: int = 1) -> History:
-    """``formulation`` solved with ``solver`` (default :func:`default_backend`) at
-    ``instants`` of ``op`` (default all), in order.
+    """``formulation`` solved with ``solver`` at ``instants`` of ``op`` (default all),
+    in order. By default the first of the formulation's backends that solves the
+    instants as one batch does (:func:`_batched`: the least-norm family's own NumPy
+    batch, the same answers on any install), else :func:`default_backend` per instant;
+    a batch-only ``solver`` solves them as one batch too. A run with its own
+    ``problem``, ``references`` or a finite ``budget_s`` goes per instant.
 
     ``problem(i)`` gives instant ``i``'s problem (default: built by the formulation);
     ``warm``: each instant starts from the previous answer, and with ``restart`` a
@@ -157,6 +170,12 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     crash.
     """
     picks = list(range(len(op.t)) if instants is None else instants)
+    batch_only = solver is not None and get_backend(solver).solve is None
+    whole = problem is None and references is None and math.isinf(budget_s)
+    if (solver is None or batch_only) and whole:
+        batched = _batched(op, formulation, picks, (solver,) if batch_only else None)
+        if batched is not None:
+            return batched
     make = problem or (lambda i: FORMULATIONS[formulation](op, i))
     solver = solver or default_backend(formulation, make(picks[0]))
     get_backend(solver)  # an unknown or absent backend is an error, not failed records
@@ -178,6 +197,30 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     results, walls, fastest = _checked(records, walls, stacks, picks, check_passes)
     history = history_of(op, formulation, solver, picks[: len(records)], results, walls)
     return history if fastest is None else dataclasses.replace(history, checks_s=fastest)
+
+
+def _batched(op: Operator, formulation: str, picks: list,
+             wanted: Sequence[str] | None = None) -> History | None:
+    """``formulation`` at ``picks`` by the first of ``wanted`` (default: its record's
+    backends) that solves them as one batch (``numpy-batched`` for the least-norm
+    family: NumPy, so every install gives the same answers), judged as any run;
+    ``None`` where none does (a clearance makes ``compliance`` no diagonal least norm,
+    a scene no chain): the run then goes per instant.
+    """
+    record = FORMULATIONS.get(formulation)
+    if record is None or not record.least_norm_batch:
+        return None
+    try:
+        batch = least_norm_batch(op, formulation, picks)
+    except ValueError:  # not a diagonal least norm on this scene
+        return None
+    chosen = next((s for s in wanted or record.backends if batches(s, batch)), None)
+    if chosen is None:
+        return None
+    began = time.perf_counter()
+    results = solve_batch(batch, chosen)
+    wall = (time.perf_counter() - began) / len(picks)
+    return history_of(op, formulation, chosen, picks, results, [wall] * len(picks))
 
 
 def _checked(records: list, walls: list, stacks, picks,

@@ -511,6 +511,16 @@ def batch_backends(batch) -> list[str]:
     return [b.name for b in available().values() if _batches(b, batch) is not False]
 
 
+def batches(name: str, batch) -> bool:
+    """Whether backend ``name`` is installed and solves ``batch`` as one batch, loading
+    only what that asks (as :func:`takes` for one problem).
+    """
+    try:
+        return _batches(get(name), batch) is True
+    except SolverNotFound:
+        return False
+
+
 def _batches(backend: Backend, batch) -> bool | str:
     """Whether ``backend`` solves ``batch`` as one batch, or why it could not say."""
     if backend.batch is None or not isinstance(batch, backend.batch_accepts):
