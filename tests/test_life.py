@@ -7,6 +7,7 @@ import dataclasses
 import importlib.util
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -445,3 +446,12 @@ def test_an_empty_out_is_refused(out, tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err
     assert err.count("cardan: error:") == 1 and "--out" in err and "Traceback" not in err
     assert not any(tmp_path.iterdir())
+
+
+def test_the_how_to_states_the_in_set_tolerance_and_the_models():
+    """docs/how-to/life.md gives the tolerance the answer uses, and says the penalty
+    average is a different model that may lie outside the set."""
+    text = " ".join((Path(__file__).parents[1] / "docs/how-to/life.md").read_text().split())
+    assert f"`in_set_tol` ({life.IN_SET_TOL:g})" in text
+    assert "not a member of the rigid set: its life may lie outside" in text
+    assert "every member of the rigid solution set" not in text
