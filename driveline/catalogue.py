@@ -13,7 +13,11 @@ from .scene import (
     MAX_TAPER_DEG,
     BearingRating,
     Tolerances,
+    table_keys,
 )
+
+FACTORS = ("X", "Y", "e")
+"""The load factors of a rating, given all three or none."""
 
 
 def read_rating(t) -> BearingRating:
@@ -21,6 +25,7 @@ def read_rating(t) -> BearingRating:
     contact angle (deg) where the type has one, and ``X``, ``Y``, ``e`` all three or
     none (then ISO 281's tables must cover the type and angle).
     """
+    t.expect(table_keys(BearingRating))
     kind_of = t.string("type", choices=BEARING_TYPES)
     rating = BearingRating(
         type=kind_of, C_N=t.number("C_N", positive=True, kind="force_N"),
@@ -29,10 +34,12 @@ def read_rating(t) -> BearingRating:
         X=t.number("X", nonnegative=True, kind="ratio") if "X" in t.raw else None,
         Y=t.number("Y", nonnegative=True, kind="ratio") if "Y" in t.raw else None,
         e=t.number("e", positive=True, kind="ratio") if "e" in t.raw else None)
-    t.used.update(("X", "Y", "e"))
-    given = [k for k in ("X", "Y", "e") if getattr(rating, k) is not None]
-    if given and len(given) < 3:
-        t.fail(given[0], "give X, Y and e together, or none (ISO 281's tables then)")
+    t.used.update(FACTORS)
+    given = [k for k in FACTORS if getattr(rating, k) is not None]
+    if given and len(given) < len(FACTORS):
+        missing = next(k for k in FACTORS if k not in given)
+        t.fail(missing, f"missing: give X, Y and e together, or none (ISO 281's tables "
+               f"then); got {', '.join(given)}")
     lo, hi = ANGULAR_TABLE_DEG
     if kind_of == "angular_contact_ball" and not given and \
             not lo <= rating.contact_angle_deg <= hi:
@@ -69,6 +76,7 @@ def read_tolerances(top) -> Tolerances | None:
         top.used.add("tolerances")
         return None
     tt = top.table("tolerances")
+    tt.expect(table_keys(Tolerances))
     tol = Tolerances(
         bearing_seat_m=tt.number("bearing_seat_m", 0.0, nonnegative=True, kind="length_m"),
         articulation_deg=tt.number("articulation_deg", 0.0, nonnegative=True,

@@ -199,6 +199,15 @@ def _within(value: float, kind: str) -> bool:
     return abs(value) <= LIMITS[kind][1]
 
 
+def _nearest(key, keys, cutoff: float = 0.6):
+    """The one of ``keys`` nearest ``key`` with case set aside (so ``c_N`` is nearest
+    ``C_N`` and ``y`` is ``Y``), None when none is near.
+    """
+    folded = {str(k).lower(): k for k in keys}
+    near = difflib.get_close_matches(str(key).lower(), list(folded), n=1, cutoff=cutoff)
+    return folded[near[0]] if near else None
+
+
 class _Table:
     """Reads typed fields from one TOML table; remembers which keys were used.
 
@@ -210,7 +219,7 @@ class _Table:
         self.source, self.path = source, path
         if not isinstance(raw, dict):
             self.fail("", f"expected a table, got {type(raw).__name__} {_show(raw)}")
-        self.raw, self.used = raw, set()
+        self.raw, self.used, self.known = raw, set(), frozenset()
 
     def where(self, key: str) -> str:
         return f"{self.path}.{key}" if self.path and key else self.path or key
@@ -222,8 +231,10 @@ class _Table:
         self.used.add(key)
         if key not in self.raw:
             if default is ...:
-                unread = [k for k in self.raw if isinstance(k, str) and k not in self.used]
-                self.misspelled(difflib.get_close_matches(key, unread, n=1, cutoff=0.8), key)
+                unread = [k for k in self.raw if isinstance(k, str) and k not in self.used
+                          and k not in self.known]
+                typo = _nearest(key, unread, cutoff=0.8)
+                self.misspelled([typo] if typo else [], key)
                 self.fail(key, "missing")
             return default
         return self.raw[key]
@@ -318,10 +329,21 @@ class _Table:
         also = f" (also: {', '.join(unknown[1:])})" if len(unknown) > 1 else ""
         self.fail(unknown[0], f"unknown key{hint}{also}")
 
+    def expect(self, known) -> None:
+        """Declare every key the table may hold, before any is read: a key outside
+        ``known`` fails now, named as written with the known key nearest it (a typo
+        first); and a known key is never taken for a typo of another, so a required key
+        left out is reported missing.
+        """
+        self.known = frozenset(known)
+        unknown = sorted((k for k in self.raw if k not in self.known), key=str)
+        unknown.sort(key=lambda k: _nearest(k, self.known) is None)
+        if unknown:
+            self.misspelled([str(k) for k in unknown], _nearest(unknown[0], self.known))
+
     def done(self) -> None:
         unknown = sorted(set(self.raw) - self.used)
-        near = difflib.get_close_matches(unknown[0], sorted(self.used), n=1) if unknown else []
-        self.misspelled(unknown, near[0] if near else None)
+        self.misspelled(unknown, _nearest(unknown[0], sorted(self.used)) if unknown else None)
 
 
 def _torque(t: _Table) -> TorqueLaw:
@@ -371,11 +393,12 @@ def _shaft(t: _Table) -> Shaft:
     length = t.number("length_m", positive=True, kind="length_m")
     bearings = []
     for bt in t.tables("bearings", []):
+        kind = bt.string("kind", "locating", choices=tuple(BEARING_KINDS))
+        bt.expect(BEARING_KINDS[kind].keys)
         offset = bt.number("offset_m", kind="position_m")
         if abs(offset) > length / 2:
             bt.fail("offset_m", f"bearing lies outside the shaft (|offset| > {length / 2} m), "
                                 f"got {offset:g}")
-        kind = bt.string("kind", "locating", choices=tuple(BEARING_KINDS))
         rating = read_rating(bt.table("rating")) if "rating" in bt.raw else None
         bearings.append(BEARING_KINDS[kind].read(bt, bt.string("name", name=True), offset,
                                                  rating))

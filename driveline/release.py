@@ -64,8 +64,9 @@ def candidates(scene: Scene) -> list[Release]:
 
 
 def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) -> Scene:
-    """``scene`` with ``releases`` applied, validated again (SceneError if a part of the
-    line is left unheld).
+    """``scene`` with ``releases`` applied, validated again: SceneError with the
+    validation's own message where the released scene is refused (a part of the line
+    left unheld, ...).
     """
     labels = ", ".join(r.label for r in releases) or "none"
     variant = _variant(scene, releases)
@@ -73,7 +74,7 @@ def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) 
         return scene.with_changes(shafts=variant.shafts, slip_joints=variant.slip_joints,
                                   name=variant.name, description=variant.description)
     except SceneError as err:
-        raise SceneError(f"releases {labels} leave a mechanism: {err}") from None
+        raise SceneError(f"releases {labels} do not apply: {err}") from None
 
 
 def _variant(scene: Scene, releases) -> Scene:

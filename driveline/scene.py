@@ -85,6 +85,13 @@ class SceneError(ValueError):
     """A scene that cannot be used: the message names the file and the field."""
 
 
+def table_keys(record: type) -> tuple[str, ...]:
+    """The keys of a scene table that holds a ``record`` (a dataclass): its fields, each
+    a key of the same name.
+    """
+    return tuple(f.name for f in dataclasses.fields(record))
+
+
 BEARING_TYPES = ("ball", "cylindrical_roller", "tapered_roller", "angular_contact_ball")
 """Rolling-bearing types of a bearing's catalogue data (:class:`BearingRating`): ``ball``
 a radial (deep-groove) ball bearing and ``cylindrical_roller`` a radial roller bearing,

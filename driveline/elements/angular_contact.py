@@ -72,13 +72,14 @@ class AngularContact(BearingKind):
     """The angular-contact bearing kind (module doc)."""
 
     name = "angular-contact"
+    record = AngularContactBearing
 
     def read(self, table, name, offset_m, rating) -> Bearing:
         alpha = table.number("contact_angle_deg", positive=True, kind="angle_deg")
         if not alpha < 90.0:
             table.fail("contact_angle_deg", f"must be below 90 deg, got {alpha:g}")
         if rating is not None and rating.type not in ANGLED_TYPES:
-            table.fail("rating", f"an angular-contact bearing is rated as one of "
+            table.fail("rating.type", f"an angular-contact bearing is rated as one of "
                        f"{', '.join(ANGLED_TYPES)}, got {rating.type!r}")
         if rating is not None and rating.contact_angle_deg != alpha:
             table.fail("contact_angle_deg", f"{alpha:g} deg differs from its rating's "
@@ -86,6 +87,12 @@ class AngularContact(BearingKind):
         return AngularContactBearing(
             name=name, offset_m=offset_m, kind=self.name, rating=rating,
             contact_angle_deg=alpha, pushes=table.string("pushes", choices=tuple(SIDES)))
+
+    def made_from(self, bearing: Bearing) -> Bearing:
+        """Refused: an angular-contact bearing needs a contact angle and a side that no
+        other kind's bearing has, so no release makes one.
+        """
+        raise NotImplementedError("no release makes a bearing angular-contact")
 
     def check(self, element, shaft, scene: Scene) -> None:
         """At most one pushing each way on a shaft; facing ones of one contact angle."""

@@ -15,23 +15,40 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..scene import Bearing, Scene
+from ..scene import Bearing, Scene, table_keys
 from .base import Column, ElementKind, Law, Layout, Link, mjcf_numbers
 from .bodies import segment_of
 
 
 class BearingKind(ElementKind):
-    """A bearing kind; ``name`` is its ``kind`` in a scene (``locating``, ...)."""
+    """A bearing kind; ``name`` is its ``kind`` in a scene (``locating``, ...), ``record``
+    the record of its bearings (:class:`~..scene.Bearing` or a subclass with its own
+    fields).
+    """
 
     name = ""
+    record: type[Bearing] = Bearing
 
     @property
     def link_kinds(self) -> tuple[str, ...]:
         return (f"bearing-{self.name}",)
 
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The keys its scene table may hold: its record's fields."""
+        return table_keys(self.record)
+
     def read(self, table, name: str, offset_m: float, rating) -> Bearing:
         """The bearing from its scene table (its own fields read and checked here)."""
         return Bearing(name=name, offset_m=offset_m, kind=self.name, rating=rating)
+
+    def made_from(self, bearing: Bearing) -> Bearing:
+        """A bearing of this kind in place of ``bearing`` (a release's change of kind): its
+        name, seat and rating kept, the fields of its former kind that this one does not
+        take dropped (an angular-contact bearing made floating loses its contact angle).
+        """
+        return Bearing(name=bearing.name, offset_m=bearing.offset_m, kind=self.name,
+                       rating=bearing.rating)
 
     def directions(self, element: Bearing, frame: np.ndarray
                    ) -> tuple[str, tuple[str, ...], np.ndarray]:

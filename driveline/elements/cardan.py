@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..contact import hertz_stiffness
-from ..scene import MAX_ARTICULATION_DEG, Joint, Scene
+from ..scene import MAX_ARTICULATION_DEG, Joint, Scene, table_keys
 from .base import Body, Column, ElementKind, Law, Layout, Link, PairMode
 
 RADIAL, FACE = "trunnion-radial", "end-face"
@@ -66,6 +66,7 @@ class Cardan(ElementKind):
         within :data:`~..scene.MAX_ARTICULATION_DEG`, bore and housing bottom outside
         the trunnion.
         """
+        t.expect(table_keys(Joint))
         name = t.string("name", name=True)
         gamma = t.number("articulation_deg", kind="angle_deg")
         if not abs(gamma) <= MAX_ARTICULATION_DEG:

@@ -13,6 +13,7 @@ import numpy as np
 
 from .base import Release
 from .bearing import BearingKind
+from .floating import KIND as FLOATING
 
 
 class Locating(BearingKind):
@@ -46,8 +47,8 @@ class Locating(BearingKind):
 
     def apply_release(self, release, shafts, slips):
         k = [s.name for s in shafts].index(release.shaft)
-        bearings = tuple(dataclasses.replace(b, kind="floating") if b.name == release.bearing
-                         else b for b in shafts[k].bearings)
+        bearings = tuple(FLOATING.made_from(b) if b.name == release.bearing else b
+                         for b in shafts[k].bearings)
         shafts[k] = dataclasses.replace(shafts[k], bearings=bearings)
 
     def axial_faces(self, link, scene):

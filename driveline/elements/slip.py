@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Scene, SceneError, SlipJoint
+from ..scene import Scene, SceneError, SlipJoint, table_keys
 from .base import Column, ElementKind, Law, Layout, Link, Release
 
 SLIP_LENGTH_M = 1.0
@@ -95,6 +95,7 @@ class Slip(ElementKind):
         return tuple(slips)
 
     def _read_one(self, t, by_name: dict) -> SlipJoint:
+        t.expect(table_keys(SlipJoint))
         shaft_name = t.string("shaft", name=True)
         if shaft_name not in by_name:
             t.fail("shaft", f"no shaft {shaft_name!r}; shafts: {', '.join(by_name)}")
