@@ -45,9 +45,14 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments.environment import json_text
 from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LS, QP, Conic
+from cardan_forces.solvers import available
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.qocogen_ import UNBUILT
+
+from cardan_forces.commands import UsageError
 
 from . import bench_metrics as metrics
 from . import bench_report as out
@@ -113,6 +118,40 @@ def views(problems: dict, references: dict, solvers: list[str], folder: Path,
             "qpbenchmark_ran": bool(theirs)}
 
 
+def check_harness(op, backends: dict[str, list[str]]) -> None:
+    """:class:`UsageError` (one line, before any solve) unless the planned ``backends``
+    (per formulation) give qpbenchmark something to run, as :func:`views` runs it: a
+    QP (a least norm as a QP) among the formulations and a qpsolvers backend with
+    qpbenchmark's settings among the backends. Conic problems and batched backends are
+    scored in the package's views only; the message says which part is missing.
+    """
+    first = {name: fbatch.build_problems(op, name, [0])[0] for name in backends}
+    chosen = sorted({s for solvers in backends.values() for s in solvers})
+    if not any(exporting.as_qp(p) is not None for p in first.values()):
+        kinds = ", ".join(f"{name}: {type(p).__name__}" for name, p in first.items())
+        raise UsageError(f"--harness qpbenchmark: the selection has no QP ({kinds}; "
+                         "qpbenchmark runs QPs and least norms, not conic problems or "
+                         f"LCPs): choose one of {', '.join(_qp_formulations(op))}")
+    if not harness.backends_with_profiles(chosen):
+        usable = harness.backends_with_profiles(available())
+        raise UsageError(f"--harness qpbenchmark: none of the chosen backends "
+                         f"({', '.join(chosen)}) is a qpbenchmark solver (batched, conic "
+                         "and other backends are scored by the package alone): choose "
+                         f"one of {', '.join(usable) or 'none installed'}")
+
+
+def _qp_formulations(op) -> list[str]:
+    """The formulations whose problems on ``op`` are QPs or least norms."""
+    found = []
+    for name in FORMULATIONS:
+        try:
+            problem = fbatch.build_problems(op, name, [0])[0]
+        except NotApplicable:
+            continue
+        found += [name] if exporting.as_qp(problem) is not None else []
+    return found
+
+
 def evaluate(measured: dict, ladder, wall_s: float | None) -> dict:
     """Every metric of the report from the measured rows."""
     summary = metrics.summarize(measured["rows"], measured["setup"])
@@ -146,6 +185,8 @@ def run(args) -> int:
     samples = np.unique(np.linspace(0, len(times) - 1, runs.QUICK_SAMPLES if args.quick
                                     else runs.SAMPLES).round().astype(int))
     backends = runs.plan(op, args.formulation, args.solver, args.quick)
+    if args.harness == "qpbenchmark":
+        check_harness(op, backends)
     measured = measure(op, backends, samples, ladder, args.budget_s)
     measured |= views(measured["view_problems"], measured["view_references"],
                       sorted({s for v in backends.values() for s in v}), folder,

@@ -356,3 +356,63 @@ def test_a_solver_that_cannot_be_built_ends_the_run_with_exit_1_and_its_reason(
     assert line.startswith(f"bench: qocogen-reduced did not run: {UNBUILT}")
     rows = _read(tmp_path / "out" / "bench_throughput.csv")
     assert rows and {r["status"] for r in rows} == {"failed"}
+
+
+@pytest.fixture(scope="module")
+def two_instants():
+    scene = load_scene("paper")
+    return build_operator(simulate(scene, scene.time.instants()[:2]))
+
+
+def test_the_harness_check_agrees_with_what_the_views_run(two_instants, tmp_path,
+                                                         monkeypatch):
+    """Every selection of one formulation and one of its backends: refused up front
+    (one line) exactly when the views would run qpbenchmark on nothing (a conic problem,
+    an LCP, a batched or non-qpsolvers backend), accepted exactly when they run it."""
+    from cardan_forces.experiments import qpbench_harness
+    from cardan_forces.formulations import batch as fbatch
+    from cardan_forces.formulations.problems import LS, QP, Conic
+
+    from cardan_forces.commands import UsageError
+
+    monkeypatch.setattr(qpbench_harness, "run_package", lambda *a, **k: [])
+    monkeypatch.setattr(qpbench_harness, "run_qpbenchmark", lambda path, solvers, results: [
+        {"solver": f"qpsolvers-{s}", "setting": "default", "success": 100.0,
+         "runtime_ratio": 1.0} for s in solvers])
+    plan = bench_run.plan(two_instants)
+    refused = accepted = 0
+    for formulation, solvers in plan.items():
+        problem = fbatch.build_problems(two_instants, formulation, [0])[0]
+        scored = {f"{formulation}_0000": problem} if isinstance(problem, (LS, QP, Conic)) \
+            else {}
+        for solver in solvers:
+            ran = bench.views(scored, {}, [solver], tmp_path, True)["qpbenchmark_ran"]
+            try:
+                bench.check_harness(two_instants, {formulation: [solver]})
+            except UsageError as err:
+                assert not ran and "\n" not in str(err), (formulation, solver)
+                refused += 1
+            else:
+                assert ran, (formulation, solver)
+                accepted += 1
+    assert refused and accepted
+
+
+@pytest.mark.parametrize("selection", [
+    ["--formulation", "min_max", "--solver", "clarabel"],
+    ["--formulation", "positive", "--solver", "numpy-batched"],
+    ["--formulation", "positive", "--solver", "clarabel"],
+    ["--formulation", "lcp"],
+    ["--formulation", "min_max", "--formulation", "positive", "--solver", "clarabel",
+     "--solver", "numpy-batched"],
+])
+def test_a_harness_run_with_no_qp_for_qpbenchmark_is_refused_in_one_line(
+        selection, tmp_path, capsys):
+    pytest.importorskip("qpbenchmark")
+    from cardan_forces.cli import main
+
+    assert main(["bench", "--quick", "--quiet", "--harness", "qpbenchmark", *selection,
+                 "--out", str(tmp_path)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.startswith("cardan: error: --harness qpbenchmark: ")
+    assert not list(tmp_path.glob("bench_*"))
