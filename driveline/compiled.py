@@ -12,6 +12,10 @@ A cache file numba cannot read (a disk that filled while it was written, a copy 
 another machine or numba) is removed and the kernel compiled again, with one warning,
 instead of ending the run in numba's unpickling error.
 
+``NUMBA_CACHE_DIR`` is made absolute, ``~`` expanded, before numba reads it: numba takes
+it as written, so a literal ``~/...`` would be a folder named ``~`` in the working folder
+and a relative path would move with it.
+
 numba keys a cached function by its own source file only: a kernel that inlines or
 calls kernels of other files would be loaded stale after an edit there. A kernel names
 the files it depends on (``njit(cache=True, depends=(...))``, paths relative to its own
@@ -30,10 +34,23 @@ from pathlib import Path
 
 import numpy as np
 
+
+def _absolute_cache_dir() -> None:
+    """``NUMBA_CACHE_DIR``, where set, as an absolute path with ``~`` expanded (in this
+    process's environment, which numba reads, and the processes it starts inherit).
+    """
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if folder:
+        os.environ["NUMBA_CACHE_DIR"] = str(Path(folder).expanduser().absolute())
+
+
+_absolute_cache_dir()
+
 try:
     import numba
     from numba.core.caching import FunctionCache
 
+    numba.core.config.reload_config()  # read again, had numba been imported before
     HAVE_NUMBA = True
 
     def njit(*args, depends=(), **kwargs):

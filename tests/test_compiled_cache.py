@@ -130,3 +130,39 @@ def test_every_penalty_kernel_is_keyed_by_every_penalty_kernel_file():
                 assert value._cache._depends_hash == expected, value.py_func.__name__
                 found += 1
     assert found >= 40
+
+
+WHERE = '''
+import os
+import numba
+from cardan_forces.driveline.compiled import harmonic
+index = harmonic._cache._cache_file._index_path
+print(numba.config.CACHE_DIR, os.environ["NUMBA_CACHE_DIR"], index, sep="\\n")
+'''
+
+
+@pytest.mark.parametrize("given, expected, numba_first", [
+    ("relative/cache", "{cwd}/relative/cache", False),
+    ("relative/cache", "{cwd}/relative/cache", True),
+    ("~/cache", "{home}/cache", True),
+    ("~", "{home}", False),
+    ("{cwd}/absolute", "{cwd}/absolute", False)])
+def test_the_numba_cache_folder_is_absolute_with_home_expanded(tmp_path, given, expected,
+                                                               numba_first):
+    """A relative ``NUMBA_CACHE_DIR`` or one that starts with ``~``: numba's cache is in
+    that folder, resolved from the working folder and the home folder (not a folder
+    named ``~``), whether or not numba was imported first; processes started from it
+    get the same."""
+    pytest.importorskip("numba")
+    home, cwd = tmp_path / "home", tmp_path / "work"
+    cwd.mkdir()
+    env = dict(os.environ, HOME=str(home), NUMBA_CACHE_DIR=given.format(cwd=cwd))
+    script = ("import numba\n" if numba_first else "") + WHERE
+    done = subprocess.run([sys.executable, "-c", script], env=env, cwd=cwd,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    config, environ, index = done.stdout.split("\n")[:3]
+    folder = expected.format(cwd=cwd, home=home)
+    assert config == environ == folder
+    assert index.startswith(folder + os.sep)
+    assert not (cwd / "~").exists()
