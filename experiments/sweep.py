@@ -260,8 +260,9 @@ def _sweep(study: Study, path: Path, workers: int, client, progress, no_workers_
     if client is None:
         backend = f"processes ({min(workers, len(tasks)) or workers} workers)"
     else:
-        backend = f"dask at {client.scheduler.address} ({sum(client.nthreads().values())} " \
-                  "worker threads)"
+        threads = sweep_exec.worker_threads(client, no_workers_s)
+        backend = f"dask at {client.scheduler.address} " \
+                  f"({'?' if threads is None else threads} worker threads)"
     say = progress or (lambda _: None)
     say(f"sweep: {n_points} points x {len(study.methods)} formulations, {resumed} resumed "
         f"from {path}, {len(tasks)} to run on {backend}")
@@ -421,7 +422,8 @@ def run(args) -> int:
     """
     try:
         study = plan(args)
-        client = sweep_exec.connect(args.scheduler, args.timeout) if args.scheduler else None
+        client = sweep_exec.connect(args.scheduler, args.timeout) \
+            if args.scheduler is not None else None
     except SweepError as err:
         print(f"cardan: error: {err}", file=sys.stderr)
         return 2
@@ -433,7 +435,7 @@ def run(args) -> int:
         return 2
     finally:
         if client is not None:
-            client.close()
+            client.close(timeout=args.timeout)
     write_md(result, study, Path(args.out) / "sweep.md")
     _say_lost(result.lost)
     if args.json:

@@ -1,16 +1,20 @@
 """Executors of ``cardan sweep``: a local process pool, or a Dask distributed cluster.
 
 Both take :class:`~.sweep_point.Point` items and yield each with its rows, or with the
-error that lost it (a dead worker: the point is retried by the next run).
+error that lost it (a dead worker: the point is retried by the next run); the Dask one
+runs any function on any tasks (``cardan tolerances`` runs its samples on it).
 
 Local workers die with the sweep: a sweep killed outright (SIGKILL, an out-of-memory
 kill), which runs no cleanup, leaves no worker computing for nobody
 (:func:`_follow_parent`). A Dask run whose workers are all gone ends after
-:data:`NO_WORKERS_S` seconds without one, keeping the rows it got.
+:data:`NO_WORKERS_S` seconds (``--timeout``) without one, keeping the rows it got:
+every wait on Dask (for finished tasks, for a result, for the scheduler's workers) is
+bounded by that deadline, whatever Dask's client is doing.
 """
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import ctypes
 import os
@@ -89,9 +93,12 @@ def _stop(pool: ProcessPoolExecutor) -> None:
 
 
 def connect(address: str, timeout: float):
-    """A Dask client on the scheduler at ``address``; :class:`SweepError` if dask is
-    missing or the scheduler does not answer within ``timeout`` s.
+    """A Dask client on the scheduler at ``address``; :class:`SweepError` if the address
+    is empty, dask is missing or the scheduler does not answer within ``timeout`` s.
     """
+    if not address.strip():
+        raise SweepError("--scheduler: the address is empty; give the scheduler's (as "
+                         "tcp://HOST:PORT), or leave --scheduler out to run here")
     try:
         from dask.distributed import Client
     except ImportError:
@@ -99,53 +106,100 @@ def connect(address: str, timeout: float):
             from None
     try:
         return Client(address, timeout=timeout)
-    except (OSError, ValueError) as err:
+    except (OSError, ValueError, TypeError) as err:
         raise SweepError(f"cannot reach the Dask scheduler at {address}: {err}") from None
 
 
 NO_WORKERS_S = 10.0
 """Default seconds a Dask run waits with no worker on its scheduler before it ends
-(``cardan sweep --timeout`` sets it, as it sets the wait for the scheduler)."""
+(``--timeout`` sets it, as it sets the wait for the scheduler)."""
 
 POLL_S = 0.5
-"""How often (s) a Dask run looks for finished points and for workers."""
+"""How often (s) a Dask run looks for finished tasks and for workers."""
+
+TIMEOUTS = (TimeoutError, asyncio.TimeoutError)
+"""What a Dask call bounded by a timeout raises when it runs out (one class from 3.11)."""
 
 
 class NoWorkers(SweepError):
-    """The Dask scheduler had no worker for the stated time: the points not finished
-    are lost to this run (a rerun computes them).
+    """The Dask scheduler had no worker (or did not answer) for the stated time: the
+    tasks not finished are lost to this run (a rerun computes them).
     """
 
 
-def dask(client, tasks: list[Point], no_workers_s: float = NO_WORKERS_S
-         ) -> Iterator[tuple[Point, list[Row] | Exception]]:
-    """Run ``tasks`` on a Dask cluster; yield each with its rows or the error. When the
-    scheduler has had no worker for ``no_workers_s`` s, the unfinished points are
-    cancelled and each yielded with one :class:`NoWorkers` error (the rows yielded
-    before are kept by the caller).
+def worker_threads(client, timeout: float) -> int | None:
+    """The worker threads on ``client``'s scheduler; ``None`` if it does not say within
+    ``timeout`` s.
     """
-    from dask.distributed import wait
+    try:
+        return sum(client.nthreads(callback_timeout=timeout).values())
+    except (*TIMEOUTS, OSError):
+        return None
 
-    futures = [client.submit(run_point, task, pure=False) for task in tasks]
+
+def dask(client, tasks: list, no_workers_s: float = NO_WORKERS_S, func=run_point,
+         unit: str = "point") -> Iterator[tuple]:
+    """Run ``func`` on each of ``tasks`` on a Dask cluster; yield each task with its
+    result or the error that lost it.
+
+    No call into Dask waits past a deadline, ``no_workers_s`` s after the scheduler last
+    had a worker: a result that cannot be gathered by then (its data went with a dead
+    worker, and Dask computes it again) goes back among the unfinished. At the deadline
+    the unfinished tasks (``unit`` names one in the message) are cancelled and each is
+    yielded with one :class:`NoWorkers` error; what was yielded before is the caller's.
+    """
+    futures = [client.submit(func, task, pure=False) for task in tasks]
     owner = {future.key: task for future, task in zip(futures, tasks)}
     pending, seen = set(futures), time.monotonic()
     while pending:
-        try:
-            done, pending = wait(pending, timeout=POLL_S, return_when="FIRST_COMPLETED")
-        except TimeoutError:
-            done = set()
-        for future in done:
-            try:
-                yield owner[future.key], future.result()
-            except Exception as exc:  # a lost worker: the point is retried next run
-                yield owner[future.key], exc
-        if not pending or client.nthreads():
+        deadline = seen + no_workers_s
+        for future in _finished(pending, min(POLL_S, _left(deadline))):
+            outcome = _outcome(future, deadline)
+            if outcome is not _AGAIN:
+                pending.discard(future)
+                yield owner[future.key], outcome
+        if not pending:
+            return
+        if worker_threads(client, max(_left(deadline), POLL_S)):
             seen = time.monotonic()
-        elif time.monotonic() - seen > no_workers_s:
+        elif _left(deadline) <= 0:
             client.cancel(list(pending))
             lost = NoWorkers(f"the Dask scheduler at {client.scheduler.address} has had no "
                              f"worker for {no_workers_s:g} s (--timeout); {len(pending)} "
-                             "point(s) not computed, a rerun computes them")
+                             f"{unit}(s) not computed, a rerun computes them")
             for future in pending:
                 yield owner[future.key], lost
             return
+
+
+_AGAIN = object()
+"""A finished task whose result was not gathered in time (it stays unfinished)."""
+
+
+def _left(deadline: float) -> float:
+    """Seconds until ``deadline`` (monotonic clock), at least 0."""
+    return max(deadline - time.monotonic(), 0.0)
+
+
+def _finished(pending: set, timeout: float) -> set:
+    """The futures of ``pending`` done now or within ``timeout`` s."""
+    from dask.distributed import wait
+
+    try:
+        return wait(pending, timeout=timeout, return_when="FIRST_COMPLETED").done
+    except TIMEOUTS:
+        return set()
+
+
+def _outcome(future, deadline: float):
+    """``future``'s result, or the error that lost its task; :data:`_AGAIN` if it is not
+    gathered before ``deadline``.
+    """
+    if _left(deadline) <= 0:
+        return _AGAIN
+    try:
+        return future.result(timeout=_left(deadline))
+    except TIMEOUTS:
+        return _AGAIN
+    except Exception as exc:  # a failed task or a worker lost while computing it
+        return exc

@@ -9,6 +9,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 
 import pytest
@@ -385,3 +386,85 @@ def test_a_dask_run_without_workers_ends_after_the_timeout_keeping_its_rows(base
     assert "has had no worker for 1 s" in err
     assert took < 60
     assert rows(out) == before  # nothing lost, nothing added
+
+
+@pytest.mark.parametrize("address", ["", "   "])
+def test_an_empty_scheduler_address_is_refused(address, tmp_path, capsys):
+    """An empty --scheduler is not a request to run here: one line, exit 2, no CSV."""
+    assert main([*ARGS, "--out", str(tmp_path), "--scheduler", address]) == 2
+    assert capsys.readouterr().err == (
+        "cardan: error: --scheduler: the address is empty; give the scheduler's (as "
+        "tcp://HOST:PORT), or leave --scheduler out to run here\n")
+    assert not (tmp_path / "sweep.csv").exists()
+
+
+def _close_workers(cluster) -> None:
+    """Close every worker of an in-process LocalCluster at once, its tasks unfinished."""
+    for worker in list(cluster.workers.values()):
+        cluster.sync(worker.close, executor_wait=False)
+
+
+def _echo(task):
+    return [task]
+
+
+def test_results_lost_with_their_workers_are_not_waited_for_past_the_timeout(monkeypatch):
+    """Every worker closed after its tasks finished but before their results were
+    gathered (Dask's client then reschedules them, for no worker): the run yields what
+    it gathered and, by the deadline, one NoWorkers error for each other task, instead
+    of waiting on a result for ever."""
+    distributed = pytest.importorskip("distributed")
+    import dask.distributed
+    from cardan_forces.experiments import sweep_exec
+
+    wait, looks = dask.distributed.wait, []
+
+    def late_wait(*args, **kwargs):  # the first look comes once every task has finished
+        if not looks:
+            time.sleep(0.3)
+        looks.append(1)
+        return wait(*args, **kwargs)
+
+    monkeypatch.setattr(dask.distributed, "wait", late_wait)
+    with distributed.LocalCluster(n_workers=2, processes=False, threads_per_worker=1,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster.scheduler_address) as client:
+        results = sweep_exec.dask(client, list(range(20)), 1.0, _echo, "task")
+        first = [next(results)]
+        _close_workers(cluster)
+        rest, started = [], time.monotonic()
+        reader = threading.Thread(target=lambda: rest.extend(results), daemon=True)
+        reader.start()
+        reader.join(timeout=15)
+        took = time.monotonic() - started
+    assert not reader.is_alive() and took < 5
+    assert first[0][1] == [first[0][0]]
+    assert sorted(task for task, _ in first + rest) == list(range(20))
+    assert all(isinstance(r, sweep_exec.NoWorkers) for _, r in rest)
+    assert "has had no worker for 1 s (--timeout); 19 task(s) not computed" in str(rest[0][1])
+
+
+def test_a_dask_sweep_whose_workers_all_die_ends_at_the_timeout_keeping_its_rows(
+        tmp_path, monkeypatch, capsys):
+    """Every worker closed once the first point's rows are stored: the sweep ends about
+    --timeout s later, exit 1, the timeout named, the stored rows kept."""
+    distributed = pytest.importorskip("distributed")
+    append = sweep.append
+    with distributed.LocalCluster(n_workers=1, processes=False, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        def append_then_close_workers(f, rows, header=False):
+            append(f, rows, header)
+            if rows:
+                _close_workers(cluster)
+
+        monkeypatch.setattr(sweep, "append", append_then_close_workers)
+        started = time.monotonic()
+        code = main(["sweep", "--angles", "0:30:6", "--formulation", "min_norm", "--quick",
+                     "--out", str(tmp_path), "--scheduler", cluster.scheduler_address,
+                     "--timeout", "1"])
+        took = time.monotonic() - started
+    err = capsys.readouterr().err
+    assert code == 1 and took < 20 and "Traceback" not in err
+    assert "has had no worker for 1 s (--timeout)" in err
+    stored = rows(tmp_path)
+    assert 1 <= len(stored) < 6 and all(r["status"] == "solved" for r in stored)
