@@ -21,9 +21,12 @@ without an articulation tolerance). Samples are seeded one by one
 (``default_rng([seed, index])``), so any subset gives the same draws in any order.
 
 Runs in this process with a progress bar, or on a Dask cluster (``--scheduler``, the
-sweep's connection, :func:`~.sweep_exec.connect`). Every finished sample is appended to
-``samples.jsonl`` in ``--out`` in one flushed line (:mod:`.tolerance_store`): a rerun
-computes only the samples the file lacks, and a sample in it twice is read once.
+sweep's connection and executor, :mod:`.sweep_exec`: a cluster left without workers
+ends the run after ``--timeout`` s, keeping the samples stored). Every finished sample
+is appended to ``samples.jsonl`` in ``--out`` in one flushed line
+(:mod:`.tolerance_store`): a rerun computes only the samples the file lacks, and a
+sample in it twice is read once. The store's study holds the SHA-256 of the scene's
+content: an edited scene is another study, refused in the same ``--out``.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ import csv
 import dataclasses
 import functools
 import math
+import sys
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -50,7 +54,8 @@ from cardan_forces.experiments.images import format_list, write_study
 from cardan_forces.experiments.life import loads as bearing_loads
 from cardan_forces.experiments.life import rated
 from cardan_forces.experiments.study import interval_history, solve_over_time
-from cardan_forces.experiments.sweep_exec import connect
+from cardan_forces.experiments.sweep_exec import NO_WORKERS_S, connect, dask
+from cardan_forces.experiments.sweep_store import scene_digest
 from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations.convex import contact_laws
 from cardan_forces.formulations.problems import QP, Conic
@@ -82,11 +87,13 @@ more than this times the instant's largest force (the solvers' acceptance is 1e-
 
 @dataclass(frozen=True)
 class Task:
-    """One sample of a study: the scene (a built-in name or a path), the study's seed,
-    the sample's index and the instants.
+    """One sample of a study: the scene (a built-in name or a path) and the SHA-256 of
+    its content (:func:`~.sweep_store.scene_digest`), the study's seed, the sample's
+    index and the instants.
     """
 
     scene: str
+    digest: str
     seed: int
     index: int
     instants: int
@@ -132,11 +139,16 @@ def check_size(scene: Scene, samples: int, instants: int) -> None:
 
 
 @functools.lru_cache(maxsize=4)
-def nominal(scene_spec: str, instants: int) -> tuple[Scene, Operator, dict, object]:
+def nominal(scene_spec: str, digest: str, instants: int
+            ) -> tuple[Scene, Operator, dict, object]:
     """The scene, its operator at ``instants`` instants over its window, each
-    formulation's problems and the rigid intervals, once per process.
+    formulation's problems and the rigid intervals, once per process and scene content
+    (``digest``: a scene file edited since is refused, not read as the study's).
     """
     scene = load_scene(scene_spec)
+    if scene_digest(scene) != digest:
+        raise ValueError(f"scene {scene_spec}: its content changed since the study "
+                         "started; run the study again")
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
     op = build_operator(simulate(scene, t))
     problems = {name: [FORMULATIONS[name](op, i) for i in range(len(t))] for name in RUN}
@@ -223,7 +235,7 @@ def run_sample(task: Task) -> dict:
     are small; a Dask worker's process is not the command's).
     """
     with threadpool_limits(limits=1):
-        scene, op0, problems, sets = nominal(task.scene, task.instants)
+        scene, op0, problems, sets = nominal(task.scene, task.digest, task.instants)
         drawn = draws(scene, task.seed, task.index)
         op = sampled_operator(scene, op0, drawn["articulation"])
         d = misfit_vector(op, scene, drawn["seat"])
@@ -288,12 +300,25 @@ def outside(forces: np.ndarray, sets) -> int:
 # ---------------------------------------------------------------------------- a study
 
 
-def study_key(spec: str, scene: Scene, seed: int, instants: int) -> dict:
-    """What names a study in its store: a sample of another key is another study's."""
+def study_key(scene: Scene, seed: int, instants: int) -> dict:
+    """What names a study in its store: a sample of another key is another study's.
+    The scene by its content (SHA-256), not its file: an edit that changes any value is
+    another study, the same scene at another path the same.
+    """
     tol = dataclasses.asdict(scene.tolerances) if scene.tolerances else None
-    return {"scene": scene.name, "source": spec, "seed": seed, "instants": instants,
-            "formulations": list(RUN), "tolerances": tol,
+    return {"scene": scene.name, "scene_sha256": scene_digest(scene), "seed": seed,
+            "instants": instants, "formulations": list(RUN), "tolerances": tol,
             "clearance": scene.has("clearance")}
+
+
+def layout(op: Operator) -> dict[str, list[str]]:
+    """The names a sample of ``op``'s line holds (:func:`sample_loads`,
+    :func:`sample_lives`): ``loads`` and ``L10_Mrev``.
+    """
+    bearings = [contact.element for contact, _ in rated(op)]
+    return {"loads": [*op.contact_magnitudes(np.zeros(len(op.names))),
+                      *(f"P:{b}" for b in bearings)],
+            "L10_Mrev": bearings}
 
 
 def _local(tasks: list[Task]):
@@ -307,48 +332,39 @@ def _local(tasks: list[Task]):
             yield task, exc
 
 
-def _dask(client, tasks: list[Task]):
-    """Each task run on the Dask cluster of ``client``: as :func:`_local`, in the order
-    they finish (a lost worker's samples come back as errors, retried by a rerun).
-    """
-    from dask.distributed import as_completed
-
-    futures = [client.submit(run_sample, task, pure=False) for task in tasks]
-    owner = {future.key: task for future, task in zip(futures, tasks)}
-    for future in as_completed(futures):
-        try:
-            yield owner[future.key], future.result()
-        except Exception as exc:  # a lost worker or a failed sample: retried next run
-            yield owner[future.key], exc
-
-
 def run_study(spec: str, samples: int, seed: int, instants: int, out: Path,
-              client=None, progress=None) -> tuple[dict, int]:
-    """Run the samples ``out``'s store lacks (locally, or on ``client``'s cluster),
-    append each as it finishes; the summary of samples ``0 .. samples - 1`` and how
-    many were lost this run.
+              client=None, progress=None, no_workers_s: float = NO_WORKERS_S
+              ) -> tuple[dict, dict[str, int]]:
+    """Run the samples ``out``'s store lacks (locally, or on ``client``'s cluster, given
+    up after ``no_workers_s`` s without a worker), append each as it finishes; the
+    summary of samples ``0 .. samples - 1`` and the samples lost this run, counted by
+    reason.
     """
     scene = load_scene(spec)
     check_size(scene, samples, instants)
-    key = study_key(spec, scene, seed, instants)
+    key = study_key(scene, seed, instants)
     path = out / store.NAME
-    have = store.read(path, key)
-    todo = [Task(spec, seed, k, instants) for k in range(samples) if k not in have]
+    have = store.read(path, key, layout(nominal(spec, key["scene_sha256"], instants)[1]))
+    todo = [Task(spec, key["scene_sha256"], seed, k, instants)
+            for k in range(samples) if k not in have]
     if progress:
         progress(f"tolerances: {len(have)} samples stored, {len(todo)} to run "
                  f"{'on ' + str(client.scheduler.address) if client else 'here'}")
-    lost = 0
+    results = dask(client, todo, no_workers_s, run_sample, "sample") if client else \
+        _local(todo)
+    lost: dict[str, int] = {}
     with store.opened(path, key) as f:
-        for task, result in (_dask(client, todo) if client else _local(todo)):
+        for task, result in results:
             if isinstance(result, Exception):
-                lost += 1
-                if progress:
-                    progress(f"tolerances: sample {task.index} lost: {result}")
+                reason = f"{type(result).__name__}: {' '.join(str(result).split())}"
+                if progress and reason not in lost:
+                    progress(f"tolerances: sample {task.index} lost: {reason}")
+                lost[reason] = lost.get(reason, 0) + 1
                 continue
             store.append(f, result)
             have[task.index] = result
     kept = [have[k] for k in range(samples) if k in have]
-    return summarize(spec, scene, instants, kept, samples), lost
+    return summarize(spec, key["scene_sha256"], scene, instants, kept, samples), lost
 
 
 def _stack(samples: list[dict], form: str, part: str, names: list[str]) -> np.ndarray:
@@ -365,14 +381,14 @@ def _quantiles(values: np.ndarray) -> dict[str, np.ndarray]:
     return {f"P{q:g}": v for q, v in zip(QUANTILES, found)}
 
 
-def summarize(spec: str, scene: Scene, instants: int, samples: list[dict],
+def summarize(spec: str, digest: str, scene: Scene, instants: int, samples: list[dict],
               asked: int) -> dict:
     """The study's answer (JSON-ready): per formulation each load's percentiles over
     the samples at each instant beside the nominal line's value (no deviation), each
     rated bearing's ``L10`` distribution, the instants solved and the components outside
     the nominal rigid set.
     """
-    _, op, _, _ = nominal(spec, instants)
+    _, op, _, _ = nominal(spec, digest, instants)
     out = {"scene": scene.name, "samples": asked, "stored": len(samples),
            "t_s": op.t, "instants": instants, "quantiles": list(QUANTILES),
            "tolerances": dataclasses.asdict(scene.tolerances) if scene.tolerances else None,
@@ -500,8 +516,10 @@ def add_parser(subparsers) -> None:
                    help="the study's seed (default 0); sample k draws from (seed, k)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help='run on this Dask scheduler (pip install -e ".[dask]")')
-    p.add_argument("--timeout", type=float, default=10.0,
-                   help="seconds to wait for the Dask scheduler (default 10)")
+    p.add_argument("--timeout", type=float, default=NO_WORKERS_S,
+                   help="seconds to wait for the Dask scheduler, and for a worker when the "
+                        "scheduler has none left (then the run ends, keeping its samples; "
+                        "default %(default)g)")
     p.add_argument("--out", default="results/tolerances",
                    help="output folder, and the samples' store (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",),
@@ -522,14 +540,19 @@ def run(args) -> int:
         if isinstance(err, SceneError):
             raise
         raise UsageError(str(err)) from None
-    client = connect(args.scheduler, args.timeout) if args.scheduler else None
-    answer, lost = run_study(args.scene, args.samples, args.seed, args.instants,
-                             Path(args.out), client, bars.line)
+    client = connect(args.scheduler, args.timeout) if args.scheduler is not None else None
+    try:
+        answer, lost = run_study(args.scene, args.samples, args.seed, args.instants,
+                                 Path(args.out), client, bars.line, args.timeout)
+    finally:
+        if client is not None:
+            client.close(timeout=args.timeout)
     if args.json:
         print(json_text(answer))
     else:
         for path in write_outputs(answer, Path(args.out), args.format):
             print(path)
-    if lost:
-        bars.line(f"tolerances: {lost} samples lost; run again to compute them")
+    for reason, count in lost.items():  # said whatever --quiet says: the exit code's why
+        print(f"tolerances: {count} sample(s) lost: {reason}; run again to compute them",
+              file=sys.stderr)
     return 1 if lost else 0
