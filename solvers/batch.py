@@ -26,6 +26,7 @@ from .record import (
     Status,
     as_statuses,
     judge,
+    judged_notes,
 )
 from .stacking import stacked_batch
 
@@ -141,7 +142,10 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
         residuals = Residuals(**residuals, reference=distance)
         if _unique(batch):
             optimality = Optimality(**optimality, distance=distance)
-    status = judge(status, optimality, source)
+    reported, status = status, judge(status, optimality, source)
+    messages = list(outcome.messages) or [""] * len(x)
+    for k, note in judged_notes(reported, status, residuals, optimality).items():
+        messages[k] = "; ".join(filter(None, (messages[k], note)))
     T = len(x)
     per = np.array([outcome.setup_s, outcome.solve_s, time.perf_counter() - began]) / T
     return Results(
@@ -149,7 +153,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
         status=as_statuses(status, Status.FAILED), x=x,
         residuals=residuals, optimality=optimality, solver_optimality=Optimality(),
         iterations=tuple(np.asarray(outcome.iterations, int).tolist()),
-        objective=(None,) * T, message=tuple(outcome.messages) or ("",) * T,
+        objective=(None,) * T, message=tuple(messages),
         duals=(source,) * T, gap_kind=("duality",) * T,
         solver_status=as_statuses(outcome.status),
         setup_s=np.full(T, per[0]), solve_s=np.full(T, per[1]), checks_s=np.full(T, per[2]),

@@ -21,7 +21,6 @@ from cardan_forces.formulations.problems import LCP, LS, NLS, QP, map_all, resid
 from .optimality import multipliers, stacked_measures, unique_optimum
 from .qp_measures import MEASURES, from_parts
 from .record import (
-    ACCEPT,
     Optimality,
     Outcome,
     Record,
@@ -30,6 +29,7 @@ from .record import (
     Status,
     as_status,
     judge,
+    judged_notes,
     statuses,
 )
 from .stacking import Stacked, conic_key, stack_conic
@@ -460,30 +460,12 @@ def _measured(st: Stacked, z, y, given, as_qp: bool) -> tuple[dict, dict | None]
 def _messages(started: _Started, status, optimality: Optimality,
               residual: dict) -> list[str]:
     """Each record's message: the outcome's, with the start's notes and why the
-    package changed the solver's status, where it did (``residual``: key -> (T,) array;
-    they are never NaN, a non-finite answer's are ``inf``).
+    package changed the solver's status, where it did (:func:`~.record.judged_notes`;
+    ``residual``: key -> (T,) array, never NaN: a non-finite answer's are ``inf``).
     """
     messages = list(started.messages)
-    reported = np.array(started.status, object)
-    changed = np.flatnonzero(status != reported).tolist()
-    if not changed and not started.notes:
-        return messages
-    for k in sorted(started.notes.keys() | set(changed)):
+    judged = judged_notes(started.status, status, residual, optimality)
+    for k in sorted(started.notes.keys() | judged.keys()):
         notes = started.notes.get(k, [messages[k]] if messages[k] else [])
-        if k in changed:
-            notes = [*notes, "confirmed by the package's primal, dual and gap measures"
-                     if status[k] is Status.SOLVED else _above(k, optimality, residual)]
-        messages[k] = "; ".join(notes)
+        messages[k] = "; ".join([*notes, judged[k]] if k in judged else notes)
     return messages
-
-
-def _above(k: int, optimality: Optimality, residual: dict) -> str:
-    """What keeps instant ``k`` from ``solved``: its worst residual where that is above
-    :data:`~.record.ACCEPT`, else its dual residual or its gap, the first above it.
-    """
-    key = max(Residuals.KEYS, key=lambda name: residual[name][k])
-    if not residual[key][k] <= ACCEPT:
-        return f"{key} residual {residual[key][k]:.1e} > {ACCEPT:.0e}"
-    measured = {"dual residual": float(optimality.dual[k]), "gap": float(optimality.gap[k])}
-    name = next((n for n, v in measured.items() if not v <= ACCEPT), "gap")
-    return f"{name} {measured[name]:.1e} > {ACCEPT:.0e}"

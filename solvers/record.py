@@ -465,3 +465,25 @@ def judge(status, optimality: Optimality, duals):
     optimal = np.where(np.asarray(duals, object) != "none", optimality.optimal(),
                        reported & (primal <= ACCEPT))
     return np.where(answered, np.where(optimal, _AS_SOLVED, _AS_INACCURATE), status)
+
+
+def judged_notes(reported, status, residuals, optimality: Optimality) -> dict[int, str]:
+    """Why :func:`judge` changed the statuses it changed, ``{instant: note}``: a reported
+    ``inaccurate`` confirmed, or what keeps an answer from ``solved``: its worst
+    residual where that is above :data:`ACCEPT`, else its dual residual or its gap, the
+    first above it (``residuals``: each of :attr:`Residuals.KEYS` as a (T,) array).
+    """
+    status = np.asarray(status, object)
+    changed = np.flatnonzero(status != np.asarray(reported, object)).tolist()
+    return {k: "confirmed by the package's primal, dual and gap measures"
+            if status[k] is Status.SOLVED else _above(k, residuals, optimality)
+            for k in changed}
+
+
+def _above(k: int, residuals, optimality: Optimality) -> str:
+    key = max(Residuals.KEYS, key=lambda name: residuals[name][k])
+    if not residuals[key][k] <= ACCEPT:
+        return f"{key} residual {residuals[key][k]:.1e} > {ACCEPT:.0e}"
+    measured = {"dual residual": float(optimality.dual[k]), "gap": float(optimality.gap[k])}
+    name = next((n for n, v in measured.items() if not v <= ACCEPT), "gap")
+    return f"{name} {measured[name]:.1e} > {ACCEPT:.0e}"

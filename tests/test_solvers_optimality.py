@@ -514,3 +514,4 @@ def test_batched_paths_judge_a_feasible_answer_that_is_not_optimal_as_each_insta
                                                    [[-1.0, 0.0, 0.0], [0.0, 2.0, 0.0]]))
     assert result.optimality["dual"][1] <= 1e-15 and result.optimality["gap"][1] > 1.0
     assert list(result.status) == ["solved", "inaccurate"]
+    assert result.message[0] == "" and result.message[1].startswith("gap")
