@@ -127,11 +127,11 @@ def prepare(op, name: str, instants) -> Prepared:
 
 
 def batch_kind(solver: str, prepared: Prepared) -> str | None:
-    """Which batch of the formulation the batched backend ``solver`` takes, if any."""
-    accepts = get_backend(solver).batch_accepts
-    if fbatch.LeastNormBatch in accepts and FORMULATIONS[prepared.name].least_norm_batch:
-        return "least_norm"
-    return "conic" if fbatch.ConicBatch in accepts else None
+    """Which batch of the formulation the batched backend ``solver`` takes on this
+    scene, if any (:func:`~cardan_forces.formulations.batch.batch_kind`).
+    """
+    return fbatch.batch_kind(get_backend(solver).batch_accepts, prepared.name,
+                             prepared.problems[0])
 
 
 def plan(op, formulations=None, solvers=None, quick=False) -> dict[str, list[str]]:
@@ -164,13 +164,14 @@ def plan(op, formulations=None, solvers=None, quick=False) -> dict[str, list[str
 
 
 def _batched(op, name: str, problems) -> list[str]:
+    """The batched backends that solve the batch of the formulation's ``problems`` (at
+    instants 0 and 1) that :func:`batch_kind` gives them.
+    """
     found = []
-    for make in (lambda: fbatch.least_norm_batch(op, name, [0, 1]),
-                 lambda: fbatch.conic_batch(problems, [0, 1])):
-        try:
-            found += [s for s in batch_backends(make()) if s not in found]
-        except ValueError:
-            continue
+    for kind in fbatch.batch_kinds(name, problems[0]):
+        batch = fbatch.make_batch(kind, op, name, problems, [0, 1])
+        found += [s for s in batch_backends(batch) if s not in found and fbatch.batch_kind(
+            get_backend(s).batch_accepts, name, problems[0]) == kind]
     return found
 
 

@@ -10,7 +10,10 @@ an operator; only the numbers change. This module builds it once per operator:
   operator's own rows, ``min 1/2 x'Wx s.t. A x = b`` (and end faces ``>= 0``), forces
   in N; built from the operator in a few vectorized lines;
 - :func:`conic_batch`: any LS, QP or conic formulation as stacked arrays in Clarabel's
-  standard form, ``P`` shared when it is the same at every instant.
+  standard form, ``P`` shared when it is the same at every instant;
+- :func:`batch_kinds`, :func:`batch_kind`: which of the two a formulation forms on a
+  scene, decided by its problem there (a clearance makes ``compliance`` a conic
+  problem, which has no least-norm batch), and which one a batched backend takes.
 
 Each batch carries :class:`CheckBatch`, the stacked ``ForceChecks`` its answers are
 judged by (:func:`~cardan_forces.formulations.problems.residuals_batch`).
@@ -120,7 +123,7 @@ def least_norm_batch(op, formulation: str, instants=None) -> LeastNormBatch:
     instants = _instants(op, instants)
     record = FORMULATIONS[formulation]
     first = record(op, int(instants[0]))
-    if not record.least_norm_batch or not _diagonal(first):
+    if "least_norm" not in batch_kinds(formulation, first):
         raise ValueError(f"{formulation!r} is not a diagonal least norm on this scene")
     A, b = op.A[instants], op.b[instants]
     weights = record.batch_weights(A, first) if record.batch_weights else None
@@ -179,3 +182,41 @@ def _null_spaces(conics: list) -> np.ndarray | None:
     if any(N is None or np.shape(N) != np.shape(bases[0]) for N in bases):
         return None
     return np.array(bases)
+
+
+BATCHES = {"least_norm": LeastNormBatch, "conic": ConicBatch}
+"""The batches a formulation's problems may form, by kind."""
+
+
+def batch_kinds(formulation: str, problem) -> tuple[str, ...]:
+    """The kinds of batch (:data:`BATCHES`) the formulation's problems form on a scene,
+    the preferred first, decided by ``problem``, its problem at an instant of that
+    scene: ``"least_norm"`` where the formulation's record allows it and the problem is
+    a diagonal least norm there (not ``compliance`` with a clearance: a conic problem),
+    ``"conic"`` where the problem has a conic form. Empty for neither (the paper's
+    root finding).
+    """
+    kinds = []
+    if FORMULATIONS[formulation].least_norm_batch and _diagonal(problem):
+        kinds.append("least_norm")
+    if as_conic(problem) is not None:
+        kinds.append("conic")
+    return tuple(kinds)
+
+
+def batch_kind(accepts, formulation: str, problem) -> str | None:
+    """The batch a batched backend whose ``batch_accepts`` is ``accepts`` takes of the
+    formulation on a scene: the first of :func:`batch_kinds` of a class it accepts,
+    ``None`` where it accepts none of them (it does not take the formulation there).
+    """
+    return next((kind for kind in batch_kinds(formulation, problem)
+                 if issubclass(BATCHES[kind], tuple(accepts))), None)
+
+
+def make_batch(kind: str, op, formulation: str, problems: list, instants):
+    """The formulation's batch of ``kind`` at ``instants`` of ``op`` (``problems``: its
+    problems at those instants, which the conic batch stacks).
+    """
+    if kind == "least_norm":
+        return least_norm_batch(op, formulation, instants)
+    return conic_batch(list(problems), instants)

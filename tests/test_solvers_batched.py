@@ -4,8 +4,10 @@ import numpy as np
 import pytest
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import builtin_names, load_scene
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
+from cardan_forces.formulations.problems import Conic
 from cardan_forces.solvers import available, solve
 from cardan_forces.solvers import numpy_batched_ as nb
 from cardan_forces.solvers.lcp_methods import lemke
@@ -273,3 +275,70 @@ def test_the_kernels_layout_names_the_rows_structure(op):
             assert [own[p] for p in a] == [layout.own[k + 1, p] for p in b]
     assert [min(k for k, cols in enumerate(touching) if f in cols) for f in u] == list(
         layout.first)
+
+
+BUILT_PER_STRUCTURE = ("qocogen-reduced",)
+"""Batched backends that compile a C solver per structure (seconds each, tested in
+their own file): here only their choice of batch is checked."""
+
+
+def _batched_backends() -> list[str]:
+    return [name for name, backend in available().items() if backend.batch is not None]
+
+
+@pytest.mark.parametrize("scene", builtin_names())
+def test_every_batched_backend_runs_each_formulation_it_is_offered_or_says_why(scene):
+    """Every batched backend x every formulation x every built-in scene, a few instants:
+    the batch a backend takes is the one the scene's problem forms (a clearance makes
+    ``compliance`` conic, so never its least-norm batch), the bench offers the backend
+    exactly where it takes that batch (else leaves it out, saying so), and the bench's
+    run of it gives a row per instant, solved or with its reason; never an exception."""
+    from cardan_forces.experiments import bench_run
+    from cardan_forces.formulations.convex import NotApplicable
+
+    loaded = load_scene(scene)
+    op = build_operator(simulate(loaded, loaded.time.instants()[:3]))
+    backends = _batched_backends()
+    offered = bench_run.plan(op, solvers=backends)
+    for name in FORMULATIONS:
+        try:
+            problems = fbatch.build_problems(op, name)
+        except NotApplicable:
+            assert name not in offered
+            continue
+        prepared = bench_run.prepare(op, name, np.arange(3))
+        for solver in backends:
+            kind = bench_run.batch_kind(solver, prepared)
+            takes = kind is not None and solver in batch_backends(
+                fbatch.make_batch(kind, op, name, problems, [0, 1]))
+            assert takes == (solver in offered.get(name, ())), (name, solver, kind)
+            if not takes or solver in BUILT_PER_STRUCTURE:
+                continue
+            if isinstance(problems[0], Conic):  # no diagonal least norm: its batch is conic
+                assert kind == "conic", (name, solver)
+            rows, _ = bench_run.run_batched(prepared, solver, repeats=1)
+            assert len(rows) == 3, (name, solver)
+            for row in rows:
+                assert row["status"] == "solved" or row["message"].strip(), (name, solver)
+
+
+def test_the_batches_a_formulation_forms_follow_its_problem_on_the_scene(op):
+    """``compliance`` is a diagonal least norm on the paper scene and a conic problem
+    with the axle pinion's clearances: its batches are the least-norm and the conic one
+    there, only the conic one here (its least-norm batch refused, not misbuilt); a
+    backend that accepts both takes the first it can."""
+    axle = load_scene("axle-pinion")
+    clearance = build_operator(simulate(axle, axle.time.instants()[:2]))
+    both = (fbatch.LeastNormBatch, fbatch.ConicBatch)
+    expected = {("paper", "compliance"): ("least_norm", "conic"),
+                ("axle", "compliance"): ("conic",), ("paper", "lcp"): ("least_norm",),
+                ("paper", "min_max"): ("conic",), ("paper", "paper"): ()}
+    for (where, name), kinds in expected.items():
+        scene_op = op if where == "paper" else clearance
+        problem = FORMULATIONS[name](scene_op, 0)
+        assert fbatch.batch_kinds(name, problem) == kinds
+        assert fbatch.batch_kind(both, name, problem) == (kinds[0] if kinds else None)
+        assert fbatch.batch_kind((fbatch.ConicBatch,), name, problem) == (
+            "conic" if "conic" in kinds else None)
+    with pytest.raises(ValueError, match="not a diagonal least norm"):
+        fbatch.least_norm_batch(clearance, "compliance")
