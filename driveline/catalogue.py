@@ -9,8 +9,8 @@ from __future__ import annotations
 from .scene import (
     ANGULAR_TABLE_DEG,
     BEARING_TYPES,
+    CONTACT_ANGLE_DEG,
     MAX_ARTICULATION_DEG,
-    MAX_TAPER_DEG,
     BearingRating,
     Tolerances,
     table_keys,
@@ -50,9 +50,8 @@ def read_rating(t) -> BearingRating:
 
 
 def _contact_angle(t, kind_of: str) -> float:
-    """The nominal contact angle (deg): 0 for the radial types (by definition), in
-    (0, 90) for angular-contact balls, in (0, :data:`~.scene.MAX_TAPER_DEG`] for tapered
-    rollers.
+    """The nominal contact angle (deg): 0 for the radial types (by definition), within
+    :data:`~.scene.CONTACT_ANGLE_DEG` for the others.
     """
     if kind_of in ("ball", "cylindrical_roller"):
         if t.number("contact_angle_deg", 0.0, kind="angle_deg") != 0.0:
@@ -60,10 +59,9 @@ def _contact_angle(t, kind_of: str) -> float:
                    "definition; give 0 or none")
         return 0.0
     alpha = t.number("contact_angle_deg", positive=True, kind="angle_deg")
-    most = MAX_TAPER_DEG if kind_of == "tapered_roller" else 89.0
-    if alpha > most:
-        t.fail("contact_angle_deg", f"must be at most {most:g} deg for a {kind_of} "
-               f"bearing, got {alpha:g}")
+    if (refusal := CONTACT_ANGLE_DEG.refusal(alpha)) is not None:
+        t.fail("contact_angle_deg", f"{refusal} (the contact angles of real "
+               f"{kind_of.replace('_', ' ')} bearings)")
     return alpha
 
 

@@ -103,9 +103,56 @@ ANGULAR_TABLE_DEG = (20.0, 45.0)
 ``e`` the package takes from ISO 281:2007 Table 3 (rows 20 to 45 deg, interpolated
 between them); outside this range the scene gives ``X``, ``Y`` and ``e`` itself."""
 
-MAX_TAPER_DEG = 60.0
-"""Largest contact angle of a tapered roller bearing (catalogue bearings have 10-30 deg;
-beyond 60 deg it is a thrust bearing, which ISO 281 rates apart)."""
+
+@dataclass(frozen=True)
+class Range:
+    """The physical range of a field, narrower than its kind's :data:`LIMITS`: ``least``
+    to ``most`` (inclusive) in ``unit``.
+    """
+
+    least: float
+    most: float
+    unit: str
+
+    def refusal(self, value: float) -> str | None:
+        """Why ``value`` is refused, in one line naming it, its unit and the range; None
+        inside the range.
+        """
+        if self.least <= value <= self.most:
+            return None
+        return (f"{value:g} {self.unit} is outside {self.least:.3g} to {self.most:.3g} "
+                f"{self.unit}")
+
+
+CONTACT_ANGLE_DEG = Range(5.0, 60.0, "deg")
+"""Nominal contact angle of a bearing that has one, as an element (an angular-contact
+bearing) and in a rating (``tapered_roller``, ``angular_contact_ball``). Catalogue
+angular-contact ball bearings have 15 to 40 deg (15, 25, 30, 40 in the makers' series)
+and the angular-contact thrust ball bearings of ball-screw supports 60 deg; tapered
+roller bearings 10 to 30 deg. The least, 5 deg, is the smallest angular-contact row of
+ISO 281:2007 Table 3 (ISO/TR 1281-1, 7.2.1); below it the axial stiffness the model
+gives, ``k_r tan^2 alpha``, falls under 1/130 of the radial one and the axial contact
+problem degenerates. Above 60 deg a bearing carries next to no radial load (a thrust
+bearing)."""
+
+CROSSPIN_ASPECT = 100.0
+"""Most ratio of a cross-pin's largest dimension (``hs_m``, ``rs_m``, ``rb_m``, ``ht_m``,
+``hb_m``, ``rt_m``) to any other: the paper's Table 2 spans a factor 6, the truck cross
+of the built-in ``propshaft`` 5.4; a dimension a hundredth of the joint's largest is a zero
+length (a trunnion contact at the cross centre, a trunnion of no radius)."""
+
+SPLINE_PITCH_RADIUS_M = Range(5e-4, 1.0, "m")
+"""Pitch radius of a slip joint's spline: ISO 4156's involute splines have modules
+0.25 to 10 mm and a pitch diameter of module times number of teeth, about 1.5 mm for a
+few teeth of the smallest module, about 1 m for a hundred of the largest. The spline's
+friction bound ``mu T / r`` grows without limit as ``r`` goes to 0."""
+
+MAX_STIFFNESS_RATIO = 1e7
+"""Most ratio, either way, of the bearings' stiffness ``bearing_stiffness_N_m`` to the
+joints' (their Hertz stiffness's secant at ``damping_full_depth_m``, the linear one the
+compliance formulation takes): the hard cases study 1e6 and 1e-6 and every formulation
+passes them; a decade beyond, a bearing so soft next to its joints holds nothing, one
+so stiff makes the joints' compliance vanish."""
 
 
 # ---------------------------------------------------------------------------- data

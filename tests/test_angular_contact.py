@@ -144,7 +144,7 @@ def test_penalty_run_touches_one_bearing_of_the_pair_at_a_time():
     ([_angular("tail", -0.1, "upstream"), _angular("head", 0.08, "downstream", 30.0)],
      "different contact angles"),
     ([_angular("tail", -0.1, "upstream", 90.0), _angular("head", 0.08, "downstream")],
-     "below 90"),
+     "contact_angle_deg': 90 deg is outside 5 to 60 deg"),
     ([_angular("tail", -0.1, "sideways"), _angular("head", 0.08, "downstream")],
      "pushes': must be one of"),
     ([{"name": "tail", "offset_m": -0.1, "kind": "angular-contact", "pushes": "upstream"},

@@ -12,8 +12,9 @@ end faces: without preload only one of the two carries it.
 
 Scene fields (``[[shafts.bearings]]`` with ``kind = "angular-contact"``):
 
-- ``contact_angle_deg``: ``alpha``, in (0, 90) deg; if the bearing also has a
-  ``rating``, its type must be one with a contact angle (``tapered_roller``,
+- ``contact_angle_deg``: ``alpha``, within :data:`~..scene.CONTACT_ANGLE_DEG` (the
+  contact angles of real angular-contact and tapered roller bearings); if the bearing
+  also has a ``rating``, its type must be one with a contact angle (``tapered_roller``,
   ``angular_contact_ball``) and its contact angle this one;
 - ``pushes``: ``"upstream"`` or ``"downstream"``, the direction along its shaft's axis
   in which it pushes the shaft;
@@ -47,7 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Bearing, Scene, SceneError
+from ..scene import CONTACT_ANGLE_DEG, Bearing, Scene, SceneError
 from .base import Law, Link, PairMode
 from .bearing import BearingKind
 
@@ -76,8 +77,9 @@ class AngularContact(BearingKind):
 
     def read(self, table, name, offset_m, rating) -> Bearing:
         alpha = table.number("contact_angle_deg", positive=True, kind="angle_deg")
-        if not alpha < 90.0:
-            table.fail("contact_angle_deg", f"must be below 90 deg, got {alpha:g}")
+        if (refusal := CONTACT_ANGLE_DEG.refusal(alpha)) is not None:
+            table.fail("contact_angle_deg", f"{refusal} (the contact angles of real "
+                       "angular-contact and tapered roller bearings)")
         if rating is not None and rating.type not in ANGLED_TYPES:
             table.fail("rating.type", f"an angular-contact bearing is rated as one of "
                        f"{', '.join(ANGLED_TYPES)}, got {rating.type!r}")

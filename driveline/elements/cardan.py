@@ -30,10 +30,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..contact import hertz_stiffness
-from ..scene import MAX_ARTICULATION_DEG, Joint, Scene, table_keys
+from ..scene import CROSSPIN_ASPECT, MAX_ARTICULATION_DEG, Joint, Range, Scene, table_keys
 from .base import Body, Column, ElementKind, Law, Layout, Link, PairMode
 
 RADIAL, FACE = "trunnion-radial", "end-face"
+
+CROSSPIN_KEYS = ("hs_m", "rs_m", "rb_m", "ht_m", "hb_m", "rt_m")
+"""A cross-pin's dimensions (m), the paper's Table 2 and Fig. 5."""
 
 MASSLESS_PIN_KG = 1e-6
 """Mass MuJoCo's model gives a cross-pin the scene leaves massless (no
@@ -54,6 +57,20 @@ def _yokes(segments: list, joint: int) -> tuple[int, int]:
             min(g for g, s in enumerate(segments) if s.shaft == joint + 1))
 
 
+def _check_proportions(t, joint: Joint) -> None:
+    """Refuse a cross-pin dimension below 1/:data:`~..scene.CROSSPIN_ASPECT` of the
+    joint's largest, naming it, its value and the range.
+    """
+    largest = max(CROSSPIN_KEYS, key=lambda key: getattr(joint, key))
+    most = getattr(joint, largest)
+    allowed = Range(most / CROSSPIN_ASPECT, most, "m")
+    for key in CROSSPIN_KEYS:
+        if (refusal := allowed.refusal(getattr(joint, key))) is not None:
+            t.fail(key, f"{refusal} (1/{CROSSPIN_ASPECT:g} of its largest dimension, "
+                   f"{largest} = {most:g} m, to it: a cross-pin's dimensions are of one "
+                   "scale)")
+
+
 class Cardan(ElementKind):
     """The Cardan joint kind (module doc)."""
 
@@ -63,7 +80,8 @@ class Cardan(ElementKind):
     def read(self, t) -> Joint:
         """A ``[[joints]]`` table (:class:`~..scene.Joint`: angles in deg, the cross-pin
         geometry of the paper's Table 2 and Fig. 5 in m), checked: the articulation
-        within :data:`~..scene.MAX_ARTICULATION_DEG`, bore and housing bottom outside
+        within :data:`~..scene.MAX_ARTICULATION_DEG`, no dimension a zero length next to
+        the others (:data:`~..scene.CROSSPIN_ASPECT`), bore and housing bottom outside
         the trunnion.
         """
         t.expect(table_keys(Joint))
@@ -76,7 +94,8 @@ class Cardan(ElementKind):
         joint = Joint(name=name, articulation_deg=gamma,
                       yoke_phase_deg=t.number("yoke_phase_deg", 0.0, kind="angle_deg"),
                       **{key: t.number(key, positive=True, kind="length_m")
-                         for key in ("hs_m", "rs_m", "rb_m", "ht_m", "hb_m", "rt_m")})
+                         for key in CROSSPIN_KEYS})
+        _check_proportions(t, joint)
         if joint.rb_m < joint.rs_m:
             t.fail("rb_m", f"housing bore {joint.rb_m} m is smaller than the trunnion "
                    f"{joint.rs_m} m")

@@ -11,24 +11,29 @@ Bad layouts raise :class:`~cardan_forces.driveline.scene.SceneError`:
   saying what it stops: a floating bearing on a shaft with axis ``a`` stops
   translations normal to ``a``, a locating one all, a Cardan joint makes its two
   shafts translate together, a frictionless spline lets its segments slide relative
-  to each other along ``a``.
+  to each other along ``a``;
+- bearings far stiffer or far softer than the joints (beyond
+  :data:`~cardan_forces.driveline.scene.MAX_STIFFNESS_RATIO` either way).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..contact import hertz_stiffness
 from ..determinacy import left_null_space
 from ..kinematics import rest_geometry
-from ..scene import Scene, SceneError
+from ..scene import MAX_STIFFNESS_RATIO, Range, Scene, SceneError
 from .bodies import Segment, frames_of, shaft_segments
 from .registry import scene_elements
 
 
 def check_elements(scene: Scene, sliding: bool = True) -> None:
-    """Refuse elements their kinds refuse (a slip joint with an unheld segment, ...) and,
-    if ``sliding``, lines free to slide (module doc).
+    """Refuse bearings out of proportion to the joints' stiffness, elements their kinds
+    refuse (a slip joint with an unheld segment, ...) and, if ``sliding``, lines free to
+    slide (module doc).
     """
+    check_stiffness(scene)
     for kind, element, shaft, _ in scene_elements(scene):
         kind.check(element, shaft, scene)
     free = sliding_bodies(scene) if sliding else []
@@ -37,6 +42,23 @@ def check_elements(scene: Scene, sliding: bool = True) -> None:
             f"scene {scene.source}: no axial support: {', '.join(free)} can slide along "
             "their axis (a floating bearing carries no axial force; make one bearing "
             "of that part of the line locating)")
+
+
+def check_stiffness(scene: Scene) -> None:
+    """Refuse a bearing stiffness beyond :data:`~..scene.MAX_STIFFNESS_RATIO` times the
+    joints' (their Hertz stiffness's secant at ``damping_full_depth_m``) either way.
+    """
+    ct = scene.contact
+    secants = [hertz_stiffness(scene, j) * ct.damping_full_depth_m ** (ct.exponent - 1.0)
+               for j in scene.joints]
+    allowed = Range(max(secants) / MAX_STIFFNESS_RATIO, min(secants) * MAX_STIFFNESS_RATIO,
+                    "N/m")
+    if (refusal := allowed.refusal(ct.bearing_stiffness_N_m)) is not None:
+        raise SceneError(
+            f"scene {scene.source}: field 'contact.bearing_stiffness_N_m': {refusal} "
+            f"({1 / MAX_STIFFNESS_RATIO:g} to {MAX_STIFFNESS_RATIO:g} times the joints' "
+            f"stiffness, {min(secants):.3g} to {max(secants):.3g} N/m: the secant of their "
+            "Hertz stiffness at contact.damping_full_depth_m)")
 
 
 def sliding_bodies(scene: Scene, segments: list[Segment] | None = None) -> list[str]:

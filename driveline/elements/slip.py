@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import Scene, SceneError, SlipJoint, table_keys
+from ..scene import SPLINE_PITCH_RADIUS_M, Scene, SceneError, SlipJoint, table_keys
 from .base import Column, ElementKind, Law, Layout, Link, Release
 
 SLIP_LENGTH_M = 1.0
@@ -111,6 +111,9 @@ class Slip(ElementKind):
             pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m"),
             friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True,
                                           kind="ratio"))
+        if (refusal := SPLINE_PITCH_RADIUS_M.refusal(slip.pitch_radius_m)) is not None:
+            t.fail("pitch_radius_m", f"{refusal} (the pitch radii of ISO 4156's "
+                   "involute splines)")
         t.done()
         return slip
 
