@@ -46,6 +46,9 @@ def test_every_module_with_numba_kernels_is_in_a_family():
 
 def test_compile_warms_every_family_in_order_and_names_the_caches(monkeypatch, capsys):
     pytest.importorskip("numba")
+    from cardan_forces.experiments import progress
+
+    monkeypatch.setitem(progress._STATE, "quiet", False)  # as a run without --quiet
     calls = []
     families = tuple(compile_command.Family(f.what, f.modules,
                                             lambda what=f.what: calls.append(what))
