@@ -9,7 +9,9 @@ in a local process pool, or on a Dask distributed cluster given ``--scheduler``
 (:mod:`.sweep_exec`); each finished point's rows are appended to ``sweep.csv`` at once
 (:mod:`.sweep_store`), so a killed sweep loses only the points in flight and a rerun
 computes only the rows the CSV lacks (one row per key: a second run into the folder
-resumes, and says how many points it found there). One sweep at a time writes into a
+resumes, and says how many points it found there; the key holds the SHA-256 of the
+scene's content, so an edited scene's rows are computed apart, never taken from the
+rows of the scene before the edit). One sweep at a time writes into a
 folder; its local workers end with it, however it ends; a Dask run left without workers
 ends after ``--timeout`` s, keeping its rows.
 
@@ -43,7 +45,17 @@ from cardan_forces.solvers import Status
 from cardan_forces.solvers import get as get_backend
 
 from . import files, progress, sweep_exec
-from .sweep_point import KEY, PEAKS, Point, Row, SweepError, point_scene, run_point, variant
+from .sweep_point import (
+    KEY,
+    PEAKS,
+    Point,
+    Row,
+    SweepError,
+    point_scene,
+    run_point,
+    scene_digest,
+    variant,
+)
 from .sweep_store import COLUMNS, FORMATS, append, key_of, locked, read_rows, spell
 
 __all__ = ["COLUMNS", "KEY", "PEAKS", "Point", "Row", "SweepError", "plan", "point_scene",
@@ -79,11 +91,13 @@ class Study:
     methods: tuple[tuple[str, str], ...]
     stop_s: float
     instants: int
+    digest: str = ""
 
     def point(self, angle: float, amplitude: float, methods=None) -> Point:
         """The work item of one point (``methods``: default all)."""
         return Point(self.scene, self.stop_s, self.instants, angle, amplitude,
-                     self.set_angle, self.set_amplitude, tuple(methods or self.methods))
+                     self.set_angle, self.set_amplitude, tuple(methods or self.methods),
+                     self.digest)
 
     def points(self) -> list[tuple[float, float]]:
         return [(a, m) for a in self.angles for m in self.amplitudes]
@@ -91,7 +105,7 @@ class Study:
     def keys(self, angle: float, amplitude: float) -> list[tuple[str, ...]]:
         """The row keys of one point, in :data:`KEY` order, as the CSV spells them."""
         return [(self.scene, spell(self.stop_s), str(self.instants), spell(angle),
-                 spell(amplitude), f, s) for f, s in self.methods]
+                 spell(amplitude), f, s, self.digest) for f, s in self.methods]
 
 
 def grid(values: list[str] | None, flag: str = "--angle") -> list[float]:
@@ -168,7 +182,7 @@ def plan(args) -> Study:
         angles=tuple(angles or [scene.joints[0].articulation_deg]),
         amplitudes=tuple(amplitudes or [scene.input_torque.amplitude_N_m]),
         set_angle=bool(angles), set_amplitude=bool(amplitudes),
-        methods=(), stop_s=float(stop_s), instants=instants)
+        methods=(), stop_s=float(stop_s), instants=instants, digest=scene_digest(scene))
     _check_size(study, len(args.formulation or FORMULATIONS))
     _check_window(scene, study)
     return dataclasses.replace(study, methods=tuple(_methods(scene, args.formulation,

@@ -4,12 +4,16 @@ A :class:`Point` is plain frozen data (a process pool and Dask ship it); :func:`
 simulates the variant, solves each requested formulation over the instants through the
 study layer and sums each up in one typed :class:`Row`: worst status, worst equilibrium
 residual, peak loads over time, cost. It never raises: a scene, motion or solver error
-is a ``failed`` row with the reason.
+is a ``failed`` row with the reason. A row's key holds the SHA-256 of the scene's
+content (:func:`scene_digest`), so that a store tells an edited scene's rows from the
+rows of the scene it was computed for.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
 import math
 import time
 from dataclasses import dataclass
@@ -28,12 +32,31 @@ class SweepError(ValueError):
     """A sweep request (or its stored rows) that cannot be carried out (exit code 2)."""
 
 
+def scene_digest(scene: Scene) -> str:
+    """SHA-256 (hex) of a loaded scene's content: every field of the validated scene
+    (what it extends already merged in), not the file it came from, so that a store
+    tells an edited scene from the one it was computed for, wherever the file lies.
+    """
+    content = dataclasses.asdict(scene)
+    content.pop("source", None)
+    text = json.dumps(content, sort_keys=True, default=_plain, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _plain(value):
+    """A value JSON has no spelling for, spelled once and always alike (a set sorted)."""
+    if isinstance(value, (set, frozenset)):
+        return sorted(map(str, value))
+    return repr(value)
+
+
 @dataclass(frozen=True)
 class Point:
     """One sweep point: scene ``scene`` (a built-in name or a resolved path) with every
     joint at ``angle_deg`` (when ``set_angle``) and the input torque's amplitude at
     ``amplitude_N_m`` N m (when ``set_amplitude``), over ``instants`` instants from the
-    scene's start to ``stop_s``; ``methods``: ``(formulation, backend)`` pairs.
+    scene's start to ``stop_s``; ``methods``: ``(formulation, backend)`` pairs;
+    ``digest``: the scene's content (:func:`scene_digest`; empty: not checked).
     """
 
     scene: str
@@ -44,6 +67,7 @@ class Point:
     set_angle: bool
     set_amplitude: bool
     methods: tuple[tuple[str, str], ...]
+    digest: str = ""
 
 
 def window(scene: Scene, stop_s: float, instants: int) -> TimeGrid:
@@ -66,8 +90,14 @@ def variant(scene: Scene, point: Point) -> Scene:
 
 
 def point_scene(point: Point) -> Scene:
-    """The scene of one point."""
-    return variant(load_scene(point.scene), point)
+    """The scene of one point (ValueError if the scene's content is no longer the one
+    the sweep was planned for: a file edited since).
+    """
+    scene = load_scene(point.scene)
+    if point.digest and scene_digest(scene) != point.digest:
+        raise ValueError(f"scene {point.scene}: its content changed since the sweep "
+                         "started; run the sweep again")
+    return variant(scene, point)
 
 
 PEAKS = ("peak_joint1_N", "peak_joint2_N", "peak_input_radial_N", "peak_input_axial_N",
@@ -77,10 +107,11 @@ PEAKS = ("peak_joint1_N", "peak_joint2_N", "peak_input_radial_N", "peak_input_ax
 
 @dataclass(frozen=True)
 class Row:
-    """One point x formulation: the key (scene ... solver), the outcome over the
-    instants, peaks (N; NaN where none was solved or the scene lacks the part), the
-    largest speed ratios, and the cost (s: simulation and operator, solving, the
-    point's whole worker call). A failed row has ``inf`` residual and NaN peaks.
+    """One point x formulation: the key (scene ... solver, and the SHA-256 of the
+    scene's content last), the outcome over the instants, peaks (N; NaN where none was
+    solved or the scene lacks the part), the largest speed ratios, and the cost (s:
+    simulation and operator, solving, the point's whole worker call). A failed row has
+    ``inf`` residual and NaN peaks.
     """
 
     scene: str
@@ -105,17 +136,20 @@ class Row:
     solve_s: float = 0.0
     total_s: float = 0.0
     message: str = ""
+    scene_sha256: str = ""
 
 
-KEY = ("scene", "stop_s", "instants", "angle_deg", "amplitude_N_m", "formulation", "solver")
+KEY = ("scene", "stop_s", "instants", "angle_deg", "amplitude_N_m", "formulation", "solver",
+       "scene_sha256")
 """The fields that name a row: a rerun skips every row whose key is stored."""
 
 
 def run_point(point: Point) -> list[Row]:
     """Simulate one point and solve its methods: one row per method, never an exception."""
     start = time.perf_counter()
-    key = {"scene": point.scene, "stop_s": point.stop_s, "instants": point.instants,
-           "angle_deg": point.angle_deg, "amplitude_N_m": point.amplitude_N_m}
+    key = {"scene": point.scene, "scene_sha256": point.digest, "stop_s": point.stop_s,
+           "instants": point.instants, "angle_deg": point.angle_deg,
+           "amplitude_N_m": point.amplitude_N_m}
     try:
         scene = point_scene(point)
         motion = simulate(scene, np.linspace(scene.time.start_s, point.stop_s, point.instants))

@@ -13,9 +13,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import dataclasses
-import hashlib
 import io
-import json
 import math
 from pathlib import Path
 
@@ -38,24 +36,6 @@ class StoreError(SweepError):
     """An existing store (``sweep.csv``, a study's samples) that cannot be read back, or
     of another study (exit code 2).
     """
-
-
-def scene_digest(scene) -> str:
-    """SHA-256 (hex) of a loaded scene's content: every field of the validated scene
-    (what it extends already merged in), not the file it came from, so that a store
-    tells an edited scene from the one it was computed for, wherever the file lies.
-    """
-    content = dataclasses.asdict(scene)
-    content.pop("source", None)
-    text = json.dumps(content, sort_keys=True, default=_plain, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _plain(value):
-    """A value JSON has no spelling for, spelled once and always alike (a set sorted)."""
-    if isinstance(value, (set, frozenset)):
-        return sorted(map(str, value))
-    return repr(value)
 
 
 def complete_lines(path: Path, what: str) -> tuple[str, bool]:

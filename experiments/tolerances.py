@@ -55,7 +55,7 @@ from cardan_forces.experiments.life import loads as bearing_loads
 from cardan_forces.experiments.life import rated
 from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.experiments.sweep_exec import NO_WORKERS_S, connect, dask
-from cardan_forces.experiments.sweep_store import scene_digest
+from cardan_forces.experiments.sweep_point import scene_digest
 from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations.convex import contact_laws
 from cardan_forces.formulations.problems import QP, Conic
@@ -88,7 +88,7 @@ more than this times the instant's largest force (the solvers' acceptance is 1e-
 @dataclass(frozen=True)
 class Task:
     """One sample of a study: the scene (a built-in name or a path) and the SHA-256 of
-    its content (:func:`~.sweep_store.scene_digest`), the study's seed, the sample's
+    its content (:func:`~.sweep_point.scene_digest`), the study's seed, the sample's
     index and the instants.
     """
 

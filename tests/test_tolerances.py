@@ -16,7 +16,7 @@ from cardan_forces.experiments import tolerances as tol
 from cardan_forces.experiments.environment import json_safe
 from cardan_forces.experiments.images import problems
 from cardan_forces.experiments.study import solve_over_time
-from cardan_forces.experiments.sweep_store import scene_digest
+from cardan_forces.experiments.sweep_point import scene_digest
 from cardan_forces.formulations.convex import contact_laws
 
 from cardan_forces.cli import main

@@ -107,7 +107,8 @@ def test_sweep_prints_and_writes_no_inf_or_nan(tmp_path, capsys):
     _clean((tmp_path / "sweep.md").read_text(), "sweep.md")
     _clean((tmp_path / "sweep.csv").read_text(), "sweep.csv")
     table = _numbers_or_empty(tmp_path / "sweep.csv",
-                              ("scene", "formulation", "solver", "status", "message"))
+                              ("scene", "formulation", "solver", "status", "message",
+                               "scene_sha256"))
     assert sorted(r["status"] for r in table) == ["failed", "solved"]
     assert main(["sweep", *args, "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)["rows"]
