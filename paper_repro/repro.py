@@ -52,16 +52,18 @@ QUICK_S = 0.15
 
 def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "results",
               quick: bool = False, fig15_scenes=FIG15_SCENES,
-              progress: Callable[[str], None] = print, methods=ALL_METHODS,
+              progress: Callable[[str], None] = print, methods=None,
               formats=("png",), workers: int | None = None) -> Path:
     """Write the requested figures (CSV, and an image per format of ``formats``) and
     ``report.md`` into ``out``. ``methods``: what the figures draw (of
-    :data:`ALL_METHODS`; ``penalty`` runs the penalty-contact simulation, once per
-    scene); ``fig15_scenes``: Fig. 15's scenes, one figure each; ``workers``: processes
-    for the penalty simulations (default: the CPUs; 0: in this process, one by one).
+    :data:`ALL_METHODS`, default :func:`default_methods`; ``penalty`` runs the
+    penalty-contact simulation, once per scene); ``fig15_scenes``: Fig. 15's scenes,
+    one figure each; ``workers``: processes for the penalty simulations (default: the
+    CPUs; 0: in this process, one by one).
     A method or figure that cannot draw the scene is refused before any long work.
     """
     out, started = Path(out), time.perf_counter()
+    methods = default_methods() if methods is None else methods
     scene = load_scene(scene_name)
     fig15 = [load_scene(s) for s in fig15_scenes] if 15 in figs else []
     times = scene.time.instants()
