@@ -17,6 +17,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import ctypes
+import logging
 import os
 import signal
 import threading
@@ -148,6 +149,7 @@ def dask(client, tasks: list, no_workers_s: float = NO_WORKERS_S, func=run_point
     the unfinished tasks (``unit`` names one in the message) are cancelled and each is
     yielded with one :class:`NoWorkers` error; what was yielded before is the caller's.
     """
+    _quiet_given_up_gathers()
     futures = [client.submit(func, task, pure=False) for task in tasks]
     owner = {future.key: task for future, task in zip(futures, tasks)}
     pending, seen = set(futures), time.monotonic()
@@ -170,6 +172,25 @@ def dask(client, tasks: list, no_workers_s: float = NO_WORKERS_S, func=run_point
             for future in pending:
                 yield owner[future.key], lost
             return
+
+
+class _GivenUpGathers(logging.Filter):
+    """Drops asyncio's report of a Dask client's inner gather task ending in
+    ``AllExit`` once nobody awaits it: Dask quiets that exception itself
+    (``quiet_exceptions``), but a gather given up at a deadline (:func:`_outcome`)
+    leaves the task behind, and its report would read as a traceback on stderr.
+    """
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        error = record.exc_info[1] if record.exc_info else None
+        return type(error).__name__ != "AllExit"
+
+
+def _quiet_given_up_gathers() -> None:
+    """Install :class:`_GivenUpGathers` on asyncio's logger, once."""
+    log = logging.getLogger("asyncio")
+    if not any(isinstance(f, _GivenUpGathers) for f in log.filters):
+        log.addFilter(_GivenUpGathers())
 
 
 _AGAIN = object()

@@ -553,6 +553,5 @@ def run(args) -> int:
         for path in write_outputs(answer, Path(args.out), args.format):
             print(path)
     for reason, count in lost.items():  # said whatever --quiet says: the exit code's why
-        print(f"tolerances: {count} sample(s) lost: {reason}; run again to compute them",
-              file=sys.stderr)
+        print(f"tolerances: lost {count} sample(s): {reason}", file=sys.stderr)
     return 1 if lost else 0

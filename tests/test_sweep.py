@@ -1,6 +1,7 @@
 import argparse
 import csv
 import json
+import logging
 import math
 import os
 import re
@@ -495,3 +496,24 @@ def test_an_edited_scene_is_computed_apart_from_its_old_rows(tmp_path, capsys):
                         (("min_norm", "numpy-kkt"),), first["scene_sha256"])
     (row,) = sweep.run_point(stale)
     assert row.status == "failed" and "its content changed" in row.message
+
+
+def test_a_given_up_gather_leaves_no_traceback_on_stderr():
+    """A gather given up at the deadline leaves Dask's inner task behind, which ends in
+    Dask's own AllExit; asyncio's report of it (a traceback) is dropped once a Dask run
+    has started, any other asyncio error still reported."""
+    distributed = pytest.importorskip("distributed")
+    from cardan_forces.experiments import sweep_exec
+
+    sweep_exec._quiet_given_up_gathers()
+    sweep_exec._quiet_given_up_gathers()  # once, however many runs
+    log = logging.getLogger("asyncio")
+    assert sum(isinstance(f, sweep_exec._GivenUpGathers) for f in log.filters) == 1
+
+    def record(error):
+        return log.makeRecord("asyncio", logging.ERROR, __file__, 0,
+                              "Task exception was never retrieved", (),
+                              (type(error), error, None))
+
+    assert not log.filter(record(distributed.client.AllExit()))
+    assert log.filter(record(ValueError("a real error")))

@@ -371,7 +371,7 @@ def test_a_dask_study_whose_workers_all_die_ends_at_the_timeout(tmp_path, monkey
     assert code == 1 and took < 20
     stored_now = _strict(captured.out)["stored"]
     assert 1 <= stored_now < 6
-    assert re.search(rf"tolerances: {6 - stored_now} sample\(s\) lost: NoWorkers: the Dask "
+    assert re.search(rf"tolerances: lost {6 - stored_now} sample\(s\): NoWorkers: the Dask "
                      r"scheduler at \S+ has had no worker for 1 s \(--timeout\)", captured.err)
     assert len((out / store.NAME).read_text().splitlines()) == 1 + stored_now
     assert _run_into(spec, out, samples=6) == 0
