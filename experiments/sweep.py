@@ -449,7 +449,7 @@ def run(args) -> int:
         return 2
     finally:
         if client is not None:
-            client.close(timeout=args.timeout)
+            sweep_exec.close(client, args.timeout)
     write_md(result, study, Path(args.out) / "sweep.md")
     _say_lost(result.lost)
     if args.json:

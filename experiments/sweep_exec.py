@@ -111,6 +111,14 @@ def connect(address: str, timeout: float):
         raise SweepError(f"cannot reach the Dask scheduler at {address}: {err}") from None
 
 
+def close(client, timeout: float) -> None:
+    """Close ``client``, waiting at most ``timeout`` s for its scheduler to take note
+    (a scheduler gone or slow leaves nothing to wait for: the run's answer stands).
+    """
+    with contextlib.suppress(*TIMEOUTS, OSError):
+        client.close(timeout=timeout)
+
+
 NO_WORKERS_S = 10.0
 """Default seconds a Dask run waits with no worker on its scheduler before it ends
 (``--timeout`` sets it, as it sets the wait for the scheduler)."""

@@ -54,7 +54,7 @@ from cardan_forces.experiments.images import format_list, write_study
 from cardan_forces.experiments.life import loads as bearing_loads
 from cardan_forces.experiments.life import rated
 from cardan_forces.experiments.study import interval_history, solve_over_time
-from cardan_forces.experiments.sweep_exec import NO_WORKERS_S, connect, dask
+from cardan_forces.experiments.sweep_exec import NO_WORKERS_S, close, connect, dask
 from cardan_forces.experiments.sweep_point import scene_digest
 from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations.convex import contact_laws
@@ -546,7 +546,7 @@ def run(args) -> int:
                                  Path(args.out), client, bars.line, args.timeout)
     finally:
         if client is not None:
-            client.close(timeout=args.timeout)
+            close(client, args.timeout)
     if args.json:
         print(json_text(answer))
     else:
