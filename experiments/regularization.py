@@ -160,8 +160,8 @@ def _table_row(r: dict) -> str:
     cells = [r["scene"], r["formulation"], number_text(r["R"], "g"),
              number_text(r["time_us"], ".1f"), number_text(r["iterations"], "g"),
              number_text(r["solved_share"], ".1%"),
-             *(f"{number_text(r[f'{key}_median'], '.1e')} / "
-               f"{number_text(r[f'{key}_worst'], '.1e')}" for key in ("rigid", "compliance"))]
+             *(f"{number_text(r[median], '.1e')} / {number_text(r[worst], '.1e')}"
+               for median, worst in (COLUMNS[-4:-2], COLUMNS[-2:]))]
     return f"| {' | '.join(cells)} |"
 
 

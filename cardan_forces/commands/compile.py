@@ -68,14 +68,14 @@ def _batched() -> None:
 
 
 def _newton() -> None:
-    """One instant of ``paper``'s ``compliance`` by ``newton`` (every path of the family,
+    """One instant of ``paper``'s selection by ``newton`` (every path of the family,
     per instant or batched, chained or not, calls the one compiled entry with the same
     types).
     """
     from cardan_forces.formulations import batch
     from cardan_forces.solvers import solve
 
-    solve(batch.build_problems(_operator(), "compliance", [0])[0], "newton")
+    solve(batch.build_problems(_operator(), SELECTION, [0])[0], "newton")
 
 
 FAMILIES = (
