@@ -282,8 +282,8 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("bench", help="throughput and accuracy-vs-time of formulations "
                                             "x backends")
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
-    p.add_argument("--out", default="results/bench", help="output folder (default "
-                                                          "results/bench/)")
+    p.add_argument("--out", type=files.folder, default="results/bench",
+                   help="output folder (default results/bench/)")
     p.add_argument("--quick", action="store_true",
                    help=f"first {runs.QUICK_INSTANTS} instants, {len(runs.QUICK_LADDER)} "
                         "tolerances, a few backends (tests, CI)")

@@ -395,7 +395,8 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("engine", help="MuJoCo's constraint forces for the same line, "
                               "against the rigid solution set (CSV, PNG, Markdown)")
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
-    p.add_argument("--out", default="results/engine", help="output folder (default %(default)s)")
+    p.add_argument("--out", type=files.folder, default="results/engine",
+                   help="output folder (default %(default)s)")
     p.add_argument("--stop", type=_stop, default=None,
                    help="simulate up to this time (s; default the scene's stop)")
     p.add_argument("--instants", type=_instants, default=6,

@@ -236,7 +236,8 @@ def add_parser(subparsers) -> None:
                         "(QPs only: no conic file)")
     p.add_argument("--instants", type=whole_number(1, MAX_INSTANTS), default=INSTANTS,
                    help=f"evenly spaced instants per scene (default {INSTANTS})")
-    p.add_argument("--out", default="results/export", help="output folder (default %(default)s)")
+    p.add_argument("--out", type=files.folder, default="results/export",
+                   help="output folder (default %(default)s)")
     p.add_argument("--name", dest="module", type=_module, default="cardan_qp",
                    help="name of the test-set module (default cardan_qp)")
     p.set_defaults(func=run)

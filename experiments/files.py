@@ -12,6 +12,7 @@ not write (``repro --fig 13`` after a full run), so a command can remove or list
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import os
 import sys
@@ -20,6 +21,16 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from . import progress
+
+
+def folder(text: str) -> str:
+    """An argparse type for every command's ``--out``: an output folder, refused with
+    one line when empty or blank (an empty path would write into the current folder).
+    """
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"expected an output folder, got {text!r} (an "
+                                         "empty path would be the current folder)")
+    return text
 
 
 @contextlib.contextmanager

@@ -471,7 +471,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--quick", action="store_true",
                    help=f"{QUICK_INSTANTS} instants, backends {', '.join(QUICK_SOLVERS)}")
     p.add_argument("--json", action="store_true", help="print JSON")
-    p.add_argument("--out", help="folder for hard.csv and hard.md "
+    p.add_argument("--out", type=files.folder, help="folder for hard.csv and hard.md "
                                  "(default: none, the table on stdout only)")
     p.set_defaults(func=run)
 

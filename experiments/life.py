@@ -44,7 +44,6 @@ selection's mark); ``--json`` prints the whole answer as strict JSON instead.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import math
 from pathlib import Path
@@ -653,7 +652,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("scene", help="built-in name or TOML path")
     p.add_argument("--instants", type=whole_number(2, MAX_INSTANTS), default=INSTANTS,
                    help=f"instants over the scene's window (default {INSTANTS})")
-    p.add_argument("--out", type=folder, default="results/life",
+    p.add_argument("--out", type=files.folder, default="results/life",
                    help="output folder (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",),
                    help="comma-separated image formats (default png; any of png,svg,pdf)")
@@ -666,16 +665,6 @@ def add_parser(subparsers) -> None:
     p.add_argument("--json", action="store_true",
                    help="print the whole answer as strict JSON on stdout (no files)")
     p.set_defaults(func=run)
-
-
-def folder(text: str) -> str:
-    """An argparse type: an output folder, refused with one line when empty or blank
-    (an empty path would write into the current folder).
-    """
-    if not text.strip():
-        raise argparse.ArgumentTypeError(f"expected an output folder, got {text!r} (an "
-                                         "empty path would be the current folder)")
-    return text
 
 
 def run(args) -> int:

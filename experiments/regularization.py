@@ -218,7 +218,7 @@ def study(folder: Path, scenes=SCENES, instants: int = INSTANTS, formats=("png",
 def main(argv=None) -> int:
     """``python -m cardan_forces.experiments.regularization [--out DIR]``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="results/bench", help="output folder")
+    parser.add_argument("--out", type=files.folder, default="results/bench", help="output folder")
     parser.add_argument("--instants", type=int, default=INSTANTS)
     args = parser.parse_args(argv)
     for path in study(Path(args.out), instants=args.instants):

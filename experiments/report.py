@@ -479,7 +479,8 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("report", help="one scene's bearing and joint loads over time "
                               "with the rigid solution set (CSV, PNG, Markdown)")
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
-    p.add_argument("--out", default="results/report", help="output folder (default %(default)s)")
+    p.add_argument("--out", type=files.folder, default="results/report",
+                   help="output folder (default %(default)s)")
     p.add_argument("--instants", type=whole_number(2, MAX_INSTANTS), default=None,
                    help=f"instants over the scene's window (default: {PER_PERIOD} per period "
                    "of the intermediate shaft's twice-per-revolution fluctuation at the "

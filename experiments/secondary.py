@@ -247,7 +247,8 @@ def add_parser(subparsers) -> None:
                         "middle one (default paper-slip)")
     p.add_argument("--torque", type=float, default=100.0,
                    help="constant input torque, N m (default 100)")
-    p.add_argument("--out", default="results/secondary", help="output folder (default %(default)s)")
+    p.add_argument("--out", type=files.folder, default="results/secondary",
+                   help="output folder (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",), metavar="FORMATS",
                    help="figure formats, comma-separated: png, svg, pdf (default png)")
     p.set_defaults(func=run)

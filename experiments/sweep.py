@@ -416,7 +416,7 @@ def add_parser(subparsers) -> None:
                    help="end of each point's window in s (default the scene's stop)")
     p.add_argument("--quick", action="store_true",
                    help=f"{QUICK_INSTANTS} instants over the first {QUICK_STOP_S:g} s")
-    p.add_argument("--out", default="results/sweep",
+    p.add_argument("--out", type=files.folder, default="results/sweep",
                    help="folder for sweep.csv and sweep.md (default results/sweep)")
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                    help="local worker processes (default: one per CPU; not with --scheduler)")

@@ -520,7 +520,7 @@ def add_parser(subparsers) -> None:
                    help="seconds to wait for the Dask scheduler, and for a worker when the "
                         "scheduler has none left (then the run ends, keeping its samples; "
                         "default %(default)g)")
-    p.add_argument("--out", default="results/tolerances",
+    p.add_argument("--out", type=files.folder, default="results/tolerances",
                    help="output folder, and the samples' store (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",),
                    help="comma-separated image formats (default png; any of png,svg,pdf)")

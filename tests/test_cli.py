@@ -384,3 +384,34 @@ def test_sets_positive_member_lies_in_every_interval(scene, capsys):
             assert c["positive"] == pytest.approx(c["min_norm"], abs=tol)
     assert any(c["min"] is not None and c["min_norm"] < c["min"] - tol
                for c in components.values())  # the column the table used to show
+
+
+def _out_options():
+    """``(command, its --out action)`` for every command that writes into a folder."""
+    import argparse
+
+    from cardan_forces.cli import _parser
+
+    sub = next(a for a in _parser()._actions if isinstance(a, argparse._SubParsersAction))
+    return [(name, action) for name, parser in sub.choices.items()
+            for action in parser._actions if "--out" in action.option_strings]
+
+
+def test_every_out_refuses_an_empty_folder():
+    """An empty --out would write into the current folder: every command's --out takes
+    the one folder type, which refuses it before any work."""
+    from cardan_forces.experiments.files import folder
+
+    found = _out_options()
+    assert len(found) >= 10
+    for name, action in found:
+        assert action.type is folder, name
+
+
+@pytest.mark.parametrize("command", ["repro", "bench", "sweep", "hard", "export"])
+def test_an_empty_out_is_one_line_and_exit_2(command, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main([command, "--out", " ", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("cardan: error:") == 1 and "--out" in err and "Traceback" not in err
+    assert not any(tmp_path.iterdir())

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from cardan_forces.experiments import files
 from cardan_forces.experiments.images import format_list
 
 from . import UsageError, progress
@@ -15,7 +16,8 @@ def add_parser(subparsers) -> None:
     rp.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     rp.add_argument("--fig", type=int, action="append", choices=FIGURES,
                     help="one figure (repeatable); default all")
-    rp.add_argument("--out", default="results", help="output folder (default results/)")
+    rp.add_argument("--out", type=files.folder, default="results",
+                    help="output folder (default results/)")
     rp.add_argument("--quick", action="store_true", help="first 0.15 s only (tests, CI)")
     rp.add_argument("--methods", type=_words,
                     help="comma-separated methods to draw (default all: paper,positive,"
