@@ -31,7 +31,7 @@ import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.formulations import FALLBACK, FORMULATIONS
-from cardan_forces.formulations.batch import least_norm_batch
+from cardan_forces.formulations.batch import batch_kind, build_problems, make_batch
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
@@ -40,6 +40,7 @@ from cardan_forces.solvers.ranging import HAVE_HIGHSPY, Ranges, ranges
 from cardan_forces.solvers.record import Results
 from cardan_forces.solvers.registry import (
     Pending,
+    SolverNotFound,
     batches,
     check,
     solve_batch,
@@ -149,8 +150,8 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
                     stacks: Stacks | None = None, check_passes: int = 1) -> History:
     """``formulation`` solved with ``solver`` at ``instants`` of ``op`` (default all),
     in order. By default the first of the formulation's backends that solves the
-    instants as one batch does (:func:`_batched`: the least-norm family's own NumPy
-    batch, the same answers on any install), else :func:`default_backend` per instant;
+    instants as one batch does (:func:`_batched`: the package's own NumPy batches, the
+    same answers on any install), else :func:`default_backend` per instant;
     a batch-only ``solver`` solves them as one batch too. A run with its own
     ``problem``, ``references`` or a finite ``budget_s`` goes per instant.
 
@@ -202,25 +203,39 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
 def _batched(op: Operator, formulation: str, picks: list,
              wanted: Sequence[str] | None = None) -> History | None:
     """``formulation`` at ``picks`` by the first of ``wanted`` (default: its record's
-    backends) that solves them as one batch (``numpy-batched`` for the least-norm
-    family: NumPy, so every install gives the same answers), judged as any run;
-    ``None`` where none does (a clearance makes ``compliance`` no diagonal least norm,
-    a scene no chain): the run then goes per instant.
+    backends) that solves them as one batch of the kind the scene's problem forms
+    (:func:`~cardan_forces.formulations.batch.batch_kind`: ``numpy-batched`` takes the
+    least norms, ``newton-batched`` the contact energies, with a clearance too; both
+    NumPy, so every install gives the same answers), judged as any run; ``None``
+    where none does: the run then goes per instant.
     """
     record = FORMULATIONS.get(formulation)
-    if record is None or not record.least_norm_batch:
+    if record is None:
         return None
+    first, made = record(op, int(picks[0])), {}
+    for name in wanted or record.backends:
+        backend = _installed(name)
+        kind = backend and backend.batch and batch_kind(backend.batch_accepts, formulation,
+                                                          first)
+        if not kind:
+            continue
+        if kind not in made:
+            problems = build_problems(op, formulation, picks) if kind == "conic" else ()
+            made[kind] = make_batch(kind, op, formulation, problems, picks)
+        if batches(name, made[kind]):
+            began = time.perf_counter()
+            results = solve_batch(made[kind], name)
+            wall = (time.perf_counter() - began) / len(picks)
+            return history_of(op, formulation, name, picks, results, [wall] * len(picks))
+    return None
+
+
+def _installed(name: str):
+    """Backend ``name``, ``None`` where it is not installed."""
     try:
-        batch = least_norm_batch(op, formulation, picks)
-    except ValueError:  # not a diagonal least norm on this scene
+        return get_backend(name)
+    except SolverNotFound:
         return None
-    chosen = next((s for s in wanted or record.backends if batches(s, batch)), None)
-    if chosen is None:
-        return None
-    began = time.perf_counter()
-    results = solve_batch(batch, chosen)
-    wall = (time.perf_counter() - began) / len(picks)
-    return history_of(op, formulation, chosen, picks, results, [wall] * len(picks))
 
 
 def _checked(records: list, walls: list, stacks, picks,
