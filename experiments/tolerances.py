@@ -453,7 +453,8 @@ def markdown(answer: dict) -> str:
     lines += [f"- {note}" for note in answer["notes"]]
     for form in RUN:
         lines += ["", f"## {form}", "", f"Instants solved: {answer['solved'][form]}; "
-                  f"components outside the nominal rigid set: {answer['outside'][form]}.",
+                  f"components outside the nominal rigid set (by more than {INSIDE_RTOL:g} of "
+                  f"the instant's largest load): {answer['outside'][form]}.",
                   "", "| bearing | nominal L10 [Mrev] | P5 | P50 | P95 | least | greatest |",
                   "|---|---|---|---|---|---|---|"]
         for bearing, e in answer["L10_Mrev"][form].items():

@@ -376,3 +376,20 @@ def test_a_dask_study_whose_workers_all_die_ends_at_the_timeout(tmp_path, monkey
     assert len((out / store.NAME).read_text().splitlines()) == 1 + stored_now
     assert _run_into(spec, out, samples=6) == 0
     assert _strict(capsys.readouterr().out)["stored"] == 6
+
+
+def test_the_report_states_the_tolerance_of_its_inside_rule():
+    """The rule that counts a sampled load outside the set is relative to the loads,
+    and the report says by how much."""
+    from types import SimpleNamespace
+
+    forces = np.array([[100.0, 0.0], [1000.0, 0.0]])
+    sets = SimpleNamespace(min=np.zeros((2, 2)), max=np.array([[100.0 - 5e-4, 0.0],
+                                                               [1000.0 - 5e-3, 0.0]]))
+    assert tol.outside(forces, sets) == 0  # 5e-6 of each instant's load
+    assert tol.outside(forces * (1 + 2 * tol.INSIDE_RTOL), sets) == 2
+    answer = {"scene": "s", "stored": 1, "samples": 1, "instants": 1, "tolerances": {},
+              "notes": [], "solved": dict.fromkeys(tol.RUN, 1),
+              "outside": dict.fromkeys(tol.RUN, 0), "L10_Mrev": dict.fromkeys(tol.RUN, {})}
+    assert f"by more than {tol.INSIDE_RTOL:g} of the instant's largest load" in \
+        tol.markdown(answer)
