@@ -13,7 +13,7 @@ solved again from the flipped point (see :func:`_solve`).
 from __future__ import annotations
 
 import numpy as np
-from cardan_forces.driveline.determinacy import RANK_RTOL
+from cardan_forces.driveline.determinacy import numerical_rank
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.formulations.paper import PaperNLS, build_paper
@@ -66,7 +66,7 @@ def _jacobian(problem: PaperNLS, z: np.ndarray) -> tuple[int, float]:
     if not np.all(np.isfinite(z)):
         return 0, float("nan")
     s = np.linalg.svd(problem.jac(z), compute_uv=False)
-    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    rank = numerical_rank(s)
     return rank, float(s[0] / s[-1]) if s[-1] > 0 else float("inf")
 
 

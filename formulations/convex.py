@@ -31,7 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from cardan_forces.driveline.determinacy import RANK_RTOL, determinacy
+from cardan_forces.driveline.determinacy import determinacy, numerical_rank
 from cardan_forces.driveline.elements.base import Law
 from cardan_forces.driveline.equilibrium import Operator
 
@@ -100,7 +100,7 @@ def equalities(op: Operator, i: int) -> tuple[np.ndarray, np.ndarray]:
 
 def _independent_rows(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     u, s, vt = np.linalg.svd(A, full_matrices=False)
-    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    rank = numerical_rank(s)
     return s[:rank, None] * vt[:rank], u[:, :rank].T @ b
 
 
@@ -118,7 +118,7 @@ def orthogonal_equalities(A: np.ndarray, b: np.ndarray, held=()):
     n = A.shape[1]
     free = np.setdiff1d(np.arange(n), held)
     u, s, vt = np.linalg.svd(A[:, free])
-    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    rank = numerical_rank(s)
     rows = np.zeros((rank + len(held), n))
     rows[:rank, free] = s[:rank, None] * vt[:rank]
     rows[rank + np.arange(len(held)), list(held)] = 1.0

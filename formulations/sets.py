@@ -14,7 +14,7 @@ model) is a choice inside it.
 from __future__ import annotations
 
 import numpy as np
-from cardan_forces.driveline.determinacy import RANK_RTOL
+from cardan_forces.driveline.determinacy import numerical_rank
 from cardan_forces.driveline.equilibrium import Operator
 
 from .convex import checks, equalities, slip_rows
@@ -30,7 +30,7 @@ def orthonormal_equalities(op: Operator, i: int) -> tuple[np.ndarray, np.ndarray
     LP inaccurate. Here each row is held to the same tolerance.
     """
     u, s, vt = np.linalg.svd(op.A[i], full_matrices=False)
-    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    rank = numerical_rank(s)
     return vt[:rank], (u[:, :rank].T @ op.b[i]) / s[:rank]
 
 

@@ -112,8 +112,28 @@ def solve_highs(problem: LP, tol=None, initvals=None, **options) -> Outcome:
                   bounds=np.column_stack([lb, ub]), method="highs",
                   options=settings.options_for(TOLERANCES["highs"], tol, HIGHS_SMALLEST) | options)
     return Outcome(LINPROG_STATUS.get(res.status, "failed"), res.x, iterations=int(res.nit),
-                   message=res.message, objective=res.fun,
+                   message=res.message, objective=res.fun, y=_highs_duals(problem, res),
                    setup_s=setup_done - start, solve_s=time.perf_counter() - setup_done)
+
+
+def _highs_duals(problem: LP, res) -> np.ndarray | None:
+    """HiGHS's multipliers in the rows of the LP's conic form (``A z = b``, then ``G z
+    <= h``, ``-z <= -lb``, ``z <= ub`` for the finite bounds; Clarabel's convention
+    ``c + A'y = 0``): the marginals are the objective's derivatives by the right-hand
+    sides, so ``y`` is minus them, and plus them for the lower bounds (``-z <= -lb``).
+    ``None`` where HiGHS gives none (an unbounded or failed LP).
+    """
+    marginals = [getattr(getattr(res, part, None), "marginals", None)
+                 for part in ("eqlin", "ineqlin", "lower", "upper")]
+    if any(m is None for m in marginals) or res.x is None:
+        return None
+    eq, ineq, lower, upper = (np.asarray(m, float) for m in marginals)
+    lb = np.full(problem.n, -np.inf) if problem.lb is None else np.asarray(problem.lb)
+    ub = np.full(problem.n, np.inf) if problem.ub is None else np.asarray(problem.ub)
+    parts = [-eq if problem.A is not None else [], -ineq if problem.G is not None else [],
+             lower[np.isfinite(lb)] if problem.lb is not None else [],
+             -upper[np.isfinite(ub)] if problem.ub is not None else []]
+    return np.concatenate([np.asarray(p, float) for p in parts])
 
 
 def _jacobian_note(problem: NLS, z: np.ndarray) -> str:

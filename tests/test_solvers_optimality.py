@@ -515,3 +515,29 @@ def test_batched_paths_judge_a_feasible_answer_that_is_not_optimal_as_each_insta
     assert result.optimality["dual"][1] <= 1e-15 and result.optimality["gap"][1] > 1.0
     assert list(result.status) == ["solved", "inaccurate"]
     assert result.message[0] == "" and result.message[1].startswith("gap")
+
+
+def _hand_lp() -> LP:
+    """min 2 x0 - 2 x1 + x2 - x3 on x0 + x1 + x2 = 4, x1 - x2 <= 1, x0, x1 in [0, 3],
+    x2, x3 <= 3: with x2 = 4 - x0 - x1 it is min x0 - 3 x1 - x3 + 4 on 2 x1 + x0 <= 5,
+    so by hand x = (0, 2.5, 1.5, 3): an equality, an inequality, a lower bound and an
+    upper bound active, each with a nonzero multiplier."""
+    return LP(checks=_checks([[1.0, 1.0, 1.0, 0.0]], [4.0], [False] * 4), formulation="ref",
+              c=np.array([2.0, -2.0, 1.0, -1.0]), A=np.array([[1.0, 1.0, 1.0, 0.0]]),
+              b=np.array([4.0]), G=np.array([[0.0, 1.0, -1.0, 0.0]]), h=np.array([1.0]),
+              lb=np.array([0.0, 0.0, -np.inf, -np.inf]), ub=np.full(4, 3.0))
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e3])
+def test_an_lp_is_judged_with_its_solver_s_multipliers(scale):
+    """HiGHS's marginals turned into the conic rows' multipliers: dual residual and gap
+    of its optimum vanish, so its answer is solved on the solver's own duals (the
+    multipliers a least-squares recovery finds for a degenerate LP need not be dual
+    feasible)."""
+    lp = _hand_lp()
+    lp = LP(checks=lp.checks, formulation="ref", c=scale * lp.c, A=lp.A, b=lp.b, G=lp.G,
+            h=lp.h, lb=lp.lb, ub=lp.ub)
+    record = solve(lp, "scipy-highs")
+    assert record.solved and record.duals == "solver"
+    assert np.allclose(record.z, [0.0, 2.5, 1.5, 3.0], atol=1e-9)
+    assert record.optimality["dual"] <= 1e-12 and record.optimality["gap"] <= 1e-12
