@@ -234,7 +234,7 @@ def build_operator(motion: Motion) -> Operator:
                   for pair in kind.pairs([c for c in links if c.kind in kind.link_kinds]))
     rows = tuple(f"{body.name}.{kind}.{axis}" for body in bodies
                  for kind in ("force", "moment") for axis in AXES)
-    terms = _load_terms(motion, segments, A.shape[1])
+    terms = _load_terms(motion, segments)
     return Operator(
         t=motion.t, A=A, b=sum(terms.values()), terms=terms, names=names, rows=rows,
         unilateral=np.array([c.unilateral for c in cols], bool), pairs=pairs, scene=scene,
@@ -250,7 +250,7 @@ def _slip_friction(scene: Scene, links: list[Link]) -> tuple[SlipFriction, ...]:
     return tuple(f for c in links if (f := c.element_kind.friction(c, scene)) is not None)
 
 
-def _load_terms(motion: Motion, segments: list[Segment], n_cols: int) -> dict[str, np.ndarray]:
+def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray]:
     """``b``'s terms, one per effect the scene calls for (and ``applied``, always)."""
     scene, geo = motion.scene, motion.geometry
     n_seg = len(segments)

@@ -50,12 +50,6 @@ def range_problems(op: Operator, i: int, c: np.ndarray) -> tuple[LP, LP]:
     )
 
 
-def interval_problems(op: Operator, i: int) -> dict[str, tuple[LP, LP]]:
-    """``{name: (lp_min, lp_max)}`` for every named component."""
-    eye = np.eye(len(op.names))
-    return {name: range_problems(op, i, eye[j]) for j, name in enumerate(op.names)}
-
-
 def feasibility_problem(op: Operator, i: int) -> LP:
     """The LP ``min 0`` over the rigid set: ``solved`` when the set is not empty."""
     return range_problems(op, i, np.zeros(len(op.names)))[0]

@@ -10,8 +10,7 @@ the shared library in a user cache directory named by a hash of the structure, i
 nonzero patterns beside it: a later process loads it instead of compiling it again, and
 a batch of other instants whose nonzeros a cached solver's patterns hold (the union
 over fewer instants of the same problem) is solved by that solver, its extra entries
-zeros (a compilation is reported in the ``compile`` stage and by
-:func:`compile_seconds`, never in a solve's time).
+zeros (a compilation is reported in the ``compile`` stage, never in a solve's time).
 
 It is registered only as ``qocogen-reduced`` (``Backend.reduced_only``): on the full
 form the equality rows are dense, so the unrolled factor is large (several times the
@@ -237,15 +236,9 @@ class BuildError(RuntimeError):
 
 
 _LOADED: dict[str, ctypes.CDLL] = {}
-_COMPILE_S: dict[str, float] = {}
 _UNBUILT: dict[str, str] = {}
 """The solvers (by cache path) this process could not build, each with its message: a
 later batch of the same structure fails at once, without building it again."""
-
-
-def compile_seconds() -> dict[str, float]:
-    """Seconds spent generating and compiling each structure in this process (by hash)."""
-    return dict(_COMPILE_S)
 
 
 @functools.cache
@@ -329,14 +322,13 @@ def _library(dims, masks) -> tuple[ctypes.CDLL, list[np.ndarray], float]:
     A structure that cannot be built raises :class:`BuildError`, at once after the first
     attempt in this process.
     """
-    key = _key(dims, masks)
-    target = cache_dir() / f"{key}.so"
+    target = cache_dir() / f"{_key(dims, masks)}.so"
     if str(target) in _LOADED:
         return _LOADED[str(target)], masks, 0.0
     if str(target) in _UNBUILT:
         raise BuildError(_UNBUILT[str(target)])
     try:
-        return _built(key, target, dims, masks)
+        return _built(target, dims, masks)
     except Exception as exc:  # any step: the backend cannot run this structure here
         why = (str(exc) if isinstance(exc, BuildError)
                else f"{UNBUILT}: {type(exc).__name__}: {exc}")
@@ -344,7 +336,7 @@ def _library(dims, masks) -> tuple[ctypes.CDLL, list[np.ndarray], float]:
         raise BuildError(_UNBUILT[str(target)]) from exc
 
 
-def _built(key: str, target: Path, dims, masks):
+def _built(target: Path, dims, masks):
     """:func:`_library`'s solver: a covering one of the cache, or built now, loaded."""
     start = time.perf_counter()
     if not target.exists():
@@ -354,7 +346,6 @@ def _built(key: str, target: Path, dims, masks):
         else:
             _build(target, dims, [_pattern(m)[0] for m in masks])
             _save_masks(target.with_suffix(".npz"), masks)
-            _COMPILE_S[key] = time.perf_counter() - start
     if str(target) not in _LOADED:
         library = ctypes.CDLL(str(target))
         library.cardan_solve_batch.restype = ctypes.c_int
