@@ -19,6 +19,7 @@ import numpy as np
 
 from .driveline.dynamics import Motion
 from .driveline.equilibrium import Operator
+from .driveline.names import did_you_mean
 from .driveline.release import Release
 from .driveline.scene import Scene
 
@@ -89,12 +90,16 @@ def instants(owner: Motion | Operator, values, name: str = "instants") -> list[i
 
 
 def choice(value, known, name: str) -> str:
-    """``value``, one of the names ``known``; else :class:`UnknownChoice` listing them."""
+    """``value``, one of the names ``known``; else :class:`UnknownChoice` naming the
+    nearest (:func:`~cardan_forces.driveline.names.did_you_mean`), or all when none is.
+    """
     if not isinstance(value, str):
         raise ArgumentTypeError(f"{name} must be a str among {', '.join(known)}, not "
                                 f"{_shown(value)}")
     if value not in known:
-        raise UnknownChoice(f"unknown {name} {value!r}; known: {', '.join(known)}")
+        near = did_you_mean(value, known)
+        raise UnknownChoice(f"unknown {name} {value!r}" + (near or f"; known: "
+                                                           f"{', '.join(known)}"))
     return value
 
 

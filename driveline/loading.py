@@ -24,7 +24,6 @@ fields are read and checked by its kind (:mod:`.elements`: a bearing's by its
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 from importlib import resources
 from pathlib import Path
@@ -34,6 +33,7 @@ import numpy as np
 from .catalogue import read_rating, read_tolerances
 from .elements import check_elements
 from .elements.registry import BEARING_KINDS, JOINT, SLIP
+from .names import did_you_mean, nearest
 from .scene import (
     EFFECTS,
     LIMITS,
@@ -137,8 +137,9 @@ def _read_text(path: Path) -> str:
     if path.is_dir():
         raise SceneError(f"scene {path}: is a directory, not a scene file")
     if not path.is_file():
-        raise SceneError(f"scene {path}: not a built-in name ({', '.join(builtin_names())}) "
-                         "and no such file")
+        near = did_you_mean(path, builtin_names())
+        listed = "" if near else f" ({', '.join(builtin_names())})"
+        raise SceneError(f"scene {path}: not a built-in name{listed} and no such file{near}")
     try:
         if path.stat().st_size > MAX_FILE_BYTES:
             raise SceneError(f"scene {path}: larger than {MAX_FILE_BYTES} bytes")
@@ -199,15 +200,6 @@ def _within(value: float, kind: str) -> bool:
     return abs(value) <= LIMITS[kind][1]
 
 
-def _nearest(key, keys, cutoff: float = 0.6):
-    """The one of ``keys`` nearest ``key`` with case set aside (so ``c_N`` is nearest
-    ``C_N`` and ``y`` is ``Y``), None when none is near.
-    """
-    folded = {str(k).lower(): k for k in keys}
-    near = difflib.get_close_matches(str(key).lower(), list(folded), n=1, cutoff=cutoff)
-    return folded[near[0]] if near else None
-
-
 class _Table:
     """Reads typed fields from one TOML table; remembers which keys were used.
 
@@ -233,8 +225,7 @@ class _Table:
             if default is ...:
                 unread = [k for k in self.raw if isinstance(k, str) and k not in self.used
                           and k not in self.known]
-                typo = _nearest(key, unread, cutoff=0.8)
-                self.misspelled([typo] if typo else [], key)
+                self.misspelled(nearest(key, unread, cutoff=0.8, most=1), [key])
                 self.fail(key, "missing")
             return default
         return self.raw[key]
@@ -318,13 +309,14 @@ class _Table:
                            f"{_show(value)}")
         return [_Table(v, f"{self.where(key)}[{i}]", self.source) for i, v in enumerate(value)]
 
-    def misspelled(self, unknown: list[str], near: str | None) -> None:
-        """Fail on the first of ``unknown`` keys, naming the valid key ``near`` it is
-        closest to (if any): a typo is reported as the key written, not as a missing one.
+    def misspelled(self, unknown: list[str], near: list) -> None:
+        """Fail on the first of ``unknown`` keys, naming the first of the valid keys
+        ``near`` it (:func:`~.names.nearest`), if any: a typo is reported as the key
+        written, not as a missing one.
         """
         if not unknown:
             return
-        hint = (f" '{unknown[0]}' in {self.path or 'the scene'}; did you mean '{near}'?"
+        hint = (f" '{unknown[0]}' in {self.path or 'the scene'}; did you mean '{near[0]}'?"
                 if near else "")
         also = f" (also: {', '.join(unknown[1:])})" if len(unknown) > 1 else ""
         self.fail(unknown[0], f"unknown key{hint}{also}")
@@ -337,13 +329,13 @@ class _Table:
         """
         self.known = frozenset(known)
         unknown = sorted((k for k in self.raw if k not in self.known), key=str)
-        unknown.sort(key=lambda k: _nearest(k, self.known) is None)
+        unknown.sort(key=lambda k: not nearest(k, self.known))
         if unknown:
-            self.misspelled([str(k) for k in unknown], _nearest(unknown[0], self.known))
+            self.misspelled([str(k) for k in unknown], nearest(unknown[0], self.known))
 
     def done(self) -> None:
         unknown = sorted(set(self.raw) - self.used)
-        self.misspelled(unknown, _nearest(unknown[0], sorted(self.used)) if unknown else None)
+        self.misspelled(unknown, nearest(unknown[0], sorted(self.used)) if unknown else [])
 
 
 def _torque(t: _Table) -> TorqueLaw:

@@ -10,6 +10,7 @@ from collections.abc import Callable, Iterable
 import numpy as np
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.formulations import FORMULATIONS
+from cardan_forces.formulations import formulation as registered
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Record, backends_for, solve
 
@@ -29,11 +30,7 @@ def solve_all(
     tolerance 1e-10 where that backend takes it. ``built``: the problems at instant
     ``i`` already built (:func:`build_all`), so none is built twice.
     """
-    names = list(formulations or FORMULATIONS)
-    unknown = [f for f in names if f not in FORMULATIONS]
-    if unknown:
-        raise KeyError(f"unknown formulation(s) {', '.join(unknown)}; known: "
-                       f"{', '.join(FORMULATIONS)}")
+    names = [registered(f).name for f in formulations or FORMULATIONS]  # a typo: its hint
     built = built if built is not None else build_all(op, i, names)
     records = []
     for formulation in names:

@@ -52,7 +52,7 @@ from cardan_forces.solvers import available
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.qocogen_ import UNBUILT
 
-from cardan_forces.commands import UsageError
+from cardan_forces.commands import UsageError, formulation_name
 
 from . import bench_metrics as metrics
 from . import bench_report as out
@@ -288,7 +288,8 @@ def add_parser(subparsers) -> None:
                    help=f"first {runs.QUICK_INSTANTS} instants, {len(runs.QUICK_LADDER)} "
                         "tolerances, a few backends (tests, CI)")
     p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
+    p.add_argument("--formulation", action="append", type=formulation_name,
+                   choices=list(FORMULATIONS),
                    help="one formulation (repeatable); default all")
     p.add_argument("--solver", action="append",
                    help="one backend (repeatable; batched ones too, e.g. numpy-batched); "

@@ -45,7 +45,7 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LS, QP, Conic
 from cardan_forces.solvers.conversions import convert
 
-from cardan_forces.commands import UsageError, whole_number
+from cardan_forces.commands import UsageError, formulation_name, whole_number
 
 from . import files
 
@@ -230,7 +230,8 @@ def add_parser(subparsers) -> None:
                               "qpbenchmark test set (default), conic formulations (e.g. "
                               "--formulation min_max) as an NPZ in one standard conic form")
     p.add_argument("scene", nargs="*", help="built-in names or TOML paths (default paper)")
-    p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
+    p.add_argument("--formulation", action="append", type=formulation_name,
+                   choices=list(FORMULATIONS),
                    help="one formulation (repeatable) among "
                         f"{', '.join(EXPORTABLE)}; default {', '.join(QP_FORMULATIONS)} "
                         "(QPs only: no conic file)")

@@ -41,6 +41,8 @@ from cardan_forces.formulations import BASELINE, FORMULATIONS, default_backends
 from cardan_forces.formulations.convex import NotApplicable as NotApplicableProblem
 from cardan_forces.solvers import ACCEPT, Residuals, backends_for
 
+from cardan_forces.commands import formulation_name
+
 TOL = 1e-8
 """Tolerance asked of every backend (``--tol``). Tighter asks find out the solvers, not
 the cases: at 1e-9 and below Clarabel reports ``AlmostSolved`` on a third of the
@@ -462,7 +464,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     p.add_argument("--case", action="append", choices=[c.name for c in CASES],
                    help="one case (repeatable); default all")
-    p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
+    p.add_argument("--formulation", action="append", type=formulation_name,
+                   choices=list(FORMULATIONS),
                    help="one formulation (repeatable); default all")
     p.add_argument("--solver", action="append",
                    help="one backend (repeatable); default all (--quick: a reduced set)")

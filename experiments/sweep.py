@@ -44,6 +44,8 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Status
 from cardan_forces.solvers import get as get_backend
 
+from cardan_forces.commands import formulation_name
+
 from . import files, progress, sweep_exec
 from .sweep_point import (
     KEY,
@@ -405,7 +407,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--amplitude", action="append", metavar="NM",
                    help="input torque amplitude in N m (repeatable, or a:b:n); default the "
                         "scene's own")
-    p.add_argument("--formulation", action="append", choices=list(FORMULATIONS),
+    p.add_argument("--formulation", action="append", type=formulation_name,
+                   choices=list(FORMULATIONS),
                    help="one formulation (repeatable); default all the scene calls for")
     p.add_argument("--solver", action="append",
                    help="backend (repeatable; each formulation takes the first that accepts "

@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from cardan_forces.driveline.names import did_you_mean
 
 from .convex import (
     compliance,
@@ -181,12 +182,15 @@ class UnknownFormulation(KeyError):
 
 
 def formulation(name: str) -> Formulation:
-    """The record of ``name``; :class:`UnknownFormulation` naming the known ones if none."""
+    """The record of ``name``; :class:`UnknownFormulation` naming the nearest known ones
+    (:func:`~cardan_forces.driveline.names.did_you_mean`), or all when none is near.
+    """
     try:
         return FORMULATIONS[name]
     except (KeyError, TypeError):
-        raise UnknownFormulation(f"unknown formulation {name!r}; known: "
-                                 f"{', '.join(FORMULATIONS)}") from None
+        near = did_you_mean(name, FORMULATIONS)
+        raise UnknownFormulation(f"unknown formulation {name!r}" + (
+            near or f"; known: {', '.join(FORMULATIONS)}")) from None
 
 
 def default_backends() -> tuple[str, ...]:

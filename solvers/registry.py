@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from cardan_forces.driveline.names import did_you_mean
 
 from . import plugins, reduced_, settings
 from .batch import BatchOutcome, ConicBatch, finalize_batch
@@ -302,7 +303,9 @@ def get(name: str) -> Backend:
         target = "cardan-forces" if extra is None else f"cardan-forces[{extra}]"
         raise SolverNotFound(f"backend {name!r} needs a package that is not installed: "
                              f'pip install "{target}"')
-    raise SolverNotFound(f"unknown backend {name!r}; available: {', '.join(_CACHE)}")
+    near = did_you_mean(name, {**_CACHE, **_KNOWN})
+    raise SolverNotFound(f"unknown backend {name!r}" + (near or f"; available: "
+                                                         f"{', '.join(_CACHE)}"))
 
 
 def backends_for(problem) -> list[str]:

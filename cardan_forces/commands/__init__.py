@@ -5,7 +5,8 @@
 :mod:`cardan_forces.cli` assembles them, owns output and exit codes.
 
 What the commands share is here: the error for a request that cannot be carried out,
-progress lines on stderr, the check of ``--t`` against a scene's span and JSON output.
+the argument types of sizes and formulations, progress lines on stderr, the check of
+``--t`` against a scene's span and JSON output.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import argparse
 
 from cardan_forces.experiments import progress as progress_bars
 from cardan_forces.experiments.environment import json_text
+from cardan_forces.formulations import UnknownFormulation, formulation
 
 
 class UsageError(ValueError):
@@ -34,6 +36,16 @@ def whole_number(least: int, most: int):
                                              f"{most}, got {text!r}")
         return value
     return parse
+
+
+def formulation_name(text: str) -> str:
+    """An argparse type: a formulation's name, a typo refused in one line naming the
+    nearest names (:func:`~cardan_forces.formulations.formulation`).
+    """
+    try:
+        return formulation(text).name
+    except UnknownFormulation as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def progress(message: str) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from cardan_forces.driveline.names import did_you_mean
 from cardan_forces.experiments import files
 from cardan_forces.experiments.images import format_list
 
@@ -40,10 +41,14 @@ def _words(text: str) -> tuple[str, ...]:
 
 
 def _check(words: tuple[str, ...], allowed: tuple[str, ...], flag: str) -> tuple[str, ...]:
+    """``words``, each among ``allowed``; else a :class:`UsageError` naming the first
+    unknown one's nearest names (:func:`~cardan_forces.driveline.names.did_you_mean`).
+    """
     bad = [w for w in words if w not in allowed]
     if bad or not words:
-        raise UsageError(f"{flag}: {'unknown ' + ', '.join(bad) if bad else 'empty'}; "
-                         f"choose among {','.join(allowed)}")
+        near = did_you_mean(bad[0], allowed) if bad else ""
+        raise UsageError(f"{flag}: {'unknown ' + ', '.join(bad) if bad else 'empty'}"
+                         f"{near or '; choose among ' + ','.join(allowed)}")
     return words
 
 

@@ -18,7 +18,7 @@ from cardan_forces.solvers import Residuals, backends_for
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.record import ACCEPT, Status
 
-from . import UsageError, check_time, print_json, progress
+from . import UsageError, check_time, formulation_name, print_json, progress
 from .solvers import say_plugin_errors
 
 OPTIMALITY = ("dual", "gap", "distance")
@@ -35,7 +35,8 @@ def add_parser(subparsers) -> None:
     so = subparsers.add_parser("solve", help="formulations x solvers at one instant")
     so.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     so.add_argument("--t", type=float, default=0.5, help="instant in s (default 0.5)")
-    so.add_argument("--formulation", action="append", type=_not_engine,
+    so.add_argument("--formulation", action="append",
+                    type=_formulation,
                     choices=list(FORMULATIONS), help="one formulation (repeatable); default all")
     so.add_argument("--solver", action="append", type=_not_engine,
                     help="one backend (repeatable); default all")
@@ -130,6 +131,13 @@ def _not_engine(text: str) -> str:
     if text == "engine":
         raise argparse.ArgumentTypeError(ENGINE)
     return text
+
+
+def _formulation(text: str) -> str:
+    """An argument type: a formulation's name (:func:`formulation_name`), ``engine``
+    refused in words (:func:`_not_engine`).
+    """
+    return formulation_name(_not_engine(text))
 
 
 def _check_pairs(built: dict, formulations, solvers) -> None:
