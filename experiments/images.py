@@ -1,13 +1,16 @@
 """Image files of the figure commands (``cardan repro``, ``cardan report``, ``bench``,
-``engine``, ``secondary``): the formats they write, the one way a figure is saved in
-each (``--format png,svg,pdf``) and the print rules every figure keeps.
+``engine``, ``secondary``): the formats they write, the one way a figure (or a figure of
+several pages) is saved in each (``--format png,svg,pdf``), the one figure style for
+print (:data:`STYLE`) and the print rules every figure keeps.
 
-Print rules: a figure's size (inches) is its printed size; no text on it is smaller
-than :data:`MIN_TEXT_PT`; a PNG is written at :data:`DPI` (vector formats are
+Print rules: a figure's size (inches) is its printed size, at most a page's text block
+(:data:`PAGE_IN`; a long figure is cut into pages, :func:`save_pages`); no text on it is
+smaller than :data:`MIN_TEXT_PT`; a PNG is written at :data:`DPI` (vector formats are
 resolution-free); every panel has a title and axis labels with their unit in brackets
-(``[-]`` for a pure number); every legend entry names an artist visible in the figure;
-no legend sits over a panel's plotting area. :func:`problems` reads a drawn figure back
-against them.
+(``[-]`` for a pure number); every legend entry names an artist that shows in the
+drawn figure, not covered by others; no legend sits over a panel's plotting area.
+:func:`problems` reads a drawn figure back against the rules any figure keeps,
+:func:`print_problems` against all of them.
 """
 
 from __future__ import annotations
@@ -24,15 +27,60 @@ FORMATS = ("png", "svg", "pdf")
 """Image formats a figure can be written in."""
 DPI = 150
 """Resolution of a PNG (dots per inch of the figure's printed size)."""
-MIN_TEXT_PT = 8.0
+PAGE_IN = (7.0, 9.0)
+"""The largest figure (width, height in inches): a page's text block, full width."""
+COLUMN_IN = 3.5
+"""The width of a figure of one column (inches)."""
+MIN_TEXT_PT = 7.0
 """The smallest text on a figure (points at its printed size)."""
+TITLE_PT = 9.0
+"""A figure's title (points)."""
+STYLE = {
+    "font.size": 8.0, "axes.titlesize": 8.0, "axes.labelsize": 8.0,
+    "xtick.labelsize": 7.0, "ytick.labelsize": 7.0, "legend.fontsize": 7.0,
+    "figure.titlesize": TITLE_PT, "lines.linewidth": 1.0, "lines.markersize": 3.5,
+    "axes.linewidth": 0.6, "xtick.major.width": 0.6, "ytick.major.width": 0.6,
+    "xtick.major.size": 2.5, "ytick.major.size": 2.5, "grid.linewidth": 0.4,
+    "grid.alpha": 0.35, "legend.frameon": False, "legend.handlelength": 2.4,
+    "axes.titlepad": 3.0, "axes.labelpad": 2.0}
+"""The figures' style for print (matplotlib settings; :func:`styled`): type sizes in
+points at the figure's printed size, from :data:`MIN_TEXT_PT` for ticks and legends to
+:data:`TITLE_PT` for a figure's title; lines and ticks thin enough for a 3.5 in panel."""
+COINCIDE = 0.005
+"""Curves closer than this share of their panel's y range at every instant are drawn
+on one another (:func:`coinciding`); the figure says which, and within how much."""
+BOUND_REACH = 0.25
+"""A finite bound of a rigid set is held in a panel's y range when it widens the range
+of the curves by at most this share; one farther off (a near-zero lower bound under
+loads of several hundred newtons) is marked on the panel's edge instead
+(:func:`draw_set`), so that it does not flatten the curves."""
 UNIT = re.compile(r"\[[^\]]+\]")
 """An axis label's unit: the text in brackets, as ``force [N]``."""
 SET_COLOUR = "0.55"
 SET_LABEL = "rigid solution set (both bounds finite)"
 OPEN_ABOVE_LABEL = "lower bound of a rigid set open above (\u25b2: the open side)"
 OPEN_BELOW_LABEL = "upper bound of a rigid set open below (\u25bc: the open side)"
+BELOW_VIEW_LABEL = ("lower bound of a rigid set open above, below the axis "
+                    "(\u25b2 on its lower edge)")
+ABOVE_VIEW_LABEL = ("upper bound of a rigid set open below, above the axis "
+                    "(\u25bc on its upper edge)")
 """Legend labels of the rigid solution set as :func:`draw_set` draws it."""
+SUPERSCRIPTS = {"^2": "\u00b2", "^3": "\u00b3", "^-1": "\u207b\u00b9"}
+"""Powers of a unit as a figure prints them (:func:`typeset`): ``m/s^2`` is ``m/s\u00b2``."""
+
+
+def styled():
+    """A context in which figures are made in :data:`STYLE`."""
+    import matplotlib.pyplot as plt
+
+    return plt.rc_context(STYLE)
+
+
+def typeset(text: str) -> str:
+    """``text`` for a figure: the powers of units as superscripts (:data:`SUPERSCRIPTS`)."""
+    for plain, raised in SUPERSCRIPTS.items():
+        text = text.replace(plain, raised)
+    return text
 
 
 def format_list(text: str) -> tuple[str, ...]:
@@ -59,6 +107,46 @@ def save(fig, stem: Path, formats=("png",)) -> list[Path]:
     return paths
 
 
+def page_stems(stem: Path, pages: int) -> list[Path]:
+    """The stems of a figure's pages: ``stem`` itself for one page, else ``stem-1``,
+    ``stem-2``, ...
+    """
+    if pages == 1:
+        return [stem]
+    return [stem.with_name(f"{stem.name}-{k}") for k in range(1, pages + 1)]
+
+
+def save_pages(figs: list, stem: Path, formats=("png",)) -> list[Path]:
+    """Write the pages ``figs`` of one figure: a PDF holds them all (``stem.pdf``), a PNG
+    or an SVG is one page (``stem-1.png``, ``stem-2.png``, ...; ``stem.png`` when there
+    is one page). Pages of ``stem`` in the same format that an earlier, longer or
+    shorter, drawing left are removed, so the folder holds this figure's pages only.
+    Returns the paths written.
+    """
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    stems, paths = page_stems(stem, len(figs)), []
+    for fmt in formats:
+        if fmt == "pdf" and len(figs) > 1:
+            paths.append(stem.with_suffix(".pdf"))
+            with files.replacing(paths[-1], "wb") as handle, PdfPages(handle) as pdf:
+                for fig in figs:
+                    pdf.savefig(fig, dpi=DPI)
+            continue
+        written = [save(fig, page, (fmt,))[0] for fig, page in zip(figs, stems)]
+        _drop_other_pages(stem, fmt, written)
+        paths += written
+    return paths
+
+
+def _drop_other_pages(stem: Path, fmt: str, kept: list[Path]) -> None:
+    """Remove ``stem.<fmt>`` and ``stem-<k>.<fmt>`` other than ``kept``."""
+    page = re.compile(rf"{re.escape(stem.name)}(-\d+)?\.{fmt}")
+    for path in stem.parent.glob(f"{stem.name}*.{fmt}"):
+        if page.fullmatch(path.name) and path not in kept:
+            path.unlink()
+
+
 def write_study(out: Path, stem: str, write_csv, text: str, figure, formats=("png",)
                 ) -> list[Path]:
     """A study's outputs into ``out``: ``stem.csv`` (``write_csv(path)``), ``stem.md``
@@ -80,18 +168,15 @@ def write_study(out: Path, stem: str, write_csv, text: str, figure, formats=("pn
 
 
 def problems(fig) -> list[str]:
-    """What in the drawn ``fig`` breaks the print rules (module doc), one line each;
-    empty when it keeps them all.
+    """What in the drawn ``fig`` breaks the print rules any figure keeps (module doc:
+    type size, titles and units, legends off the panels, every legend entry with an
+    artist in view), one line each; empty when it keeps them all.
     """
-    if not hasattr(fig.canvas, "get_renderer"):  # a closed pyplot figure: draw it again
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-        FigureCanvasAgg(fig)
-    fig.canvas.draw()
+    _drawn(fig)
     found = _small_text(fig) + _unlabelled(fig)
     renderer = fig.canvas.get_renderer()
     areas = [ax.bbox for ax in fig.axes if ax.get_visible() and ax.axison]
-    for legend in fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]:
+    for legend in _legends(fig):
         box = legend.get_window_extent(renderer)
         if any(box.overlaps(area) for area in areas):
             found.append("a legend sits over a panel's plotting area")
@@ -99,6 +184,68 @@ def problems(fig) -> list[str]:
             if not any(_shows(a) for a in _labelled(fig, text.get_text())):
                 found.append(f"legend entry {text.get_text()!r} has no visible artist")
     return found
+
+
+def print_problems(fig) -> list[str]:
+    """:func:`problems`, and what else breaks the rules of print: a figure larger than
+    :data:`PAGE_IN`, a legend entry whose artists are all covered by others (drawn
+    without them, the figure's pixels do not change).
+    """
+    found = problems(fig)
+    width, height = fig.get_size_inches()
+    if width > PAGE_IN[0] + 1e-6 or height > PAGE_IN[1] + 1e-6:
+        found.append(f"{width:.2f} x {height:.2f} in: larger than a page "
+                     f"({PAGE_IN[0]:g} x {PAGE_IN[1]:g} in)")
+    return found + [f"legend entry {label!r} is covered by other artists"
+                    for label in covered(fig)]
+
+
+def covered(fig) -> list[str]:
+    """The legend entries of ``fig`` whose artists do not show: hidden, the drawn
+    figure's pixels stay the same (other artists lie over every pixel of theirs).
+    """
+    def pixels():
+        fig.canvas.draw()
+        return np.asarray(fig.canvas.buffer_rgba()).copy()
+
+    _drawn(fig)
+    whole, found = pixels(), []
+    for label in dict.fromkeys(t.get_text() for lg in _legends(fig) for t in lg.get_texts()):
+        artists = [a for a in _labelled(fig, label) if a.get_visible()]
+        for artist in artists:
+            artist.set_visible(False)
+        if np.array_equal(pixels(), whole):
+            found.append(label)
+        for artist in artists:
+            artist.set_visible(True)
+    return found
+
+
+def drawn_before(fig, until_s: float, labels) -> list[str]:
+    """The curves of ``fig`` whose label starts with one of ``labels`` and that have a
+    point drawn at x < ``until_s``: data inside a start-up interval the figure leaves
+    out; one line each.
+    """
+    labels, found = tuple(labels), []
+    for line in (line for ax in fig.axes for line in ax.lines
+                 if line.get_label().startswith(labels)):
+        x, y = (np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float))
+        early = (x < until_s - 1e-12) & np.isfinite(y)
+        if early.any():
+            found.append(f"{line.get_label()!r} drawn at x = {x[early].min():g} < {until_s:g}")
+    return found
+
+
+def _drawn(fig) -> None:
+    if not hasattr(fig.canvas, "get_renderer"):  # a closed pyplot figure: draw it again
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()
+
+
+def _legends(fig) -> list:
+    return fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
 
 
 def _small_text(fig) -> list[str]:
@@ -123,7 +270,10 @@ def _unlabelled(fig) -> list[str]:
 
 
 def _labelled(fig, label: str) -> list:
-    return [a for ax in fig.axes for a in ax.lines + ax.collections if a.get_label() == label]
+    """The lines and filled regions labelled ``label`` (a legend wraps long labels)."""
+    words = label.split()
+    return [a for ax in fig.axes for a in ax.lines + ax.collections
+            if str(a.get_label()).split() == words]
 
 
 def _shows(artist) -> bool:
@@ -176,12 +326,14 @@ def span_text(values: np.ndarray, unit: str) -> str:
     return f"{a} {unit}" if a == b else f"{a} to {b} {unit}"
 
 
-def draw_set(ax, t, set_min, set_max, unit: str = "N") -> tuple[dict, str]:
+def draw_set(ax, t, set_min, set_max, unit: str = "N", view=None) -> tuple[dict, str]:
     """Draw the rigid solution set behind the curves: shaded (with its edges, so a set of
     one value still shows) where both bounds are finite; where one side is open, the
-    finite bound dashed with triangles pointing to the open side. Returns the legend
-    handles and the panel's note: which sides are open, at how many instants, and the
-    finite bounds' span.
+    finite bound dashed with triangles pointing to the open side. With ``view`` (the
+    panel's y range, :func:`limits`), such a bound where it lies outside the range is
+    marked by its triangles on the panel's edge instead. Returns the legend handles and
+    the panel's note: which sides are open, at how many instants, and the finite
+    bounds' span.
     """
     checked = ~(np.isnan(set_min) | np.isnan(set_max))
     if not checked.any():
@@ -197,21 +349,110 @@ def draw_set(ax, t, set_min, set_max, unit: str = "N") -> tuple[dict, str]:
         single = both & (hi - lo <= 1e-6 * max(np.max(np.abs(hi[both])), 1e-9))
         if single.any():  # a determinate quantity: the band is a line under the curves
             notes.append(f"one value (determinate) {_share(int(single.sum()), n)}")
-    sides = ((lo, hi, "^", OPEN_ABOVE_LABEL, "open above", "lower"),
-             (hi, lo, "v", OPEN_BELOW_LABEL, "open below", "upper"))
-    for bound, other, marker, label, side, word in sides:
+    low, high = view if view is not None else (-np.inf, np.inf)
+    sides = ((lo, hi, "^", "open above", "lower", OPEN_ABOVE_LABEL, BELOW_VIEW_LABEL),
+             (hi, lo, "v", "open below", "upper", OPEN_BELOW_LABEL, ABOVE_VIEW_LABEL))
+    for bound, other, marker, side, word, label, off_label in sides:
         one = np.isfinite(bound) & ~np.isfinite(other)
-        if one.any():
-            handles[label], = ax.plot(tc, np.where(one, bound, np.nan), ls="--", lw=1.2,
-                                      color="0.25", marker=marker, ms=5.5, zorder=2,
-                                      markevery=(0, max(1, len(tc) // 10)), label=label)
-            notes.append(f"{side} {_share(int(one.sum()), n)}, {word} bound "
-                         f"{span_text(bound[one], unit)}")
+        if not one.any():
+            continue
+        off = one & ((bound < low) if word == "lower" else (bound > high))
+        every = (0, max(1, len(tc) // 10))
+        if (one & ~off).any():
+            handles[label], = ax.plot(tc, np.where(one & ~off, bound, np.nan), ls="--",
+                                      lw=1.0, color="0.25", marker=marker, ms=4.5, zorder=2,
+                                      markevery=every, label=label)
+        if off.any():
+            edge = low + 0.03 * (high - low) if word == "lower" else high - 0.03 * (high - low)
+            handles[off_label], = ax.plot(tc, np.where(off, edge, np.nan), ls="none",
+                                          color="0.25", marker=marker, ms=4.5, zorder=2,
+                                          markevery=every, label=off_label)
+        notes.append(f"{side} {_share(int(one.sum()), n)}, {word} bound "
+                     f"{span_text(bound[one], unit)}"
+                     + (f" ({'below' if word == 'lower' else 'above'} the axis "
+                        f"{_share(int(off.sum()), int(one.sum()))})" if off.any() else ""))
     free = ~np.isfinite(lo) & ~np.isfinite(hi)
     if free.any():
         notes.append(f"open above and below (any value) {_share(int(free.sum()), n)}")
     return handles, "rigid set: " + "; ".join(notes) if notes else ""
 
 
+def limits(curves: list, bounds: list = ()) -> tuple[float, float]:
+    """A panel's y range: the finite values of ``curves`` with a margin of 15 % of their
+    range (at least 5 % of the largest magnitude, so a flat line is not drawn as noise),
+    widened to hold each finite value of ``bounds`` (a rigid set's ends) that lies
+    within :data:`BOUND_REACH` of that range; those farther off are left outside.
+    """
+    low, high = _margin(_finite(curves))
+    reach = BOUND_REACH * (high - low)
+    near = _finite(bounds)
+    near = near[(near >= low - reach) & (near <= high + reach)]
+    return _margin(np.concatenate([_finite(curves), near])) if near.size else (low, high)
+
+
+def _finite(curves) -> np.ndarray:
+    values = [np.asarray(c, float).ravel() for c in curves if c is not None]
+    values = np.concatenate(values) if values else np.zeros(0)
+    return values[np.isfinite(values)]
+
+
+def _margin(values: np.ndarray) -> tuple[float, float]:
+    if not values.size or not np.any(values):  # nothing, or zero only: a unit each way
+        return -1.0, 1.0
+    lo, hi = float(values.min()), float(values.max())
+    margin = max(0.15 * (hi - lo), 0.05 * max(abs(lo), abs(hi)), 1e-9)
+    return lo - margin, hi + margin
+
+
+def coincide_note(curves: dict, groups: list[tuple[str, ...]], unit: str) -> str:
+    """``a = b within x N; c = d within y N``: the ``groups`` of ``curves`` drawn on one
+    another (:func:`coinciding`), each with the largest difference between its members.
+    """
+    return "; ".join(f"{' = '.join(g)} within {spread(curves, g):.2g} {unit}"
+                     for g in groups)
+
+
+def spread(curves: dict, group) -> float:
+    """The largest difference between the ``group`` of ``curves`` at one instant."""
+    stack = np.array([curves[name] for name in group], float)
+    return float(np.nanmax(np.ptp(stack, axis=0), initial=0.0))
+
+
+def on_bound(curves: dict, bound: np.ndarray, tol: float) -> dict[str, float]:
+    """The ``curves`` that lie within ``tol`` of ``bound`` (a rigid set's end) wherever
+    both are finite (an instant at least), with their largest distance from it: drawn,
+    they hide the bound's line.
+    """
+    bound = np.asarray(bound, float)
+    found = {}
+    for name, values in curves.items():
+        both = np.isfinite(bound) & np.isfinite(np.asarray(values, float))
+        gap = np.abs(np.asarray(values, float)[both] - bound[both])
+        if both.any() and gap.max() <= tol:
+            found[name] = float(gap.max())
+    return found
+
+
+def bound_note(found: dict[str, float], word: str, unit: str) -> str:
+    """``a, b on the rigid set's lower bound within x N`` (:func:`on_bound`'s ``found``)."""
+    if not found:
+        return ""
+    return (f"{', '.join(found)} on the rigid set's {word} bound within "
+            f"{max(found.values()):.2g} {unit}")
+
+
+def interleave(k: int, n: int, dash: float = 4.0) -> tuple:
+    """The line style of the ``k``-th (from 0) of ``n`` curves drawn on one another:
+    the first solid, each other dashed so that the dashes of each show in turn over it
+    (every colour along the whole line).
+    """
+    if k == 0:
+        return "-"
+    return ((k - 1) * dash, (dash, (n - 1) * dash))
+
+
 def _share(count: int, total: int) -> str:
-    return f"at all {total} instants" if count == total else f"at {count} of {total} instants"
+    if count == total:
+        return {1: "at the one instant", 2: "at both instants"}.get(total,
+                                                                    f"at all {total} instants")
+    return f"at {count} of {total} instants"

@@ -76,9 +76,9 @@ def _engine_section(work: dict, runs: _Runs, out: Path, formats):
     """
     result, bounds = work["result"], work["bounds"]
     op, runs_e = result.op, result.runs
-    csv = figures.engine_figure(op, {k: r.forces for k, r in runs_e.items()}, bounds, out,
-                                formats)
     settle = settle_s(runs_e)
+    csv, caption = figures.engine_figure(op, {k: r.forces for k, r in runs_e.items()}, bounds,
+                                         out, formats, settle)
     lines = [
         f"MuJoCo {work['version']}, forward simulation of `{op.scene.name}` from its start "
         f"over {op.t[-1] - op.t[0]:g} s ({len(op.t)} instants), every bearing a soft "
@@ -87,7 +87,7 @@ def _engine_section(work: dict, runs: _Runs, out: Path, formats):
         "the `default` curve. Statistics after the engine's settling "
         f"({settle:g} s; {len(result.sampled)} instants for the table); a load is inside "
         f"the rigid band within {ENGINE_RTOL:g} of the largest load. `cardan engine` "
-        "runs the full study (more settings, more instants).",
+        "runs the full study (more settings, more instants).", "", *caption,
         *_engine_load_lines(op, result, bounds, settle), "",
         "Every component against its rigid interval and the formulations:", "",
         *agreement_lines(result)[2:], "",

@@ -1,20 +1,25 @@
 """How the paper's figures (:mod:`cardan_forces.paper_repro.figures`) are drawn: a grid
-of panels read from a figure's CSV, one shared legend below it, kept to the print rules
-of :mod:`cardan_forces.experiments.images` (8 pt text or more, 150 dpi PNG).
+of panels read from a figure's CSV on one page, one shared legend below it, in the print
+style and kept to the print rules of :mod:`cardan_forces.experiments.images`.
 
 In each panel (:func:`draw_panel`):
 
 - the rigid-model methods on top, each its own colour, dash and marker; the markers sit
   at staggered instants, so methods whose lines lie on one another stay told apart, and
-  the panel names those that do (found from the data, :func:`images.coinciding`);
-- the penalty simulation as a light raw line under a bold smoothed one (the figure's
-  smoothed column, absent where its centred window does not fit);
-- the y axis holds every bold curve (the rigid methods and the smoothed penalty) and
-  every finite bound of the rigid set, with a margin; only the raw penalty line may
-  leave it, and the panel then says so with its range and unit;
-- behind them the rigid solution set (:func:`images.draw_set`): shaded where both bounds are
-  finite; where one side is open, the finite bound as a dashed line with triangles
-  pointing to the open side; a set open on both sides (any value) is said in the panel.
+  a line above the panel names those that do and within how much (found from the data,
+  :func:`images.coinciding`);
+- a simulation's curves (the penalty simulation's, MuJoCo's) only from the end of its
+  start-up on (``starts``), the instants its statistics use: the penalty as a light raw
+  line under a bold filtered one (the figure's filtered column);
+- the y axis holds every bold curve (the rigid methods and the filtered penalty) and the
+  rigid set's finite bounds near them (:func:`images.limits`); a bound far below them
+  (a near-zero lower bound under loads of hundreds of newtons) is marked on the panel's
+  lower edge instead of flattening the curves; the raw penalty line may leave the axis;
+- behind them the rigid solution set (:func:`images.draw_set`).
+
+What else a panel has to say (its rigid set's sides and bounds, where the raw line leaves
+the axis) is its caption line, returned for the report's text rather than written over
+the panels.
 """
 
 from __future__ import annotations
@@ -22,34 +27,41 @@ from __future__ import annotations
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from cardan_forces.experiments.images import UNIT, coinciding, draw_set, save, span_text  # noqa: E402, E501
+from cardan_forces.experiments import images  # noqa: E402
 
 PENALTY = "penalty"
 """The method name of the penalty-contact simulation in histories and columns."""
 MARKERS = "osD^vP"
 DASHES = ("-", "--", "-.", ":")
-COINCIDE = 0.005
-"""Curves closer than this share of the axis range at every instant are drawn on one
-another; the panel names them."""
-STYLE = {"font.size": 9.0, "axes.titlesize": 9.5, "axes.labelsize": 9.0,
-         "xtick.labelsize": 8.0, "ytick.labelsize": 8.0, "legend.fontsize": 8.5}
-"""Type sizes (pt at the figure's printed size: 8 in wide for one column, 11 for two)."""
-NOTE_PT = 8.0
-SMOOTHED = {False: "_avg", True: "_smooth"}
-"""Suffix of a penalty column's smoothed copy: forces (moving average), speeds."""
+SMOOTHED = {False: "_lowpass", True: "_smooth"}
+"""Suffix of a penalty column's filtered copy: forces (low-pass), speeds."""
+ROW_IN = {1: 2.25, 2: 1.95}
+"""Height of a row of panels (inches, title and axis labels included) by the number of
+columns: a plotting area of some 1.3-1.6 in."""
+RAW_LABEL = "penalty (raw)"
+
+
+class Drawn(NamedTuple):
+    """A figure written: its CSV and its caption (one line per panel with something to
+    say beyond the drawing; the report prints them under the figure's files).
+    """
+
+    csv: Path
+    caption: list[str]
 
 
 @dataclass(frozen=True)
 class Panel:
     """One panel: the columns of ``quantity``. ``methods``: the rigid-model curves, the
     columns ``quantity_<method>`` (``""``: the column ``quantity`` itself, the rigid
-    model's); the penalty's ``quantity_penalty`` (raw) and its smoothed column where
+    model's); the penalty's ``quantity_penalty`` (raw) and its filtered column where
     present; with ``sets``, ``quantity_set_min/max`` as the rigid solution set.
     """
 
@@ -66,7 +78,7 @@ class Panel:
     @property
     def unit(self) -> str:
         """The unit of the y axis (the bracketed part of ``ylabel``)."""
-        found = UNIT.search(self.ylabel)
+        found = images.UNIT.search(self.ylabel)
         return found.group(0)[1:-1] if found else ""
 
 
@@ -92,76 +104,117 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
 
 
 def plot_grid(csv: Path, panels: list[Panel], title: str, ncols: int, formats=("png",),
-              labels: dict | None = None) -> list[Path]:
-    """:func:`grid_figure` of the CSV's columns, written beside it in each format."""
-    with plt.rc_context(STYLE):
-        fig = grid_figure(read_csv(csv), panels, title, ncols, labels or {})
-        paths = save(fig, csv.with_suffix(""), formats)
+              labels: dict | None = None, starts: dict | None = None) -> Drawn:
+    """:func:`grid_figure` of the CSV's columns, written beside it in each format; the
+    CSV and the panels' caption lines.
+    """
+    with images.styled():
+        fig, caption = grid_figure(read_csv(csv), panels, title, ncols, labels or {},
+                                   starts or {})
+        images.save(fig, csv.with_suffix(""), formats)
     plt.close(fig)
-    return paths
+    return Drawn(csv, caption)
 
 
 def grid_figure(cols: dict[str, np.ndarray], panels: list[Panel], title: str, ncols: int,
-                labels: dict):
-    """``panels`` in a grid of ``ncols`` columns with one shared legend below.
-    ``labels``: legend labels of methods and smoothed columns (name -> label).
+                labels: dict, starts: dict | None = None):
+    """``panels`` in a grid of ``ncols`` columns on one page with one shared legend
+    below; the figure and its caption lines. ``labels``: legend labels of methods and
+    filtered columns (name -> label); ``starts``: the time (s) from which a simulated
+    method's curves are drawn (method -> s).
     """
     nrows = -(-len(panels) // ncols)
-    width = 8.0 if ncols == 1 else 11.0
-    fig, axes = plt.subplots(nrows, ncols, figsize=(width, 2.7 * nrows + 1.4), squeeze=False)
+    width = images.PAGE_IN[0]
+    height = min(images.PAGE_IN[1], 0.5 + ROW_IN[ncols] * nrows + 1.0)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(width, height), squeeze=False)
     handles: dict[str, object] = {}
+    caption = []
     for ax, panel in zip(axes.ravel(), panels):
-        handles.update(draw_panel(ax, cols, panel, labels, width / ncols))
+        drawn, note = draw_panel(ax, cols, panel, labels, width / ncols, starts or {})
+        handles.update(drawn)
+        if note:
+            caption.append(f"- {panel.title}: {note}")
     for ax in axes.ravel()[len(panels):]:
         ax.axis("off")
-    fig.suptitle(title, fontsize=11)
-    longest = max((len(k) for k in handles), default=1)
-    ncol = max(1, min(3, int(width * 72 / (longest * 0.52 * STYLE["legend.fontsize"] + 40))))
-    fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=ncol,
-               frameon=False)
-    rows = -(-len(handles) // ncol)
-    fig.tight_layout(rect=(0, (0.15 + 0.19 * rows) / fig.get_figheight(), 1, 1))
-    return fig
+    fig.suptitle(images.typeset(title))
+    legend_below(fig, handles)
+    return fig, caption
+
+
+def legend_below(fig, handles: dict) -> None:
+    """One legend for the figure under its panels, in two columns where the labels
+    allow (a long label wrapped), the panels laid out above it.
+    """
+    texts = [textwrap.fill(label, 58) for label in handles]
+    ncol = 2 if len(texts) > 2 else 1
+    legend = fig.legend(list(handles.values()), texts, loc="lower center", ncol=ncol,
+                        bbox_to_anchor=(0.5, 0.0), columnspacing=1.5)
+    fig.canvas.draw()
+    below = legend.get_window_extent().height / fig.dpi + 0.08
+    fig.tight_layout(rect=(0, below / fig.get_figheight(), 1, 1), h_pad=0.6, w_pad=1.0)
 
 
 def draw_panel(ax, cols: dict[str, np.ndarray], panel: Panel, labels: dict,
-               width_in: float = 8.0) -> dict:
-    """One panel (:class:`Panel`) on ``ax`` (about ``width_in`` wide); returns its legend
-    handles by label.
+               width_in: float = images.PAGE_IN[0], starts: dict | None = None
+               ) -> tuple[dict, str]:
+    """One panel (:class:`Panel`) on ``ax`` (about ``width_in`` wide); its legend
+    handles by label and its caption note.
     """
-    t, q = cols["t"], panel.quantity
-    curves = {m or "rigid model": cols[f"{q}_{m}" if m else q] for m in panel.methods}
-    raw = cols.get(f"{q}_{PENALTY}")
-    smooth = next((s for s in SMOOTHED.values() if f"{q}_{PENALTY}{s}" in cols), None)
-    bounds = (cols[f"{q}_set_min"], cols[f"{q}_set_max"]) if panel.sets else ()
-    held = [*curves.values(), *bounds] + ([cols[f"{q}_{PENALTY}{smooth}"]] if smooth else [])
-    low, high = limits(held or [raw])
-    names = dict(panel.labels) | {"rigid model": "rigid model"}
-    handles = _draw_methods(ax, t, curves, {m: names.get(m) or labels.get(m, m)
-                                            for m in curves})
-    own = dict(panel.labels)
-    notes = [_coincide_note({own.get(m, m): v for m, v in curves.items()},
-                            COINCIDE * (high - low))]
-    if raw is not None:
-        handles["penalty (raw)"], = ax.plot(t, raw, lw=0.5, color="0.45", alpha=0.45,
-                                            zorder=1, label="penalty (raw)")
+    t, q, starts = cols["t"], panel.quantity, starts or {}
+    curves = {m or "rigid model": _from(t, cols[f"{q}_{m}" if m else q], starts.get(m))
+              for m in panel.methods}
+    raw, smooth = _penalty(cols, q, starts.get(PENALTY))
+    first = min((starts.get(m, -np.inf) for m in panel.methods), default=None)
+    bounds = tuple(_from(t, cols[f"{q}_set_{end}"], first) for end in ("min", "max")
+                   ) if panel.sets else ()
+    low, high = images.limits([*curves.values(), *(c for _, c in smooth[:1])] or [raw],
+                              list(bounds))
+    own = dict(panel.labels) | {"rigid model": "rigid model"}
+    handles = _draw_methods(ax, t, curves, {m: own.get(m) or labels.get(m, m) for m in curves})
+    notes = []
+    if raw is not None and np.isfinite(raw).any():
+        handles[labels.get(RAW_LABEL, RAW_LABEL)], = ax.plot(
+            t, raw, lw=0.5, color="0.45", alpha=0.45, zorder=1,
+            label=labels.get(RAW_LABEL, RAW_LABEL))
         notes.append(clip_note(raw, low, high, panel.unit))
-    if smooth is not None:
-        label = labels[smooth]
-        handles[label], = ax.plot(t, cols[f"{q}_{PENALTY}{smooth}"], lw=2.2, color="C4",
-                                  zorder=3, label=label)
+    for suffix, values in smooth:
+        if not np.isfinite(values).any():
+            continue
+        handles[labels[suffix]], = ax.plot(t, values, lw=1.8, color="C4", zorder=3,
+                                           label=labels[suffix])
     if bounds:
-        drawn, note = draw_set(ax, t, *bounds, panel.unit)
+        drawn, note = images.draw_set(ax, t, *bounds, panel.unit, view=(low, high))
         handles.update(drawn)
         notes.insert(0, note)
     if panel.zero_line:
         ax.axhline(0.0, color="0.2", lw=0.6, zorder=2)
     ax.set_ylim(low, high)
-    titles(ax, panel.title, notes, width_in)
+    named = {dict(panel.labels).get(m, m): v for m, v in curves.items()}
+    tol = images.COINCIDE * (high - low)
+    above = [images.coincide_note(named, images.coinciding(named, tol), panel.unit)]
+    for bound, word in zip(bounds, ("lower", "upper")):
+        above.append(images.bound_note(images.on_bound(named, bound, tol), word, panel.unit))
+    titles(ax, panel.title, "; ".join(n for n in above if n), width_in)
     ax.set_xlabel("time t [s]")
     ax.set_ylabel(panel.ylabel)
-    ax.grid(alpha=0.3)
-    return handles
+    ax.grid(True)
+    return handles, "; ".join(n for n in notes if n)
+
+
+def _from(t: np.ndarray, values: np.ndarray, start: float | None) -> np.ndarray:
+    """``values`` with NaN (not drawn) before ``start`` (s; None: from the first)."""
+    return values if start is None or start == -np.inf else np.where(
+        t >= start - 1e-12, values, np.nan)
+
+
+def _penalty(cols: dict, q: str, start: float | None):
+    """The penalty's raw column of ``q`` (None if absent) and its filtered one as
+    ``[(suffix, values)]``, each from ``start`` on.
+    """
+    t, raw = cols["t"], cols.get(f"{q}_{PENALTY}")
+    smooth = [(s, _from(t, cols[f"{q}_{PENALTY}{s}"], start)) for s in SMOOTHED.values()
+              if f"{q}_{PENALTY}{s}" in cols]
+    return (None if raw is None else _from(t, raw, start)), smooth
 
 
 def _draw_methods(ax, t, curves: dict, labels: dict) -> dict:
@@ -169,48 +222,35 @@ def _draw_methods(ax, t, curves: dict, labels: dict) -> dict:
     handles, step = {}, max(1, len(t) // 8)
     for k, (method, values) in enumerate(curves.items()):
         label = labels[method]
-        handles[label], = ax.plot(t, values, lw=1.3, color=f"C{k}", zorder=4,
-                                  ls=DASHES[k % 4], marker=MARKERS[k % len(MARKERS)], ms=4.5,
+        handles[label], = ax.plot(t, values, lw=1.1, color=f"C{k}", zorder=4,
+                                  ls=DASHES[k % 4], marker=MARKERS[k % len(MARKERS)], ms=3.5,
                                   markevery=(k * step // len(curves), step), label=label)
     return handles
 
 
-def _coincide_note(curves: dict, tol: float) -> str:
-    groups = coinciding(curves, tol)
-    return ("drawn on one another (markers tell them apart): "
-            + "; ".join(" = ".join(g) for g in groups)) if groups else ""
-
-
-def titles(ax, title: str, notes: list[str], width_in: float) -> None:
-    """The panel's title on the left, its notes (at :data:`NOTE_PT`) between it and the
-    plotting area, wrapped to the panel's width.
+def titles(ax, title: str, note: str, width_in: float) -> None:
+    """The panel's title on the left, wrapped to the panel's width, and ``note`` (curves
+    drawn on one another, at :data:`images.MIN_TEXT_PT`) between it and the plotting
+    area.
     """
-    text = "\n".join(textwrap.wrap("; ".join(n for n in notes if n),
-                                   width=max(30, int(width_in * 72 / (0.5 * NOTE_PT) * 0.8))))
-    lines = text.count("\n") + 1 if text else 0
-    if text:
-        ax.annotate(text, xy=(0, 1), xycoords="axes fraction", xytext=(0, 3),
-                    textcoords="offset points", va="bottom", ha="left", fontsize=NOTE_PT,
-                    color="0.25")
-    ax.set_title(title, loc="left", pad=4 + 1.25 * NOTE_PT * lines)
+    def chars(pt):  # characters of ``pt`` type across the plotting area
+        return max(30, int((width_in - 0.7) * 72 / (0.52 * pt)))
 
-
-def limits(curves: list[np.ndarray]) -> tuple[float, float]:
-    """The y range of ``curves``' finite values with a margin of 15 % of the range (at
-    least 5 % of the largest magnitude, so a flat line is not drawn as noise).
-    """
-    finite = np.concatenate([c[np.isfinite(c)] for c in curves if c is not None]
-                            or [np.zeros(1)])
-    finite = finite if finite.size else np.zeros(1)
-    lo, hi = float(finite.min()), float(finite.max())
-    margin = max(0.15 * (hi - lo), 0.05 * max(abs(lo), abs(hi)), 1e-9)
-    return lo - margin, hi + margin
+    lines = 0
+    if note:
+        note = textwrap.fill(note, chars(images.MIN_TEXT_PT))
+        lines = note.count("\n") + 1
+        ax.annotate(note, xy=(0, 1), xycoords="axes fraction", xytext=(0, 3),
+                    textcoords="offset points", va="bottom", ha="left",
+                    fontsize=images.MIN_TEXT_PT, color="0.25")
+    ax.set_title(textwrap.fill(images.typeset(title), chars(images.STYLE["axes.titlesize"])),
+                 loc="left", pad=5 + 1.3 * images.MIN_TEXT_PT * lines)
 
 
 def clip_note(raw: np.ndarray, low: float, high: float, unit: str) -> str:
-    """What the panel says when the raw penalty line leaves the drawn range: its range."""
+    """What the caption says when the raw penalty line leaves the drawn range: its range."""
     ok = np.isfinite(raw)
     if not ok.any() or low <= raw[ok].min() and raw[ok].max() <= high:
         return ""
-    return (f"raw penalty (thin grey) clipped: it spans {span_text(raw[ok], unit)} "
-            "(impacts); the axis holds the bold curves")
+    return (f"the raw penalty line (thin grey) spans {images.span_text(raw[ok], unit)} "
+            "(impacts), beyond the axis")

@@ -21,7 +21,14 @@ from .compliance import _compliance_vs_penalty
 from .figures import PENALTY
 from .histories import History, penalty_history
 from .runs import _Runs
-from .verdicts import _bearing_notes, _fig13_notes, _fig15_summary, _gravity, _speed_notes
+from .verdicts import (
+    SETTLED_S,
+    _bearing_notes,
+    _fig13_notes,
+    _fig15_summary,
+    _gravity,
+    _speed_notes,
+)
 
 
 def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs, work,
@@ -33,18 +40,20 @@ def _main_figures(runs: _Runs, scene: Scene, motion: Motion, op: Operator, figs,
     pen_omega = None if pen is None else pen.omega
     sections = []
     if 11 in figs:
-        csv = figures.fig11(motion, out, pen_omega, formats)
+        csv, caption = figures.fig11(motion, out, pen_omega, formats,
+                                      settled_s=SETTLED_S)
         diff = np.max(np.abs(motion.omega[-1] - motion.omega[0]))
-        sections.append(("Fig. 11: input and output angular velocity", csv, [
+        sections.append(("Fig. 11: input and output angular velocity", csv, [*caption,
             f"- the output turns with the input: max |omega_out - omega_in| = {diff:.1e} rad/s "
             "(paper: uniform output in the Z arrangement with equal angles, eq. 4)",
             f"- input speed at t = {motion.t[-1]:g} s: {motion.omega[0][-1]:.3f} rad/s",
             *_speed_notes(motion, pen, (0, -1))]))
     if 12 in figs:
-        csv = figures.fig12(motion, out, pen_omega, formats)
+        csv, caption = figures.fig12(motion, out, pen_omega, formats,
+                                      settled_s=SETTLED_S)
         ratio = motion.omega[1][1:] / motion.omega[0][1:]
         g1 = scene.joints[0].articulation_deg
-        sections.append(("Fig. 12: intermediate shaft angular velocity", csv, [
+        sections.append(("Fig. 12: intermediate shaft angular velocity", csv, [*caption,
             f"- omega_intermediate / omega_input oscillates in [{ratio.min():.4f}, "
             f"{ratio.max():.4f}] (eq. 3: [cos g1, 1/cos g1] = "
             f"[{np.cos(np.radians(g1)):.4f}, {1 / np.cos(np.radians(g1)):.4f}] for "
@@ -63,14 +72,16 @@ def _contact_figures(op: Operator, figs, work, out: Path, formats, penalty) -> l
     forces = {m: h.forces for m, h in hist.items()}
     sections = []
     if 13 in figs:
-        csv = figures.fig13(op, forces, work[13], out, formats)
+        csv, caption = figures.fig13(op, forces, work[13], out, formats,
+                                      settled_s=SETTLED_S)
         sections.append(("Fig. 13: contact forces of joint 1", csv,
-                         _fig13_notes(op, hist) + _status_lines(hist)))
+                         caption + _fig13_notes(op, hist) + _status_lines(hist)))
     if 14 in figs:
         bounds = work[14]
-        csv = figures.fig14(op, forces, bounds, out, formats=formats)
+        csv, caption = figures.fig14(op, forces, bounds, out, formats=formats,
+                                      settled_s=SETTLED_S)
         sections.append(("Fig. 14: input shaft bearing loads", csv,
-                         _bearing_notes(op, hist, bounds, 14)[0]))
+                         caption + _bearing_notes(op, hist, bounds, 14)[0]))
     return sections
 
 
@@ -91,12 +102,13 @@ def _fig15(runs: _Runs, scenes_work, out: Path, formats) -> list:
         hist = dict(work["hist"]) | ({} if pen is None else
                                      {PENALTY: penalty_history(pen, op.names)})
         bounds = work[14]
-        csv = figures.fig14(op, {m: h.forces for m, h in hist.items()}, bounds, out,
-                            number=15, stem=f"fig15_{scene.name}",
-                            subtitle=f", {_gravity(scene)}", formats=formats)
+        csv, caption = figures.fig14(op, {m: h.forces for m, h in hist.items()}, bounds,
+                                     out, number=15, stem=f"fig15_{scene.name}",
+                                     subtitle=f", {_gravity(scene)}", formats=formats,
+                                     settled_s=SETTLED_S)
         notes, verdict = _bearing_notes(op, hist, bounds, 15)
         sections.append((f"Fig. 15 on `{scene.name}`: input shaft bearing loads, "
-                         f"{_gravity(scene)}", csv, notes))
+                         f"{_gravity(scene)}", csv, caption + notes))
         verdicts.append((scene, verdict))
     if len(verdicts) > 1 or any(v for _, v in verdicts):
         sections.append(_fig15_summary(verdicts))
