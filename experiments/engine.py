@@ -26,6 +26,7 @@ statistics and said to be.
 from __future__ import annotations
 
 import csv
+import textwrap
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,9 +36,20 @@ from cardan_forces.driveline import engine_mujoco
 from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
 from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import number_text
-from cardan_forces.experiments.images import draw_set, format_list, save
+from cardan_forces.experiments.images import (
+    COINCIDE,
+    MIN_TEXT_PT,
+    PAGE_IN,
+    coincide_note,
+    coinciding,
+    draw_set,
+    format_list,
+    limits,
+    save,
+    styled,
+)
 from cardan_forces.experiments.study import intervals as rigid_intervals
-from cardan_forces.experiments.study import value_range
+from cardan_forces.experiments.study import value_ranges
 from cardan_forces.formulations import FALLBACK, FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import UnsupportedProblem
@@ -208,31 +220,52 @@ def engine_runs(op, settings=SETTINGS) -> dict[str, EngineRun]:
 
 
 def _load_rows(op) -> dict[str, np.ndarray]:
-    """The first shaft's loads the figure draws, as rows ``c`` over the forces (``c'x``):
-    each bearing's in-plane radial component (``r1``, N) and the shaft's axial load
-    (sum over its bearings, N).
+    """The first shaft's loads the figure draws, as Figs. 14-15 and ``cardan repro``'s
+    MuJoCo figure draw them, by panel title: per bearing the magnitude of its radial
+    load (the length of its two components normal to the axis: two rows over the
+    forces) and the shaft's axial load (sum over its bearings, signed: one row).
     """
     bearings = op.bearings(0)
     matrices = [op.bearing_matrix(link) for link in bearings]  # rows (r1, r2, axis)
-    rows = {f"({'abcdefgh'[k]}) bearing '{link.element}': radial load in the articulation "
-            "plane (r1, signed)": m[0] for k, (link, m) in enumerate(zip(bearings, matrices))}
+    rows = {f"({'abcdefgh'[k]}) bearing '{link.label}': magnitude of its radial load": m[:2]
+            for k, (link, m) in enumerate(zip(bearings, matrices))}
     rows[f"({'abcdefgh'[len(rows)]}) axial load of shaft '{op.scene.shafts[0].name}' (sum "
-         "over its bearings, signed)"] = sum((m[2] for m in matrices),
-                                                         np.zeros(len(op.names)))
+         "over its bearings, signed)"] = sum(m[2] for m in matrices)[None, :]
     return rows
 
 
-def _band(op, c: np.ndarray, sampled: np.ndarray) -> np.ndarray:
-    """(k, 2): the rigid interval of ``c'x`` at the sampled instants (+-inf: unbounded)."""
-    return np.array([_ends(value_range(op, int(i), c)) for i in sampled]).reshape(-1, 2)
+def _load(forces: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The load ``rows`` (k, n) makes of ``forces`` (T, n): its length for two rows, its
+    signed value for one.
+    """
+    values = np.asarray(forces) @ rows.T
+    return values[:, 0] if len(rows) == 1 else np.linalg.norm(values, axis=1)
+
+
+def _band(op, rows: np.ndarray, sampled: np.ndarray) -> np.ndarray:
+    """(k, 2): the rigid interval of the load ``rows`` (:func:`_load`) at the sampled
+    instants (+-inf: unbounded): of one row exact; of a length, the range its two
+    components' intervals allow (their box hull: it contains the exact range).
+    """
+    out = []
+    for i in sampled:
+        ends = [_ends(found) for found in value_ranges(op, int(i), rows)]
+        if len(ends) == 1:
+            out.append(ends[0])
+            continue
+        closest = [0.0 if lo <= 0.0 <= hi else min(abs(lo), abs(hi)) for lo, hi in ends]
+        out.append((np.hypot(*closest), np.hypot(*(max(abs(lo), abs(hi)) for lo, hi in ends))))
+    return np.array(out, float).reshape(-1, 2)
 
 
 def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
-    """The engine's first-shaft bearing loads over time for :data:`FIGURE_SETTINGS` over
-    the rigid set, drawn as ``cardan repro``'s figures draw it
+    """The engine's first-shaft bearing loads over time for :data:`FIGURE_SETTINGS`
+    from the end of its settling on (:func:`settle_s`, the instants its statistics
+    use), over the rigid set, drawn as ``cardan repro``'s figures draw it
     (:func:`~cardan_forces.experiments.images.draw_set`: a band where both ends are
-    finite, the finite end with the open side marked, a set open on both sides said in
-    the panel), one legend below the panels; saved as ``stem`` in each of ``formats``.
+    finite, the finite end with the open side marked, one far below the loads marked
+    on the panel's edge), one legend below the panels, on one page in the print style
+    (:mod:`~cardan_forces.experiments.images`); saved as ``stem`` in each of ``formats``.
     """
     import matplotlib
 
@@ -240,53 +273,58 @@ def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
     import matplotlib.pyplot as plt
 
     op, rows = result.op, _load_rows(result.op)
-    with plt.rc_context(FIGURE_STYLE):
-        fig, axes = plt.subplots(len(rows), 1, figsize=(8, 2.7 * len(rows) + 1.2),
+    names = [n for n in FIGURE_SETTINGS if n in result.runs]
+    start = float(op.t[0]) + settle_s(result.runs)
+    with styled():
+        fig, axes = plt.subplots(len(rows), 1, figsize=(PAGE_IN[0], 2.3 * len(rows) + 1.3),
                                  squeeze=False)
         handles = {}
         for ax, (label, c) in zip(axes[:, 0], rows.items()):
-            handles.update(_draw_load(ax, result, label, c))
+            handles.update(_draw_load(ax, result, label, c, names, start))
         fig.suptitle(f"MuJoCo's first-shaft bearing loads over the rigid set "
-                     f"({op.scene.name}; three softness settings)", fontsize=11)
-        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=2,
-                   frameon=False)
-        rows_in = 0.15 + 0.19 * -(-len(handles) // 2)
-        fig.tight_layout(rect=(0, rows_in / fig.get_figheight(), 1, 1))
+                     f"({op.scene.name}; {len(names)} of its {len(result.runs)} softness "
+                     f"settings, from {start:g} s)")
+        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=2)
+        fig.canvas.draw()
+        below = fig.legends[0].get_window_extent().height / fig.dpi + 0.08
+        fig.tight_layout(rect=(0, below / fig.get_figheight(), 1, 1), h_pad=0.6)
         paths = save(fig, stem, formats)
     plt.close(fig)
     return paths
 
 
-FIGURE_STYLE = {"font.size": 9.0, "axes.titlesize": 9.5, "xtick.labelsize": 8.0,
-                "ytick.labelsize": 8.0, "legend.fontsize": 8.5}
-"""Type sizes of the figure (pt at its printed size, 8 in wide), as ``cardan repro``'s."""
-
-
-def _draw_load(ax, result: EngineStudy, label: str, c: np.ndarray) -> dict:
-    """One panel: the load ``c'x`` of each figure setting (markers at staggered
-    instants) over its rigid set at the sampled instants; its legend handles.
+def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: list[str],
+               start: float) -> dict:
+    """One panel: the load of each setting in ``names`` from ``start`` (s) on (markers
+    at staggered instants; those on one another named above the panel, with how close)
+    over its rigid set at the sampled instants; its legend handles.
     """
-    op = result.op
-    band = _band(op, c, result.sampled)
-    handles, note = draw_set(ax, op.t[result.sampled], band[:, 0], band[:, 1], "N")
-    names = [n for n in FIGURE_SETTINGS if n in result.runs]
-    step = max(1, len(op.t) // 8)
-    curves = [result.runs[n].forces @ c for n in names]
-    for k, (name, values) in enumerate(zip(names, curves)):
-        handles[f"MuJoCo, {name}"], = ax.plot(
-            op.t, values, ("-", "--", "-.")[k % 3], color=f"C{k}", marker="osD"[k % 3], ms=4.5,
-            markevery=(k * step // len(names), step), zorder=3, label=f"MuJoCo, {name}")
-    held = np.concatenate([*curves, band[np.isfinite(band)]])
-    low, high = float(held.min()), float(held.max())
-    margin = max(0.1 * (high - low), 0.05 * max(abs(low), abs(high)), 1e-9)
-    ax.set_ylim(low - margin, high + margin)
-    if note:
-        ax.annotate(note, xy=(0, 1), xycoords="axes fraction", xytext=(0, 3),
-                    textcoords="offset points", va="bottom", fontsize=8, color="0.25")
-    ax.set_title(label, loc="left", pad=14 if note else 4)
+    op, handles = result.op, {}
+    shown = op.t >= start - 1e-12
+    sampled = result.sampled[shown[result.sampled]]
+    band = _band(op, rows, sampled)
+    curves = {f"MuJoCo, {n}": np.where(shown, _load(result.runs[n].forces, rows), np.nan)
+              for n in names}
+    low, high = limits(list(curves.values()), [band[:, 0], band[:, 1]])
+    step, first = max(1, int(shown.sum()) // 8), int(np.argmax(shown))
+    for k, (name, values) in enumerate(curves.items()):
+        handles[name], = ax.plot(op.t, values, ("-", "--", "-.")[k % 3], color=f"C{k}",
+                                 marker="osD"[k % 3], markevery=(first + k * step // len(curves),
+                                                                 step), zorder=3, label=name)
+    drawn, note = draw_set(ax, op.t[sampled], band[:, 0], band[:, 1], "N", view=(low, high))
+    handles.update(drawn)
+    ax.set_ylim(low, high)
+    together = coinciding(curves, COINCIDE * (high - low))
+    above = "; ".join(n for n in (coincide_note(curves, together, "N"), note) if n)
+    if above:
+        ax.annotate(textwrap.fill(above, 110), xy=(0, 1), xycoords="axes fraction",
+                    xytext=(0, 3), textcoords="offset points", va="bottom",
+                    fontsize=MIN_TEXT_PT, color="0.25")
+    ax.set_title(label, loc="left", pad=5 + 1.3 * MIN_TEXT_PT * (above.count("\n") + 1
+                                                                 if above else 0))
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("force [N]")
-    ax.grid(alpha=0.3)
+    ax.grid(True)
     return handles
 
 
