@@ -8,12 +8,14 @@ component of the operator, the member ``positive`` picks (least force, end faces
 pushing only), the interval ``[min, max]`` over every rigid solution with end faces
 >= 0 (two LPs per component that is not determinate, the band; a determinate one's
 interval is its value), and whether the component is determinate.
-Written as ``report.csv`` (long format, with each component's unit), ``report.png``
-(and ``.svg``/``.pdf`` with ``--format``: one panel per contact, unit and scale
-group, a slip joint's forces in N apart from its moments in N m, a few-newton component
-apart from a kilonewton one; each component's legend entry, below its panel, says
-whether it is determinate or which side of its set is open) and ``report.md`` (the
-determinacy table and the named modes). With ``--engine``, MuJoCo's forces under its
+Written as ``report.csv`` (long format, with each component's unit), the figure (one
+panel per contact, unit and scale group, a slip joint's forces in N apart from its
+moments in N m, a few-newton component apart from a kilonewton one; each component's
+legend entry, below its panel, says whether it is determinate or which side of its set
+is open) on pages of print size: ``report-1.png``, ``report-2.png``, ... (``report.png``
+for one page; ``.svg`` likewise, ``report.pdf`` every page in one file, with
+``--format``), and ``report.md`` (the determinacy table, the named modes and how the
+figure is drawn). With ``--engine``, MuJoCo's forces under its
 default softness (:mod:`cardan_forces.experiments.engine`) are drawn as open circles on
 every panel and ``report.md`` says how they sit in the rigid set (:class:`EngineOverlay`).
 """
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import csv
 import math
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,10 +36,10 @@ from cardan_forces.driveline.equilibrium import Link, Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.release import named_modes
 from cardan_forces.driveline.scene import MAX_INSTANTS
-from cardan_forces.experiments import engine, files
+from cardan_forces.experiments import engine, files, images
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import number_text
-from cardan_forces.experiments.images import format_list, save
+from cardan_forces.experiments.images import format_list
 from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.formulations import SELECTION
 from cardan_forces.formulations.convex import NotApplicable
@@ -285,147 +288,234 @@ BOTH_OPEN_MARK = "$\\updownarrow$"
 """The marker along a component whose set is open on both sides (any value)."""
 
 
-def _draw(ax, op: Operator, h: dict[str, np.ndarray], panel: Panel,
-          engine_forces: np.ndarray | None = None) -> None:
-    """One panel: each component's selected value as a line, its rigid set in the same
-    colour: shaded where both ends are finite; where one side is open, the finite end
-    dashed with triangles pointing to the open side; where both are, double arrows along
-    the line; ``engine_forces`` (T, n), where given, as open circles in the same colour.
-    The y range holds the lines and every finite end; the legend sits below the panel.
+@dataclass(frozen=True)
+class Drawing:
+    """What a panel draws, found before it is drawn (the page's layout reserves its
+    legend's lines): the y range, each component's legend entry and its line style
+    (interleaved dashes for the components whose lines lie on one another).
     """
-    held = []
-    step = max(1, len(op.t) // 10)
-    for k, j in enumerate(panel.columns):
-        lo, hi, value = h["min"][:, j], h["max"][:, j], h["value"][:, j]
-        both = np.isfinite(lo) & np.isfinite(hi)
+
+    ylim: tuple[float, float]
+    entries: tuple[str, ...]
+    styles: tuple
+
+
+LEGEND_CHARS = 52
+"""A legend entry's line below a panel (characters; a longer entry is wrapped)."""
+
+
+def drawing(op: Operator, h: dict[str, np.ndarray], panel: Panel,
+            engine_forces: np.ndarray | None = None) -> Drawing:
+    """:class:`Drawing` of ``panel``: the y range holds the lines, every finite end and
+    the engine's values; an entry says the component's set (:func:`set_words`), that
+    its line lies on its set's finite end or on another component's, and within how
+    much (so every entry names a line that shows or says where it is).
+    """
+    held = [h[k][:, j] for j in panel.columns for k in ("min", "max", "value")]
+    held += [] if engine_forces is None else [engine_forces[:, j] for j in panel.columns]
+    low, high = images.limits(held)
+    tol = images.COINCIDE * (high - low)
+    values = {_name(op, panel, j): h["value"][:, j] for j in panel.columns}
+    together = images.coinciding(values, tol)
+    entries, styles = [], []
+    for j, name in zip(panel.columns, values):
+        lo, hi, both = h["min"][:, j], h["max"][:, j], np.isfinite(h["min"][:, j] + h["max"][:, j])
         free = ~np.isfinite(lo) & ~np.isfinite(hi) & ~h["determinate"][:, j]
-        name = op.names[j][len(panel.contact.name) + 1:] or "force"
-        words = set_words(lo, hi, h["determinate"][:, j])
-        ax.plot(op.t, value, lw=1.4, color=f"C{k}", zorder=3,
-                label=f"{name}: {words}" + (" (\u2195 on the line)" if free.any() else ""))
-        if free.any():
-            ax.plot(op.t, np.where(free, value, np.nan), ls="none", marker=BOTH_OPEN_MARK,
-                    ms=10, color=f"C{k}", markevery=(k * step // len(panel.columns), step),
-                    zorder=3)
-        ax.fill_between(op.t, np.where(both, lo, np.nan), np.where(both, hi, np.nan),
-                        color=f"C{k}", alpha=0.2, lw=0, zorder=1)
-        for bound, other, marker in ((lo, hi, "^"), (hi, lo, "v")):  # open above: ^
-            one = np.where(np.isfinite(bound) & ~np.isfinite(other), bound, np.nan)
-            if np.isfinite(one).any():
-                ax.plot(op.t, one, ls="--", lw=1.1, color=f"C{k}", marker=marker, ms=5,
-                        markevery=(0, step), zorder=2)
-        held += [lo, hi, value]
+        words = [set_words(lo, hi, h["determinate"][:, j])
+                 + (" (\u2195 on the line)" if free.any() else "")]
+        words += [f"the line on its {word} bound" for bound, word in ((lo, "lower"), (hi, "upper"))
+                  if not both.all()
+                  and images.on_bound({name: values[name]}, np.where(both, np.nan, bound), tol)]
+        group = next((g for g in together if name in g), (name,))
+        if group.index(name):
+            words.append(f"= {group[0]} within "
+                         f"{images.spread(values, (group[0], name)):.2g} {panel.unit}")
+        entries.append(textwrap.fill(f"{name}: " + "; ".join(words), LEGEND_CHARS))
+        styles.append(images.interleave(group.index(name), len(group)))
+    if engine_forces is not None:
+        entries.append(textwrap.fill(ENGINE_LABEL, LEGEND_CHARS))
+    return Drawing((low, high), tuple(entries), tuple(styles))
+
+
+def _name(op: Operator, panel: Panel, j: int) -> str:
+    return op.names[j][len(panel.contact.name) + 1:] or "force"
+
+
+def _draw(ax, op: Operator, h: dict[str, np.ndarray], panel: Panel,
+          engine_forces: np.ndarray | None = None, found: Drawing | None = None) -> None:
+    """One panel (its :func:`drawing`, ``found`` where known): each component's
+    selected value as a line, its rigid set in the same colour: shaded where both ends
+    are finite; where one side is open, the finite end dashed with triangles pointing to
+    the open side; where both are, double arrows along the line; ``engine_forces``
+    (T, n), where given, as open circles in the same colour. Components whose lines lie
+    on one another are drawn in interleaved dashes, each colour showing in turn. The
+    legend sits below the panel.
+    """
+    found = found or drawing(op, h, panel, engine_forces)
+    step = max(1, len(op.t) // 10)
+    for k, (j, label, style) in enumerate(zip(panel.columns, found.entries, found.styles)):
+        _draw_component(ax, op.t, h, j, f"C{k}", (k * step // len(panel.columns), step),
+                        label, style)
         if engine_forces is not None:
-            ax.plot(op.t, engine_forces[:, j], ls="none", marker="o", ms=4.5, mfc="none",
-                    mew=1.1, color=f"C{k}", zorder=4,
-                    label=ENGINE_LABEL if k == 0 else "_")
-            held.append(engine_forces[:, j])
-    ax.set_ylim(*_limits(held))
-    ax.set_title(panel.title, fontsize=9, y=1.0)  # placed, not searched for: no top ticks
-    ax.set_xlabel("time t [s]", fontsize=8.5)
-    ax.set_ylabel(UNIT_AXIS.get(panel.unit, f"[{panel.unit}]"), fontsize=8.5)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(-0.02, -LEGEND_DROP_IN / PANEL_IN[1]),
-              frameon=False, borderaxespad=0.0, handlelength=1.6)
+            ax.plot(op.t, engine_forces[:, j], ls="none", marker="o", ms=3.5, mfc="none",
+                    mew=0.9, color=f"C{k}", zorder=4,
+                    label=found.entries[-1] if k == 0 else "_")
+    ax.set_ylim(*found.ylim)
+    ax.set_title(textwrap.fill(panel.title, LEGEND_CHARS), loc="left")
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel(UNIT_AXIS.get(panel.unit, f"[{panel.unit}]"))
+    ax.grid(True)
+    ax.legend(loc="upper left", bbox_to_anchor=(-0.02, -LEGEND_DROP_IN / PANEL_IN[1]),
+              borderaxespad=0.0, handlelength=2.4)
+
+
+def _draw_component(ax, t, h: dict[str, np.ndarray], j: int, colour: str, every, label: str,
+                    style) -> None:
+    """One component ``j`` of a panel (:func:`_draw`) in ``colour``: its line in
+    ``style``, the double arrows where its set is open on both sides (at the instants
+    ``every``), its band and its open sets' finite ends.
+    """
+    lo, hi, value = h["min"][:, j], h["max"][:, j], h["value"][:, j]
+    both = np.isfinite(lo) & np.isfinite(hi)
+    free = ~np.isfinite(lo) & ~np.isfinite(hi) & ~h["determinate"][:, j]
+    ax.plot(t, value, lw=1.2, color=colour, zorder=3, label=label, ls=style)
+    if free.any():
+        ax.plot(t, np.where(free, value, np.nan), ls="none", marker=BOTH_OPEN_MARK,
+                ms=8, color=colour, markevery=every, zorder=3)
+    ax.fill_between(t, np.where(both, lo, np.nan), np.where(both, hi, np.nan),
+                    color=colour, alpha=0.2, lw=0, zorder=1)
+    for bound, other, marker in ((lo, hi, "^"), (hi, lo, "v")):  # open above: ^
+        one = np.where(np.isfinite(bound) & ~np.isfinite(other), bound, np.nan)
+        if np.isfinite(one).any():
+            ax.plot(t, one, ls="--", lw=0.9, color=colour, marker=marker, ms=4,
+                    markevery=(0, every[1]), zorder=2)
 
 
 ENGINE_LABEL = "MuJoCo, default softness (open circles, each component's colour)"
-
-
-def _limits(curves: list[np.ndarray]) -> tuple[float, float]:
-    """A y range holding every finite value of ``curves``, with a margin (8 % of the
-    range, at least 5 % of the largest magnitude, so a flat line is not drawn as noise).
-    """
-    finite = np.concatenate([c[np.isfinite(c)] for c in curves] + [np.zeros(0)])
-    if not finite.size:
-        return -1.0, 1.0
-    low, high = float(finite.min()), float(finite.max())
-    margin = max(0.08 * (high - low), 0.05 * max(abs(low), abs(high)), 1e-6)
-    return low - margin, high + margin
-
-
-STYLE = {"axes.grid": True, "grid.alpha": 0.3, "xtick.labelsize": 8, "ytick.labelsize": 8}
-"""Matplotlib settings of the report's figure: each tick is made with them, instead of
-every tick of 60 axes restyled after it is made."""
-
-MARGINS_IN = {"left": 0.75, "right": 0.2, "top": 0.45, "line": 0.2,
-              "wspace": 0.9, "hspace": 0.85, "entry": 0.19}
-"""The figure's margins and the gaps between panels (inches): room for the tick labels
-and axis labels at the report's font sizes, ``entry`` more below each row per entry of
-the longest legend below a panel, and ``line`` per line of the suptitle above ``top``
-(a fixed layout: a constrained one measured every panel's text twice and took a third
-of the figure's time)."""
-PANEL_IN = (4.0, 2.1)
-"""A panel's plotting area (inches, its printed size)."""
-LEGEND_DROP_IN = 0.42
+MARGINS_IN = {"left": 0.62, "right": 0.15, "top": 0.15, "line": 0.17, "title": 0.32,
+              "wspace": 0.75, "axis": 0.42, "entry": 0.135, "gap": 0.12}
+"""A page's margins and the room around each panel (inches): ``title`` above a panel
+for its title (two lines at most), ``axis`` below it for its tick and axis labels,
+``entry`` per entry of the longest legend below a panel and ``gap`` under it; ``line``
+per line of the page's title below ``top`` (a fixed layout: a constrained one
+measured every panel's text twice and took a third of the figure's time)."""
+COLUMNS = 2
+"""Panels side by side on a page."""
+PANEL_IN = ((images.PAGE_IN[0] - MARGINS_IN["left"] - MARGINS_IN["right"]
+             - (COLUMNS - 1) * MARGINS_IN["wspace"]) / COLUMNS, 1.3)
+"""A panel's plotting area (inches, its printed size): the width a page's columns
+leave, the least height (a page's rows share what the page has over it)."""
+LEGEND_DROP_IN = 0.36
 """How far below a panel its legend starts (inches): under the axis label."""
 
 
 def write_figure(op: Operator, h: dict[str, np.ndarray], stem: Path,
                  formats=("png",), overlay: EngineOverlay | None = None) -> list[Path]:
-    """Every :func:`panels` panel in a grid, written as ``stem.<format>`` per format
-    (with ``overlay``, MuJoCo's forces on each).
+    """Every :func:`panels` panel on pages of a grid (:func:`pages`), written as
+    ``stem.<format>`` per format (:func:`images.save_pages`: a PDF of every page, a PNG
+    or SVG per page); with ``overlay``, MuJoCo's forces on each.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    with plt.rc_context(STYLE):
-        fig = figure(op, h, overlay)
-        paths = save(fig, stem, formats)
-    plt.close(fig)
+    with images.styled():
+        figs = pages(op, h, overlay)
+        paths = images.save_pages(figs, stem, formats)
+    for fig in figs:
+        plt.close(fig)
     return paths
 
 
-def figure(op: Operator, h: dict[str, np.ndarray], overlay: EngineOverlay | None = None):
-    """The report's figure (not yet drawn; :func:`write_figure` writes it under
-    :data:`STYLE`).
+def pages(op: Operator, h: dict[str, np.ndarray], overlay: EngineOverlay | None = None
+          ) -> list:
+    """The report's figure, :func:`panels` in :data:`COLUMNS` columns on as many pages
+    of :data:`images.PAGE_IN` as they take (make them in :func:`images.styled`).
+    """
+    engine_forces = None if overlay is None else overlay.forces
+    grid = [(p, drawing(op, h, p, engine_forces)) for p in panels(op, h)]
+    below = MARGINS_IN["entry"] * max(sum(e.count("\n") + 1 for e in found.entries)
+                                      for _, found in grid)
+    rows = _rows_per_page(below)
+    per_page = rows * COLUMNS
+    count = -(-len(grid) // per_page)
+    return [_page(op, h, grid[k:k + per_page], rows, below, engine_forces,
+                  (k // per_page + 1, count)) for k in range(0, len(grid), per_page)]
+
+
+def _room(below: float) -> tuple[float, float]:
+    """A row's height besides its plotting area (inches) and a page's room for rows."""
+    m = MARGINS_IN
+    return (m["title"] + m["axis"] + below + m["gap"],
+            images.PAGE_IN[1] - m["top"] - 2 * m["line"])
+
+
+def _rows_per_page(below: float) -> int:
+    """As many rows as a page holds with plotting areas :data:`PANEL_IN` tall or more."""
+    extra, room = _room(below)
+    return max(1, int(room // (PANEL_IN[1] + extra)))
+
+
+def _page(op: Operator, h, grid: list[tuple[Panel, Drawing]], rows: int, below: float,
+          engine_forces: np.ndarray | None, page: tuple[int, int]):
+    """One page: the panels ``grid`` (with their drawings) in ``rows`` rows, its title
+    saying which page.
     """
     import matplotlib.pyplot as plt
 
-    grid = panels(op, h)
-    cols = min(4, len(grid))
-    rows = math.ceil(len(grid) / cols)
-    m = MARGINS_IN
-    below = m["entry"] * max(len(p.columns) + (overlay is not None) for p in grid)
-    size = (m["left"] + m["right"] + cols * PANEL_IN[0] + (cols - 1) * m["wspace"],
-            m["top"] + 2 * m["line"] + rows * (PANEL_IN[1] + m["hspace"] + below))
-    fig, axes = plt.subplots(rows, cols, figsize=size, squeeze=False)
-    for ax, panel in zip(axes.ravel(), grid):
-        _draw(ax, op, h, panel, None if overlay is None else overlay.forces)
+    fig, axes = plt.subplots(rows, COLUMNS, figsize=images.PAGE_IN, squeeze=False)
+    for ax, (panel, found) in zip(axes.ravel(), grid):
+        _draw(ax, op, h, panel, engine_forces, found)
     for ax in axes.ravel()[len(grid):]:
         ax.set_visible(False)
     title = fig.suptitle(
-        f"{op.scene.name}: contact forces over time, the {SELECTION} selection (lines) and "
-        "the rigid solution set of each component (same colour): shaded where both ends "
-        "are finite,\nthe finite end dashed with triangles to the open side where one "
-        "side is open, double arrows on the line where both are (any value); each panel "
-        "its own scale"
-        + ("; MuJoCo's forces as open circles (default softness, after its settling)"
-           if overlay is not None else ""), fontsize=10, va="top")
-    _place(fig, rows, cols, title, below)
+        f"{op.scene.name}: contact forces over time"
+        + (f", page {page[0]} of {page[1]}" if page[1] > 1 else "")
+        + f"\nlines: the {SELECTION} selection; same colour: each component's rigid set "
+        "(report.md says how it is drawn)", va="top")
+    _place(fig, rows, title, below)
     return fig
 
 
-def _place(fig, rows: int, cols: int, title, below: float) -> None:
-    """Panels and suptitle at :data:`MARGINS_IN` of a figure of ``rows`` x ``cols``,
-    ``below`` inches more under each row for its legends.
+def _place(fig, rows: int, title, below: float) -> None:
+    """Panels and title at :data:`MARGINS_IN` on a page of ``rows`` rows, ``below``
+    inches more under each row for its legends; the rows share the page's height.
     """
     width, height = fig.get_size_inches()
     m = MARGINS_IN
-    top = m["top"] + m["line"] * (title.get_text().count("\n") + 1)
-    gap = m["hspace"] + below
-    panel_w = (width - m["left"] - m["right"] - (cols - 1) * m["wspace"]) / cols
-    panel_h = (height - gap - top - (rows - 1) * gap) / rows
+    top = m["top"] + m["line"] * (title.get_text().count("\n") + 1) + m["title"]
+    extra, _ = _room(below)
+    panel_h = (height - top - rows * extra + m["title"]) / rows
     fig.subplots_adjust(left=m["left"] / width, right=1 - m["right"] / width,
-                        bottom=gap / height, top=1 - top / height,
-                        wspace=m["wspace"] / panel_w, hspace=gap / panel_h)
-    title.set_y(1 - 0.1 / height)
+                        bottom=(extra - m["title"]) / height, top=1 - top / height,
+                        wspace=m["wspace"] / PANEL_IN[0], hspace=extra / panel_h)
+    title.set_y(1 - m["top"] / height)
+
+
+def figure_lines(written, overlay: EngineOverlay | None) -> list[str]:
+    """``report.md``'s section on the figure: its files and how it is drawn."""
+    return ["", "## Figure", "",
+            "Files: " + ", ".join(f"`{p.name}`" for p in written) + " (a PDF holds every "
+            "page; a PNG or an SVG is one page).", "",
+            f"Each panel: one contact's components of one unit and scale, over time; the "
+            f"`{SELECTION}` selection as a line and, in the same colour, the component's "
+            "rigid solution set: shaded where both ends are finite; where one side is open, "
+            "the finite end dashed with triangles pointing to the open side; double arrows "
+            "on the line where both sides are (any value). Each panel has its own scale. "
+            "Components whose lines lie on one another are drawn in interleaved dashes, "
+            "each colour in turn; the legend below the panel names them and how close they "
+            "are."
+            + (" MuJoCo's forces are open circles in the component's colour (default "
+               f"softness, from its settling on, {overlay.settle_s:g} s)."
+               if overlay is not None else "")]
 
 
 def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path,
-             overlay: EngineOverlay | None = None) -> None:
-    """The determinacy table, the named modes and, with ``overlay``, MuJoCo's section."""
+             overlay: EngineOverlay | None = None, images_written: tuple = ()) -> None:
+    """The determinacy table, the named modes, with ``images_written`` the figure's
+    section (:func:`figure_lines`) and with ``overlay`` MuJoCo's section.
+    """
     det = determinacy(op, 0)
     lines = [f"# Loads of scene {op.scene.name}", "", op.scene.description, "",
              f"{len(op.t)} instants from {op.t[0]:g} to {op.t[-1]:g} s; rank {det.rank}, "
@@ -440,16 +530,17 @@ def write_md(op: Operator, h: dict[str, np.ndarray], modes, path: Path,
                      f"{number_text(width[j], '.3g', 'unbounded')} |")
     lines += ["", "## Modes (null-space directions)", ""]
     lines += [f"- **{m.kind}**: {m.description}; release: {m.release}" for m in modes]
+    lines += figure_lines(images_written, overlay) if images_written else []
     lines += engine_lines(op, overlay) if overlay is not None else []
     files.write_text(path, "\n".join(lines) + "\n")
 
 
 def run_report(scene_spec: str, out: Path, instants: int | None = None,
                progress=None, formats=("png",), with_engine: bool = False) -> list[Path]:
-    """Write ``report.csv``, ``report.<format>`` for each of ``formats`` and
-    ``report.md`` for one scene into ``out``; their paths. ``with_engine``: MuJoCo
-    beside the rigid set (refused before any work where it does not apply);
-    ``instants``: default :func:`default_instants`.
+    """Write ``report.csv``, the figure's pages in each of ``formats``
+    (:func:`write_figure`) and ``report.md`` for one scene into ``out``; their paths.
+    ``with_engine``: MuJoCo beside the rigid set (refused before any work where it does
+    not apply); ``instants``: default :func:`default_instants`.
     """
     scene = load_scene(scene_spec)
     grid = len(scene.time.instants())
@@ -470,7 +561,7 @@ def run_report(scene_spec: str, out: Path, instants: int | None = None,
     out.mkdir(parents=True, exist_ok=True)
     write_csv(op, h, out / "report.csv", overlay)
     images = write_figure(op, h, out / "report", formats, overlay)
-    write_md(op, h, named_modes(motion, 0, op), out / "report.md", overlay)
+    write_md(op, h, named_modes(motion, 0, op), out / "report.md", overlay, tuple(images))
     return [out / "report.csv", *images, out / "report.md"]
 
 

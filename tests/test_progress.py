@@ -66,4 +66,4 @@ def test_quiet_report_says_nothing_on_stderr_but_its_answer_on_stdout(tmp_path, 
     assert main(["report", "propshaft", "--instants", "2", "--out", str(tmp_path),
                  "--quiet"]) == 0
     captured = capsys.readouterr()
-    assert "report:" not in captured.err and "report.png" in captured.out
+    assert "report:" not in captured.err and "report-1.png" in captured.out

@@ -4,6 +4,8 @@ on constructed solution sets whose drawing is known, and the command's image for
 
 from __future__ import annotations
 
+import re
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -82,16 +84,22 @@ def test_band_where_both_ends_are_finite_and_the_finite_end_where_one_side_is_op
     assert band, "the bounded component's band is drawn"
     low, high = ax.get_ylim()
     assert low < -50 and high > 80  # the range holds the band
-    dashed = [line for line in ax.get_lines() if line.get_linestyle() == "--"]
+    dashed = [line for line in ax.get_lines()  # the set's ends: drawn, not in the legend
+              if line.get_linestyle() == "--" and line.get_label().startswith("_")]
     ends = [np.asarray(line.get_ydata(), float) for line in dashed]
     assert any(np.allclose(e, 5.0) for e in ends), "the finite end of the open set"
     assert not [c for c in ax.collections if c.get_hatch()], "no hatched panel"
     assert [line.get_marker() for line in dashed] == ["^"]  # triangles to the open side
     arrows = [line for line in ax.get_lines() if line.get_marker() == report.BOTH_OPEN_MARK]
     assert len(arrows) == 1 and arrows[0].get_color() == "C2"  # z: any value, marked
-    labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert labels == ["x: bounded", "y: open above", "z: open below and above (\u2195 on the line)"]
+    assert _legend(ax) == ["x: bounded", "y: open above",
+                           "z: open below and above (\u2195 on the line); = x within 0 N"]
     plt.close(fig)
+
+
+def _legend(ax) -> list[str]:
+    """The entries of ``ax``'s legend, each on one line."""
+    return [" ".join(t.get_text().split()) for t in ax.get_legend().get_texts()]
 
 
 def test_a_determinate_component_is_not_called_unbounded(op):
@@ -99,9 +107,8 @@ def test_a_determinate_component_is_not_called_unbounded(op):
     x, y, z = panel.columns
     fig, ax = plt.subplots()
     report._draw(ax, op, _histories(op, {x: (0.0, NAN, NAN)}), panel)
-    labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert labels == ["x: open below and above (\u2195 on the line)", "y: determinate",
-                      "z: determinate"]
+    assert _legend(ax) == ["x: open below and above (\u2195 on the line)",
+                           "y: determinate; = x within 0 N", "z: determinate; = x within 0 N"]
     assert "unbounded" not in ax.get_title() and "open" not in ax.get_title()
     plt.close(fig)
 
@@ -109,22 +116,26 @@ def test_a_determinate_component_is_not_called_unbounded(op):
 def test_the_fixed_layout_holds_every_panel_s_text(op):
     """The grid's fixed margins (no layout engine): with the widest tick labels the
     loads give (five digits and a sign, as a trunnion's -20000 N), no panel's labels,
-    title or legend reach into another's or out of the figure, nor into the suptitle."""
+    title or legend reach into another's or out of its page, nor into the page's title;
+    every panel is on one page, each page of print size."""
     h = _histories(op, {j: (-20000.0 + 4000.0 * k, NAN, NAN)
                         for k, j in enumerate(range(0, len(op.names), 3))})
-    with plt.rc_context(report.STYLE):
-        fig = report.figure(op, h)
+    with images.styled():
+        figs = report.pages(op, h)
+    assert sum(ax.get_visible() for fig in figs for ax in fig.axes) == len(report.panels(op, h))
+    for fig in figs:
         fig.canvas.draw()
-    renderer = fig.canvas.get_renderer()
-    boxes = [ax.get_tightbbox(renderer) for ax in fig.axes if ax.get_visible()]
-    title = next(c for c in fig.get_children() if isinstance(c, Text)
-                 and c.get_text() == fig.get_suptitle()).get_window_extent(renderer)
-    for k, box in enumerate(boxes):
-        assert fig.bbox.x0 <= box.x0 and box.x1 <= fig.bbox.x1
-        assert fig.bbox.y0 <= box.y0 and box.y1 <= title.y0
-        assert not any(box.overlaps(other) for other in boxes[k + 1:])
-    assert title.y1 <= fig.bbox.y1
-    plt.close(fig)
+        renderer = fig.canvas.get_renderer()
+        boxes = [ax.get_tightbbox(renderer) for ax in fig.axes if ax.get_visible()]
+        title = next(c for c in fig.get_children() if isinstance(c, Text)
+                     and c.get_text() == fig.get_suptitle()).get_window_extent(renderer)
+        for k, box in enumerate(boxes):
+            assert fig.bbox.x0 <= box.x0 and box.x1 <= fig.bbox.x1
+            assert fig.bbox.y0 <= box.y0 and box.y1 <= title.y0
+            assert not any(box.overlaps(other) for other in boxes[k + 1:])
+        assert title.y1 <= fig.bbox.y1
+        assert tuple(fig.get_size_inches()) == images.PAGE_IN
+        plt.close(fig)
 
 
 @pytest.mark.parametrize(("lo", "hi", "det", "words"), [
@@ -139,12 +150,21 @@ def test_set_words(lo, hi, det, words):
     assert report.set_words(np.array(lo), np.array(hi), np.array(det)) == words
 
 
-def test_report_writes_every_format_asked(tmp_path, capsys):
-    assert main(["report", "propshaft", "--instants", "2", "--format", "png,svg",
+def test_report_writes_every_format_asked_a_page_each_and_one_pdf(tmp_path, capsys):
+    """A report of many panels on pages: a PNG and an SVG per page, one PDF of them all,
+    and ``report.md`` naming them."""
+    assert main(["report", "propshaft", "--instants", "2", "--format", "png,svg,pdf",
                  "--out", str(tmp_path), "--quiet"]) == 0
     written = capsys.readouterr().out.split()
-    assert {p.rsplit(".", 1)[1] for p in written} == {"csv", "png", "svg", "md"}
-    assert (tmp_path / "report.svg").read_text().lstrip().startswith("<?xml")
+    assert {p.rsplit(".", 1)[1] for p in written} == {"csv", "png", "svg", "pdf", "md"}
+    pngs = sorted(tmp_path.glob("report-*.png"))
+    assert len(pngs) > 1 and len(pngs) == len(list(tmp_path.glob("report-*.svg")))
+    assert not (tmp_path / "report.png").exists()
+    assert (tmp_path / "report-1.svg").read_text().lstrip().startswith("<?xml")
+    pdf = (tmp_path / "report.pdf").read_bytes()
+    assert len(re.findall(rb"/Type /Page\b", pdf)) == len(pngs)
+    md = (tmp_path / "report.md").read_text()
+    assert "## Figure" in md and all(f"`{p.name}`" in md for p in pngs)
     assert main(["report", "propshaft", "--format", "gif", "--out", str(tmp_path)]) == 2
     assert "--format" in capsys.readouterr().err
 
@@ -163,12 +183,13 @@ def test_engine_forces_are_drawn_in_each_component_s_colour_and_held_by_the_rang
     report._draw(ax, op, h, panel, forces)
     marked = [line for line in ax.get_lines() if line.get_marker() == "o"]
     assert len(marked) == 3
-    solid = {line.get_color() for line in ax.get_lines() if line.get_linestyle() == "-"}
+    solid = {line.get_color() for line in ax.get_lines() if line.get_linestyle() != "None"
+             and not line.get_label().startswith("_")}
     for line, j in zip(marked, (x, y, z)):
         assert np.array_equal(np.asarray(line.get_ydata(), float), forces[:, j], equal_nan=True)
         assert line.get_color() in solid
     assert ax.get_ylim()[1] > 500
-    assert report.ENGINE_LABEL in [t.get_text() for t in ax.get_legend().get_texts()]
+    assert report.ENGINE_LABEL in _legend(ax)
     plt.close(fig)
 
 
@@ -195,10 +216,11 @@ def test_the_report_figure_keeps_the_print_rules(op, monkeypatch):
     panel = _panel(op, "bearing.gearbox.rear")
     x, y, z = panel.columns
     h = _histories(op, {x: (0.0, -50.0, 80.0), y: (10.0, 5.0, NAN), z: (3.0, NAN, NAN)})
-    with plt.rc_context(report.STYLE):
-        fig = report.figure(op, h)
-    assert images.problems(fig) == []
-    plt.close(fig)
+    with images.styled():
+        figs = report.pages(op, h)
+    for fig in figs:
+        assert images.print_problems(fig) == []
+        plt.close(fig)
 
 
 def test_components_of_different_scales_get_panels_of_their_own(op):
