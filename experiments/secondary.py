@@ -38,6 +38,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -48,7 +49,14 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import LIMITS, Scene, SceneError, TimeGrid, TorqueLaw
 from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import number_text
-from cardan_forces.experiments.images import coinciding, format_list, save
+from cardan_forces.experiments.images import (
+    PAGE_IN,
+    coinciding,
+    format_list,
+    save,
+    styled,
+    typeset,
+)
 
 STEPS = 72
 """Instants per revolution (5 deg apart)."""
@@ -145,24 +153,22 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
             for name, values in loads.items():
                 w.writerows([case, name, f"{q:.6g}", number_text(v, ".9g", "")]
                             for q, v in zip(angle_deg, values))
-    with plt.rc_context(STYLE):
-        fig, axes = plt.subplots(len(results), 1, figsize=(10, 2.9 * len(results) + 0.7),
-                                 squeeze=False)
+    with styled():
+        fig, axes = plt.subplots(len(results), 1, squeeze=False, figsize=(
+            PAGE_IN[0], min(PAGE_IN[1], 2.1 * len(results) + 0.6)))
         colours = {n: f"C{k}" for k, n in enumerate(dict.fromkeys(
             n for loads in results.values() for n in loads))}
         for k, (ax, (case, loads)) in enumerate(zip(axes[:, 0], results.items())):
             _panel(ax, f"({'abcdefgh'[k]}) {case}", angle_deg, loads, colours,
                    (handbook_marks or {}).get(case, {}))
-        fig.suptitle(title or "Bearing loads over one revolution", fontsize=11)
-        fig.tight_layout()
+        fig.suptitle(textwrap.fill(typeset(title or "Bearing loads over one revolution"),
+                                   100))
+        fig.tight_layout(h_pad=0.8)
         paths = save(fig, out / "secondary", formats)
     plt.close(fig)
     return [out / "secondary.csv", *paths]
 
 
-STYLE = {"font.size": 9.0, "axes.titlesize": 9.5, "xtick.labelsize": 8.0,
-         "ytick.labelsize": 8.0, "legend.fontsize": 8.0}
-"""Type sizes of the figure (pt at its printed size, 10 in wide)."""
 HANDBOOK_LABEL = "handbook closed form (0 and 90 deg)"
 
 
@@ -183,7 +189,7 @@ def _panel(ax, title: str, angle_deg, loads: dict, colours: dict, marks: dict) -
                 label=" = ".join(group))
     for k, points in enumerate(marks.values()):
         x, y = zip(*points)
-        ax.plot(x, y, ls="none", marker="o", ms=9, mfc="none", mew=1.6, color="k", zorder=5,
+        ax.plot(x, y, ls="none", marker="o", ms=7, mfc="none", mew=1.2, color="k", zorder=5,
                 label=HANDBOOK_LABEL if k == 0 else "_")
     missing = [n for n in loads if n not in drawn]
     ax.set_title(title + (f"; not determinate: {', '.join(missing)}" if missing else ""),
@@ -191,8 +197,8 @@ def _panel(ax, title: str, angle_deg, loads: dict, colours: dict, marks: dict) -
     ax.set_xlabel("input angle [deg]")
     ax.set_ylabel("bearing force [N]")
     ax.set_xticks(np.arange(0, 361, 45))
-    ax.grid(alpha=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    ax.grid(True)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), handlelength=2.0)
 
 
 CASES = (("Z", (30.0, 30.0)), ("W", (30.0, 30.0)), ("Z", (10.0, 40.0)), ("W", (15.0, 25.0)))

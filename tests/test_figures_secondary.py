@@ -18,7 +18,7 @@ def test_the_handbook_values_sit_on_the_package_curves(tmp_path, monkeypatch):
                         or [])
     results = secondary.revolutions("paper-slip", 250.0, tmp_path)
     fig, = kept
-    assert images.problems(fig) == []
+    assert images.print_problems(fig) == []
     assert "paper-slip" in fig.get_suptitle() and "250 N m" in fig.get_suptitle()
     for ax, loads in zip(fig.axes, results.values()):
         curves = {line.get_label(): line for line in ax.get_lines()
