@@ -1,0 +1,237 @@
+"""Every figure the figure commands draw, read back at its printed size against the rules
+of print (:mod:`cardan_forces.experiments.images`): a page at most (7 x 9.5 in), no text
+under 7 pt, every legend entry with an artist that shows (not covered by others), and no
+data drawn inside a start-up interval the figure declares (the penalty simulation's
+before :data:`~cardan_forces.paper_repro.verdicts.SETTLED_S`, the engine's before its
+settling). On quick runs of a few instants; then the checks themselves, each on a
+figure that breaks its rule.
+"""
+
+from __future__ import annotations
+
+import re
+from types import SimpleNamespace
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from cardan_forces.driveline.dynamics import simulate  # noqa: E402
+from cardan_forces.driveline.equilibrium import build_operator  # noqa: E402
+from cardan_forces.driveline.loading import load_scene  # noqa: E402
+from cardan_forces.experiments import engine, images, report, secondary  # noqa: E402
+from cardan_forces.paper_repro import repro, verdicts  # noqa: E402
+from matplotlib.text import Text  # noqa: E402
+
+PAGE = (7.0, 9.5)
+"""The largest figure a page holds (inches)."""
+SMALLEST_PT = 7.0
+
+
+def _kept(monkeypatch_context, *modules) -> list:
+    """Figures passed to ``save`` (in :mod:`images` and ``modules``) kept, not written."""
+    kept = []
+
+    def keep(fig, stem, formats=("png",)):
+        kept.append((stem.name, fig))
+        return []
+
+    for module in (images, *modules):
+        monkeypatch_context.setattr(module, "save", keep)
+    return kept
+
+
+def _check(fig, start_s: float | None = None, labels=()) -> None:
+    """The rules of print on ``fig``: each said with the figure's title."""
+    name = fig.get_suptitle()
+    width, height = fig.get_size_inches()
+    assert width <= PAGE[0] and height <= PAGE[1], name
+    small = [t.get_text() for t in fig.findobj(Text)
+             if t.get_visible() and t.get_text().strip() and t.get_fontsize() < SMALLEST_PT]
+    assert small == [], name
+    assert images.print_problems(fig) == [], name
+    if start_s is not None:
+        assert images.drawn_before(fig, start_s, labels) == [], name
+
+
+@pytest.fixture(scope="module")
+def repro_figures(tmp_path_factory):
+    """``cardan repro --quick``'s figures (Figs. 11-15 and MuJoCo's where installed),
+    with the penalty simulation, by file stem."""
+    with pytest.MonkeyPatch.context() as patch:
+        kept = _kept(patch)
+        repro.run_repro(out=tmp_path_factory.mktemp("repro"), quick=True, workers=0,
+                        progress=lambda _: None)
+    yield dict(kept)
+    for _, fig in kept:
+        plt.close(fig)
+
+
+def test_repro_s_figures_fit_a_page_and_keep_the_rules_of_print(repro_figures):
+    assert {"fig11", "fig12", "fig13", "fig14"} <= set(repro_figures)
+    assert any(stem.startswith("fig15_") for stem in repro_figures)
+    start = verdicts.SETTLED_S  # the quick run starts at t = 0
+    for stem, fig in repro_figures.items():
+        if stem == "engine":
+            continue
+        _check(fig, start, ("penalty",))
+        assert any(line.get_label().startswith("penalty") for ax in fig.axes
+                   for line in ax.lines), f"{stem}: the penalty is drawn after its start-up"
+
+
+def test_repro_s_mujoco_figure_is_drawn_after_the_engine_s_settling(repro_figures):
+    pytest.importorskip("mujoco")
+    fig = repro_figures["engine"]
+    start = engine.settle_s({s.label: SimpleNamespace(softness=s)
+                             for s in engine.SETTINGS if s.label in engine.FIGURE_SETTINGS})
+    _check(fig, start, ("MuJoCo",))
+
+
+def test_titles_write_powers_of_units_as_superscripts(repro_figures):
+    titles = [fig.get_suptitle() for stem, fig in repro_figures.items()
+              if stem.startswith("fig15_")]
+    assert titles and all("m/s\u00b2" in t and "^2" not in t for t in titles)
+
+
+@pytest.fixture(scope="module")
+def paper_report():
+    """``cardan report paper`` over its first 0.1 s at three instants: the operator and
+    the histories."""
+    op = build_operator(simulate(load_scene("paper"), np.linspace(0.0, 0.1, 3)))
+    return op, report.histories(op)
+
+
+def test_report_pages_keep_the_rules_of_print(paper_report):
+    op, h = paper_report
+    with images.styled():
+        figs = report.pages(op, h)
+    assert len(figs) > 1  # paginated, not one canvas
+    for fig in figs:
+        _check(fig)
+        plt.close(fig)
+
+
+def test_report_pages_with_the_engine_draw_nothing_in_its_settling(paper_report):
+    """MuJoCo's open circles on every panel, none within the engine's settling; the
+    rules of print on the first page (the overlay is alike on every page)."""
+    pytest.importorskip("mujoco")
+    op, h = paper_report
+    overlay = report.engine_overlay(op, h, "test")
+    with images.styled():
+        figs = report.pages(op, h, overlay)
+    _check(figs[0])
+    settling = op.t < op.t[0] + overlay.settle_s
+    assert settling.any()
+    for fig in figs:
+        circles = [line for ax in fig.axes for line in ax.lines if line.get_marker() == "o"]
+        assert circles and not any(np.isfinite(np.asarray(line.get_ydata(), float)[
+            settling]).any() for line in circles)
+        plt.close(fig)
+
+
+def test_cardan_engine_s_figure_keeps_the_rules_of_print(tmp_path):
+    pytest.importorskip("mujoco")
+    result = engine.study("paper", stop_s=0.15, instants=3)
+    with pytest.MonkeyPatch.context() as patch:
+        kept = _kept(patch, engine)
+        engine.draw(result, tmp_path / "engine")
+    (_, fig), = kept
+    _check(fig, engine.settle_s(result.runs), ("MuJoCo",))
+    plt.close(fig)
+
+
+def test_cardan_secondary_s_figure_keeps_the_rules_of_print(tmp_path):
+    with pytest.MonkeyPatch.context() as patch:
+        kept = _kept(patch, secondary)
+        secondary.revolutions("paper-slip", 100.0, tmp_path)
+    (_, fig), = kept
+    _check(fig)
+    plt.close(fig)
+
+
+def test_the_print_style_is_for_a_page():
+    assert images.PAGE_IN[0] <= PAGE[0] and images.PAGE_IN[1] <= PAGE[1]
+    assert images.MIN_TEXT_PT >= SMALLEST_PT
+    sizes = {k: v for k, v in images.STYLE.items()  # the type sizes
+             if k.endswith(("font.size", "titlesize", "labelsize", "fontsize"))}
+    assert sizes and min(sizes.values()) >= images.MIN_TEXT_PT
+
+
+# The checks themselves, each on a figure that breaks its rule.
+
+def _figure(size=(6.0, 4.0)):
+    fig, ax = plt.subplots(figsize=size)
+    fig.suptitle("a figure")
+    ax.set_title("(a) a panel", loc="left")
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("force [N]")
+    return fig, ax
+
+
+def test_a_figure_larger_than_a_page_is_found():
+    fig, ax = _figure((8.0, 10.0))
+    ax.plot([0, 1], [0, 1])
+    assert any("larger than a page" in p for p in images.print_problems(fig))
+    plt.close(fig)
+
+
+def test_text_under_7_pt_is_found():
+    fig, ax = _figure()
+    ax.plot([0, 1], [0, 1])
+    ax.annotate("tiny", (0.5, 0.5), fontsize=6)
+    assert any("'tiny' at 6 pt" in p for p in images.print_problems(fig))
+    plt.close(fig)
+
+
+def test_a_legend_entry_covered_by_another_line_is_found():
+    """Two equal lines of one width and style: the first does not show. Drawn in
+    interleaved dashes (:func:`images.interleave`), both show."""
+    t = np.linspace(0, 1, 50)
+    fig, ax = _figure()
+    ax.plot(t, t, color="C0", label="a")
+    ax.plot(t, t, color="C1", label="b")
+    fig.legend(loc="lower center")
+    fig.subplots_adjust(bottom=0.3)
+    assert images.covered(fig) == ["a"]
+    assert any("'a' is covered" in p for p in images.print_problems(fig))
+    plt.close(fig)
+    fig, ax = _figure()
+    for k, colour in enumerate(("C0", "C1", "C2")):
+        ax.plot(t, t, color=colour, ls=images.interleave(k, 3), label="abc"[k])
+    fig.legend(loc="lower center", ncol=3)
+    fig.subplots_adjust(bottom=0.3)
+    assert images.covered(fig) == []
+    plt.close(fig)
+
+
+def test_data_inside_a_start_up_interval_is_found():
+    t = np.linspace(0, 1, 11)
+    fig, ax = _figure()
+    ax.plot(t, t, label="penalty (raw)")
+    ax.plot(t, np.where(t >= 0.1, t, np.nan), label="penalty, filtered")
+    found = images.drawn_before(fig, 0.1, ("penalty",))
+    assert found == ["'penalty (raw)' drawn at x = 0 < 0.1"]
+    plt.close(fig)
+
+
+def test_a_figure_of_several_pages_is_one_pdf_and_a_png_per_page(tmp_path):
+    figs = [_figure()[0] for _ in range(3)]
+    (tmp_path / "report.png").write_bytes(b"an earlier single page")
+    (tmp_path / "report-4.png").write_bytes(b"an earlier fourth page")
+    paths = images.save_pages(figs, tmp_path / "report", ("png", "pdf"))
+    assert [p.name for p in paths] == ["report-1.png", "report-2.png", "report-3.png",
+                                       "report.pdf"]
+    assert sorted(p.name for p in tmp_path.glob("report*.png")) == [
+        "report-1.png", "report-2.png", "report-3.png"]  # no page of an earlier drawing
+    pdf = (tmp_path / "report.pdf").read_bytes()
+    assert len(re.findall(rb"/Type /Page\b", pdf)) == 3
+    one = images.save_pages(figs[:1], tmp_path / "one", ("png",))
+    assert [p.name for p in one] == ["one.png"]
+    for fig in figs:
+        plt.close(fig)
+
+
+def test_units_are_typeset():
+    assert images.typeset("gravity (0, 9.81, 0) m/s^2") == "gravity (0, 9.81, 0) m/s\u00b2"
