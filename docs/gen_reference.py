@@ -99,9 +99,12 @@ def _record_reads() -> dict[tuple[str, str], dict]:
             entry(self, key)
         return get(self, key, default)
 
-    def watched_number(self, key, *args, kind="number", **kw):
-        entry(self, key)["kind"] = kind
-        return number(self, key, *args, kind=kind, **kw)
+    def watched_number(self, key, *args, kind="number", within=None, **kw):
+        read = entry(self, key)
+        read["kind"] = kind
+        if within is not None:  # a radial rating's angle (0) is read without its range
+            read["within"] = within
+        return number(self, key, *args, kind=kind, within=within, **kw)
 
     def watched_vector(self, key, size, *args, kind="position_m", unit=False, **kw):
         entry(self, key)["kind"] = "direction" if unit else kind
@@ -130,6 +133,27 @@ def _by_key(reads: dict) -> tuple[dict[str, str], dict[str, set[str]]]:
     return kinds, defaults
 
 
+def _read_as(read: dict):
+    """How the loader reads a key: within its physical range (a
+    :class:`~cardan_forces.driveline.scene.Range`) where it has one, else as its kind.
+    """
+    return read.get("within") or read["kind"]
+
+
+def _kinds_of(cls: type, reads: dict, kinds: dict) -> dict:
+    """:func:`_read_as` of each field of ``cls``, from the file's table that reads most
+    of them (``joints[]`` for a joint, ``tolerances`` for the tolerances, whose
+    ``articulation_deg`` differ), the other fields' kinds by key alone (``kinds``).
+    """
+    names = {f.name for f in dataclasses.fields(cls)}
+    counts: dict[str, int] = {}
+    for where, key in reads:
+        counts[where] = counts.get(where, 0) + (key in names)
+    table = max(counts, key=counts.get, default=None)
+    return kinds | {key: _read_as(read) for (where, key), read in reads.items()
+                    if where == table and key in names and _read_as(read)}
+
+
 def file_keys_markdown(reads: dict) -> str:
     """Every key of a scene file the loader reads, by table, with unit, default, limit."""
     optional = {f.name for cls in scene_classes() for f in dataclasses.fields(cls)
@@ -142,7 +166,8 @@ def file_keys_markdown(reads: dict) -> str:
         return " or ".join(sorted(read["defaults"]))
 
     rows = [[f"`{where}`", f"`{key}`", _unit(key), default(key, read),
-             _limit(key, {key: read["kind"]})] for (where, key), read in sorted(reads.items())]
+             _limit(key, {key: _read_as(read)})]
+            for (where, key), read in sorted(reads.items())]
     return "\n".join(_table(["table", "key", "unit", "default", "limit"], rows)) + "\n"
 
 
@@ -150,8 +175,14 @@ def _unit(name: str) -> str:
     return next((unit for suffix, unit in UNITS if name.endswith(suffix)), "-")
 
 
-def _limit(name: str, kinds: dict[str, str]) -> str:
+def _limit(name: str, kinds: dict) -> str:
+    """The limit of field ``name`` whose kind of quantity ``kinds`` gives: its physical
+    range where the loader reads it within one (a :class:`~.scene.Range`, the loader's
+    own constant), else its kind's :data:`~.scene.LIMITS`.
+    """
     kind = kinds.get(name)
+    if isinstance(kind, scene.Range):
+        return str(kind)
     if kind == "direction":
         return "any length above 0 (normalized)"
     if kind not in scene.LIMITS:
@@ -232,12 +263,13 @@ def scene_markdown() -> str:
     parts = []
     for cls in scene_classes():
         hints = typing.get_type_hints(cls, vars(scene))
+        fields = _kinds_of(cls, reads, kinds)
         doc = " ".join(inspect.getdoc(cls).split("\n\n")[0].split())
         parts += [f"### {cls.__name__}", "", doc, "",
                   "| field | type | unit | default | limit |", "|---|---|---|---|---|"]
         for f in dataclasses.fields(cls):
             parts.append(f"| `{f.name}` | {_type_name(hints[f.name])} | {_unit(f.name)} | "
-                         f"{_default(f, defaults)} | {_limit(f.name, kinds)} |")
+                         f"{_default(f, defaults)} | {_limit(f.name, fields)} |")
         parts.append("")
     parts += ["## Every key of a scene file", "",
               "Every key the loader reads from the built-in scenes' files, by table (an "
@@ -336,26 +368,32 @@ def backends_markdown() -> str:
 
 # ---------------------------------------------------------------------- determinacy
 
-SCENES = ("paper", "paper-slip", "propshaft")
-"""The built-in scenes the determinacy table compares."""
+SCENES = ("paper", "paper-slip", "propshaft", "axle-pinion")
+"""The built-in scenes the determinacy table compares; the others (``paper-fig15``,
+``paper-fig15-axial``, ``paper-penalty``) are ``paper`` under another gravity or with its
+joints released, of ``paper``'s rigid structure."""
 
 TOL = 1e-8
 """A component is determinate where its row of the null-space basis is below this."""
 
 
-def determinacy_rows(t: float = 0.5) -> list[dict]:
-    """Rank, nullity, named modes and determinate components of each scene at ``t`` s."""
-    rows = []
-    for name in SCENES:
+def determinacy_rows(t: float = 0.5, scenes=SCENES) -> list[dict]:
+    """Rank, nullity, named modes (each kind met in any of ``scenes``) and determinate
+    components of each of ``scenes`` at ``t`` s.
+    """
+    rows, found = [], {}
+    for name in scenes:
         motion = cf.simulate(cf.load_scene(name))
         i = int(abs(motion.t - t).argmin())
         det = cf.determinacy(cf.build_operator(motion), i)
         kinds = [m.kind for m in cf.named_modes(motion, i)]
+        found.update(dict.fromkeys(kinds))
         rows.append({"scene": name, "forces": len(det.names), "rank": det.rank,
-                     "nullity": len(det.names) - det.rank,
-                     "modes": {k: kinds.count(k) for k in ("end-face pair", "axial split",
-                                                           "closed loop")},
+                     "nullity": len(det.names) - det.rank, "kinds": kinds,
                      "determinate": int((det.null_row_norms < TOL).sum())})
+    for row in rows:  # every kind of mode met in any scene, counted in each
+        kinds = row.pop("kinds")
+        row["modes"] = {k: kinds.count(k) for k in found}
     return rows
 
 

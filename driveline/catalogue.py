@@ -12,6 +12,7 @@ from .scene import (
     CONTACT_ANGLE_DEG,
     MAX_ARTICULATION_DEG,
     BearingRating,
+    Range,
     Tolerances,
     table_keys,
 )
@@ -58,11 +59,9 @@ def _contact_angle(t, kind_of: str) -> float:
             t.fail("contact_angle_deg", f"a {kind_of} bearing has contact angle 0 by "
                    "definition; give 0 or none")
         return 0.0
-    alpha = t.number("contact_angle_deg", positive=True, kind="angle_deg")
-    if (refusal := CONTACT_ANGLE_DEG.refusal(alpha)) is not None:
-        t.fail("contact_angle_deg", f"{refusal} (the contact angles of real "
-               f"{kind_of.replace('_', ' ')} bearings)")
-    return alpha
+    return t.number("contact_angle_deg", positive=True, kind="angle_deg",
+                    within=CONTACT_ANGLE_DEG, why=f"the contact angles of real "
+                    f"{kind_of.replace('_', ' ')} bearings")
 
 
 def read_tolerances(top) -> Tolerances | None:
@@ -78,11 +77,10 @@ def read_tolerances(top) -> Tolerances | None:
     tol = Tolerances(
         bearing_seat_m=tt.number("bearing_seat_m", 0.0, nonnegative=True, kind="length_m"),
         articulation_deg=tt.number("articulation_deg", 0.0, nonnegative=True,
-                                   kind="angle_deg"),
+                                   kind="angle_deg", within=Range(0.0, MAX_ARTICULATION_DEG,
+                                                                  "deg"),
+                                   why="a joint's largest angle"),
         bearing_clearance_m=tt.number("bearing_clearance_m", 0.0, nonnegative=True,
                                       kind="length_m"))
-    if tol.articulation_deg > MAX_ARTICULATION_DEG:
-        tt.fail("articulation_deg", f"must be at most {MAX_ARTICULATION_DEG:g} deg, got "
-                f"{tol.articulation_deg:g}")
     tt.done()
     return tol

@@ -46,6 +46,7 @@ from .scene import (
     Frame,
     Joint,
     Material,
+    Range,
     Scene,
     SceneError,
     Shaft,
@@ -231,9 +232,11 @@ class _Table:
         return self.raw[key]
 
     def number(self, key: str, default=..., positive=False, nonnegative=False,
-               kind: str = "number") -> float:
+               kind: str = "number", within: Range | None = None, why: str = "") -> float:
         """A finite number of ``kind`` (a key of :data:`LIMITS`): at most its ``most`` in
-        magnitude; when ``positive``, at least its ``least``.
+        magnitude; when ``positive``, at least its ``least``; inside the physical range
+        ``within``, if given, refused with ``why`` it is that range (the scene reference
+        shows ``within`` as the field's limit).
         """
         value = self.get(key, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -254,6 +257,8 @@ class _Table:
         if abs(value) > most:
             self.fail(key, f"must be at most {most:g} in magnitude (limit for {kind}), "
                            f"got {value:g}")
+        if within is not None and (refusal := within.refusal(value)) is not None:
+            self.fail(key, f"{refusal} ({why})" if why else refusal)
         return value
 
     def string(self, key: str, default=..., choices: tuple[str, ...] | None = None,

@@ -120,8 +120,11 @@ class Range:
         """
         if self.least <= value <= self.most:
             return None
-        return (f"{value:g} {self.unit} is outside {self.least:.3g} to {self.most:.3g} "
-                f"{self.unit}")
+        return f"{value:g} {self.unit} is outside {self}"
+
+    def __str__(self) -> str:
+        """``LEAST to MOST UNIT``, as refusals and the scene reference write it."""
+        return f"{self.least:.3g} to {self.most:.3g} {self.unit}"
 
 
 CONTACT_ANGLE_DEG = Range(5.0, 60.0, "deg")

@@ -115,8 +115,8 @@ SCENES = [
      "field 'frame.input_start_m': components must be at most 1000 in magnitude (limit for "
      "position_m), got [1e+200, 0.0, 0.0]"),
     ("articulation-89.5", paper((r"articulation_deg = 30.0", "articulation_deg = 89.5")),
-     "field 'joints[0].articulation_deg': |articulation| must be at most 89 deg (below 90: "
-     "the velocity ratio 1/cos grows without bound), got 89.5"),
+     "field 'joints[0].articulation_deg': 89.5 deg is outside -89 to 89 deg (below 90 deg: "
+     "the velocity ratio 1/cos grows without bound)"),
     ("dotted-name", paper((r'name = "intermediate"', 'name = "inter.mediate"')),
      "field 'shafts[1].name': a name is letters, digits, '_' or '-' (it becomes part of "
      "dotted force names), got 'inter.mediate'"),

@@ -178,7 +178,7 @@ def test_unphysical_angle_is_refused_and_a_failed_row(tmp_path, capsys):
                                           "min_norm", "--quick"]))
     (row,) = sweep.run_point(study.point(95.0, 0.0))
     assert row.status == "failed" and row.max_equilibrium == math.inf
-    assert "must be at most 89 deg" in row.message
+    assert "95 deg is outside -89 to 89 deg" in row.message
 
 
 def test_point_scene_sets_every_joint_and_the_amplitude():

@@ -76,10 +76,9 @@ class AngularContact(BearingKind):
     record = AngularContactBearing
 
     def read(self, table, name, offset_m, rating) -> Bearing:
-        alpha = table.number("contact_angle_deg", positive=True, kind="angle_deg")
-        if (refusal := CONTACT_ANGLE_DEG.refusal(alpha)) is not None:
-            table.fail("contact_angle_deg", f"{refusal} (the contact angles of real "
-                       "angular-contact and tapered roller bearings)")
+        alpha = table.number("contact_angle_deg", positive=True, kind="angle_deg",
+                             within=CONTACT_ANGLE_DEG, why="the contact angles of real "
+                             "angular-contact and tapered roller bearings")
         if rating is not None and rating.type not in ANGLED_TYPES:
             table.fail("rating.type", f"an angular-contact bearing is rated as one of "
                        f"{', '.join(ANGLED_TYPES)}, got {rating.type!r}")

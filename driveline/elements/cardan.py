@@ -86,11 +86,9 @@ class Cardan(ElementKind):
         """
         t.expect(table_keys(Joint))
         name = t.string("name", name=True)
-        gamma = t.number("articulation_deg", kind="angle_deg")
-        if not abs(gamma) <= MAX_ARTICULATION_DEG:
-            t.fail("articulation_deg", f"|articulation| must be at most "
-                   f"{MAX_ARTICULATION_DEG:g} deg (below 90: the velocity ratio 1/cos grows "
-                   f"without bound), got {gamma:g}")
+        gamma = t.number("articulation_deg", kind="angle_deg", within=Range(
+            -MAX_ARTICULATION_DEG, MAX_ARTICULATION_DEG, "deg"), why="below 90 deg: the "
+            "velocity ratio 1/cos grows without bound")
         joint = Joint(name=name, articulation_deg=gamma,
                       yoke_phase_deg=t.number("yoke_phase_deg", 0.0, kind="angle_deg"),
                       **{key: t.number(key, positive=True, kind="length_m")

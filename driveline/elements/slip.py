@@ -108,12 +108,11 @@ class Slip(ElementKind):
             t.fail("offset_m", "a slip joint cannot sit exactly at a bearing")
         slip = SlipJoint(
             name=t.string("name", name=True), shaft=shaft_name, offset_m=offset,
-            pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m"),
+            pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m",
+                                    within=SPLINE_PITCH_RADIUS_M,
+                                    why="the pitch radii of ISO 4156's involute splines"),
             friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True,
                                           kind="ratio"))
-        if (refusal := SPLINE_PITCH_RADIUS_M.refusal(slip.pitch_radius_m)) is not None:
-            t.fail("pitch_radius_m", f"{refusal} (the pitch radii of ISO 4156's "
-                   "involute splines)")
         t.done()
         return slip
 
