@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .record import Status
+
 TOL = 1e-12
 """Default stopping rule: ``||E f - e|| <= TOL ||e||`` (the equilibrium residual, the
 only optimality condition the dual iteration leaves inexact)."""
@@ -45,7 +47,7 @@ across a change of the contacts' states (a clearance closing, a cone's load pass
 zero) can make the steps crawl where a cold start converges (on ``axle-pinion``'s
 ``compliance`` one instant took 184 steps warm, 25 cold)."""
 
-STATUS = ("solved", "inaccurate", "inaccurate", "failed", "failed")
+STATUS = (Status.SOLVED, Status.INACCURATE, Status.INACCURATE, Status.FAILED, Status.FAILED)
 """Status codes of :func:`newton_numpy` and the kernel, by index."""
 REASONS = ("", "no convergence in the iteration limit", "the line search made no progress",
            "non-finite numbers or a contact without positive stiffness",

@@ -19,12 +19,14 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .record import Status
+
 
 class LCPResult(NamedTuple):
-    """Answer of one LCP method: ``status`` is one of the record statuses."""
+    """Answer of one LCP method, with the record's status."""
 
     z: np.ndarray
-    status: str
+    status: Status
     iterations: int
     message: str
 
@@ -42,7 +44,7 @@ def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> LCPRes
     """Lemke's method on the tableau ``w - M z - e z0 = q`` (columns w, z, z0, rhs)."""
     n = len(q)
     if np.all(q >= 0):
-        return LCPResult(np.zeros(n), "solved", 0, "q >= 0: z = 0")
+        return LCPResult(np.zeros(n), Status.SOLVED, 0, "q >= 0: z = 0")
     max_pivots = 50 * (n + 1) if max_pivots is None else max_pivots
     tableau = np.hstack([np.eye(n), -M, -np.ones((n, 1)), q[:, None]])
     basis = np.arange(n)
@@ -58,18 +60,19 @@ def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> LCPRes
             z = np.zeros(n)
             in_z = (basis >= n) & (basis < 2 * n)
             z[basis[in_z] - n] = tableau[in_z, -1]
-            return LCPResult(z, "solved", pivots, f"{pivots} pivots")
+            return LCPResult(z, Status.SOLVED, pivots, f"{pivots} pivots")
         entering = leaving + n if leaving < n else leaving - n
         column = tableau[:, entering]
         candidates = np.flatnonzero(column > pivot_tol)
         if candidates.size == 0:
             message = "secondary ray: no solution found"
-            return LCPResult(np.full(n, np.nan), "failed", pivots, message)
+            return LCPResult(np.full(n, np.nan), Status.FAILED, pivots, message)
         ratios = tableau[candidates, -1] / column[candidates]
         ties = candidates[ratios <= ratios.min() + 1e-12 * max(1.0, abs(ratios.min()))]
         leaves_artificial = ties[basis[ties] == artificial]
         row = int(leaves_artificial[0] if leaves_artificial.size else ties[0])
-    return LCPResult(np.full(n, np.nan), "failed", max_pivots, f"pivot limit {max_pivots} reached")
+    return LCPResult(np.full(n, np.nan), Status.FAILED, max_pivots,
+                     f"pivot limit {max_pivots} reached")
 
 
 def pgs(M: np.ndarray, q: np.ndarray, z0: np.ndarray | None = None, tol: float = 1e-10,
@@ -78,7 +81,7 @@ def pgs(M: np.ndarray, q: np.ndarray, z0: np.ndarray | None = None, tol: float =
     n = len(q)
     diag = np.diag(M)
     if np.any(diag <= 0):
-        return LCPResult(np.full(n, np.nan), "failed", 0, "PGS needs a positive diagonal of M")
+        return LCPResult(np.full(n, np.nan), Status.FAILED, 0, "PGS needs a positive diagonal of M")
     z = np.zeros(n) if z0 is None else np.maximum(np.asarray(z0, float), 0.0)
     target = tol * _scale(q)
     for sweep in range(1, max_iter + 1):
@@ -86,10 +89,10 @@ def pgs(M: np.ndarray, q: np.ndarray, z0: np.ndarray | None = None, tol: float =
             z[i] = max(0.0, z[i] - (M[i] @ z + q[i]) / diag[i])
         residual = natural_residual(M, q, z)
         if not np.isfinite(residual):
-            return LCPResult(z, "failed", sweep, "iterates diverged")
+            return LCPResult(z, Status.FAILED, sweep, "iterates diverged")
         if residual <= target:
-            return LCPResult(z, "solved", sweep, f"natural residual {residual:.1e}")
-    return LCPResult(z, "inaccurate", max_iter, f"max_iter reached, residual {residual:.1e}")
+            return LCPResult(z, Status.SOLVED, sweep, f"natural residual {residual:.1e}")
+    return LCPResult(z, Status.INACCURATE, max_iter, f"max_iter reached, residual {residual:.1e}")
 
 
 def fischer_burmeister(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -109,9 +112,9 @@ def fb_newton(M: np.ndarray, q: np.ndarray, z0: np.ndarray | None = None, tol: f
         phi = fischer_burmeister(z, w)
         norm = float(np.max(np.abs(phi), initial=0.0))
         if not np.isfinite(norm):
-            return LCPResult(z, "failed", it, "iterates diverged")
+            return LCPResult(z, Status.FAILED, it, "iterates diverged")
         if norm <= target:
-            return LCPResult(z, "solved", it, f"||Phi||_inf {norm:.1e}")
+            return LCPResult(z, Status.SOLVED, it, f"||Phi||_inf {norm:.1e}")
         if it == max_iter:
             break
         r = np.hypot(z, w)
@@ -134,6 +137,6 @@ def fb_newton(M: np.ndarray, q: np.ndarray, z0: np.ndarray | None = None, tol: f
                 break
             step *= 0.5
         else:
-            return LCPResult(z, "failed", it, f"line search failed at ||Phi||_inf {norm:.1e}")
+            return LCPResult(z, Status.FAILED, it, f"line search failed at ||Phi||_inf {norm:.1e}")
         z = trial
-    return LCPResult(z, "inaccurate", max_iter, f"max_iter reached, ||Phi||_inf {norm:.1e}")
+    return LCPResult(z, Status.INACCURATE, max_iter, f"max_iter reached, ||Phi||_inf {norm:.1e}")

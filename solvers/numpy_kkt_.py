@@ -15,7 +15,7 @@ import time
 import numpy as np
 from cardan_forces.formulations.problems import LS
 
-from .record import Outcome
+from .record import Outcome, Status
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"numpy-kkt": None}
@@ -39,7 +39,7 @@ def solve_ls(problem: LS, tol: float | None = None, initvals=None,
     # W z = A' mu with mu = U S^-1 V' y; in the conic form (P z + A'y = 0) the dual is -mu
     mu = U[:, :rank] @ ((Vt[:rank] @ y) / sigma[:rank])
     return Outcome(
-        "solved", z, y=-mu,
+        Status.SOLVED, z, y=-mu,
         message=f"rank {rank} of {min(A.shape)}",
         objective=0.5 * float(z @ (w * z)),
         setup_s=setup_done - start,

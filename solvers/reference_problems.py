@@ -21,6 +21,8 @@ from cardan_forces.formulations.problems import (
     SecondOrderCone,
 )
 
+from .record import Status
+
 
 @dataclass(frozen=True)
 class Reference:
@@ -28,7 +30,7 @@ class Reference:
 
     name: str
     problem: object
-    status: str = "solved"
+    status: Status = Status.SOLVED
     x: np.ndarray | None = None
 
 
@@ -84,7 +86,7 @@ def _qp() -> list[Reference]:
                   QP(checks=_checks([[1.0, 1]], [-1.0], [True, True]), formulation="ref",
                      P=np.eye(2), q=np.zeros(2), A=np.array([[1.0, 1]]), b=np.array([-1.0]),
                      lb=np.zeros(2)),
-                  status="infeasible"),
+                  status=Status.INFEASIBLE),
     ]
 
 
@@ -101,12 +103,12 @@ def _lp() -> list[Reference]:
         Reference("lp_unbounded",
                   LP(checks=ray, formulation="ref", c=np.array([-1.0, 0]),
                      A=np.array([[1.0, -1]]), b=np.array([1.0]), lb=np.zeros(2)),
-                  status="unbounded"),
+                  status=Status.UNBOUNDED),
         Reference("lp_infeasible",
                   LP(checks=_checks([[1.0, 1]], [-1.0], [True, True]), formulation="ref",
                      c=np.array([1.0, 1]), A=np.array([[1.0, 1]]), b=np.array([-1.0]),
                      lb=np.zeros(2)),
-                  status="infeasible"),
+                  status=Status.INFEASIBLE),
     ]
 
 
@@ -130,7 +132,7 @@ def _lcp() -> list[Reference]:
                   x=np.array([1.0, 0, 2, 0, 5, 0])),
         Reference("lcp_infeasible",
                   LCP(checks=checks1, formulation="ref", to_forces=forces1, M=M1, q=q1),
-                  status="infeasible"),
+                  status=Status.INFEASIBLE),
     ]
 
 
