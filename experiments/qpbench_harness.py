@@ -1,7 +1,7 @@
 """Both accuracy views on the same solves, and qpbenchmark itself beside them.
 
 ``cardan bench --harness qpbenchmark`` runs each QP backend on exported problems at
-qpbenchmark's four settings (:mod:`cardan_forces.solvers.settings_profiles`) and scores
+qpbenchmark's four settings (:mod:`cardan_forces.solvers.settings`) and scores
 every solve twice:
 
 - **solver optimality** (:mod:`cardan_forces.solvers.qp_measures`): qpbenchmark's
@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 from cardan_forces.formulations.problems import Conic
-from cardan_forces.solvers import get, settings_profiles
+from cardan_forces.solvers import get
 from cardan_forces.solvers import qp_measures as qm
 from cardan_forces.solvers.checks import finalize
 from cardan_forces.solvers.conversions import convert
@@ -43,6 +43,7 @@ from cardan_forces.solvers.optimality import unique_optimum
 from cardan_forces.solvers.qpsolvers_ import conic_duals
 from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status
 from cardan_forces.solvers.registry import with_warnings
+from cardan_forces.solvers.settings import SETTINGS, has_profile, profile, qpbenchmark_options
 
 from . import progress
 from .export import as_qp, class_name
@@ -75,9 +76,9 @@ def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
 
     began = time.perf_counter()
     qp = as_qp(problem)
-    solver = settings_profiles.profile(backend).solver
+    solver = profile(backend).solver
     data = qpsolvers_problem(qp, solver)
-    options = settings_profiles.options(backend, setting)
+    options = qpbenchmark_options(backend, setting)
     with warnings.catch_warnings(record=True) as caught:  # kept with the row
         warnings.simplefilter("always")
         start = time.perf_counter()
@@ -108,7 +109,7 @@ def solve_conic_both(problem, backend: str, setting: str, reference=None) -> dic
     began = time.perf_counter()
     received = convert(problem, (Conic,))
     try:
-        outcome = get(backend).solve(received, **settings_profiles.options(backend, setting))
+        outcome = get(backend).solve(received, **qpbenchmark_options(backend, setting))
     except Exception as exc:  # a failing solver is a solve not found
         outcome = Outcome("failed", None, message=f"{type(exc).__name__}: {exc}")
     found = outcome.status == "solved"
@@ -127,7 +128,7 @@ def _row(problem, backend, setting, found, measured, record, runtime, solver_s,
     force = {k: float(record.residuals[k]) for k in Residuals.KEYS}
     if record.residuals.reference is not None and unique_optimum(problem):
         force["distance"] = float(record.residuals.reference)
-    chosen = qm.SETTINGS[setting]
+    chosen = SETTINGS[setting]
     return {
         "formulation": problem.formulation, "solver": backend, "setting": setting,
         "found": found, **measured, "solver_ok": bool(qm.succeeds(found, *measured.values(),
@@ -154,7 +155,7 @@ def force_rule(status: str, force: dict[str, float]) -> str:
 def backends_with_profiles(available) -> list[str]:
     """The qpsolvers backends among ``available`` that declare qpbenchmark's settings."""
     return [b for b in available if get(b).family == "qpsolvers"
-            and settings_profiles.has_profile(b)]
+            and has_profile(b)]
 
 
 def conic_backends(available) -> list[str]:
@@ -162,10 +163,10 @@ def conic_backends(available) -> list[str]:
     declare qpbenchmark's settings (Clarabel's own API).
     """
     return [b for b in available if get(b).family != "qpsolvers" and get(b).solve is not None
-            and Conic in get(b).accepts and settings_profiles.has_profile(b)]
+            and Conic in get(b).accepts and has_profile(b)]
 
 
-def run_package(problems: dict[str, object], backends, settings=tuple(qm.SETTINGS),
+def run_package(problems: dict[str, object], backends, settings=tuple(SETTINGS),
                 references=None):
     """Rows of :func:`solve_both` for every QP problem x qpsolvers backend x setting,
     and of :func:`solve_conic_both` for every conic problem x conic backend among
@@ -197,7 +198,7 @@ def package_tables(rows: list[dict]) -> list[dict]:
     keys = dict.fromkeys((r["solver"], r["setting"]) for r in rows)
     for solver, setting in keys:
         mine = [r for r in rows if (r["solver"], r["setting"]) == (solver, setting)]
-        chosen = qm.SETTINGS[setting]
+        chosen = SETTINGS[setting]
         times = qm.runtime_for_mean([r["found"] for r in mine], [r["runtime_s"] for r in mine],
                                     chosen)
         out.append({

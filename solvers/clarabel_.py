@@ -22,14 +22,10 @@ import numpy as np
 from cardan_forces.formulations.problems import Conic
 
 from . import settings
-from .record import Outcome
+from .record import Outcome, Status
 from .registry import Backend
-from .settings_profiles import CLARABEL
 
 EXTRAS: dict[str, str | None] = {"clarabel": None, "clarabel-reduced": None}
-
-TOLERANCES = ("tol_gap_abs", "tol_gap_rel", "tol_feas")
-"""Clarabel's settings a requested tolerance sets."""
 
 UNSCALED = ("soc", "pow")
 """The cone kinds on which ``clarabel-reduced`` runs without equilibration. The reduced
@@ -42,15 +38,15 @@ inaccurate instead of 21 (so it keeps it on linear cones alone)."""
 
 
 STATUS = {
-    "Solved": "solved",
-    "AlmostSolved": "inaccurate",
-    "MaxIterations": "inaccurate",
-    "MaxTime": "inaccurate",
-    "InsufficientProgress": "inaccurate",
-    "PrimalInfeasible": "infeasible",
-    "AlmostPrimalInfeasible": "infeasible",
-    "DualInfeasible": "unbounded",
-    "AlmostDualInfeasible": "unbounded",
+    "Solved": Status.SOLVED,
+    "AlmostSolved": Status.INACCURATE,
+    "MaxIterations": Status.INACCURATE,
+    "MaxTime": Status.INACCURATE,
+    "InsufficientProgress": Status.INACCURATE,
+    "PrimalInfeasible": Status.INFEASIBLE,
+    "AlmostPrimalInfeasible": Status.INFEASIBLE,
+    "DualInfeasible": Status.UNBOUNDED,
+    "AlmostDualInfeasible": Status.UNBOUNDED,
 }
 """Clarabel status name -> ours; anything else (NumericalError, Unsolved, ...) is failed."""
 
@@ -136,7 +132,7 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
     A = np.asarray(problem.A, float)
     opts = clarabel.DefaultSettings()
     opts.verbose = False
-    chosen = settings.options_for(TOLERANCES, tol) | options
+    chosen = settings.solver_options("clarabel", tol) | options
     for key, value in chosen.items():
         setattr(opts, key, value)
     data = (_csc(np.triu(P)), np.asarray(problem.q, float), _csc(A),
@@ -144,7 +140,7 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
     setup_done = time.perf_counter()
     sol = _solver(clarabel, *data, opts).solve()
     status_name = str(sol.status)
-    return Outcome(STATUS.get(status_name, "failed"), np.asarray(sol.x),
+    return Outcome(STATUS.get(status_name, Status.FAILED), np.asarray(sol.x),
                    iterations=int(sol.iterations),
                    message="" if status_name == "Solved" else f"Clarabel status {status_name}",
                    objective=sol.obj_val, setup_s=setup_done - start,
@@ -158,5 +154,6 @@ def backends() -> list[Backend]:
     except ImportError:
         return []
     return [Backend(name="clarabel", family="clarabel", distributions=("clarabel",),
-                    accepts=(Conic,), solve=solve_conic, tolerances=TOLERANCES,
-                    qpbenchmark=CLARABEL, reducible=True, unscaled=UNSCALED)]
+                    accepts=(Conic,), solve=solve_conic,
+                    tolerances=settings.TOLERANCES["clarabel"],
+                    qpbenchmark=settings.PROFILES["clarabel"], reducible=True, unscaled=UNSCALED)]

@@ -19,7 +19,7 @@ import numpy as np
 from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 from . import settings
-from .record import Outcome
+from .record import Outcome, Status
 from .registry import Backend
 
 SOLVERS: dict[str, tuple[str, str, str | None]] = {
@@ -28,26 +28,19 @@ SOLVERS: dict[str, tuple[str, str, str | None]] = {
     "cvxpy-scs": ("SCS", "scs", None),
     "cvxpy-osqp": ("OSQP", "osqp", None),
 }
-"""Backend name -> (cvxpy solver name, settings key and distribution, pip extra)."""
+"""Backend name -> (cvxpy solver name, the solver's name in :data:`.settings.TOLERANCES`
+and its distribution, pip extra); cvxpy passes the tolerance parameters on."""
 
 EXTRAS: dict[str, str | None] = {name: extra for name, (_, _, extra) in SOLVERS.items()}
 
-TOLERANCES: dict[str, tuple[str, ...]] = {
-    "clarabel": ("tol_gap_abs", "tol_gap_rel", "tol_feas"),
-    "ecos": ("abstol", "reltol", "feastol"),
-    "scs": ("eps_abs", "eps_rel"),
-    "osqp": ("eps_abs", "eps_rel"),
-}
-"""Each solver's own parameters a requested tolerance sets (cvxpy passes them on)."""
-
 STATUS = {
-    "optimal": "solved",
-    "optimal_inaccurate": "inaccurate",
-    "user_limit": "inaccurate",
-    "infeasible": "infeasible",
-    "infeasible_inaccurate": "infeasible",
-    "unbounded": "unbounded",
-    "unbounded_inaccurate": "unbounded",
+    "optimal": Status.SOLVED,
+    "optimal_inaccurate": Status.INACCURATE,
+    "user_limit": Status.INACCURATE,
+    "infeasible": Status.INFEASIBLE,
+    "infeasible_inaccurate": Status.INFEASIBLE,
+    "unbounded": Status.UNBOUNDED,
+    "unbounded_inaccurate": Status.UNBOUNDED,
 }
 """cvxpy status -> ours; anything else (solver_error, infeasible_or_unbounded) is failed."""
 
@@ -204,11 +197,11 @@ def _solve_with(name: str):
             z.value = np.asarray(initvals, float)
         built = time.perf_counter()
         prob.solve(solver=cvx_name, warm_start=initvals is not None,
-                   **(settings.options_for(TOLERANCES[key], tol) | options))
+                   **(settings.solver_options(key, tol) | options))
         wall = time.perf_counter() - built
         compile_s = prob.compilation_time or 0.0
         stats = prob.solver_stats
-        return Outcome(STATUS.get(prob.status, "failed"), z.value,
+        return Outcome(STATUS.get(prob.status, Status.FAILED), z.value,
                        iterations=stats.num_iters,
                        message="" if prob.status == "optimal" else f"cvxpy status {prob.status}",
                        objective=prob.value, setup_s=built - start + compile_s,
@@ -238,5 +231,5 @@ def backends() -> list[Backend]:
         limits = {"supports": _no_power_cone} if key == "ecos" else {}
         found.append(Backend(name=name, family="cvxpy", distributions=("cvxpy", key),
                              extra=extra, accepts=accepts, solve=_solve_with(name),
-                             tolerances=TOLERANCES[key], **limits))
+                             tolerances=settings.TOLERANCES[key], **limits))
     return found

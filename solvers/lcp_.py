@@ -18,18 +18,15 @@ from .registry import Backend
 EXTRAS: dict[str, str | None] = dict.fromkeys(("lcp-lemke", "lcp-pgs", "lcp-fb-newton"))
 
 
-TOLERANCES: dict[str, tuple[str, ...]] = {"lcp-lemke": (), "lcp-pgs": ("tol",),
-                                          "lcp-fb-newton": ("tol",)}
-"""Each method's tolerance parameter (Lemke: a pivoting method, none)."""
-
-
 def _adapter(method, key: str, warm: bool):
-    """Wrap one method as a backend function (``initvals`` used only by ``warm`` methods)."""
+    """Wrap one method, named ``key`` in :data:`.settings.TOLERANCES`, as a backend
+    function (``initvals`` used only by ``warm`` methods).
+    """
 
     def solve_lcp(problem: LCP, tol=None, initvals=None, **options) -> Outcome:
         start = time.perf_counter()
         M, q = np.asarray(problem.M, float), np.asarray(problem.q, float)
-        kwargs = settings.options_for(TOLERANCES[key], tol) | options
+        kwargs = settings.solver_options(key, tol) | options
         if warm and initvals is not None:
             kwargs["z0"] = initvals
         setup_done = time.perf_counter()
@@ -45,9 +42,9 @@ def backends() -> list[Backend]:
     """The three LCP methods (NumPy only, always present)."""
     dist = ("cardan-forces", "numpy")
     return [
-        Backend(name=name, family="lcp", distributions=dist, accepts=(LCP,),
-                solve=_adapter(method, name, warm), tolerances=TOLERANCES[name],
+        Backend(name=f"lcp-{key}", family="lcp", distributions=dist, accepts=(LCP,),
+                solve=_adapter(method, key, warm), tolerances=settings.TOLERANCES[key],
                 warm_start=warm)
-        for name, method, warm in (("lcp-lemke", lemke, False), ("lcp-pgs", pgs, True),
-                                   ("lcp-fb-newton", fb_newton, True))
+        for key, method, warm in (("lemke", lemke, False), ("pgs", pgs, True),
+                                  ("fb-newton", fb_newton, True))
     ]

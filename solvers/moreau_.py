@@ -29,6 +29,7 @@ import warnings
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
+from . import settings
 from .batch import BatchOutcome
 from .record import Status
 from .registry import Backend
@@ -42,17 +43,15 @@ paper's 1001 instants moreau's Ruiz scaling nearly doubled the iterations on
 ``compliance_hertz`` (20 against 11); without it one ``socp_face`` instant was missed,
 so it keeps it there."""
 
-TOLERANCES = ("tol_gap_abs", "tol_gap_rel", "tol_feas")
-"""moreau's interior-point settings a requested tolerance sets."""
-
 ORDER = ("zero", "nonneg", "soc", "pow")
 """The row order ``moreau.Cones`` implies."""
 
 STATUS = {
-    "Solved": "solved", "AlmostSolved": "inaccurate", "MaxIterations": "inaccurate",
-    "MaxTime": "inaccurate", "InsufficientProgress": "inaccurate",
-    "PrimalInfeasible": "infeasible", "AlmostPrimalInfeasible": "infeasible",
-    "DualInfeasible": "unbounded", "AlmostDualInfeasible": "unbounded",
+    "Solved": Status.SOLVED, "AlmostSolved": Status.INACCURATE,
+    "MaxIterations": Status.INACCURATE, "MaxTime": Status.INACCURATE,
+    "InsufficientProgress": Status.INACCURATE, "PrimalInfeasible": Status.INFEASIBLE,
+    "AlmostPrimalInfeasible": Status.INFEASIBLE, "DualInfeasible": Status.UNBOUNDED,
+    "AlmostDualInfeasible": Status.UNBOUNDED,
 }
 """moreau status name -> ours; anything else is failed."""
 
@@ -94,7 +93,7 @@ def _settings(tol, batch_size: int, options: dict):
 
     fields = moreau.IPMSettings.model_fields
     ipm = {k: v for k, v in options.items() if k in fields}
-    ipm |= dict.fromkeys(TOLERANCES, tol) if tol is not None else {}
+    ipm |= settings.solver_options("moreau", tol)
     return moreau.Settings(device="cpu", batch_size=batch_size,
                            **({"ipm_settings": moreau.IPMSettings(**ipm)} if ipm else {}),
                            **{k: v for k, v in options.items() if k not in fields})
@@ -222,9 +221,8 @@ def backends() -> list[Backend]:
         import moreau  # noqa: F401
     except ImportError:
         return []
-    return [Backend(name="moreau", family="moreau", distributions=("moreau",), extra="moreau",
-                    tolerances=TOLERANCES, batch=solve_batch, batch_accepts=(ConicBatch,),
-                    reducible=True, unscaled=UNSCALED),
-            Backend(name="moreau-warm", family="moreau", distributions=("moreau",),
-                    extra="moreau", tolerances=TOLERANCES, batch=solve_batch_warm,
-                    batch_accepts=(ConicBatch,), reducible=True, unscaled=UNSCALED)]
+    common = dict(family="moreau", distributions=("moreau",), extra="moreau",
+                  tolerances=settings.TOLERANCES["moreau"], batch_accepts=(ConicBatch,),
+                  reducible=True, unscaled=UNSCALED)
+    return [Backend(name="moreau", batch=solve_batch, **common),
+            Backend(name="moreau-warm", batch=solve_batch_warm, **common)]

@@ -67,6 +67,7 @@ from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LCP, Conic, LastMade
 from threadpoolctl import ThreadpoolController
 
+from . import settings
 from ._newton_layout import answer, numbers, parse_batch, parse_conic
 from ._newton_numpy import (
     EXTRAPOLATION,
@@ -308,7 +309,8 @@ def _batch_supported(batch) -> bool:
 def backends() -> list[Backend]:
     """The family (NumPy is a core dependency; numba, where installed, compiles it)."""
     common = dict(family="newton", distributions=("cardan-forces", "numpy"),
-                  tolerances=("tol",), smallest_tol=1e-15)
+                  tolerances=settings.TOLERANCES["newton"],
+                  smallest_tol=settings.SMALLEST["newton"])
     return [Backend(name="newton", accepts=(Conic, LCP), solve=solve_problem,
                     supports=supports, warm_start=True, **common),
             Backend(name="newton-batched", batch=solve_batch, supports=_batch_supported,

@@ -98,7 +98,7 @@ def _setting_faults(b):
     if not isinstance(b.warm_start, bool):
         yield f"warm_start must be True or False, not {b.warm_start!r}"
     if b.qpbenchmark is not None and not callable(getattr(b.qpbenchmark, "options", None)):
-        yield (f"qpbenchmark must be None or a settings_profiles.Profile (what the harness "
+        yield (f"qpbenchmark must be None or a settings.Profile (what the harness "
                f"calls is its options(setting)), not {b.qpbenchmark!r}")
 
 

@@ -30,17 +30,14 @@ from .registry import Backend
 EXTRAS: dict[str, str | None] = {"qoco": "qoco", "qoco-batched": "qoco", "qoco-reduced": "qoco",
                                  "qoco-batched-reduced": "qoco"}
 
-TOLERANCES = ("abstol", "reltol")
-"""QOCO's settings a requested tolerance sets."""
-
-STATUS = {"QOCO_SOLVED": "solved", "QOCO_SOLVED_INACCURATE": "inaccurate",
-          "QOCO_MAX_ITER": "inaccurate"}
+STATUS = {"QOCO_SOLVED": Status.SOLVED, "QOCO_SOLVED_INACCURATE": Status.INACCURATE,
+          "QOCO_MAX_ITER": Status.INACCURATE}
 """QOCO status -> ours; anything else (numerical error, unsolved) is failed."""
 
-def _status(sol) -> str:
+def _status(sol) -> Status:
     if sol.status == "QOCO_SOLVED" and max(sol.dres, sol.gap) > CLAIM_TOL:
-        return "inaccurate"
-    return STATUS.get(sol.status, "failed")
+        return Status.INACCURATE
+    return STATUS.get(sol.status, Status.FAILED)
 
 
 def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
@@ -58,7 +55,7 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
     eq, cone, nonneg, sizes = layout(problem.cones)
     P = None if problem.P is None else spa.csc_matrix(np.triu(np.asarray(problem.P, float)))
     parts = [spa.csc_matrix(A[rows]) if len(rows) else None for rows in (eq, cone)]
-    chosen = {"verbose": 0} | settings.options_for(TOLERANCES, tol) | options
+    chosen = {"verbose": 0} | settings.solver_options("qoco", tol) | options
     setup_done = time.perf_counter()
     solver = qoco.QOCO()
     solver.setup(n, len(cone), len(eq), P, np.asarray(problem.q, float), parts[0],
@@ -70,7 +67,7 @@ def solve_conic(problem: Conic, tol=None, initvals=None, **options) -> Outcome:
     y[eq], y[cone] = np.asarray(sol.y), np.asarray(sol.z)
     status = _status(sol)
     return Outcome(status, np.asarray(sol.x, float).copy(), iterations=int(sol.iters),
-                   message="" if status == "solved" else
+                   message="" if status is Status.SOLVED else
                    f"QOCO status {sol.status} (dual residual {sol.dres:.1e}, gap {sol.gap:.1e})",
                    objective=float(sol.obj), setup_s=setup_done - start,
                    solve_s=solved - setup_done, y=y)
@@ -95,7 +92,7 @@ def solve_batch(batch: ConicBatch, tol=None, **options) -> BatchOutcome:
     parts = [csc_ones(np.any(M != 0, axis=0))  # the union of the instants' nonzeros
              for M in (P, batch.A[:, eq], batch.A[:, cone])]
     solver = qoco.QOCO()
-    chosen = {"verbose": 0} | settings.options_for(TOLERANCES, tol) | options
+    chosen = {"verbose": 0} | settings.solver_options("qoco", tol) | options
     b = np.asarray(batch.b, float)
     solver.setup(n, len(cone), len(eq), parts[0][0], np.zeros(n),
                  parts[1][0] if len(eq) else None, np.zeros(len(eq)) if len(eq) else None,
@@ -125,9 +122,8 @@ def backends() -> list[Backend]:
         import qoco  # noqa: F401
     except ImportError:
         return []
-    return [Backend(name="qoco", family="qoco", distributions=("qoco",), extra="qoco",
-                    accepts=(Conic,), solve=solve_conic, supports=supports,
-                    tolerances=TOLERANCES, reducible=True),
-            Backend(name="qoco-batched", family="qoco", distributions=("qoco",), extra="qoco",
-                    supports=supports, tolerances=TOLERANCES, batch=solve_batch,
-                    batch_accepts=(ConicBatch,), reducible=True)]
+    common = dict(family="qoco", distributions=("qoco",), extra="qoco", supports=supports,
+                  tolerances=settings.TOLERANCES["qoco"], reducible=True)
+    return [Backend(name="qoco", accepts=(Conic,), solve=solve_conic, **common),
+            Backend(name="qoco-batched", batch=solve_batch, batch_accepts=(ConicBatch,),
+                    **common)]

@@ -45,12 +45,10 @@ from cardan_forces.formulations.batch import ConicBatch
 from . import qoco_form, settings
 from .batch import BatchOutcome
 from .qoco_form import CLAIM_TOL, csc_ones, layout
+from .record import Status
 from .registry import Backend, dist_version
 
 EXTRAS: dict[str, str | None] = {"qocogen-reduced": "qocogen"}
-
-TOLERANCES = ("abstol", "reltol")
-"""The generated solver's settings a requested tolerance sets."""
 
 SETTINGS = ("max_iters", "bisect_iters", "iter_ref_iters", "kkt_static_reg",
             "kkt_dynamic_reg", "abstol", "reltol", "abstol_inacc", "reltol_inacc")
@@ -80,7 +78,7 @@ leave unsolved is solved again (its iterations are added to the first attempt's)
 stalled without refinement ("numerical error": the step fell below 1e-8 at a dual
 residual and gap below 1e-10); refined, both are solved."""
 
-STATUS = {1: "solved", 2: "inaccurate", 4: "inaccurate"}
+STATUS = {1: Status.SOLVED, 2: Status.INACCURATE, 4: Status.INACCURATE}
 """Generated solver status -> ours; anything else is failed."""
 
 NAMES = ("unsolved", "solved", "solved inaccurate", "numerical error", "max iterations")
@@ -367,7 +365,7 @@ def _options(tol, options: dict) -> np.ndarray:
     unknown = set(options) - set(SETTINGS)
     if unknown:
         raise TypeError(f"qocogen takes no option {', '.join(sorted(unknown))}")
-    chosen = DEFAULTS | settings.options_for(TOLERANCES, tol) | options
+    chosen = DEFAULTS | settings.solver_options("qocogen", tol) | options
     return np.array([float(chosen.get(name, np.nan)) for name in SETTINGS])
 
 
@@ -434,13 +432,13 @@ def _statuses(codes: np.ndarray, info: np.ndarray) -> tuple[np.ndarray, tuple[st
     (objective, dual residual, gap): by table over all instants at once, a message
     written only where an instant is not solved.
     """
-    table = np.array([STATUS.get(k, "failed") for k in range(len(NAMES))], object)
+    table = np.array([STATUS.get(k, Status.FAILED) for k in range(len(NAMES))], object)
     known = (codes >= 0) & (codes < len(NAMES))
-    status = np.full(len(codes), "failed", object)
+    status = np.full(len(codes), Status.FAILED, object)
     status[known] = table[codes[known]]
-    status[(codes == 1) & (np.max(info[:, 1:], axis=1) > CLAIM_TOL)] = "inaccurate"
+    status[(codes == 1) & (np.max(info[:, 1:], axis=1) > CLAIM_TOL)] = Status.INACCURATE
     messages = np.full(len(codes), "", object)
-    for t in np.flatnonzero(status != "solved"):
+    for t in np.flatnonzero(status != Status.SOLVED):
         k, (_, dual, gap) = int(codes[t]), info[t]
         messages[t] = (f"qocogen: {NAMES[k] if 0 <= k < len(NAMES) else k} (dual residual "
                        f"{dual:.1e}, gap {gap:.1e})")
@@ -507,5 +505,5 @@ def backends() -> list[Backend]:
     if compiler() is None:
         return []
     return [Backend(name="qocogen", family="qoco", distributions=("qocogen",),
-                    extra="qocogen", supports=supports, tolerances=TOLERANCES,
+                    extra="qocogen", supports=supports, tolerances=settings.TOLERANCES["qocogen"],
                     batch=solve_batch, batch_accepts=(ConicBatch,), reduced_only=True)]

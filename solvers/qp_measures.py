@@ -15,7 +15,7 @@ lb <= x <= ub`` with multipliers ``y, z, z_box`` (``Px + q + A'y + G'z + z_box =
 
 All three are absolute (in the units of the data: N, N², ...), as qpbenchmark's are.
 A solve succeeds at a setting when the solver reports it found a solution and all
-three are strictly below the setting's tolerance (:data:`SETTINGS`).
+three are strictly below the setting's tolerance (:data:`.settings.SETTINGS`).
 
 The same QP written in Clarabel's standard form (:meth:`QP.as_conic`: ``A_c z + s =
 b_c``, ``s`` in zero x nonnegative cones, multipliers ``y_c`` with ``y_c = (y, z,
@@ -34,43 +34,16 @@ instant.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
 
 from .conversions import convert
 from .optimality import Parts, cone_violation
+from .settings import Setting
 from .stacking import times_P
 
-
-@dataclass(frozen=True)
-class Setting:
-    """One of qpbenchmark's solver settings: the absolute tolerance it asks of the
-    solver (``None``: the solver's defaults), the tolerance it judges primal, dual and
-    gap by (strictly below), and the time limit (s) given to solvers that take one and
-    counted for a run the solver reports as not found.
-    """
-
-    name: str
-    eps_abs: float | None
-    tolerance: float
-    time_limit_s: float
-
-
-TIME_LIMIT_S = 10.0
-"""qpbenchmark's time limit per solve (``TestSet.define_tolerances(runtime=10.0)``)."""
 SHIFT_S = 10.0
 """qpbenchmark's shift of the shifted geometric mean of runtimes (``sh = 10``)."""
-
-SETTINGS = {s.name: s for s in (
-    Setting("default", None, 1.0, TIME_LIMIT_S),
-    Setting("low_accuracy", 1e-3, 1e-3, TIME_LIMIT_S),
-    Setting("mid_accuracy", 1e-6, 1e-6, TIME_LIMIT_S),
-    Setting("high_accuracy", 1e-9, 1e-9, TIME_LIMIT_S),
-)}
-"""qpbenchmark 2.7's four settings (``TestSet.define_solver_settings`` and
-``define_tolerances``); ``default`` judges at 1, its other settings at their ``eps_abs``."""
 
 MEASURES = ("primal", "dual", "gap")
 

@@ -15,9 +15,8 @@ from cardan_forces.formulations.problems import QP
 
 from . import settings
 from .ranging import HAVE_HIGHSPY, without_banner
-from .record import Outcome
+from .record import Outcome, Status
 from .registry import Backend
-from .settings_profiles import CLARABEL, Profile
 
 DISTRIBUTIONS: dict[str, str] = {
     "clarabel": "clarabel", "daqp": "daqp", "ecos": "ecos", "highs": "highspy", "osqp": "osqp",
@@ -32,78 +31,40 @@ EXTRAS: dict[str, str | None] = {
     f"qpsolvers-{name}": None if name in CORE else name for name in DISTRIBUTIONS
 }
 
-TOLERANCES: dict[str, tuple[str, ...]] = {
-    "clarabel": ("tol_gap_abs", "tol_gap_rel", "tol_feas"),
-    "daqp": ("primal_tol",),
-    "ecos": ("abstol", "reltol", "feastol"),
-    "highs": ("primal_feasibility_tolerance", "dual_feasibility_tolerance"),
-    "osqp": ("eps_abs", "eps_rel"),
-    "piqp": ("eps_abs", "eps_rel"),
-    "proxqp": ("eps_abs",),
-    "quadprog": (),
-    "scs": ("eps_abs", "eps_rel"),
-}
-"""Each solver's own parameters a requested tolerance sets (quadprog: a direct method)."""
-
-PROFILES: dict[str, Profile] = {
-    "clarabel": CLARABEL,
-    "daqp": Profile("daqp", ("dual_tol", "primal_tol")),
-    "ecos": Profile("ecos", ("feastol",)),
-    "highs": Profile("highs", ("dual_feasibility_tolerance", "primal_feasibility_tolerance"),
-                     time_limit="time_limit"),
-    "osqp": Profile("osqp", ("eps_abs",), ("eps_rel",), time_limit="time_limit"),
-    "piqp": Profile("piqp", ("eps_abs", "eps_duality_gap_abs"),
-                    ("eps_duality_gap_rel", "eps_rel"), {"check_duality_gap": True}),
-    "proxqp": Profile("proxqp", ("eps_abs", "eps_duality_gap_abs"),
-                      ("eps_duality_gap_rel", "eps_rel"), {"check_duality_gap": True}),
-    "quadprog": Profile("quadprog"),
-    "scs": Profile("scs", ("eps_abs",), ("eps_rel",), time_limit="time_limit_secs"),
-}
-"""How each solver takes qpbenchmark's four settings: qpbenchmark 2.7's ``set_eps_abs``,
-``set_eps_rel``, ``set_param`` and ``set_time_limit`` for it
-(:class:`~.settings_profiles.Profile`)."""
-
-TIME_LIMITS = {"highs": "time_limit"}
-"""Solvers given :data:`~.settings.TIME_LIMIT_S` as their own time limit (their iteration
-limits do not bound the time)."""
-
-SMALLEST_TOL = {"highs": 1e-10}
-"""Smallest tolerance a solver accepts (HiGHS rejects smaller ones)."""
-
 WARM_STARTS = ("osqp", "proxqp", "scs")
 """Solvers to which qpsolvers passes ``initvals``."""
 
 BOUNDS_AS_ROWS = ("ecos",)
 """Solvers that reject infinite bounds; their finite bounds are passed as rows of G."""
 
-SCS_STATUS = {2: "inaccurate", -1: "unbounded", -2: "infeasible", -6: "unbounded",
-              -7: "infeasible"}
-ECOS_STATUS = {10: "inaccurate", -1: "inaccurate", 1: "infeasible", 2: "unbounded",
-               11: "infeasible", 12: "unbounded"}
+SCS_STATUS = {2: Status.INACCURATE, -1: Status.UNBOUNDED, -2: Status.INFEASIBLE,
+              -6: Status.UNBOUNDED, -7: Status.INFEASIBLE}
+ECOS_STATUS = {10: Status.INACCURATE, -1: Status.INACCURATE, 1: Status.INFEASIBLE,
+               2: Status.UNBOUNDED, 11: Status.INFEASIBLE, 12: Status.UNBOUNDED}
 
 
-def _unfound_status(solver: str, extras: dict) -> tuple[str, str]:
+def _unfound_status(solver: str, extras: dict) -> tuple[Status, str]:
     """Our status for a run qpsolvers did not call found, from the solver's own status.
 
     Infeasibility and unboundedness certificates are kept; "inaccurate" and iteration
-    limits become ``"inaccurate"`` (the package then checks the iterate); else failed.
+    limits become ``INACCURATE`` (the package then checks the iterate); else ``FAILED``.
     """
     if solver == "scs":
         code = extras.get("status_val")
-        return SCS_STATUS.get(code, "failed"), f"SCS status {code}"
+        return SCS_STATUS.get(code, Status.FAILED), f"SCS status {code}"
     if solver == "ecos":
         code = extras.get("exitFlag")
-        return ECOS_STATUS.get(code, "failed"), f"ECOS exit flag {code}"
+        return ECOS_STATUS.get(code, Status.FAILED), f"ECOS exit flag {code}"
     info = extras.get("info")
     text = str(getattr(info, "status", extras.get("status", "")))
     key = text.lower().replace("_", "").replace(" ", "")
     if "dualinfeasible" in key or "unbounded" in key:
-        return "unbounded", text
+        return Status.UNBOUNDED, text
     if "infeasible" in key:
-        return "infeasible", text
+        return Status.INFEASIBLE, text
     if "inaccurate" in key or "almost" in key or ("max" in key and "iter" in key):
-        return "inaccurate", text
-    return "failed", text or "no solution found"
+        return Status.INACCURATE, text
+    return Status.FAILED, text or "no solution found"
 
 
 def _iterations(extras: dict) -> int | None:
@@ -170,10 +131,7 @@ def _solve_with(solver: str):
         P, q = np.asarray(problem.P, float), vec(problem.q)
         qp = qpsolvers.Problem(mat(P), q, mat(problem.G), vec(problem.h), mat(problem.A),
                                vec(problem.b), vec(problem.lb), vec(problem.ub))
-        kwargs = settings.options_for(TOLERANCES.get(solver, ()), tol,
-                                      SMALLEST_TOL.get(solver, 0.0))
-        if solver in TIME_LIMITS:
-            kwargs[TIME_LIMITS[solver]] = settings.TIME_LIMIT_S
+        kwargs = settings.solver_options(solver, tol) | settings.time_limit(solver)
         if solver == "osqp":
             kwargs["raise_error"] = False  # today's behaviour, without osqp's FutureWarning
         setup_done = time.perf_counter()
@@ -182,8 +140,8 @@ def _solve_with(solver: str):
         build = sol.build_time or 0.0
         solve_s = wall - build if sol.solve_time is None else sol.solve_time
         extras = sol.extras or {}
-        status, text = ("solved", "") if sol.found else _unfound_status(solver, extras)
-        if not sol.found and solver in TIME_LIMITS and wall >= settings.TIME_LIMIT_S:
+        status, text = (Status.SOLVED, "") if sol.found else _unfound_status(solver, extras)
+        if not sol.found and solver in settings.TIME_LIMITED and wall >= settings.TIME_LIMIT_S:
             text = f"{text}; time limit of {settings.TIME_LIMIT_S:g} s reached"
         z = sol.x
         objective = None if z is None else 0.5 * z @ P @ z + q @ z
@@ -204,7 +162,8 @@ def backends() -> list[Backend]:
         Backend(name=f"qpsolvers-{name}", family="qpsolvers",
                 distributions=("qpsolvers", DISTRIBUTIONS.get(name, name)),
                 extra=EXTRAS.get(f"qpsolvers-{name}"), accepts=(QP,), solve=_solve_with(name),
-                tolerances=TOLERANCES.get(name, ()), smallest_tol=SMALLEST_TOL.get(name, 0.0),
-                warm_start=name in WARM_STARTS, qpbenchmark=PROFILES.get(name))
+                tolerances=settings.TOLERANCES.get(name, ()),
+                smallest_tol=settings.SMALLEST.get(name, 0.0), warm_start=name in WARM_STARTS,
+                qpbenchmark=settings.PROFILES.get(name))
         for name in qpsolvers.available_solvers
     ]

@@ -35,7 +35,6 @@ import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from cardan_forces.driveline.names import did_you_mean
@@ -46,9 +45,6 @@ from .checks import Stacks, failed_record, finalize_all
 from .conversions import convert, reachable
 from .plugins import InvalidBackend, blame
 from .record import Outcome, Record, Results, Status
-
-if TYPE_CHECKING:  # settings_profiles looks backends up here: a type-only import
-    from .settings_profiles import Profile
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
             "numpy_batched_", "moreau_", "qocogen_", "newton_")
@@ -86,7 +82,7 @@ class Backend:
     clamped below at ``smallest_tol``; ``warm_start`` whether ``initvals`` reach the
     solver; ``batch(batch, tol, **options) -> BatchOutcome`` solves all instants of a
     formulation's batch of one of the ``batch_accepts`` classes at once.
-    ``qpbenchmark``: how it takes qpbenchmark's four settings (:mod:`.settings_profiles`;
+    ``qpbenchmark``: how it takes qpbenchmark's four settings (:class:`.settings.Profile`;
     ``None``: it does not). ``reducible``: a conic backend that also runs on the reduced
     form (equality rows eliminated), registered as ``<name>-reduced`` beside it
     (:func:`.reduced_.variant`); ``reduced_only``: registered only so (a backend made
@@ -106,7 +102,7 @@ class Backend:
     warm_start: bool = False
     batch: Callable | None = None
     batch_accepts: tuple[type, ...] = ()
-    qpbenchmark: Profile | None = None
+    qpbenchmark: settings.Profile | None = None
     reducible: bool = False
     reduced_only: bool = False
     unscaled: tuple[str, ...] = ()

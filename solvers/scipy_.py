@@ -23,25 +23,15 @@ from cardan_forces.formulations.problems import LP, LS, NLS, QP
 
 from . import settings
 from .qp_measures import qp_duals
-from .record import Outcome
+from .record import Outcome, Status
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = dict.fromkeys(
     ("scipy-lsq_linear", "scipy-highs", "scipy-fsolve", "scipy-root-lm")
 )
 
-TOLERANCES: dict[str, tuple[str, ...]] = {
-    "lsq_linear": ("tol",),
-    "highs": ("primal_feasibility_tolerance", "dual_feasibility_tolerance"),
-    "fsolve": ("xtol",),
-    "root-lm": ("xtol", "ftol"),
-}
-"""Each method's own parameters a requested tolerance sets."""
-
-HIGHS_SMALLEST = 1e-10
-"""Smallest tolerance HiGHS accepts."""
-
-LINPROG_STATUS = {0: "solved", 1: "inaccurate", 2: "infeasible", 3: "unbounded", 4: "failed"}
+LINPROG_STATUS = {0: Status.SOLVED, 1: Status.INACCURATE, 2: Status.INFEASIBLE,
+                  3: Status.UNBOUNDED, 4: Status.FAILED}
 """``scipy.optimize.linprog`` status codes (1: iteration limit, 4: numerical trouble)."""
 
 
@@ -70,9 +60,10 @@ def solve_lsq_linear(problem: LS | QP, tol=None, initvals=None, **options) -> Ou
     lb = np.full(n, -np.inf) if problem.lb is None else problem.lb
     ub = np.full(n, np.inf) if problem.ub is None else problem.ub
     setup_done = time.perf_counter()
-    kwargs = {"method": "bvls"} | settings.options_for(TOLERANCES["lsq_linear"], tol) | options
+    kwargs = {"method": "bvls"} | settings.solver_options("lsq_linear", tol) | options
     res = lsq_linear(R, r, bounds=(lb, ub), **kwargs)
-    status = "solved" if res.status > 0 else ("inaccurate" if res.status == 0 else "failed")
+    status = (Status.SOLVED if res.status > 0
+              else Status.INACCURATE if res.status == 0 else Status.FAILED)
     z = res.x
     solve_s = time.perf_counter() - setup_done
     return Outcome(status, z, iterations=int(res.nit), message=f"{message}; {res.message}",
@@ -110,8 +101,8 @@ def solve_highs(problem: LP, tol=None, initvals=None, **options) -> Outcome:
     setup_done = time.perf_counter()
     res = linprog(problem.c, A_ub=problem.G, b_ub=problem.h, A_eq=problem.A, b_eq=problem.b,
                   bounds=np.column_stack([lb, ub]), method="highs",
-                  options=settings.options_for(TOLERANCES["highs"], tol, HIGHS_SMALLEST) | options)
-    return Outcome(LINPROG_STATUS.get(res.status, "failed"), res.x, iterations=int(res.nit),
+                  options=settings.solver_options("highs", tol) | options)
+    return Outcome(LINPROG_STATUS.get(res.status, Status.FAILED), res.x, iterations=int(res.nit),
                    message=res.message, objective=res.fun, y=_highs_duals(problem, res),
                    setup_s=setup_done - start, solve_s=time.perf_counter() - setup_done)
 
@@ -156,10 +147,11 @@ def solve_fsolve(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
 
     z0 = problem.z0 if initvals is None else initvals
     start = time.perf_counter()
-    options = settings.options_for(TOLERANCES["fsolve"], tol) | options
+    options = settings.solver_options("fsolve", tol) | options
     z, info, ier, mesg = fsolve(problem.fun, np.asarray(z0, float), fprime=problem.jac,
                                 full_output=True, **options)
-    status = "solved" if ier == 1 and np.all(np.isfinite(info["fvec"])) else "failed"
+    status = (Status.SOLVED if ier == 1 and np.all(np.isfinite(info["fvec"]))
+              else Status.FAILED)
     solve_s = time.perf_counter() - start
     return Outcome(status, z, message=f"{mesg.strip()} (nfev {info['nfev']}, ier {ier})"
                    + _jacobian_note(problem, z), solve_s=solve_s)
@@ -172,11 +164,11 @@ def solve_root_lm(problem: NLS, tol=None, initvals=None, **options) -> Outcome:
     z0 = problem.z0 if initvals is None else initvals
     start = time.perf_counter()
     sol = root(problem.fun, np.asarray(z0, float), jac=problem.jac, method="lm",
-               options=settings.options_for(TOLERANCES["root-lm"], tol) | options)
+               options=settings.solver_options("root-lm", tol) | options)
     if not (sol.success and np.all(np.isfinite(sol.fun))):
-        status = "failed"
+        status = Status.FAILED
     else:  # status 4: a stationary point of ||F||^2, not necessarily a root
-        status = "inaccurate" if sol.status == 4 else "solved"
+        status = Status.INACCURATE if sol.status == 4 else Status.SOLVED
     solve_s = time.perf_counter() - start
     return Outcome(status, sol.x, message=f"{sol.message} (nfev {sol.nfev}, status {sol.status})"
                    + _jacobian_note(problem, sol.x), solve_s=solve_s)
@@ -191,11 +183,11 @@ def backends() -> list[Backend]:
     common = {"family": "scipy", "distributions": ("scipy",)}
     return [
         Backend(name="scipy-lsq_linear", accepts=(LS, QP), solve=solve_lsq_linear, **common,
-                supports=_no_inequalities, tolerances=TOLERANCES["lsq_linear"]),
+                supports=_no_inequalities, tolerances=settings.TOLERANCES["lsq_linear"]),
         Backend(name="scipy-highs", accepts=(LP,), solve=solve_highs, **common,
-                tolerances=TOLERANCES["highs"], smallest_tol=HIGHS_SMALLEST),
+                tolerances=settings.TOLERANCES["highs"], smallest_tol=settings.SMALLEST["highs"]),
         Backend(name="scipy-fsolve", accepts=(NLS,), solve=solve_fsolve, **common,
-                tolerances=TOLERANCES["fsolve"], warm_start=True),
+                tolerances=settings.TOLERANCES["fsolve"], warm_start=True),
         Backend(name="scipy-root-lm", accepts=(NLS,), solve=solve_root_lm, **common,
-                tolerances=TOLERANCES["root-lm"], warm_start=True),
+                tolerances=settings.TOLERANCES["root-lm"], warm_start=True),
     ]

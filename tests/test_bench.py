@@ -12,7 +12,7 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import bench, bench_metrics, bench_report, bench_run, study
 from cardan_forces.formulations import FORMULATIONS
-from cardan_forces.solvers import SolverNotFound, failed_record, qp_measures, registry, solve
+from cardan_forces.solvers import SolverNotFound, failed_record, registry, settings, solve
 from cardan_forces.solvers.record import Outcome
 
 
@@ -104,7 +104,7 @@ def test_performance_profile_on_a_hand_made_table():
     assert found["a"]["solved"] == 0.75 and found["b"]["solved"] == 1.0
     # shifted geometric means (qpbenchmark's shift), the run without an answer counted
     # at qpbenchmark's time limit
-    sgm_a = bench_metrics.shifted_geometric_mean([1.0, 1.0, 1.0, qp_measures.TIME_LIMIT_S])
+    sgm_a = bench_metrics.shifted_geometric_mean([1.0, 1.0, 1.0, bench_metrics.TIME_LIMIT_S])
     sgm_b = bench_metrics.shifted_geometric_mean([2.0, 4.0, 1.0, 3.0])
     assert found["b"]["sgm_ratio"] == pytest.approx(sgm_b / min(sgm_a, sgm_b))
     assert found["a"]["sgm_ratio"] == pytest.approx(sgm_a / min(sgm_a, sgm_b))
@@ -165,7 +165,7 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     views = {(r["solver"], r["setting"]) for r in out["solver_optimality"]}
     judged = {b for b in bench_run.QUICK_SOLVERS  # QPs through qpsolvers, conic problems
               if b.startswith("qpsolvers-") and b in registry.available()} | {"clarabel"}
-    assert views == {(b, s) for b in judged for s in qp_measures.SETTINGS}
+    assert views == {(b, s) for b in judged for s in settings.SETTINGS}
     assert {p["clock"] for p in out["profiles"]} == {"solver", "end_to_end"}
     assert {"formulation", "solver", "mode", "instants_per_s", "success_rate",
             "time_split_s"} <= set(out["throughput"][0])

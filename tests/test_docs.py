@@ -297,8 +297,8 @@ def _sci(value: float) -> str:
 
 
 def test_the_bench_views_page_states_qpbenchmarks_settings():
-    from cardan_forces.solvers.qp_measures import SETTINGS
     from cardan_forces.solvers.record import ACCEPT
+    from cardan_forces.solvers.settings import SETTINGS
 
     text = " ".join((DOCS / "how-to/bench-views.md").read_text().split())
     assert "`default` (the solver's defaults, judged at 1)" in text

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from cardan_forces.experiments import export, qpbench_harness
 from cardan_forces.formulations.problems import Conic
-from cardan_forces.solvers import qp_measures, solve
+from cardan_forces.solvers import qp_measures, settings, solve
 from cardan_forces.solvers.conversions import convert
 
 
@@ -79,7 +79,7 @@ def test_qpbenchmark_runs_the_export_unchanged(exported, tmp_path):
     with results.open() as handle:
         rows = list(csv.DictReader(handle))
     qps = [n for n in problems if "min_max" not in n]
-    assert sorted(r["problem"] for r in rows) == sorted(qps * len(qp_measures.SETTINGS))
+    assert sorted(r["problem"] for r in rows) == sorted(qps * len(settings.SETTINGS))
     assert {r["solver"] for r in rows} == {"quadprog"}
 
 

@@ -11,7 +11,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import qpbench_harness as harness
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.problems import QP, ForceChecks
-from cardan_forces.solvers import available, qpsolvers_, settings_profiles
+from cardan_forces.solvers import available, settings
 from cardan_forces.solvers import qp_measures as qm
 
 
@@ -74,7 +74,7 @@ def test_cone_violation_by_hand():
 
 
 def test_success_rule_is_strict_and_needs_found():
-    mid = qm.SETTINGS["mid_accuracy"]
+    mid = settings.SETTINGS["mid_accuracy"]
     assert qm.succeeds(True, 9e-7, 0.0, 0.0, mid)
     assert not qm.succeeds(True, 1e-6, 0.0, 0.0, mid)
     assert not qm.succeeds(False, 0.0, 0.0, 0.0, mid)
@@ -84,8 +84,8 @@ def test_success_rule_is_strict_and_needs_found():
 
 
 def test_time_limit_rule_and_shifted_mean():
-    times = qm.runtime_for_mean([True, False], [1e-3, 1e-4], qm.SETTINGS["default"])
-    assert list(times) == [1e-3, qm.TIME_LIMIT_S]
+    times = qm.runtime_for_mean([True, False], [1e-3, 1e-4], settings.SETTINGS["default"])
+    assert list(times) == [1e-3, settings.QPBENCHMARK_TIME_LIMIT_S]
     assert qm.shifted_geometric_mean([0.0, 0.0]) == pytest.approx(0.0, abs=1e-12)
     assert qm.shifted_geometric_mean([10.0, 30.0], shift=10.0) == pytest.approx(
         math.sqrt(20 * 40) - 10)
@@ -96,7 +96,7 @@ def qpbenchmark():
     return pytest.importorskip("qpbenchmark")
 
 
-def test_settings_profiles_are_qpbenchmarks(qpbenchmark):
+def test_settings_are_qpbenchmarks(qpbenchmark):
     class Probe(qpbenchmark.TestSet):
         description, title, sparse_only = "", "", False
 
@@ -104,17 +104,17 @@ def test_settings_profiles_are_qpbenchmarks(qpbenchmark):
             return iter(())
 
     probe = Probe()
-    assert set(probe.solver_settings) == set(qm.SETTINGS)
-    for name, setting in qm.SETTINGS.items():
+    assert set(probe.solver_settings) == set(settings.SETTINGS)
+    for name, setting in settings.SETTINGS.items():
         tol = probe.tolerances[name]
         assert (tol.primal, tol.dual, tol.gap, tol.runtime) == (
             setting.tolerance, setting.tolerance, setting.tolerance, setting.time_limit_s)
-        for profile in [*qpsolvers_.PROFILES.values(), settings_profiles.CLARABEL]:
+        for profile in settings.PROFILES.values():
             assert profile.options(name) == dict(
                 probe.solver_settings[name][profile.solver]), (name, profile.solver)
     for backend in available().values():  # each backend reads its own declaration
         if backend.qpbenchmark is not None:
-            assert settings_profiles.options(backend.name, "high_accuracy") == (
+            assert settings.qpbenchmark_options(backend.name, "high_accuracy") == (
                 backend.qpbenchmark.options("high_accuracy"))
 
 
@@ -135,7 +135,7 @@ def test_verdicts_equal_qpbenchmarks_on_the_same_solves(qpbenchmark, problems, s
 
     if solver not in available():
         pytest.skip(f"{solver} not installed")
-    name = settings_profiles.profile(solver).solver
+    name = settings.profile(solver).solver
 
     class Empty(qpbenchmark.TestSet):
         description, title, sparse_only = "", "", False
@@ -149,9 +149,9 @@ def test_verdicts_equal_qpbenchmarks_on_the_same_solves(qpbenchmark, problems, s
         qp = harness.as_qp(problem)
         data = harness.qpsolvers_problem(qp, name)
         bench_problem = qpbenchmark.Problem.from_qpsolvers(data, key)
-        for setting in qm.SETTINGS:
+        for setting in settings.SETTINGS:
             sol = qpsolvers.solve_problem(data, solver=name,
-                                          **settings_profiles.options(solver, setting))
+                                          **settings.qpbenchmark_options(solver, setting))
             sol.problem = bench_problem
             results.update(bench_problem, name, setting, sol, 0.0)
             measured = qm.qp_residuals(qp, bool(sol.found), sol.x, sol.y, sol.z, sol.z_box)
@@ -161,10 +161,10 @@ def test_verdicts_equal_qpbenchmarks_on_the_same_solves(qpbenchmark, problems, s
             assert measured["dual"] == pytest.approx(sol.dual_residual(), rel=1e-9, abs=1e-12)
             assert measured["gap"] == pytest.approx(sol.duality_gap(), rel=1e-6, abs=1e-9)
             ours[key, setting] = bool(qm.succeeds(bool(sol.found), *measured.values(),
-                                                  qm.SETTINGS[setting]))
-    tol = {k: s.tolerance for k, s in qm.SETTINGS.items()}
+                                                  settings.SETTINGS[setting]))
+    tol = {k: s.tolerance for k, s in settings.SETTINGS.items()}
     theirs = results.build_success_rate_df(tol, tol, tol)
-    for setting in qm.SETTINGS:
+    for setting in settings.SETTINGS:
         rate = 100.0 * np.mean([ours[key, setting] for key in problems])
         assert rate == pytest.approx(theirs.at[name, setting]), setting
 

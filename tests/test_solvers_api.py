@@ -189,7 +189,7 @@ def test_tol_reaches_the_solver(monkeypatch):
         seen.append(kwargs)
         return lcp_.fb_newton(M, q, **kwargs)
 
-    adapter = lcp_._adapter(spy, "lcp-fb-newton", True)
+    adapter = lcp_._adapter(spy, "fb-newton", True)
     for tol in (1e-2, None):
         outcome = adapter(REFS["lcp_mixed"].problem, tol=tol)
         assert outcome.status == "solved"
