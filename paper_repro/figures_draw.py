@@ -167,8 +167,8 @@ def draw_panel(ax, cols: dict[str, np.ndarray], panel: Panel, labels: dict,
     first = min((starts.get(m, -np.inf) for m in panel.methods), default=None)
     bounds = tuple(_from(t, cols[f"{q}_set_{end}"], first) for end in ("min", "max")
                    ) if panel.sets else ()
-    low, high = images.limits([*curves.values(), *(c for _, c in smooth[:1])] or [raw],
-                              list(bounds))
+    bold = [c for c in [*curves.values(), *(c for _, c in smooth)] if np.isfinite(c).any()]
+    low, high = images.limits(bold or [raw], list(bounds))
     own = dict(panel.labels) | {"rigid model": "rigid model"}
     handles = _draw_methods(ax, t, curves, {m: own.get(m) or labels.get(m, m) for m in curves})
     notes = []

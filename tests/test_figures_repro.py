@@ -284,3 +284,16 @@ def test_fig11_and_fig12_keep_the_print_rules_and_smooth_honestly(tmp_path, draw
             assert np.isnan(y[:first]).all() and np.isfinite(y[first:-half]).all()
     cols = figures.read_csv(csv11)
     assert np.isnan(cols["omega_input_penalty_smooth"][:first]).all()
+
+
+def test_without_a_filtered_curve_the_axis_holds_the_raw_line(tmp_path, drawn):
+    """A quick run (0.15 s): after the start-up too few instants for the filter, so the
+    penalty - rigid panel has its raw line only, and its axis is the raw line's, not a
+    default range."""
+    t = np.arange(0.0, 0.1501, 0.005)
+    csv = figures.write_csv(tmp_path / "f.csv", figures._with_smoothed(
+        {"t": t, "d_penalty": 0.13 + 0.01 * t}, t, SETTLED, speeds=True))
+    figures._plot_grid(csv, [figures.Panel("(c) difference", "d", "difference [rad/s]",
+                                           zero_line=True)], "a title", 1, settled_s=SETTLED)
+    low, high = drawn[0].axes[0].get_ylim()
+    assert low < 0.13 < 0.1315 < high and high - low < 0.1
