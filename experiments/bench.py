@@ -193,7 +193,6 @@ def run(args) -> int:
                       args.harness == "qpbenchmark")
     results = evaluate(measured, ladder, time.perf_counter() - started)
     softened = _regularization(folder, args.format) if args.regularization else []
-    replaced = (folder / "bench_throughput.csv").exists()
     written = _write(folder, results, {
         "scene": scene.name, "instants": len(times), "span": f"{times[0]:g}..{times[-1]:g} s",
         "budget_s": args.budget_s, "samples": len(samples), "ladder": ladder,
@@ -210,7 +209,7 @@ def run(args) -> int:
     for path in removed:  # an earlier run's figure in another format: not this run's
         path.unlink()
     runs.progress(f"bench: done in {time.perf_counter() - started:.0f} s")
-    files.say_written("bench", written, replaced, removed)
+    files.say_written("bench", written, removed)
     if args.json:
         print(json_text(out.json_object(results)))
     else:

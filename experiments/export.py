@@ -199,21 +199,17 @@ def export(folder: Path, problems: dict[str, object], module: str) -> dict[str, 
 
 
 def run(args) -> int:
-    """``cardan export``: write the chosen problems into ``args.out``."""
+    """``cardan export``: write the chosen problems into ``args.out`` (named on stderr)."""
     problems = collect(args.scene or ["paper"], args.formulation or QP_FORMULATIONS,
                        args.instants)
     if not problems:
         raise NotApplicable("none of the chosen formulations applies to the chosen scenes")
     folder = Path(args.out)
-    replaced = (folder / f"{args.module}.npz").exists() or \
-        (folder / f"{args.module}_conic.npz").exists()
     written = export(folder, problems, args.module)
-    for kind, path in written.items():
-        print(f"{kind}: {path}")
     paths = [*written.values()]
     if "qpbenchmark" in written:
         paths.insert(1, folder / f"{args.module}.npz")
-    files.say_written(f"export ({len(problems)} problems)", paths, replaced)
+    files.say_written(f"export ({len(problems)} problems)", paths)
     return 0
 
 

@@ -7,7 +7,9 @@ that fails (a full disk, an interrupt, an error while formatting) removes the te
 file and leaves the earlier file, if any, as it was; a reader never sees half a file.
 
 :func:`stale` finds the files an earlier run left in an output folder that this run did
-not write (``repro --fig 13`` after a full run), so a command can remove or list them.
+not write (``repro --fig 13`` after a full run), so a command can remove or list them;
+:func:`replacing` remembers which files it wrote over one of an earlier run, so that
+:func:`say_written` says how many a run replaced.
 """
 
 from __future__ import annotations
@@ -33,6 +35,12 @@ def folder(text: str) -> str:
     return text
 
 
+_FOUND: dict[Path, bool] = {}
+"""Each file :func:`replacing` wrote since the last :func:`say_written` (its resolved
+path) and whether a file was there before its first write: one of an earlier run, which
+this run replaced."""
+
+
 @contextlib.contextmanager
 def replacing(path: Path | str, mode: str = "w", **options) -> Iterator:
     """An open file whose content replaces ``path`` when the block ends without error
@@ -43,6 +51,7 @@ def replacing(path: Path | str, mode: str = "w", **options) -> Iterator:
     if mode not in ("w", "wb"):
         raise ValueError(f"mode {mode!r}: only 'w' and 'wb' replace a file")
     path = Path(path)
+    _FOUND.setdefault(path.resolve(), path.is_file())
     if mode == "w":
         options.setdefault("encoding", "utf-8")
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
@@ -104,21 +113,25 @@ LISTED = 8
 """Most files :func:`say_written` names one by one (more: their count)."""
 
 
-def say_written(command: str, paths: Iterable[Path | str], replaced: bool = False,
-                removed: Iterable[Path | str] = (), note: str = "") -> None:
+def say_written(command: str, paths: Iterable[Path | str], removed: Iterable[Path | str] = (),
+                note: str = "") -> None:
     """One line on stderr naming where ``command`` wrote (its folder when every path
-    shares one), whether it replaced an earlier run's files, which files of an earlier
-    run it ``removed``, and a ``note`` (e.g. what a resumed run found); none with
-    ``--quiet`` (the command's answer on stdout still names its files).
+    shares one), how many of ``paths`` replaced a file of an earlier run (:data:`_FOUND`,
+    which this call empties: the run's writes are said), which files of an earlier run
+    it ``removed``, and a ``note`` (e.g. what a resumed run found); none with
+    ``--quiet``.
     """
     paths, removed = [Path(p) for p in paths], [Path(p) for p in removed]
+    replaced = sum(_FOUND.get(p.resolve(), False) for p in paths)
+    _FOUND.clear()
     if not paths or progress.quiet():
         return
     folders = {p.parent for p in paths}
     names = ", ".join(p.name for p in paths) if len(paths) <= LISTED else f"{len(paths)} files"
     where = f"{folders.pop()}/ ({names})" if len(folders) == 1 \
         else ", ".join(str(p) for p in paths)
-    again = " (replacing the earlier run's files)" if replaced else ""
+    again = f" (replacing {replaced} file{'s' * (replaced != 1)} of an earlier run)" \
+        if replaced else ""
     gone = f"; removed an earlier run's {', '.join(p.name for p in removed)}" if removed \
         else ""
     note = f"; {note}" if note else ""

@@ -668,7 +668,7 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    """The answer as JSON, or the files written (their paths on stdout)."""
+    """The answer as JSON on stdout, or the files written (named on stderr)."""
     answer = study(args.scene, args.instants, progress=bars.line, penalty=args.penalty,
                    engine=args.engine)
     if not answer["bearings"]:
@@ -676,6 +676,5 @@ def run(args) -> int:
     if args.json:
         print(json_text(answer))
         return 0
-    for path in write_outputs(answer, Path(args.out), args.format):
-        print(path)
+    files.say_written("life", write_outputs(answer, Path(args.out), args.format))
     return 0

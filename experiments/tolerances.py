@@ -551,8 +551,7 @@ def run(args) -> int:
     if args.json:
         print(json_text(answer))
     else:
-        for path in write_outputs(answer, Path(args.out), args.format):
-            print(path)
+        files.say_written("tolerances", write_outputs(answer, Path(args.out), args.format))
     for reason, count in lost.items():  # said whatever --quiet says: the exit code's why
         print(f"tolerances: lost {count} sample(s): {reason}", file=sys.stderr)
     return 1 if lost else 0

@@ -50,7 +50,7 @@ QUICK_S = 0.15
 """Window of ``--quick`` (s from the start)."""
 
 
-def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "results",
+def run_repro(scene_name: str = "paper", figs=FIGURES, out: str | Path = "results/repro",
               quick: bool = False, fig15_scenes=FIG15_SCENES,
               progress: Callable[[str], None] = print, methods=None,
               formats=("png",), workers: int | None = None) -> Path:

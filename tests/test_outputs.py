@@ -64,11 +64,11 @@ def test_repro_lists_an_earlier_runs_figures_as_not_its_own(tmp_path, capsys):
 ])
 def test_a_command_that_writes_files_ends_saying_where(tmp_path, capsys, argv, names):
     """The last line on stderr names the folder and the files, which are there; a
-    second run replaces them (no second copy, no temporary left)."""
-    for _ in range(2):
+    second run replaces them (no second copy, no temporary left) and says how many."""
+    for again in ("", f" (replacing {len(names)} files of an earlier run)"):
         assert main([*argv, "--out", str(tmp_path)]) == 0
         last = capsys.readouterr().err.splitlines()[-1]
-        assert last == f"cardan {argv[0]}: wrote {tmp_path}/ ({', '.join(names)})"
+        assert last == f"cardan {argv[0]}: wrote {tmp_path}/ ({', '.join(names)}){again}"
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
 
 

@@ -17,8 +17,8 @@ def add_parser(subparsers) -> None:
     rp.add_argument("scene", nargs="?", default="paper", help="built-in name or TOML path")
     rp.add_argument("--fig", type=int, action="append", choices=FIGURES,
                     help="one figure (repeatable); default all")
-    rp.add_argument("--out", type=files.folder, default="results",
-                    help="output folder (default results/)")
+    rp.add_argument("--out", type=files.folder, default="results/repro",
+                    help="output folder (default %(default)s)")
     rp.add_argument("--quick", action="store_true", help="first 0.15 s only (tests, CI)")
     rp.add_argument("--methods", type=_words,
                     help="comma-separated methods to draw (default all: paper,positive,"
