@@ -56,8 +56,9 @@ own API; HiGHS's through qpsolvers or ``scipy.optimize.linprog``). moreau is Cla
 algorithm and takes its names; ``()``: a direct method."""
 
 SMALLEST: dict[str, float] = {"highs": 1e-10, "newton": 1e-15}
-"""The least tolerance a solver accepts (HiGHS rejects smaller ones; the package's
-Newton method cannot reach below rounding); 0 for the others."""
+"""The least tolerance a solver is given, a smaller requested one raised to it (HiGHS
+rejects smaller ones; the Newton family's relative stopping rule is kept at 1e-15 or
+above); 0 for the others."""
 
 TIME_LIMIT_S = 20.0
 """Wall-time limit of one solve for solvers whose own iteration limit does not bound the
