@@ -25,7 +25,11 @@ for one in units of the load. In formulas, with ``r = P z + q + A'y``:
   viol_K*(y) / ||y||_inf)``;
 - ``gap = |p - d| / max(|p|, |d|)``, ``p = 1/2 z'Pz + q'z``, ``d = -1/2 z'Pz - b'y``
   (or ``|p - p*| / |p*|`` against a high-precision optimal value ``p*`` where the
-  multipliers are recovered).
+  multipliers are recovered);
+- both 0 where ``P z + q = 0`` (a feasibility problem's ``min 0``): ``y = 0`` satisfies
+  stationarity and closes the gap, so a feasible ``z`` is optimal whatever multipliers
+  the solver returned (relative to terms that vanish, theirs would measure only
+  rounding).
 
 Where they differ from qpbenchmark's (``r_p, r_d, r_g`` of :mod:`.qp_measures`) and
 why: qpbenchmark's are absolute, in the units of the data, so on a least norm in
@@ -218,6 +222,8 @@ def _combined(parts: Parts, q, y) -> dict[str, np.ndarray]:
     gap = np.abs(primal - dual_obj) / np.maximum(np.maximum(np.abs(primal), np.abs(dual_obj)),
                                                  TINY)
     dual = np.maximum(stationarity, cone)
+    unforced = inf_norm(parts.Pz + q) == 0.0  # y = 0 certifies it (a feasibility problem)
+    dual[unforced], gap[unforced] = 0.0, 0.0
     dual[parts.bad], gap[parts.bad] = np.inf, np.inf
     return {"dual": dual, "gap": gap, "objective": primal}
 

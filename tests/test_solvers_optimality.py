@@ -541,3 +541,16 @@ def test_an_lp_is_judged_with_its_solver_s_multipliers(scale):
     assert record.solved and record.duals == "solver"
     assert np.allclose(record.z, [0.0, 2.5, 1.5, 3.0], atol=1e-9)
     assert record.optimality["dual"] <= 1e-12 and record.optimality["gap"] <= 1e-12
+
+
+def test_a_feasibility_problem_is_optimal_at_any_feasible_point():
+    """min 0 over x0 + x1 = 1, x >= 0: a feasible z with y = 0 meets stationarity and
+    closes the gap, so rounding-sized multipliers a solver returns (A'y = 1e-15, b'y =
+    1e-15) cannot make it inaccurate; with an objective the same y is measured."""
+    A = np.array([[1.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    b, cones, z = np.array([1.0, 0.0, 0.0]), (("zero", 1), ("nonneg", 2)), np.array([[0.3, 0.7]])
+    y = np.array([[1e-15, 0.0, 0.0]])
+    found = measures(None, np.zeros((1, 2)), A[None], b[None], cones, z, y)
+    assert found["dual"][0] == 0.0 and found["gap"][0] == 0.0
+    found = measures(None, np.ones((1, 2)), A[None], b[None], cones, z, y)
+    assert found["dual"][0] > 0.5  # q + A'y = 1 is no stationary point
