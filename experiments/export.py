@@ -57,10 +57,18 @@ INSTANTS = 50
 """Evenly spaced instants per scene by default."""
 QP_KEYS = ("P", "q", "A", "b", "G", "h", "lb", "ub")
 
+QPBENCHMARK_RUN = 'qpbenchmark --results-path {module}.csv {module}.py run --author "Your Name"'
+"""qpbenchmark's command that runs an exported test set in its folder, without a question
+(qpbenchmark 2.7 stops without a results path and asks for the report's author)."""
+
 TEST_SET_MODULE = '''"""cardan-forces problems as a qpbenchmark test set (``cardan export``).
 
-Run with ``qpbenchmark {module}.py run``; the problems are in ``{module}.npz`` beside
-this file (per problem ``<name>/P``, ``q``, ``A``, ``b``, ``G``, ``h``, ``lb``, ``ub``).
+Run it in this folder with
+
+    {run}
+
+The problems are in ``{module}.npz`` beside this file (per problem ``<name>/P``, ``q``,
+``A``, ``b``, ``G``, ``h``, ``lb``, ``ub``).
 """
 
 from pathlib import Path
@@ -160,6 +168,7 @@ def write_qpbenchmark(folder: Path, module: str, qps: dict[str, QP], title: str)
     path = folder / f"{module}.py"
     files.write_text(path, TEST_SET_MODULE.format(
         module=module, cls=class_name(module), title=title,
+        run=QPBENCHMARK_RUN.format(module=module),
         description=f"{len(qps)} QPs of drive-shaft reaction forces (cardan-forces)"))
     return path
 
