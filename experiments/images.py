@@ -188,10 +188,10 @@ def problems(fig) -> list[str]:
 
 def print_problems(fig) -> list[str]:
     """:func:`problems`, and what else breaks the rules of print: a figure larger than
-    :data:`PAGE_IN`, a legend entry whose artists are all covered by others (drawn
-    without them, the figure's pixels do not change).
+    :data:`PAGE_IN`, text running off it, a legend entry whose artists are all covered
+    by others (drawn without them, the figure's pixels do not change).
     """
-    found = problems(fig)
+    found = problems(fig) + _off_page(fig)
     width, height = fig.get_size_inches()
     if width > PAGE_IN[0] + 1e-6 or height > PAGE_IN[1] + 1e-6:
         found.append(f"{width:.2f} x {height:.2f} in: larger than a page "
@@ -263,6 +263,20 @@ def _drawn(fig) -> None:
 
 def _legends(fig) -> list:
     return fig.legends + [ax.get_legend() for ax in fig.axes if ax.get_legend()]
+
+
+def _off_page(fig) -> list[str]:
+    """What of the drawn ``fig`` reaches beyond its edges (cut off in print): a panel
+    with its labels, notes and legend, the figure's own texts and legends.
+    """
+    renderer, page = fig.canvas.get_renderer(), fig.bbox.padded(1.0)
+    boxes = [(f"panel {ax.get_title(loc='left')[:40]!r}", ax.get_tightbbox(renderer))
+             for ax in fig.axes if ax.get_visible()]
+    boxes += [(f"text {t.get_text()[:40]!r}", t.get_window_extent(renderer))
+              for t in fig.texts if t.get_visible() and t.get_text().strip()]
+    boxes += [("a legend", legend.get_window_extent(renderer)) for legend in fig.legends]
+    return [f"{what} runs off the figure" for what, box in boxes
+            if not (page.contains(*box.min) and page.contains(*box.max))]
 
 
 def _small_text(fig) -> list[str]:

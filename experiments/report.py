@@ -300,10 +300,6 @@ class Drawing:
     styles: tuple
 
 
-LEGEND_CHARS = 52
-"""A legend entry's line below a panel (characters; a longer entry is wrapped)."""
-
-
 def drawing(op: Operator, h: dict[str, np.ndarray], panel: Panel,
             engine_forces: np.ndarray | None = None) -> Drawing:
     """:class:`Drawing` of ``panel``: the y range holds the lines, every finite end and
@@ -392,8 +388,8 @@ def _draw_component(ax, t, h: dict[str, np.ndarray], j: int, colour: str, every,
 
 
 ENGINE_LABEL = "MuJoCo, default softness (open circles, each component's colour)"
-MARGINS_IN = {"left": 0.62, "right": 0.15, "top": 0.15, "line": 0.17, "title": 0.32,
-              "wspace": 0.75, "axis": 0.42, "entry": 0.135, "gap": 0.12}
+MARGINS_IN = {"left": 0.75, "right": 0.15, "top": 0.15, "line": 0.17, "title": 0.32,
+              "wspace": 0.85, "axis": 0.42, "entry": 0.135, "gap": 0.12}
 """A page's margins and the room around each panel (inches): ``title`` above a panel
 for its title (two lines at most), ``axis`` below it for its tick and axis labels,
 ``entry`` per entry of the longest legend below a panel and ``gap`` under it; ``line``
@@ -405,6 +401,9 @@ PANEL_IN = ((images.PAGE_IN[0] - MARGINS_IN["left"] - MARGINS_IN["right"]
              - (COLUMNS - 1) * MARGINS_IN["wspace"]) / COLUMNS, 1.3)
 """A panel's plotting area (inches, its printed size): the width a page's columns
 leave, the least height (a page's rows share what the page has over it)."""
+LEGEND_CHARS = int((PANEL_IN[0] - 0.3) * 72 / (0.6 * images.MIN_TEXT_PT))
+"""A legend entry's line below a panel (characters: the panel's width less the
+legend's handle; a longer entry is wrapped)."""
 LEGEND_DROP_IN = 0.36
 """How far below a panel its legend starts (inches): under the axis label."""
 

@@ -233,8 +233,8 @@ def titles(ax, title: str, note: str, width_in: float) -> None:
     drawn on one another, at :data:`images.MIN_TEXT_PT`) between it and the plotting
     area.
     """
-    def chars(pt):  # characters of ``pt`` type across the plotting area
-        return max(30, int((width_in - 0.7) * 72 / (0.52 * pt)))
+    def chars(pt):  # characters of ``pt`` type across the plotting area, at most
+        return max(30, int((width_in - 0.8) * 72 / (0.6 * pt)))
 
     lines = 0
     if note:

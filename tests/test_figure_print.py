@@ -185,6 +185,14 @@ def test_text_under_7_pt_is_found():
     plt.close(fig)
 
 
+def test_text_running_off_the_figure_is_found():
+    fig, ax = _figure()
+    ax.plot([0, 1], [0, 1])
+    ax.annotate("a note far too long for its panel " * 4, (0, 1), xycoords="axes fraction")
+    assert any("runs off the figure" in p for p in images.print_problems(fig))
+    plt.close(fig)
+
+
 def test_a_legend_entry_covered_by_another_line_is_found():
     """Two equal lines of one width and style: the first does not show. Drawn in
     interleaved dashes (:func:`images.interleave`), both show."""
