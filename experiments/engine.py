@@ -40,6 +40,7 @@ from cardan_forces.experiments.images import (
     COINCIDE,
     MIN_TEXT_PT,
     PAGE_IN,
+    chars_across,
     coincide_note,
     coinciding,
     draw_set,
@@ -317,7 +318,8 @@ def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: lis
     together = coinciding(curves, COINCIDE * (high - low))
     above = "; ".join(n for n in (coincide_note(curves, together, "N"), note) if n)
     if above:
-        ax.annotate(textwrap.fill(above, 110), xy=(0, 1), xycoords="axes fraction",
+        ax.annotate(textwrap.fill(above, chars_across(PAGE_IN[0] - 0.8)), xy=(0, 1),
+                    xycoords="axes fraction",
                     xytext=(0, 3), textcoords="offset points", va="bottom",
                     fontsize=MIN_TEXT_PT, color="0.25")
     ax.set_title(label, loc="left", pad=5 + 1.3 * MIN_TEXT_PT * (above.count("\n") + 1

@@ -76,6 +76,13 @@ def styled():
     return plt.rc_context(STYLE)
 
 
+def chars_across(width_in: float, pt: float = MIN_TEXT_PT) -> int:
+    """How many characters of ``pt`` type fit across ``width_in`` inches, at most (a
+    wide character's width, 0.6 of the type size): where text is wrapped.
+    """
+    return max(20, int(width_in * 72 / (0.6 * pt)))
+
+
 def typeset(text: str) -> str:
     """``text`` for a figure: the powers of units as superscripts (:data:`SUPERSCRIPTS`)."""
     for plain, raised in SUPERSCRIPTS.items():

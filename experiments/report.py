@@ -401,7 +401,7 @@ PANEL_IN = ((images.PAGE_IN[0] - MARGINS_IN["left"] - MARGINS_IN["right"]
              - (COLUMNS - 1) * MARGINS_IN["wspace"]) / COLUMNS, 1.3)
 """A panel's plotting area (inches, its printed size): the width a page's columns
 leave, the least height (a page's rows share what the page has over it)."""
-LEGEND_CHARS = int((PANEL_IN[0] - 0.3) * 72 / (0.6 * images.MIN_TEXT_PT))
+LEGEND_CHARS = images.chars_across(PANEL_IN[0] - 0.3)
 """A legend entry's line below a panel (characters: the panel's width less the
 legend's handle; a longer entry is wrapped)."""
 LEGEND_DROP_IN = 0.36

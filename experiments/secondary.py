@@ -51,6 +51,8 @@ from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import (
     PAGE_IN,
+    TITLE_PT,
+    chars_across,
     coinciding,
     format_list,
     save,
@@ -162,7 +164,7 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
             _panel(ax, f"({'abcdefgh'[k]}) {case}", angle_deg, loads, colours,
                    (handbook_marks or {}).get(case, {}))
         fig.suptitle(textwrap.fill(typeset(title or "Bearing loads over one revolution"),
-                                   100))
+                                   chars_across(PAGE_IN[0], TITLE_PT)))
         fig.tight_layout(h_pad=0.8)
         paths = save(fig, out / "secondary", formats)
     plt.close(fig)

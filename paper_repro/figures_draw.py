@@ -233,18 +233,16 @@ def titles(ax, title: str, note: str, width_in: float) -> None:
     drawn on one another, at :data:`images.MIN_TEXT_PT`) between it and the plotting
     area.
     """
-    def chars(pt):  # characters of ``pt`` type across the plotting area, at most
-        return max(30, int((width_in - 0.8) * 72 / (0.6 * pt)))
-
     lines = 0
     if note:
-        note = textwrap.fill(note, chars(images.MIN_TEXT_PT))
+        note = textwrap.fill(note, images.chars_across(width_in - 0.8))
         lines = note.count("\n") + 1
         ax.annotate(note, xy=(0, 1), xycoords="axes fraction", xytext=(0, 3),
                     textcoords="offset points", va="bottom", ha="left",
                     fontsize=images.MIN_TEXT_PT, color="0.25")
-    ax.set_title(textwrap.fill(images.typeset(title), chars(images.STYLE["axes.titlesize"])),
-                 loc="left", pad=5 + 1.3 * images.MIN_TEXT_PT * lines)
+    ax.set_title(textwrap.fill(images.typeset(title), images.chars_across(
+        width_in - 0.8, images.STYLE["axes.titlesize"])), loc="left",
+        pad=5 + 1.3 * images.MIN_TEXT_PT * lines)
 
 
 def clip_note(raw: np.ndarray, low: float, high: float, unit: str) -> str:
