@@ -22,6 +22,7 @@ import typing
 from pathlib import Path
 
 from cardan_forces.driveline import loading, scene
+from cardan_forces.experiments.bench_report import solved_sentence
 
 import cardan_forces as cf
 from cardan_forces import cli
@@ -443,7 +444,7 @@ def bench_markdown(path: Path = BENCH_DATA) -> str:
               "Instants per second of each formulation x backend (cold: one instant at a "
               "time; warm: warm-started from the previous instant; batched: every instant "
               "at once), the share solved, the solver's iterations per instant and its "
-              "share of the time.", ""]
+              "share of the time. " + solved_sentence(results["throughput"]), ""]
     rows = sorted(results["throughput"],
                   key=lambda r: (r["formulation"], -(r["instants_per_s"] or 0)))
     parts += _table(["formulation", "backend", "mode", "instants/s", "solved",

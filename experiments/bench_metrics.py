@@ -1,5 +1,7 @@
 """Metrics of ``cardan bench``: throughput summary, success per accuracy level, Pareto
-fronts, Dolan-Moré performance profiles, shifted geometric means, overhead and targets.
+fronts, Dolan-Moré performance profiles, shifted geometric means, overhead; and the
+targets a developer check holds a run to (:func:`targets`, ``pytest -m targets``),
+which the bench's outputs, measurements only, leave out.
 
 The ladder's accuracy is the package's own view (:mod:`cardan_forces.solvers.
 optimality`, relative measures; not qpbenchmark's, which are absolute and live in
@@ -266,7 +268,8 @@ def best_runs(summary: list[dict]) -> dict[str, dict]:
 
 def targets(summary: list[dict], success_rows: list[dict], conic: set[str],
             wall_s: float | None) -> list[dict]:
-    """The targets measured in this run: ``{name, value, wanted, met, detail}`` rows.
+    """The targets of a run, a developer's check (``tests/test_bench_targets.py``), not
+    a part of what the bench reports: ``{name, value, wanted, met, detail}`` rows.
 
     The paper's fair baseline is its fastest run (warm-started, analytic Jacobian);
     ``conic`` names the formulations whose problem is conic; a formulation with a

@@ -52,7 +52,8 @@ class Formulation:
     :data:`FALLBACK`, then any that takes it; a batched backend serves runs over
     time, the first per-instant one a single instant); ``least_norm_batch``: the stacked
     least-norm batch (``numpy-batched``) takes it, and its batched runs are held to
-    ``target_rate`` instants per second by the bench; ``drawn``: drawn in the paper's
+    ``target_rate`` instants per second by the bench's targets (a developer's check,
+    ``pytest -m targets``, not in the bench's outputs); ``drawn``: drawn in the paper's
     figures by default; ``beside_penalty``: compared with the penalty simulation on the
     released line; ``job_cost``: relative CPU cost of a run over the whole time grid by
     its default backend (the paper figures' worker queue starts the dearest first);
@@ -62,10 +63,10 @@ class Formulation:
     ``compliant``: its contacts have a stiffness (a compliance law), so a seat misfit
     enters as work on them (``cardan tolerances``); ``design``: a physical selection
     whose loads the design answers report (``cardan life``); ``success_target``:
-    ``(level, rate)``, the bench wants its best backend to solve at least ``rate`` of
+    ``(level, rate)``, the targets want the bench's best backend to solve at least ``rate`` of
     the instants at accuracy ``level`` (``None``: no such target); ``paper_ratio``: the
-    speed-up over the paper's method the bench wants of its best run (a conic one's);
-    ``newton_share``: the share of ``numpy-batched``'s rate the bench wants of the
+    speed-up over the paper's method the targets want of its best run (a conic one's);
+    ``newton_share``: the share of ``numpy-batched``'s rate the targets want of the
     ``newton`` family's best batched run (a least-norm one's; ``None``: no such target).
 
     The builder is called with the record's ``name`` (``build(op, i, name=...)``), which

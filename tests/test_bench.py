@@ -160,7 +160,7 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     args = _args("--quick", "--json", "--out", str(tmp_path), "--budget-s", "600")
     assert args.func(args) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"throughput", "pareto", "success", "profiles", "targets", "best",
+    assert set(out) == {"throughput", "pareto", "success", "profiles", "best",
                         "solver_optimality", "overhead"}
     views = {(r["solver"], r["setting"]) for r in out["solver_optimality"]}
     judged = {b for b in bench_run.QUICK_SOLVERS  # QPs through qpsolvers, conic problems
@@ -195,7 +195,7 @@ def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     report = (tmp_path / "report.md").read_text()
     views = _read(tmp_path / "bench_views.csv")
     assert {r["formulation"] for r in views} >= {"min_norm", "positive", "min_max"}
-    for heading in ("## Throughput", "## Best backend", "## Whose time", "## Targets",
+    for heading in ("## Throughput", "## Best backend", "## Whose time",
                     "## Success per accuracy level", "## Performance profiles",
                     "## Solver optimality", "## The package's time around the solver",
                     "## Pareto front", "## Known limitations"):
@@ -237,14 +237,14 @@ def test_a_new_backend_is_one_registration(tmp_path, monkeypatch, capsys):
 
 
 def test_json_is_strict_with_inf_and_nan():
-    results = {"summary": [], "points": [], "success": [], "targets": [
-        {"name": "x", "value": math.inf, "wanted": 1.0, "met": False, "detail": ""}],
+    results = {"summary": [], "points": [], "success": [], "overhead": [
+        {"formulation": "f", "solver_s": math.inf}],
         "profiles": [{"formulation": "f", "profile": "default", "clock": "solver",
                       "level": 1e-6, "solver": "a",
                       "solved": 0.0, "sgm_ratio": math.nan, "curve": [0.0]}]}
     text = json.dumps(bench_report.json_object(results), allow_nan=False)
     found = json.loads(text)  # undefined numbers are null, the finite ones kept
-    assert found["targets"][0]["value"] is None and found["profiles"][0]["sgm_ratio"] is None
+    assert found["overhead"][0]["solver_s"] is None and found["profiles"][0]["sgm_ratio"] is None
     assert np.isfinite(found["profiles"][0]["level"])
 
 
