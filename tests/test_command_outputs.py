@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 
 import pytest
+
 from cardan_forces import cli
 from cardan_forces.cli import main
 

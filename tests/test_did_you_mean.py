@@ -6,11 +6,12 @@ every lookup by name); a name near none lists the known ones.
 from __future__ import annotations
 
 import pytest
-from cardan_forces.cli import main
 from cardan_forces.driveline.loading import builtin_names
 from cardan_forces.driveline.names import did_you_mean, nearest
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers.registry import available, known_backends
+
+from cardan_forces.cli import main
 
 KINDS = {
     "solver": (lambda: list(known_backends()), ["solve", "--solver"]),

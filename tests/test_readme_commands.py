@@ -12,8 +12,9 @@ import shlex
 from pathlib import Path
 
 import pytest
-from cardan_forces.cli import main
 from cardan_forces.paper_repro.request import ALL_METHODS, ENGINE
+
+from cardan_forces.cli import main
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 
