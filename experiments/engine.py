@@ -40,12 +40,14 @@ from cardan_forces.experiments.images import (
     COINCIDE,
     MIN_TEXT_PT,
     PAGE_IN,
+    bound_note,
     chars_across,
     coincide_note,
     coinciding,
     draw_set,
     format_list,
     limits,
+    on_bound,
     save,
     styled,
 )
@@ -297,8 +299,9 @@ def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
 def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: list[str],
                start: float) -> dict:
     """One panel: the load of each setting in ``names`` from ``start`` (s) on (markers
-    at staggered instants; those on one another named above the panel, with how close)
-    over its rigid set at the sampled instants; its legend handles.
+    at staggered instants; those on one another or on a bound of the set named above
+    the panel, with how close) over its rigid set at the sampled instants; its legend
+    handles.
     """
     op, handles = result.op, {}
     shown = op.t >= start - 1e-12
@@ -315,8 +318,13 @@ def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: lis
     drawn, note = draw_set(ax, op.t[sampled], band[:, 0], band[:, 1], "N", view=(low, high))
     handles.update(drawn)
     ax.set_ylim(low, high)
-    together = coinciding(curves, COINCIDE * (high - low))
-    above = "; ".join(n for n in (coincide_note(curves, together, "N"), note) if n)
+    tol = COINCIDE * (high - low)
+    ends = np.full((len(op.t), 2), np.nan)
+    ends[sampled] = np.where(np.isfinite(band), band, np.nan)
+    above = "; ".join(n for n in (
+        coincide_note(curves, coinciding(curves, tol), "N"),
+        *(bound_note(on_bound(curves, ends[:, k], tol), word, "N")
+          for k, word in enumerate(("lower", "upper"))), note) if n)
     if above:
         ax.annotate(textwrap.fill(above, chars_across(PAGE_IN[0] - 0.8)), xy=(0, 1),
                     xycoords="axes fraction",

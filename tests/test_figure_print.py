@@ -243,3 +243,16 @@ def test_a_figure_of_several_pages_is_one_pdf_and_a_png_per_page(tmp_path):
 
 def test_units_are_typeset():
     assert images.typeset("gravity (0, 9.81, 0) m/s^2") == "gravity (0, 9.81, 0) m/s\u00b2"
+
+
+def test_a_curve_on_a_bound_of_the_set_is_named():
+    """A selection on the set's lower bound hides the bound's line: found where the
+    bound is known (NaN elsewhere) and said with how close; a curve that leaves it is
+    not."""
+    bound = np.array([0.0, np.nan, 0.0, np.nan, 0.0])
+    curves = {"positive": np.array([0.001, 5.0, 0.0, 7.0, 0.002]),
+              "paper": np.array([0.0, 1.0, 3.0, 1.0, 0.0])}
+    found = images.on_bound(curves, bound, tol=0.01)
+    assert found == {"positive": 0.002}
+    assert images.bound_note(found, "lower", "N") == (
+        "positive on the rigid set's lower bound within 0.002 N")
