@@ -42,8 +42,8 @@ from cardan_forces.solvers.conversions import convert
 from cardan_forces.solvers.optimality import unique_optimum
 from cardan_forces.solvers.qpsolvers_ import conic_duals
 from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status
-from cardan_forces.solvers.registry import with_warnings
-from cardan_forces.solvers.settings import SETTINGS, has_profile, profile, qpbenchmark_options
+from cardan_forces.solvers.registry import has_profile, profile, qpbenchmark_options, with_warnings
+from cardan_forces.solvers.settings import SETTINGS
 
 from . import progress
 from .export import as_qp, class_name

@@ -567,3 +567,28 @@ def _failed_batch(message: str, batch, start: float) -> BatchOutcome:
                         z=np.full((T, width), np.nan), y=None, iterations=np.zeros(T, int),
                         setup_s=0.0, solve_s=time.perf_counter() - start,
                         messages=(message,) * T)
+
+
+def profile(backend: str) -> settings.Profile | None:
+    """The profile backend ``backend`` declares (its ``Backend.qpbenchmark``), ``None``
+    for one without, or not installed.
+    """
+    try:
+        return get(backend).qpbenchmark
+    except SolverNotFound:
+        return None
+
+
+def qpbenchmark_options(backend: str, setting: str) -> dict:
+    """The keyword arguments backend ``backend`` gets at qpbenchmark setting ``setting``
+    (``KeyError`` for a backend without a profile or an unknown setting).
+    """
+    found = profile(backend)
+    if found is None:
+        raise KeyError(f"backend {backend!r} declares no qpbenchmark settings")
+    return found.options(setting)
+
+
+def has_profile(backend: str) -> bool:
+    """Whether ``backend`` declares how it takes qpbenchmark's settings."""
+    return profile(backend) is not None

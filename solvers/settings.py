@@ -16,7 +16,8 @@ their names from this module, ``Backend.tolerances`` and ``Backend.qpbenchmark``
   relative tolerances set to 0, PIQP's and ProxQP's duality-gap check on). Each solver's
   translation is one :class:`Profile` (:data:`PROFILES`, as qpbenchmark declares them),
   so the package's bench runs a backend exactly as qpbenchmark would;
-  :func:`qpbenchmark_options` gives a backend's keyword arguments for a setting.
+  :func:`~.registry.qpbenchmark_options` gives a backend's keyword arguments for a
+  setting.
 
 Besides these, an adapter changes no numerical default: it quiets the solver's output and
 gives the solvers of :data:`TIME_LIMITED` the wall-time guard :data:`TIME_LIMIT_S`.
@@ -177,30 +178,3 @@ PROFILES: dict[str, Profile] = {p.solver: p for p in (
 qpbenchmark 2.7's ``set_eps_abs``, ``set_eps_rel``, ``set_param`` and ``set_time_limit``
 for it. The qpsolvers backends declare their solver's; ``clarabel`` declares Clarabel's,
 as qpbenchmark runs it through qpsolvers."""
-
-
-def profile(backend: str) -> Profile | None:
-    """The profile backend ``backend`` declares (its ``Backend.qpbenchmark``), ``None``
-    for one without, or not installed.
-    """
-    from .registry import SolverNotFound, get
-
-    try:
-        return get(backend).qpbenchmark
-    except SolverNotFound:
-        return None
-
-
-def qpbenchmark_options(backend: str, setting: str) -> dict:
-    """The keyword arguments backend ``backend`` gets at qpbenchmark setting ``setting``
-    (``KeyError`` for a backend without a profile or an unknown setting).
-    """
-    found = profile(backend)
-    if found is None:
-        raise KeyError(f"backend {backend!r} declares no qpbenchmark settings")
-    return found.options(setting)
-
-
-def has_profile(backend: str) -> bool:
-    """Whether ``backend`` declares how it takes qpbenchmark's settings."""
-    return profile(backend) is not None

@@ -11,7 +11,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import qpbench_harness as harness
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.problems import QP, ForceChecks
-from cardan_forces.solvers import available, settings
+from cardan_forces.solvers import available, registry, settings
 from cardan_forces.solvers import qp_measures as qm
 
 
@@ -114,7 +114,7 @@ def test_settings_are_qpbenchmarks(qpbenchmark):
                 probe.solver_settings[name][profile.solver]), (name, profile.solver)
     for backend in available().values():  # each backend reads its own declaration
         if backend.qpbenchmark is not None:
-            assert settings.qpbenchmark_options(backend.name, "high_accuracy") == (
+            assert registry.qpbenchmark_options(backend.name, "high_accuracy") == (
                 backend.qpbenchmark.options("high_accuracy"))
 
 
@@ -135,7 +135,7 @@ def test_verdicts_equal_qpbenchmarks_on_the_same_solves(qpbenchmark, problems, s
 
     if solver not in available():
         pytest.skip(f"{solver} not installed")
-    name = settings.profile(solver).solver
+    name = registry.profile(solver).solver
 
     class Empty(qpbenchmark.TestSet):
         description, title, sparse_only = "", "", False
@@ -151,7 +151,7 @@ def test_verdicts_equal_qpbenchmarks_on_the_same_solves(qpbenchmark, problems, s
         bench_problem = qpbenchmark.Problem.from_qpsolvers(data, key)
         for setting in settings.SETTINGS:
             sol = qpsolvers.solve_problem(data, solver=name,
-                                          **settings.qpbenchmark_options(solver, setting))
+                                          **registry.qpbenchmark_options(solver, setting))
             sol.problem = bench_problem
             results.update(bench_problem, name, setting, sol, 0.0)
             measured = qm.qp_residuals(qp, bool(sol.found), sol.x, sol.y, sol.z, sol.z_box)
