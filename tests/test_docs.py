@@ -216,7 +216,7 @@ def _cardan_lines() -> list[tuple[str, str]]:
     for path in [ROOT / "README.md", ROOT / "CONTRIBUTING.md", *sorted(DOCS.rglob("*.md"))]:
         for block in re.findall(r"```[a-z]*\n(.*?)```", path.read_text(), flags=re.S):
             for line in block.replace("\\\n", " ").splitlines():
-                line = line.split("#", 1)[0].split(">", 1)[0].split("||", 1)[0].strip()
+                line = line.split("#", 1)[0].split(">", 1)[0].split("|", 1)[0].strip()
                 if line.startswith("cardan ") and "..." not in line:
                     found.append((path.name, line))
     return found
@@ -306,3 +306,19 @@ def test_the_bench_views_page_states_qpbenchmarks_settings():
     for name in ("low_accuracy", "mid_accuracy", "high_accuracy"):
         assert f"`{name}` {_sci(SETTINGS[name].tolerance)}" in text, name
     assert f"each is at most {_sci(ACCEPT)}" in text
+
+
+@pytest.mark.slow
+def test_the_readme_figure_is_what_its_command_draws_now(tmp_path):
+    """docs/fig13.png and its data docs/fig13.csv are what the README's command draws
+    with the current code (the same data; the picture at the same size), so the README
+    never shows an older drawing. Refresh both by copying that command's output."""
+    import matplotlib.image
+    from figure_data import assert_same_figure
+
+    assert cli.main(["repro", "--fig", "13", "--no-penalty", "--out", str(tmp_path),
+                     "--quiet"]) == 0
+    assert_same_figure(tmp_path / "fig13.csv", DOCS / "fig13.csv")
+    drawn, shown = (matplotlib.image.imread(p) for p in (tmp_path / "fig13.png",
+                                                            DOCS / "fig13.png"))
+    assert drawn.shape == shown.shape
