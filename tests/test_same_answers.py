@@ -14,6 +14,7 @@ from cardan_forces.experiments import study
 from cardan_forces.formulations import BASELINE, FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Status, available, registry
+from figure_data import assert_same_figure
 
 
 def _core_only(monkeypatch):
@@ -79,45 +80,11 @@ FULL_RUN, CORE_RUN = "CARDAN_FORCES_FULL_RUN", "CARDAN_FORCES_CORE_RUN"
 dependencies alone (CI makes both, in two environments, and runs the test below)."""
 
 
-def _numbers(path):
-    """A figure CSV's header and its cells as floats (an empty cell, no number: NaN)."""
-    rows = [line.split(",") for line in path.read_text().splitlines()]
-    cells = [[float(c) if c else np.nan for c in row] for row in rows[1:]]
-    return rows[0], np.array(cells, float)
-
-
 def _verdicts(report: str) -> list[str]:
     """The report's verdicts (its bold words) and the methods it calls no physical
     selection (the lines' numbers may differ in a last printed digit)."""
     return re.findall(r"\*\*(.+?)\*\*", report) + re.findall(
         r"`(\w+)`: both end faces of a pair push", report)
-
-
-UNIQUE = tuple(f for f, r in FORMULATIONS.items() if r.least_norm_batch)
-"""Methods whose answer is unique (strictly convex least norms): the same on any
-install to rounding. ``min_max``'s optimal face is not a point: where its answer lands
-a change in the last digits of ``A(t)`` moves (the motion is integrated compiled with
-numba or in NumPy), so it is held to the rigid set instead; the paper's root finder
-jumps between roots as its text says, and its end faces act at the rim (eqs. 33-36),
-so it is held to the report's verdicts alone."""
-
-
-def _method(column: str) -> str | None:
-    return next((f for f in FORMULATIONS if column.endswith(f"_{f}")), None)
-
-
-def _inside_the_set(head: list[str], x: np.ndarray, column: int) -> bool:
-    """Column ``column`` (a method's force) lies in its quantity's rigid set at every
-    instant where the CSV bounds it (to 1e-6 of the largest force)."""
-    quantity = head[column][: -len(_method(head[column])) - 1]
-    if f"{quantity}_set_min" not in head:
-        return True
-    lo, hi = (x[:, head.index(f"{quantity}_set_{side}")] for side in ("min", "max"))
-    tol = 1e-6 * np.nanmax(np.abs(x[:, 1:]))
-    value = x[:, column]
-    with np.errstate(invalid="ignore"):
-        below, above = value < lo - tol, value > hi + tol
-    return not (below | above).any()
 
 
 @pytest.mark.skipif(not (os.environ.get(FULL_RUN) and os.environ.get(CORE_RUN)),
@@ -127,14 +94,6 @@ def test_the_core_install_draws_the_full_install_s_figures_and_verdicts():
     figures = sorted(p.name for p in core.glob("fig*.csv"))
     assert figures and figures == sorted(p.name for p in full.glob("fig*.csv"))
     for name in figures:
-        (head, a), (head_b, b) = _numbers(full / name), _numbers(core / name)
-        assert head == head_b and a.shape == b.shape, name
-        tol = 1e-6 * np.nanmax(np.abs(a[:, 1:]))
-        for j, column in enumerate(head):
-            if _method(column) in UNIQUE or _method(column) is None:
-                assert np.array_equal(np.isnan(a[:, j]), np.isnan(b[:, j])), (name, column)
-                assert np.nanmax(np.abs(a[:, j] - b[:, j]), initial=0.0) <= tol, (name, column)
-            elif _method(column) != BASELINE:
-                assert _inside_the_set(head, a, j) and _inside_the_set(head, b, j), column
+        assert_same_figure(full / name, core / name)
     assert _verdicts((core / "report.md").read_text()) == \
         _verdicts((full / "report.md").read_text())
