@@ -138,7 +138,7 @@ def _read_text(path: Path) -> str:
     if path.is_dir():
         raise SceneError(f"scene {path}: is a directory, not a scene file")
     if not path.is_file():
-        near = did_you_mean(path, builtin_names())
+        near = "" if path.suffix else did_you_mean(path.name, builtin_names())
         listed = "" if near else f" ({', '.join(builtin_names())})"
         raise SceneError(f"scene {path}: not a built-in name{listed} and no such file{near}")
     try:

@@ -83,3 +83,10 @@ def test_nearest_sets_case_aside_and_keeps_the_known_spelling():
     assert nearest("c_n", ["C_N", "C0_N"]) == ["C_N"]
     assert nearest("zzzz", ["C_N"]) == [] and did_you_mean("zzzz", ["C_N"]) == ""
     assert did_you_mean("ab", ["abc", "abd"]) == "; did you mean 'abc' or 'abd'?"
+
+
+def test_a_mistyped_extends_names_the_built_in_scene(tmp_path, capsys):
+    path = tmp_path / "line.toml"
+    path.write_text('extends = "propshat"\n')
+    err = refusal(["scene", "check", str(path)], capsys)
+    assert err.rstrip().endswith("did you mean 'propshaft'?")
