@@ -589,10 +589,8 @@ def add_parser(subparsers) -> None:
 
 
 def run(args) -> int:
-    """Write the report; the paths written on stdout, progress on stderr."""
+    """Write the report; progress and the files written on stderr."""
     written = run_report(args.scene, Path(args.out), args.instants, progress=bars.line,
                          formats=args.format, with_engine=args.engine)
-    for path in written:
-        print(path)
     files.say_written("report", written)
     return 0

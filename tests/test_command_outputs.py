@@ -50,13 +50,7 @@ def test_the_api_writes_repro_where_the_command_does():
     assert inspect.signature(run_repro).parameters["out"].default == _out_defaults()["repro"]
 
 
-STDOUT_PATHS = {"report": "prints its files' paths on stdout too"}
-"""Commands that do not keep the convention yet, and what they do instead."""
-
-
-@pytest.mark.parametrize("command", [
-    pytest.param(c, marks=pytest.mark.xfail(reason=STDOUT_PATHS[c], strict=True))
-    if c in STDOUT_PATHS else c for c in sorted(SMALL)])
+@pytest.mark.parametrize("command", sorted(SMALL))
 def test_a_command_names_its_files_on_stderr_and_what_it_replaced(command, tmp_path, capsys):
     """Two runs into one folder: each ends with one line on stderr naming the folder,
     the second with how many files it replaced (every one of the first run's that it
