@@ -57,10 +57,10 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.modes import counts
 from cardan_forces.driveline.release import advise, named_modes
 from cardan_forces.driveline.scene import SceneError
-from cardan_forces.experiments import files
+from cardan_forces.experiments import files, images
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.environment import json_text, number_text
-from cardan_forces.experiments.images import format_list, write_study
+from cardan_forces.experiments.images import format_list
 from cardan_forces.experiments.life_runs import ENGINE, PENALTY, engine_history, penalty_history
 from cardan_forces.experiments.study import solve_over_time, value_ranges
 from cardan_forces.formulations import where
@@ -589,60 +589,179 @@ def _load_lines(answer: dict) -> list[str]:
     return ["", line]
 
 
-def figure(answer: dict):
-    """Each bearing's ``L10`` (h) interval over the rigid set as a bar between end
-    ticks (one tick where it is a point), each selection's as a mark; an open worst
-    case as a bar from the axis' left edge, labelled.
-    """
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import NullFormatter
+ROW_IN = 0.6
+"""The height of one bearing's row on the figure (inches): its bar and each
+selection's mark at a height of its own."""
 
+FRAME_IN = 1.25
+"""The figure's height besides its rows and its legend (inches): the titles above the
+panel and the x axis below it."""
+
+LEGEND_LINE_IN = 0.14
+"""The height of one line of the legend beside the panel (inches)."""
+
+MARK_STEP = 0.19
+"""How far apart (a row's height is 1) the selections' marks of one row are drawn: at
+one life they all show, each at its own height."""
+
+BAR, CAP, OPEN_END = "0.72", "0.3", "0.3"
+"""The colours of a rigid set's bar, of its finite ends' caps, and of the arrow of an
+open end."""
+
+SET_BAR_LABEL = "rigid set: worst to best\n(a cap at a finite end)"
+OPEN_WORST_LABEL = "open: no finite worst case\n(the arrow: L10 down to 0)"
+UNLOADED_BEST_LABEL = "unloaded at best: no finite\nbest case (the arrow: L10\nunbounded)"
+"""Legend labels of the rigid set's bar and of its open ends (wrapped to the legend's
+width)."""
+
+
+ROWS_PER_PAGE = int((images.PAGE_IN[1] - FRAME_IN) / ROW_IN)
+"""How many bearings' rows one page of the figure holds (:data:`images.PAGE_IN`)."""
+
+
+def _arrow(pointing: str):
+    """A marker whose tip is the point it marks, pointing ``left`` or ``right``: drawn at
+    the axis' edge, the arrow of an end that runs on beyond the axis (no cap).
+    """
+    from matplotlib.path import Path as Shape
+
+    sign = 1.0 if pointing == "left" else -1.0
+    return Shape([(0.0, 0.0), (sign * 1.6, 1.0), (sign * 1.6, -1.0), (0.0, 0.0)],
+                 [Shape.MOVETO, Shape.LINETO, Shape.LINETO, Shape.CLOSEPOLY])
+
+
+def _legend_in(answer: dict) -> float:
+    """The height of the legend beside the panel at most (inches): each selection, the
+    set's bar and its two open ends.
+    """
+    lines = len(answer["selections"]) + sum(
+        label.count("\n") + 1 for label in (SET_BAR_LABEL, OPEN_WORST_LABEL,
+                                            UNLOADED_BEST_LABEL))
+    return lines * LEGEND_LINE_IN + 0.4
+
+
+def figures(answer: dict) -> list:
+    """The figure's pages (:data:`ROWS_PER_PAGE` bearings each, one x range on all):
+    each bearing's ``L10`` (h) interval over the rigid set as a bar with a cap at each
+    finite end, an open end as an arrow on the axis' edge pointing to the open side,
+    and each selection's ``L10`` as a mark, each selection at a height of its own in
+    the row so that marks at one life all show. Make them in :func:`images.styled`.
+    """
     entries = answer["bearings"]
-    fig, ax = plt.subplots(figsize=(8.0, 1.6 + 0.55 * max(len(entries), 1)))
+    pages = [entries[k:k + ROWS_PER_PAGE]
+             for k in range(0, len(entries), ROWS_PER_PAGE)] or [[]]
     values = [v for e in entries for v in (*e["interval"]["L10_h"],
               *(s["L10_h"] for s in e["selections"].values())) if 0 < v < math.inf]
-    left = 10.0 ** math.floor(math.log10(min(values, default=1.0) / 100.0))  # a decade
-    shown = set()
+    room = 100.0 if any(e["interval"]["open"] for e in entries) else 1.0  # for the arrow
+    span = (10.0 ** math.floor(math.log10(min(values, default=1.0) / room)),  # decades
+            10.0 ** (math.floor(math.log10(max(values, default=1.0))) + 1))
+    return [_page(answer, rows, span, k, len(pages)) for k, rows in enumerate(pages)]
+
+
+def figure(answer: dict):
+    """The figure of one page (a scene whose bearings fit one; :func:`figures`)."""
+    return figures(answer)[0]
+
+
+def _page(answer: dict, entries: list, span: tuple, page: int, pages: int):
+    """One page of :func:`figures`: ``entries``' rows over the x range ``span``."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    names = list(answer["selections"])
+    rows = max(len(entries), 1)
+    height = max(FRAME_IN + ROW_IN * rows, _legend_in(answer))
+    fig, ax = plt.subplots(figsize=(images.PAGE_IN[0], height))
+    left, right = span
     for k, e in enumerate(entries):
-        worst, best = e["interval"]["L10_h"]
-        lo = left if e["interval"]["open"] or not worst > 0 else worst
-        hi = best if math.isfinite(best) else max(values, default=1.0) * 100.0
-        if math.isfinite(lo) and math.isfinite(hi) and hi > 0:
-            ax.plot([lo, max(hi, lo)], [k, k], color="0.6", lw=7, solid_capstyle="butt",
-                    marker="|", ms=16, mew=2.5,
-                    label=None if "set" in shown else "rigid set: worst to best")
-            shown.add("set")
-        if e["interval"]["open"]:
-            ax.annotate("open: no finite worst case", (left, k), xytext=(4, 7),
-                        textcoords="offset points", fontsize=8)
-        for c, (name, sel) in enumerate(e["selections"].items()):
-            if 0 < sel["L10_h"] < math.inf:
-                ax.plot([sel["L10_h"]], [k], MARKS.get(name, "x"), color=f"C{c}", ms=6,
-                        mfc="none", label=None if name in shown else name)
-                shown.add(name)
+        _bar(ax, k, e, left, right)
+        for c, name in enumerate(names):
+            value = e["selections"][name]["L10_h"]
+            if 0 < value < math.inf:
+                ax.plot([value], [k + MARK_STEP * (c - (len(names) - 1) / 2)],
+                        MARKS.get(name, "x"), color=f"C{c}", ms=4.5, mfc="none", mew=1.0,
+                        zorder=3, label=name)
     ax.set_xscale("log")
-    ax.xaxis.set_minor_formatter(NullFormatter())  # a span under two decades: no crowding
-    ax.set_xlim(left, 10.0 ** math.ceil(math.log10(ax.dataLim.intervalx[1])))  # decades
+    ax.set_xlim(left, right)
+    ax.xaxis.set_major_locator(LogLocator(numticks=12))
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_yticks(range(len(entries)), [e["bearing"] for e in entries])
-    ax.set_ylim(-0.7, len(entries) - 0.3)
+    ax.tick_params(axis="y", length=0)
+    reach = max(0.5, MARK_STEP * (len(names) - 1) / 2 + 0.18)  # the outer marks inside
+    ax.set_ylim(rows - 1 + reach, -reach)  # the first bearing on top
+    ax.grid(True, axis="x", which="major")
     ax.set_xlabel("basic rating life L10 [h]")
-    ax.set_ylabel("bearing [-]")
-    ax.set_title("L10 over every rigid solution (bar) and each selection (marks)", fontsize=9)
-    fig.suptitle(f"{answer['scene']}: ISO 281 bearing life", fontsize=10)
+    ax.set_ylabel("rated bearing [shaft.bearing]")
+    ax.set_title(images.typeset("L10 over the rigid set (bar) and of each selection "
+                                "(marks, one height each)"), loc="left")
+    of = f" ({page + 1} of {pages})" if pages > 1 else ""
+    fig.suptitle(images.typeset(f"{answer['scene']}: ISO 281 bearing life{of}"))
     if entries:
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+        handles = _handles(ax)
+        fig.legend(handles.values(), handles.keys(), loc="upper right",
+                   bbox_to_anchor=(1.0, 1 - FRAME_IN / 2 / height), labelspacing=0.7)
     else:
         ax.text(0.5, 0.5, "no bearing of the scene has catalogue data", ha="center",
-                transform=ax.transAxes, fontsize=9)
-    height = fig.get_size_inches()[1]
-    fig.subplots_adjust(left=0.2, right=0.74, bottom=0.6 / height, top=1 - 0.75 / height)
+                transform=ax.transAxes)
+    fig.canvas.draw()
+    beside = (fig.legends[0].get_window_extent().width / fig.dpi + 0.05
+              if fig.legends else 0.0)
+    fig.tight_layout(rect=(0, 0, 1 - beside / images.PAGE_IN[0], 1), pad=0.3)
     return fig
 
 
+def _bar(ax, k: int, entry: dict, left: float, right: float) -> None:
+    """Row ``k``'s interval over the rigid set: a bar from the worst life to the best,
+    a cap at each finite end (one cap where the interval is a point), an arrow on the
+    axis' edge where an end is open (no finite worst case: to the left; unloaded at
+    best: to the right). Nothing where an end was not solved.
+    """
+    worst, best = entry["interval"]["L10_h"]
+    if math.isnan(worst) or math.isnan(best):
+        return
+    open_low = entry["interval"]["open"] or not worst > 0
+    open_high = math.isinf(best)
+    lo, hi = left if open_low else worst, right if open_high else max(best, worst)
+    caps = [i for i, is_open in ((0, open_low), (1, open_high)) if not is_open]
+    ax.plot([lo, hi], [k, k], color=BAR, lw=6, solid_capstyle="butt", zorder=1,
+            marker="|", ms=11, mew=1.2, mec=CAP, markevery=caps, label=SET_BAR_LABEL)
+    for is_open, x, side, label in ((open_low, left, "left", OPEN_WORST_LABEL),
+                                    (open_high, right, "right", UNLOADED_BEST_LABEL)):
+        if is_open:
+            ax.plot([x], [k], ls="none", marker=_arrow(side), ms=15, color=OPEN_END,
+                    zorder=2, clip_on=False, label=label)
+
+
+def _handles(ax) -> dict:
+    """One legend handle per label of ``ax``: the selections in their marks' order in a
+    row (top to bottom), then the set's bar and its open ends.
+    """
+    handles = {}
+    for line in ax.lines:
+        handles.setdefault(line.get_label(), line)
+    ends = (SET_BAR_LABEL, OPEN_WORST_LABEL, UNLOADED_BEST_LABEL)
+    return {**{k: v for k, v in handles.items() if k not in ends},
+            **{k: handles[k] for k in ends if k in handles}}
+
+
 def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
-    """``life.csv``, ``life.md`` and ``life.<format>`` into ``out``; their paths."""
-    return write_study(out, "life", lambda path: write_csv(answer, path), markdown(answer),
-                       lambda: figure(answer), formats)
+    """``life.csv``, ``life.md`` and the figure (``life.<format>``; a page each where
+    its rows take more than one, :func:`images.save_pages`) into ``out``; their paths.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, whatever display there is
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(answer, out / "life.csv")
+    files.write_text(out / "life.md", markdown(answer))
+    with images.styled():
+        pages = figures(answer)
+        paths = images.save_pages(pages, out / "life", formats)
+    for fig in pages:
+        plt.close(fig)
+    return [out / "life.csv", out / "life.md", *paths]
 
 
 def add_parser(subparsers) -> None:
