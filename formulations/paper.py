@@ -56,6 +56,17 @@ _FB_ORIGIN = 1.0 / np.sqrt(2.0) - 1.0
 """Generalized derivative of ``sqrt(a^2 + b^2) - a - b`` at (0, 0) in a and b."""
 
 
+def end_faces_words(rim: bool) -> str:
+    """Where the paper's method, as built with ``rim`` (:func:`build_paper`), puts the
+    end-face forces, in the words every output uses: at the rim (eqs. 33-36, the
+    ``paper`` formulation of the figures), or on the axis as the package's operator
+    does (the rim moments dropped, the equations exactly ``A x = b``).
+    """
+    if rim:
+        return "end faces at the rim, eqs. 33-36"
+    return "end faces on the axis, without the rim moments of eqs. 33-36"
+
+
 @dataclass(frozen=True)
 class PaperNLS(NLS):
     """The paper's 34 x 34 system plus its own residual and unknown names."""

@@ -25,7 +25,7 @@ from .convex import (
     positive,
     socp_face,
 )
-from .paper import build_paper
+from .paper import build_paper, end_faces_words
 from .problems import LCP, LS, NLS, QP, Conic
 
 FALLBACK = "clarabel"
@@ -135,7 +135,7 @@ root)."""
 
 REGISTRY: tuple[Formulation, ...] = (
     Formulation("paper", build_paper, (NLS,),
-                "the paper's method (as computed here; end faces at the rim, eqs. 33-36)",
+                f"the paper's method (as computed here; {end_faces_words(True)})",
                 physical=False, backends=("scipy-fsolve", "scipy-root-lm"), drawn=True,
                 job_cost=4.0),
     Formulation("min_norm", min_norm, (LS,), "min_norm (least norm: end faces may pull)",

@@ -23,6 +23,7 @@ from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.paper_method import multistart
 from cardan_forces.experiments.study import default_backend, intervals
 from cardan_forces.formulations import FORMULATIONS, SELECTION
+from cardan_forces.formulations.paper import end_faces_words
 from cardan_forces.solvers import solve
 
 from . import check_time, print_json
@@ -61,7 +62,7 @@ def run(args) -> int:
     result = determinacy(op, 0)
     ranges = intervals(op, 0)
     modes = named_modes(motion, 0, op)
-    starts = multistart(op, 0, n=args.multistart, rim=False)[:, : len(op.names)] \
+    starts = multistart(op, 0, n=args.multistart, rim=MULTISTART_RIM)[:, : len(op.names)] \
         if args.multistart else None
     member = signed_member(op)
     if args.json:
@@ -76,6 +77,11 @@ def run(args) -> int:
     print_modes(modes)
     return 0
 
+
+MULTISTART_RIM = False
+"""``--multistart`` solves the paper's equations with the end faces on the axis, as the
+operator puts them: its answers then solve ``A x = b`` and are members of the rigid set
+whose intervals the table shows (with the rim moments they would solve other equations)."""
 
 EMPTY = ("empty: no forces satisfy the equilibrium with end faces >= 0 and the slip "
          "joints' friction bounds at this instant")
@@ -145,8 +151,8 @@ def print_table(name, result, ranges, member, starts=None, n_starts=0) -> None:
     print(f"{'component':{width}s} {'determinate':>11s} {SIGNED + ' N':>14s} {'min N':>12s} "
           f"{'max N':>12s}")
     if starts is not None:
-        print(f"paper method (fsolve, end faces on the axis) from {n_starts} random "
-              f"starts: {len(starts)} converged; their spread per component at the right")
+        print(f"paper method (fsolve, {end_faces_words(MULTISTART_RIM)}) from {n_starts} "
+              f"random starts: {len(starts)} converged; their spread per component at the right")
     for j, (name, det, value) in enumerate(zip(result.names, result.determinate, values)):
         lo, hi, status = ranges[name]["min"], ranges[name]["max"], ranges[name]["status"]
         lo, hi = number_text(lo, ".4f", "-inf"), number_text(hi, ".4f", "+inf")
