@@ -134,13 +134,23 @@ def handbook(torque: float, b1_deg: float, b2_deg: float, arrangement: str, a: f
             "near_90": -couple, "far_90": couple}
 
 
+HANDBOOK_LABEL = "handbook closed form (0 and 90 deg)"
+"""The closed forms' legend entry, and their source in ``secondary.csv``."""
+PACKAGE_SOURCE = "package (rigid model)"
+"""The source of the curves' values in ``secondary.csv``: the rigid model's loads."""
+CSV_COLUMNS = ("case", "bearing_load", "angle_deg", "force_N", "source")
+"""Columns of ``secondary.csv``: one row per case, load, angle and source."""
+
+
 def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
           out: Path, formats=("png",), handbook_marks: dict | None = None,
           title: str = "") -> list[Path]:
-    """``secondary.csv`` (long format) and the figure ``secondary.<format>`` (one panel
-    per case, titled ``title``) for each of ``formats``; ``handbook_marks`` (case ->
-    load name -> ((angle deg, N), ...)): the closed forms, drawn as open markers over
-    the package's curves.
+    """``secondary.csv`` (long format, every number the figure draws: the package's
+    loads, source :data:`PACKAGE_SOURCE`, then the closed forms, source
+    :data:`HANDBOOK_LABEL`) and the figure ``secondary.<format>`` (one panel per case,
+    titled ``title``) for each of ``formats``; ``handbook_marks`` (case -> load name ->
+    ((angle deg, N), ...)): the closed forms, drawn as open markers over the package's
+    curves.
     """
     import matplotlib
 
@@ -150,11 +160,15 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
     out.mkdir(parents=True, exist_ok=True)
     with files.replacing(out / "secondary.csv", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["case", "bearing_load", "angle_deg", "force_N"])
+        w.writerow(CSV_COLUMNS)
         for case, loads in results.items():
             for name, values in loads.items():
-                w.writerows([case, name, f"{q:.6g}", number_text(v, ".9g", "")]
+                w.writerows([case, name, f"{q:.6g}", number_text(v, ".9g", ""), PACKAGE_SOURCE]
                             for q, v in zip(angle_deg, values))
+        for case, marks in (handbook_marks or {}).items():
+            for name, points in marks.items():
+                w.writerows([case, name, f"{q:.6g}", number_text(v, ".9g", ""), HANDBOOK_LABEL]
+                            for q, v in points)
     with styled():
         fig, axes = plt.subplots(len(results), 1, squeeze=False, figsize=(
             PAGE_IN[0], min(PAGE_IN[1], 2.1 * len(results) + 0.6)))
@@ -169,9 +183,6 @@ def write(results: dict[str, dict[str, np.ndarray]], angle_deg: np.ndarray,
         paths = save(fig, out / "secondary", formats)
     plt.close(fig)
     return [out / "secondary.csv", *paths]
-
-
-HANDBOOK_LABEL = "handbook closed form (0 and 90 deg)"
 
 
 def _panel(ax, title: str, angle_deg, loads: dict, colours: dict, marks: dict) -> None:
@@ -189,10 +200,10 @@ def _panel(ax, title: str, angle_deg, loads: dict, colours: dict, marks: dict) -
         group = next((g for g in together if g[0] == name), (name,))
         ax.plot(angle_deg, values, color=colours[name], ls="-" if "normal" in name else "--",
                 label=" = ".join(group))
-    for k, points in enumerate(marks.values()):
+    for k, (name, points) in enumerate(marks.items()):
         x, y = zip(*points)
         ax.plot(x, y, ls="none", marker="o", ms=7, mfc="none", mew=1.2, color="k", zorder=5,
-                label=HANDBOOK_LABEL if k == 0 else "_")
+                label=HANDBOOK_LABEL if k == 0 else "_", gid=name)
     missing = [n for n in loads if n not in drawn]
     ax.set_title(title + (f"; not determinate: {', '.join(missing)}" if missing else ""),
                  loc="left")

@@ -178,7 +178,7 @@ def test_secondary_writes_csv_and_png(tmp_path):
     secondary.revolutions(out=tmp_path, cases=(("Z", (30.0, 30.0)),))
     assert (tmp_path / "secondary.png").stat().st_size > 0
     text = (tmp_path / "secondary.csv").read_text().splitlines()
-    assert text[0] == "case,bearing_load,angle_deg,force_N" and len(text) > 100
+    assert text[0] == "case,bearing_load,angle_deg,force_N,source" and len(text) > 100
 
 
 def test_report_on_the_propshaft(tmp_path):
