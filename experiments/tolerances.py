@@ -36,6 +36,7 @@ import dataclasses
 import functools
 import math
 import sys
+import textwrap
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,11 +47,11 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import MAX_ARTICULATION_DEG, Scene, SceneError
-from cardan_forces.experiments import files
+from cardan_forces.experiments import files, images
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments import tolerance_store as store
 from cardan_forces.experiments.environment import json_text, number_text
-from cardan_forces.experiments.images import format_list, write_study
+from cardan_forces.experiments.images import format_list
 from cardan_forces.experiments.life import loads as bearing_loads
 from cardan_forces.experiments.life import rated
 from cardan_forces.experiments.study import interval_history, solve_over_time
@@ -464,44 +465,132 @@ def markdown(answer: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def figure(answer: dict):
-    """Each rated bearing's ``P`` over time: the compliance samples' 5-95 % band and
-    median, compliance_hertz's median, and the nominal line's value.
-    """
-    import matplotlib.pyplot as plt
+COLUMNS = 2
+"""Panels side by side on a page (a column's width each, :data:`images.COLUMN_IN`)."""
 
+ROW_IN = 2.45
+"""The height of one row of panels (inches): the panel, its title and note above it
+and its x axis below."""
+
+FRAME_IN = 0.85
+"""The page's height besides its rows (inches): the figure's title and the legend."""
+
+ROWS_PER_PAGE = int((images.PAGE_IN[1] - FRAME_IN) / ROW_IN)
+"""Rows of panels one page holds (:data:`images.PAGE_IN`); more rows take more pages."""
+
+
+def _curves(answer: dict, name: str) -> dict[str, tuple]:
+    """The lines of one load's panel by legend label, each ``(short name, values,
+    colour)``: drawn in interleaved dashes (:func:`images.interleave`) in this order, so
+    that where they lie on one another each shows in turn.
+    """
+    lin, hz = answer["loads"][RUN[0]][name], answer["loads"][RUN[1]][name]
+    return {f"{RUN[0]}: median": (f"{RUN[0]} median", lin["P50"], "C0"),
+            f"{RUN[1]}: median": ("hertz median", hz["P50"], "C1"),
+            f"nominal line ({RUN[0]})": ("nominal", lin["nominal"], "k")}
+
+
+def figures(answer: dict) -> list:
+    """The figure's pages (:data:`ROWS_PER_PAGE` rows of :data:`COLUMNS` panels each):
+    each rated bearing's ``P`` over time, the compliance samples' 5-95 % band, the
+    medians of compliance and compliance_hertz and the nominal line's value, the three
+    lines in interleaved dashes and those that lie on one another named above the panel
+    with how close. Make them in :func:`images.styled`.
+    """
     names = [n for n in answer["loads"][RUN[0]] if n.startswith("P:")] or \
         list(answer["loads"][RUN[0]])[:4]
-    cols = min(3, math.ceil(math.sqrt(len(names))))
-    rows = math.ceil(len(names) / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.4 * cols, 2.9 * rows + 1.2),
+    per_page = COLUMNS * ROWS_PER_PAGE
+    pages = [names[k:k + per_page] for k in range(0, len(names), per_page)] or [[]]
+    return [_page(answer, chunk, k, len(pages)) for k, chunk in enumerate(pages)]
+
+
+def figure(answer: dict):
+    """The figure's first page (:func:`figures`)."""
+    return figures(answer)[0]
+
+
+def _page(answer: dict, names: list[str], page: int, pages: int):
+    """One page of :func:`figures`: the panels of ``names``, one legend under them."""
+    import matplotlib.pyplot as plt
+
+    rows = max(1, math.ceil(len(names) / COLUMNS))
+    height = FRAME_IN + ROW_IN * rows
+    fig, axes = plt.subplots(rows, COLUMNS, figsize=(images.PAGE_IN[0], height),
                              squeeze=False)
-    t = np.asarray(answer["t_s"])
+    handles = {}
     for ax, name in zip(axes.ravel(), names):
-        lin, hz = answer["loads"][RUN[0]][name], answer["loads"][RUN[1]][name]
-        ax.fill_between(t, lin["P5"], lin["P95"], color="C0", alpha=0.3,
-                        label=f"{RUN[0]}: 5-95 % of samples")
-        ax.plot(t, lin["P50"], color="C0", label=f"{RUN[0]}: median")
-        ax.plot(t, hz["P50"], "--", color="C1", label=f"{RUN[1]}: median")
-        ax.plot(t, lin["nominal"], ":", color="k", label=f"nominal line ({RUN[0]})")
-        ax.set_title(name.removeprefix("P:"), fontsize=9)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("P [N]" if name.startswith("P:") else "force [N]")
+        handles.update(_panel(ax, answer, name))
     for ax in axes.ravel()[len(names):]:
         ax.set_visible(False)
-    fig.suptitle(f"{answer['scene']}: equivalent bearing loads over {answer['stored']} "
-                 "tolerance samples", fontsize=10)
-    handles, labels = axes.ravel()[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=8, frameon=False)
-    height = fig.get_size_inches()[1]
-    fig.subplots_adjust(bottom=1.0 / height, top=1 - 0.55 / height, hspace=0.6, wspace=0.35)
+    of = f" ({page + 1} of {pages})" if pages > 1 else ""
+    fig.suptitle(images.typeset(f"{answer['scene']}: equivalent bearing loads over "
+                                f"{answer['stored']} tolerance samples{of}"))
+    if handles:
+        fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=2)
+    fig.canvas.draw()
+    below = (fig.legends[0].get_window_extent().height / fig.dpi + 0.05
+             if fig.legends else 0.0)
+    above = fig._suptitle.get_window_extent().height / fig.dpi + 0.1
+    fig.tight_layout(rect=(0, below / height, 1, 1 - above / height), pad=0.3, h_pad=0.8,
+                     w_pad=3.0)  # the right panels' y labels clear of the left ones
     return fig
 
 
+def _panel(ax, answer: dict, name: str) -> dict:
+    """One load's panel (:func:`figures`); its legend handles by label."""
+    t = np.asarray(answer["t_s"])
+    lin = answer["loads"][RUN[0]][name]
+    curves = _curves(answer, name)
+    values = {short: np.asarray(v, float) for short, v, _ in curves.values()}
+    low, high = images.limits([lin["P5"], lin["P95"], *values.values()])
+    tol = images.COINCIDE * (high - low)
+    width = np.nan_to_num(np.asarray(lin["P95"], float) - np.asarray(lin["P5"], float))
+    band = f"{RUN[0]}: 5-95 % of samples"
+    flat = bool(np.all(width <= tol))  # a band no wider than a line: not shown, said
+    handles = {} if flat else {band: ax.fill_between(t, lin["P5"], lin["P95"], color="C0",
+                                                     alpha=0.25, lw=0, label=band)}
+    for k, (label, (_, v, colour)) in enumerate(curves.items()):
+        handles[label], = ax.plot(t, v, color=colour, label=label,
+                                  ls=images.interleave(k, len(curves)))
+    ax.set_ylim(low, high)
+    together = images.coincide_note(values, images.coinciding(values, tol), "N")
+    note = "; ".join(n for n in (
+        f"no band: {RUN[0]}'s samples within {width.max(initial=0.0):.2g} N" if flat
+        else "", f"on one another: {together}" if together else "") if n)
+    if note:
+        text = textwrap.fill(note,
+                             images.chars_across(images.COLUMN_IN - 0.9))
+        ax.annotate(text, xy=(0, 1), xycoords="axes fraction", xytext=(0, 3),
+                    textcoords="offset points", va="bottom", fontsize=images.MIN_TEXT_PT,
+                    color="0.25").set_in_layout(False)  # the title's pad holds it
+    lines = text.count("\n") + 1 if note else 0
+    ax.set_title(images.typeset(name.removeprefix("P:")), loc="left",
+                 pad=3 + (1.25 * images.MIN_TEXT_PT * lines + 2 if lines else 0))
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel("equivalent load P [N]" if name.startswith("P:") else "force [N]")
+    ax.grid(True)
+    return handles
+
+
 def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
-    """``tolerances.csv``, ``tolerances.md`` and ``tolerances.<format>``; their paths."""
-    return write_study(out, "tolerances", lambda path: write_csv(answer, path), markdown(answer),
-                       lambda: figure(answer), formats)
+    """``tolerances.csv``, ``tolerances.md`` and the figure (``tolerances.<format>``; a
+    page each where its panels take more than one, :func:`images.save_pages`); their
+    paths.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")  # files only, whatever display there is
+    import matplotlib.pyplot as plt
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(answer, out / "tolerances.csv")
+    files.write_text(out / "tolerances.md", markdown(answer))
+    with images.styled():
+        pages = figures(answer)
+        paths = images.save_pages(pages, out / "tolerances", formats)
+    for fig in pages:
+        plt.close(fig)
+    return [out / "tolerances.csv", out / "tolerances.md", *paths]
 
 
 def add_parser(subparsers) -> None:

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.loading import load_scene
+from cardan_forces.experiments import images
 from cardan_forces.experiments import tolerance_store as store
 from cardan_forces.experiments import tolerances as tol
 from cardan_forces.experiments.environment import json_safe
-from cardan_forces.experiments.images import problems
 from cardan_forces.experiments.study import solve_over_time
 from cardan_forces.experiments.sweep_point import scene_digest
 from cardan_forces.formulations.convex import contact_laws
@@ -170,7 +170,9 @@ def test_the_store_resumes_without_loss_or_repeat(tmp_path):
     fresh, _ = tol.run_study(spec, 4, 5, INSTANTS, tmp_path / "fresh")
     assert json.dumps(json_safe(again["L10_Mrev"])) == \
         json.dumps(json_safe(fresh["L10_Mrev"]))
-    assert not problems(tol.figure(again))  # the print rules
+    with images.styled():
+        fig = tol.figure(again)
+    assert images.print_problems(fig) == []  # the print rules
     with pytest.raises(store.StoreError):
         tol.run_study(spec, 4, 6, INSTANTS, out)  # another seed: another study
 
