@@ -38,7 +38,7 @@ from cardan_forces.solvers import newton_
 from cardan_forces.solvers.batch import finalize_batch
 from cardan_forces.solvers.registry import solve_batch
 
-from . import files
+from . import files, images
 from .bench_report import write_csv
 from .environment import number_text
 from .images import save
@@ -165,35 +165,83 @@ def _table_row(r: dict) -> str:
     return f"| {' | '.join(cells)} |"
 
 
+PANELS = (("rigid_median", "(a) distance from the rigid set"),
+          ("compliance_median", "(b) distance from the compliance member"))
+"""The figure's panels: the measure drawn and the panel's title."""
+RIGID_LABEL = "R = 0: the rigid answer"
+ZERO_LABEL = "distance 0 (the arrow: below the log axis)"
+"""Legend labels of the rigid answers' marks and of a distance of exactly 0."""
+
+
+def _down_arrow():
+    """A marker whose tip is the point it marks, pointing down: on a panel's lower edge,
+    a distance of 0, which a log axis cannot show.
+    """
+    from matplotlib.path import Path as Shape
+
+    return Shape([(0.0, 0.0), (1.0, 1.6), (-1.0, 1.6), (0.0, 0.0)],
+                 [Shape.MOVETO, Shape.LINETO, Shape.LINETO, Shape.CLOSEPOLY])
+
+
 def draw(rows: list[dict], stem: Path, formats=("png",)) -> list[Path]:
-    """Two panels against the time per instant: distance from the rigid set and from
-    the compliance member, one curve per scene and formulation (its points the
-    softenings, the rigid answer ``R = 0`` drawn at the floor), MuJoCo a star.
+    """Two panels against the time per instant, a column each: distance from the rigid
+    set and from the compliance member, one curve per scene and formulation (its points
+    the softenings, the rigid answer ``R = 0`` marked), MuJoCo a star; a distance of
+    exactly 0 as an arrow on the panel's lower edge. In the print style
+    (:mod:`~cardan_forces.experiments.images`), one legend under the panels.
     """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), constrained_layout=True)
-    for (scene, formulation), group in _curves(rows).items():
-        marker = "*" if formulation.startswith("MuJoCo") else "o"
-        style = dict(marker=marker, markersize=10 if marker == "*" else 4,
-                     linestyle="none" if marker == "*" else "-",
-                     label=f"{scene}: {formulation}")
-        for ax, key in zip(axes, ("rigid_median", "compliance_median")):
-            ax.plot([r["time_us"] for r in group], [max(r[key], 1e-17) for r in group],
-                    **style)
-    for ax, title in zip(axes, ("distance from the rigid set", "distance from the "
-                                "compliance member")):
-        ax.set(xscale="log", yscale="log", title=title, xlabel="time per instant [us]",
-               ylabel="median relative distance [-]")
-    fig.suptitle("Softened (R from 1e-1 to 0) against rigid: accuracy and time")
-    handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8)
-    paths = save(fig, stem, formats)
+    with images.styled():
+        fig, axes = plt.subplots(1, 2, figsize=(images.PAGE_IN[0], 3.9))
+        handles = {}
+        for ax, (key, title) in zip(axes, PANELS):
+            handles.update(_panel(ax, rows, key, title))
+        fig.suptitle(images.typeset("Softened (R from 1e-1 to 0) against rigid: accuracy "
+                                    "and time"))
+        fig.legend(handles.values(), handles.keys(), loc="lower center", ncol=3)
+        fig.canvas.draw()
+        below = fig.legends[0].get_window_extent().height / fig.dpi + 0.05
+        fig.tight_layout(rect=(0, below / fig.get_figheight(), 1, 1), pad=0.3, w_pad=2.0)
+        paths = save(fig, stem, formats)
     plt.close(fig)
     return paths
+
+
+def _panel(ax, rows: list[dict], key: str, title: str) -> dict:
+    """One panel of :func:`draw`: ``key`` of each curve against its time; its legend
+    handles by label.
+    """
+    handles, rigid, zeros = {}, [], []
+    values = np.array([r[key] for r in rows], float)
+    shown = values[np.isfinite(values) & (values > 0)]
+    low, high = (10.0 ** v for v in images.limits([np.log10(shown)]))
+    for (scene, formulation), group in _curves(rows).items():
+        label = f"{scene}: {formulation}"
+        star = formulation.startswith("MuJoCo")
+        x = np.array([r["time_us"] for r in group], float)
+        y = np.array([r[key] for r in group], float)
+        handles[label], = ax.plot(x, np.where(y > 0, y, np.nan), marker="*" if star else "o",
+                                  ms=8 if star else 3.5, ls="none" if star else "-",
+                                  zorder=3 if star else 2, label=label)
+        rigid += [(xi, yi) for r, xi, yi in zip(group, x, y) if r["R"] == 0.0 and yi > 0]
+        zeros += [xi for xi, yi in zip(x, y) if yi == 0.0]
+    if rigid:
+        handles[RIGID_LABEL], = ax.plot(*zip(*rigid), ls="none", marker="s", ms=7, mfc="none",
+                                        mec="k", mew=0.8, zorder=4, label=RIGID_LABEL)
+    if zeros:
+        handles[ZERO_LABEL], = ax.plot(zeros, [low] * len(zeros), ls="none", ms=10,
+                                       marker=_down_arrow(), color="0.3", clip_on=False,
+                                       zorder=4, label=ZERO_LABEL)
+    ax.set(xscale="log", yscale="log", ylim=(low, high))
+    ax.set_title(title, loc="left")
+    ax.set_xlabel("time per instant [\u00b5s]")
+    ax.set_ylabel("median relative distance [-]")
+    ax.grid(True, which="major")
+    return handles
 
 
 def _curves(rows: list[dict]) -> dict:

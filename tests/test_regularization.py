@@ -5,6 +5,7 @@ import csv
 
 import numpy as np
 import pytest
+from cardan_forces.experiments import images
 from cardan_forces.experiments import regularization as reg
 
 
@@ -34,8 +35,17 @@ def test_softened_compliance_reaches_the_compliance_member(rows):
     assert at[0.0]["compliance_worst"] <= 1e-8
 
 
-def test_writes_table_section_and_figure(rows, tmp_path):
+def test_writes_table_section_and_figure(rows, tmp_path, monkeypatch):
+    drawn = []
+
+    def keep(fig, stem, formats=("png",)):
+        drawn.append(fig)
+        return images.save(fig, stem, formats)
+
+    monkeypatch.setattr(reg, "save", keep)
     paths = reg.write(rows, tmp_path)
+    (fig,) = drawn
+    assert images.print_problems(fig) == []  # the rules of print
     assert {p.name for p in paths} == {"regularization.csv", "regularization.md",
                                        "regularization.png"}
     with open(tmp_path / "regularization.csv") as handle:
