@@ -19,9 +19,9 @@ import numpy as np
 
 from .driveline.dynamics import Motion
 from .driveline.equilibrium import Operator
-from .driveline.names import did_you_mean
 from .driveline.release import Release
 from .driveline.scene import Scene
+from .util.names import did_you_mean
 
 
 class ArgumentError(ValueError):
@@ -91,7 +91,7 @@ def instants(owner: Motion | Operator, values, name: str = "instants") -> list[i
 
 def choice(value, known, name: str) -> str:
     """``value``, one of the names ``known``; else :class:`UnknownChoice` naming the
-    nearest (:func:`~cardan_forces.driveline.names.did_you_mean`), or all when none is.
+    nearest (:func:`~cardan_forces.util.names.did_you_mean`), or all when none is.
     """
     if not isinstance(value, str):
         raise ArgumentTypeError(f"{name} must be a str among {', '.join(known)}, not "

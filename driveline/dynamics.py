@@ -25,7 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .compiled import HAVE_NUMBA, harmonic, harmonic_law, njit
+from cardan_forces.util.compiled import HAVE_NUMBA, njit
+
+from .harmonic import harmonic, harmonic_law
 from .kinematics import Geometry, Kinematics, kinematics, reduced_terms, rest_geometry
 from .scene import Scene
 

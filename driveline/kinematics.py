@@ -21,7 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .compiled import njit
+from cardan_forces.util.compiled import njit
+
 from .scene import Scene
 
 

@@ -30,10 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
+from cardan_forces.util.names import did_you_mean, nearest
+
 from .catalogue import read_rating, read_tolerances
 from .elements import check_elements
 from .elements.registry import BEARING_KINDS, JOINT, SLIP
-from .names import did_you_mean, nearest
 from .scene import (
     EFFECTS,
     LIMITS,

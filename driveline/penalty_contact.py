@@ -20,9 +20,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .compiled import harmonic, njit
+from cardan_forces.util.compiled import njit
 
-KERNEL_FILES = ("compiled.py", "penalty_contact.py", "penalty_jacobian.py",
+from .harmonic import harmonic
+
+KERNEL_FILES = ("harmonic.py", "penalty_contact.py", "penalty_jacobian.py",
                 "penalty_linear.py", "penalty_bdf.py")
 """The source files of the penalty kernels (beside this one): each kernel's cache is
 keyed by all of their contents, as one file was before."""

@@ -17,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .compiled import harmonic
+from .harmonic import harmonic
 from .penalty_contact import (
     Local,
     _contacts_into,

@@ -44,7 +44,8 @@ uses the NumPy model and SciPy's integrators instead (:data:`HAVE_NUMBA`).
 
 from __future__ import annotations
 
-from .compiled import HAVE_NUMBA
+from cardan_forces.util.compiled import HAVE_NUMBA
+
 from .penalty_bdf import (
     FINISHED,
     MESSAGES,

@@ -18,7 +18,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .compiled import HAVE_NUMBA
+from cardan_forces.util.compiled import HAVE_NUMBA
+
 from .penalty_contact import kernel
 
 if HAVE_NUMBA:

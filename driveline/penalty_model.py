@@ -21,10 +21,10 @@ from scipy import sparse
 from scipy.spatial.transform import Rotation
 
 from . import penalty_kernels as kernels
-from .compiled import harmonic_law
 from .dynamics import simulate
 from .elements import shaft_segments
 from .equilibrium import body_references, build_operator
+from .harmonic import harmonic_law
 from .scene import Scene
 
 _TAU_S = 1e-3

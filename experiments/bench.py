@@ -43,6 +43,7 @@ import numpy as np
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
+from cardan_forces.experiments.arguments import UsageError, formulation_name
 from cardan_forces.experiments.environment import json_text
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import batch as fbatch
@@ -51,8 +52,6 @@ from cardan_forces.formulations.problems import LS, QP, Conic
 from cardan_forces.solvers import available
 from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.qocogen_ import UNBUILT
-
-from cardan_forces.commands import UsageError, formulation_name
 
 from . import bench_metrics as metrics
 from . import bench_report as out
@@ -206,7 +205,8 @@ def run(args) -> int:
         files.write_text(report, report.read_text() + "\n"
                          + (folder / "regularization.md").read_text() + figure)
         written += softened
-    removed = files.stale(folder, written, [f"{stem}.{f}" for stem in FIGURES for f in FORMATS])
+    removed = files.stale(folder, written, [f"{stem}{page}.{f}" for stem in FIGURES
+                                             for f in FORMATS for page in ("", "-[0-9]*")])
     for path in removed:  # an earlier run's figure in another format: not this run's
         path.unlink()
     runs.progress(f"bench: done in {time.perf_counter() - started:.0f} s")
@@ -233,7 +233,8 @@ def _unbuilt(rows: list[dict]) -> dict[str, str]:
 
 
 FIGURES = ("bench_pareto", "bench_profiles")
-"""The figures' names (without format) in the output folder."""
+"""The figures' names (without format) in the output folder (a figure of several pages
+is ``<name>-1``, ``<name>-2``, ... in PNG and SVG, :func:`.images.save_pages`)."""
 
 
 def _regularization(folder: Path, formats) -> list[Path]:

@@ -33,7 +33,11 @@ from pathlib import Path
 
 import numpy as np
 from cardan_forces.driveline import engine_mujoco
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
+from cardan_forces.driveline.equilibrium import Operator, build_operator
+from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import (
@@ -55,9 +59,7 @@ from cardan_forces.experiments.study import intervals as rigid_intervals
 from cardan_forces.experiments.study import value_ranges
 from cardan_forces.formulations import FALLBACK, FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
-from cardan_forces.solvers import UnsupportedProblem
-
-import cardan_forces as cf
+from cardan_forces.solvers import SolverNotFound, UnsupportedProblem, solve
 
 SETTINGS = (
     Softness(label="default"),
@@ -97,7 +99,7 @@ class InstantComparison:
 class EngineStudy:
     """The runs, the operator they were read on, and the comparisons."""
 
-    op: cf.Operator
+    op: Operator
     runs: dict[str, EngineRun]
     sampled: np.ndarray
     settled: np.ndarray
@@ -121,8 +123,8 @@ def _formulation_forces(op, i: int) -> dict[str, np.ndarray]:
             continue
         for backend in (*formulation.backends, FALLBACK):
             try:
-                record = cf.solve(cf.build_formulation(name, op, i), backend)
-            except (cf.SolverNotFound, NotApplicable, UnsupportedProblem):
+                record = solve(formulation(op, i), backend)
+            except (SolverNotFound, NotApplicable, UnsupportedProblem):
                 continue
             if record.solved:
                 out[name] = np.asarray(record.x[:len(op.names)], float)
@@ -152,10 +154,10 @@ def settle_s(runs: dict[str, EngineRun]) -> float:
 def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray) -> EngineStudy:
     """Set every run against the rigid analysis at the ``sampled`` instants."""
     settled = op.t[sampled] - op.t[0] >= settle_s(runs)
-    det0 = cf.determinacy(op, int(sampled[0]))
+    det0 = determinacy(op, int(sampled[0]))
     intervals, rigid, forms, comparisons = {}, {}, {}, []
     for i in sampled:
-        det = cf.determinacy(op, int(i))
+        det = determinacy(op, int(i))
         intervals[i], rigid[i] = _intervals(op, int(i)), det.min_norm
         forms[i] = _formulation_forces(op, int(i))
         for label, r in runs.items():
@@ -187,7 +189,7 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
     """Run the engine on scene ``spec`` up to ``stop_s`` (default its stop) under
     every softness setting and compare at ``instants`` evenly spaced instants.
     """
-    scene = cf.load_scene(spec)
+    scene = load_scene(spec)
     try:
         engine_mujoco.check_expressible(scene)
     except EngineUnsupported as err:
@@ -199,7 +201,7 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
             raise NotApplicable(f"--stop {stop_s}: the scene's grid starts at "
                                 f"{scene.time.start_s} s with step {scene.time.step_s} s; "
                                 "give at least two of its instants")
-    return study_operator(cf.build_operator(cf.simulate(scene, t)), instants, settings)
+    return study_operator(build_operator(simulate(scene, t)), instants, settings)
 
 
 def study_operator(op, instants: int = 6, settings=SETTINGS) -> EngineStudy:

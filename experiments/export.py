@@ -39,13 +39,12 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import MAX_INSTANTS
+from cardan_forces.experiments.arguments import UsageError, formulation_name, whole_number
 from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LS, QP, Conic
 from cardan_forces.solvers.conversions import convert
-
-from cardan_forces.commands import UsageError, formulation_name, whole_number
 
 from . import files
 

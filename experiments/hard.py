@@ -35,13 +35,12 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
 from cardan_forces.experiments import files, progress
+from cardan_forces.experiments.arguments import formulation_name
 from cardan_forces.experiments.environment import json_number, json_text, number_text
 from cardan_forces.experiments.study import History, solve_over_time
 from cardan_forces.formulations import BASELINE, FORMULATIONS, default_backends
 from cardan_forces.formulations.convex import NotApplicable as NotApplicableProblem
 from cardan_forces.solvers import ACCEPT, Residuals, backends_for
-
-from cardan_forces.commands import formulation_name
 
 TOL = 1e-8
 """Tolerance asked of every backend (``--tol``). Tighter asks find out the solvers, not

@@ -59,13 +59,12 @@ from cardan_forces.driveline.release import advise, named_modes
 from cardan_forces.driveline.scene import SceneError
 from cardan_forces.experiments import files, images
 from cardan_forces.experiments import progress as bars
+from cardan_forces.experiments.arguments import whole_number
 from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.images import format_list
 from cardan_forces.experiments.life_runs import ENGINE, PENALTY, engine_history, penalty_history
 from cardan_forces.experiments.study import solve_over_time, value_ranges
 from cardan_forces.formulations import where
-
-from cardan_forces.commands import whole_number
 
 INSTANTS = 41
 """Instants by default (each costs a few warm LPs per bearing whose radial load is free)."""

@@ -38,13 +38,12 @@ from cardan_forces.driveline.release import named_modes
 from cardan_forces.driveline.scene import MAX_INSTANTS
 from cardan_forces.experiments import engine, files, images
 from cardan_forces.experiments import progress as bars
+from cardan_forces.experiments.arguments import UsageError, whole_number
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import format_list
 from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.formulations import SELECTION
 from cardan_forces.formulations.convex import NotApplicable
-
-from cardan_forces.commands import UsageError, whole_number
 
 INSTANTS = 41
 """The fewest instants of the report by default (each costs two LPs per component)."""

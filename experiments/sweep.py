@@ -37,14 +37,13 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import builtin_names, load_scene
 from cardan_forces.driveline.scene import LIMITS, MAX_ARTICULATION_DEG, Scene, SceneError
+from cardan_forces.experiments.arguments import formulation_name
 from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.study import NoBackend, default_backend
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Status
 from cardan_forces.solvers import get as get_backend
-
-from cardan_forces.commands import formulation_name
 
 from . import files, progress, sweep_exec
 from .sweep_point import (

@@ -50,6 +50,7 @@ from cardan_forces.driveline.scene import MAX_ARTICULATION_DEG, Scene, SceneErro
 from cardan_forces.experiments import files, images
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments import tolerance_store as store
+from cardan_forces.experiments.arguments import UsageError, whole_number
 from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.images import format_list
 from cardan_forces.experiments.life import loads as bearing_loads
@@ -61,8 +62,6 @@ from cardan_forces.formulations import FORMULATIONS, where
 from cardan_forces.formulations.convex import contact_laws
 from cardan_forces.formulations.problems import QP, Conic
 from threadpoolctl import threadpool_limits
-
-from cardan_forces.commands import UsageError, whole_number
 
 RUN = where(compliant=True)
 """The formulations each sample solves: those whose contacts have a stiffness (the

@@ -13,7 +13,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from cardan_forces.driveline.names import did_you_mean
+
+from cardan_forces.util.names import did_you_mean
 
 from .convex import (
     compliance,
@@ -184,7 +185,7 @@ class UnknownFormulation(KeyError):
 
 def formulation(name: str) -> Formulation:
     """The record of ``name``; :class:`UnknownFormulation` naming the nearest known ones
-    (:func:`~cardan_forces.driveline.names.did_you_mean`), or all when none is near.
+    (:func:`~cardan_forces.util.names.did_you_mean`), or all when none is near.
     """
     try:
         return FORMULATIONS[name]

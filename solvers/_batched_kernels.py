@@ -29,7 +29,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..driveline.compiled import HAVE_NUMBA, njit
+from cardan_forces.util.compiled import HAVE_NUMBA, njit
+
 from ._batched_state import ActiveSetScratch, Answers, Group, LcpScratch, Refinement
 
 if not HAVE_NUMBA:  # an optional extra: the callers take their NumPy paths

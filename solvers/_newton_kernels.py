@@ -23,7 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..driveline.compiled import HAVE_NUMBA
+from cardan_forces.util.compiled import HAVE_NUMBA
+
 from ._newton_state import Data, Scratch
 
 if not HAVE_NUMBA:  # an optional extra: the caller takes the NumPy reference

@@ -12,14 +12,16 @@ from functools import partial
 
 import numpy as np
 
-from ..driveline.compiled import HAVE_NUMBA, njit
+from cardan_forces.util import compiled
+from cardan_forces.util.compiled import HAVE_NUMBA, njit
+
 from ._newton_state import Scratch
 
 if not HAVE_NUMBA:  # an optional extra: the caller takes the NumPy reference
     raise ImportError("numba is not installed")
 
 FILES = ("_newton_linalg.py", "_newton_kernels.py", "_newton_state.py",
-         "../driveline/compiled.py")
+         compiled.__file__)
 """The newton kernels' source files: each kernel's cache is keyed by all of them (a
 kernel inlines the functions of the others)."""
 

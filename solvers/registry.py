@@ -37,7 +37,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from cardan_forces.driveline.names import did_you_mean
+
+from cardan_forces.util.names import did_you_mean
 
 from . import plugins, reduced_, settings
 from .batch import BatchOutcome, ConicBatch, finalize_batch

@@ -12,7 +12,7 @@ import sys
 import pytest
 
 HELPER = '''
-from cardan_forces.driveline.compiled import njit
+from cardan_forces.util.compiled import njit
 
 
 @njit(inline="always")
@@ -21,7 +21,7 @@ def offset(x):
 '''
 
 KERNEL = '''
-from cardan_forces.driveline.compiled import njit
+from cardan_forces.util.compiled import njit
 from helper_module import offset
 
 
@@ -64,7 +64,7 @@ def test_a_kernel_is_compiled_again_when_a_file_it_depends_on_changes(tmp_path):
 RATIO = '''
 import os
 
-from cardan_forces.driveline.compiled import njit
+from cardan_forces.util.compiled import njit
 
 
 @njit(cache=True, error_model=os.environ["ERROR_MODEL"])
@@ -100,7 +100,7 @@ def test_a_declared_dependency_that_does_not_exist_fails_at_import(tmp_path):
     """A kernel that names a missing file fails when its module is imported (a
     declaration that could never invalidate anything is an error, not a no-op)."""
     pytest.importorskip("numba")
-    from cardan_forces.driveline.compiled import njit
+    from cardan_forces.util.compiled import njit
 
     with pytest.raises(FileNotFoundError):
         njit(cache=True, depends=("no_such_file.py",))(lambda x: x)
@@ -112,12 +112,13 @@ def test_every_penalty_kernel_is_keyed_by_every_penalty_kernel_file():
     stale integrator), and every file that holds one is among those listed."""
     numba = pytest.importorskip("numba")
     from cardan_forces.driveline import (
-        compiled,
         penalty_bdf,
         penalty_contact,
         penalty_jacobian,
         penalty_linear,
     )
+
+    from cardan_forces.util import compiled
 
     files = penalty_contact.KERNEL_FILES
     expected = compiled._files_hash(penalty_contact.__file__, files)
@@ -135,7 +136,7 @@ def test_every_penalty_kernel_is_keyed_by_every_penalty_kernel_file():
 WHERE = '''
 import os
 import numba
-from cardan_forces.driveline.compiled import harmonic
+from cardan_forces.driveline.harmonic import harmonic
 index = harmonic._cache._cache_file._index_path
 print(numba.config.CACHE_DIR, os.environ["NUMBA_CACHE_DIR"], index, sep="\\n")
 '''

@@ -1,5 +1,5 @@
 """A mistyped name, of a solver backend, a formulation or a scene, is refused in one
-line with exit code 2 that names the name meant (``driveline.names``, the one helper of
+line with exit code 2 that names the name meant (``util.names``, the one helper of
 every lookup by name); a name near none lists the known ones.
 """
 
@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import pytest
 from cardan_forces.driveline.loading import builtin_names
-from cardan_forces.driveline.names import did_you_mean, nearest
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.solvers.registry import available, known_backends
 
 from cardan_forces.cli import main
+from cardan_forces.util.names import did_you_mean, nearest
 
 KINDS = {
     "solver": (lambda: list(known_backends()), ["solve", "--solver"]),

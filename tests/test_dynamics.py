@@ -3,12 +3,12 @@
 import numpy as np
 import pytest
 from cardan_forces.driveline import dynamics
-from cardan_forces.driveline.compiled import HAVE_NUMBA
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import reduced_inertia, simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from scipy.integrate import simpson
 
+from cardan_forces.util.compiled import HAVE_NUMBA
 from tests.conftest import variant
 
 pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run

@@ -25,7 +25,7 @@ def test_engine_comparison_passes_over_backends_that_cannot_take_a_friction_cone
 
 
 KERNEL = '''
-from cardan_forces.driveline.compiled import njit
+from cardan_forces.util.compiled import njit
 
 
 @njit(cache=True)

@@ -4,48 +4,20 @@
 ``report``, ``secondary``) follow the same convention in ``cardan_forces.experiments``.
 :mod:`cardan_forces.cli` assembles them, owns output and exit codes.
 
-What the commands share is here: the error for a request that cannot be carried out,
-the argument types of sizes and formulations, progress lines on stderr, the check of
-``--t`` against a scene's span and JSON output.
+What only the commands share is here: progress lines on stderr, the check of ``--t``
+against a scene's span and JSON output; the error for a request that cannot be carried
+out and the argument types, which the study commands take too, are
+:mod:`cardan_forces.experiments.arguments`'.
 """
 
 from __future__ import annotations
 
-import argparse
-
 from cardan_forces.experiments import progress as progress_bars
+from cardan_forces.experiments.arguments import UsageError, formulation_name, whole_number
 from cardan_forces.experiments.environment import json_text
-from cardan_forces.formulations import UnknownFormulation, formulation
 
-
-class UsageError(ValueError):
-    """A command-line request that cannot be carried out (exit code 2)."""
-
-
-def whole_number(least: int, most: int):
-    """An argparse type: a whole number from ``least`` to ``most`` (a size, a count, a
-    seed), refused with one line before any work.
-    """
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            value = least - 1
-        if not least <= value <= most:
-            raise argparse.ArgumentTypeError(f"expected a whole number from {least} to "
-                                             f"{most}, got {text!r}")
-        return value
-    return parse
-
-
-def formulation_name(text: str) -> str:
-    """An argparse type: a formulation's name, a typo refused in one line naming the
-    nearest names (:func:`~cardan_forces.formulations.formulation`).
-    """
-    try:
-        return formulation(text).name
-    except UnknownFormulation as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
+__all__ = ["UsageError", "check_time", "formulation_name", "print_json", "progress",
+           "whole_number"]
 
 
 def progress(message: str) -> None:

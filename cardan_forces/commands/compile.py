@@ -20,9 +20,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cardan_forces.commands import progress
-from cardan_forces.driveline.compiled import HAVE_NUMBA
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.formulations import SELECTION
+from cardan_forces.util.compiled import HAVE_NUMBA
 
 
 @dataclass(frozen=True)
@@ -51,10 +51,11 @@ def _operator():
     """``paper``'s operator at its first two instants (the rigid simulation's kernels
     compile on the way).
     """
-    import cardan_forces as cf
+    from cardan_forces.driveline.dynamics import simulate
+    from cardan_forces.driveline.equilibrium import build_operator
 
     scene = load_scene("paper")
-    return cf.build_operator(cf.simulate(scene, scene.time.instants()[:2]))
+    return build_operator(simulate(scene, scene.time.instants()[:2]))
 
 
 def _batched() -> None:
@@ -80,9 +81,9 @@ def _newton() -> None:
 
 FAMILIES = (
     Family("the penalty simulation's kernels (a few minutes on a small machine)",
-           ("driveline.compiled", "driveline.penalty_bdf", "driveline.penalty_contact",
+           ("driveline.harmonic", "driveline.penalty_bdf", "driveline.penalty_contact",
             "driveline.penalty_jacobian", "driveline.penalty_linear"), _penalty),
-    Family("the rigid simulation's kernels", ("driveline.compiled", "driveline.dynamics",
+    Family("the rigid simulation's kernels", ("driveline.harmonic", "driveline.dynamics",
                                               "driveline.kinematics"), _operator),
     Family("the batched least-norm kernels", ("solvers._batched_kernels",), _batched),
     Family("the newton family's kernels (about a minute)",

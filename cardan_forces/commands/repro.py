@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from cardan_forces.driveline.names import did_you_mean
 from cardan_forces.experiments import files
 from cardan_forces.experiments.images import format_list
+from cardan_forces.util.names import did_you_mean
 
 from . import UsageError, progress
 
@@ -42,7 +42,7 @@ def _words(text: str) -> tuple[str, ...]:
 
 def _check(words: tuple[str, ...], allowed: tuple[str, ...], flag: str) -> tuple[str, ...]:
     """``words``, each among ``allowed``; else a :class:`UsageError` naming the first
-    unknown one's nearest names (:func:`~cardan_forces.driveline.names.did_you_mean`).
+    unknown one's nearest names (:func:`~cardan_forces.util.names.did_you_mean`).
     """
     bad = [w for w in words if w not in allowed]
     if bad or not words:

@@ -19,8 +19,8 @@ and a relative path would move with it.
 numba keys a cached function by its own source file only: a kernel that inlines or
 calls kernels of other files would be loaded stale after an edit there. A kernel names
 the files it depends on (``njit(cache=True, depends=(...))``, paths relative to its own
-file); their contents' hash joins its cache key, so an edit of any of them compiles it
-again.
+file or absolute); their contents' hash joins its cache key, so an edit of any of them
+compiles it again.
 """
 
 from __future__ import annotations
@@ -31,8 +31,6 @@ import hashlib
 import os
 import warnings
 from pathlib import Path
-
-import numpy as np
 
 
 def _absolute_cache_dir() -> None:
@@ -125,7 +123,7 @@ def _rebuilding(dispatcher, depends=(), options=""):
 @functools.cache
 def _files_hash(source: str, depends: tuple) -> str:
     """SHA-256 of the contents of the files ``depends`` (paths relative to the folder
-    of the file ``source``), in their order; empty where there are none. A file that
+    of the file ``source``, or absolute), in their order; empty where there are none. A file that
     is missing raises at import: a kernel's declared dependency must exist.
     """
     if not depends:
@@ -151,18 +149,4 @@ def _discard(cache, exc: Exception) -> None:
     _WARNED.append(str(index))
 
 
-__all__ = ["HAVE_NUMBA", "harmonic", "harmonic_law", "njit"]
-
-
-@njit(cache=True)
-def harmonic(law, t):
-    """``mean + amplitude cos(2 pi f t + phase)`` (N m) with ``law`` = those four
-    (:class:`~cardan_forces.driveline.scene.TorqueLaw`'s fields) at time ``t`` (s).
-    """
-    return law[0] + law[1] * np.cos(2.0 * np.pi * law[2] * t + law[3])
-
-
-def harmonic_law(torque) -> np.ndarray:
-    """A :class:`~cardan_forces.driveline.scene.TorqueLaw` as :func:`harmonic` takes it."""
-    return np.array([torque.mean_N_m, torque.amplitude_N_m, torque.frequency_hz,
-                     torque.phase_rad], float)
+__all__ = ["HAVE_NUMBA", "njit"]
