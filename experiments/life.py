@@ -705,7 +705,9 @@ def _page(answer: dict, entries: list, span: tuple, page: int, pages: int):
     fig.canvas.draw()
     beside = (fig.legends[0].get_window_extent().width / fig.dpi + 0.05
               if fig.legends else 0.0)
-    fig.tight_layout(rect=(0, 0, 1 - beside / images.PAGE_IN[0], 1), pad=0.3)
+    above = fig._suptitle.get_window_extent().height / fig.dpi
+    fig.tight_layout(rect=(0, 0, 1 - beside / images.PAGE_IN[0], 1 - above / height),
+                     pad=0.3)
     return fig
 
 
