@@ -21,7 +21,15 @@ import pytest  # noqa: E402
 from cardan_forces.driveline.dynamics import simulate  # noqa: E402
 from cardan_forces.driveline.equilibrium import build_operator  # noqa: E402
 from cardan_forces.driveline.loading import load_scene  # noqa: E402
-from cardan_forces.experiments import engine, images, report, secondary  # noqa: E402
+from cardan_forces.experiments import (  # noqa: E402
+    engine,
+    images,
+    life,
+    regularization,
+    report,
+    secondary,
+    tolerances,
+)
 from cardan_forces.paper_repro import repro, verdicts  # noqa: E402
 from matplotlib.text import Text  # noqa: E402
 
@@ -40,6 +48,19 @@ def _kept(monkeypatch_context, *modules) -> list:
 
     for module in (images, *modules):
         monkeypatch_context.setattr(module, "save", keep)
+    return kept
+
+
+def _kept_pages(monkeypatch_context) -> list:
+    """:func:`_kept` for figures saved by :func:`images.save_pages`: each page kept, not
+    written, with the path it would have."""
+    kept = []
+
+    def keep(fig, stem, formats=("png",)):
+        kept.append((stem.name, fig))
+        return [stem.with_suffix(f".{fmt}") for fmt in formats]
+
+    monkeypatch_context.setattr(images, "save", keep)
     return kept
 
 
@@ -148,6 +169,169 @@ def test_cardan_secondary_s_figure_keeps_the_rules_of_print(tmp_path):
         secondary.revolutions("paper-slip", 100.0, tmp_path)
     (_, fig), = kept
     _check(fig)
+    plt.close(fig)
+
+
+@pytest.fixture(scope="module")
+def life_answers():
+    """``cardan life``'s answers at five instants: paper and axle-pinion (open worst
+    cases, the selections' lives alike on paper), propshaft (every interval a point)."""
+    return {name: life.study(name, 5) for name in ("paper", "propshaft", "axle-pinion")}
+
+
+def _open_arrows(fig, label: str, side: str) -> list:
+    """The lines labelled ``label`` drawn as an arrow on the panel's ``side`` edge
+    (``left``, ``right``, ``bottom``) pointing out of the panel: a marker whose tip is
+    its point and whose body lies inside."""
+    found = []
+    for ax in fig.axes:
+        edge = {"left": ax.get_xlim()[0], "right": ax.get_xlim()[1],
+                "bottom": ax.get_ylim()[0]}[side]
+        for line in ax.lines:
+            if line.get_label() != label:
+                continue
+            marker = line.get_marker()
+            assert hasattr(marker, "vertices"), f"{label!r} is not drawn as an arrow"
+            body = np.asarray(marker.vertices, float)[1:]  # the tip first, at (0, 0)
+            axis, sign = {"left": (0, 1), "right": (0, -1), "bottom": (1, 1)}[side]
+            assert np.allclose(marker.vertices[0], 0) and np.all(sign * body[:, axis] >= 0)
+            at = line.get_xdata() if axis == 0 else line.get_ydata()
+            assert np.allclose(np.asarray(at, float), edge), f"{label!r} off the {side} edge"
+            found.append(line)
+    return found
+
+
+def test_cardan_life_s_figures_keep_the_rules_of_print(life_answers, tmp_path):
+    """Every selection's mark shows (on paper they lie at one life), at a height of
+    its own in the bearing's row; the y axis names the bearings, not a unit."""
+    for name, answer in life_answers.items():
+        with pytest.MonkeyPatch.context() as patch:
+            kept = _kept_pages(patch)
+            life.write_outputs(answer, tmp_path / name)
+        (stem, fig), = kept
+        assert stem == "life"
+        _check(fig)
+        legend = {t.get_text() for lg in fig.legends for t in lg.get_texts()}
+        assert set(answer["selections"]) <= legend, name
+        ax = fig.axes[0]
+        assert ax.get_ylabel() != "bearing [-]"
+        heights = {line.get_label(): float(line.get_ydata()[0]) % 1 for line in ax.lines
+                   if line.get_label() in answer["selections"]}
+        assert len(set(np.round(list(heights.values()), 6))) == len(heights), name
+        plt.close(fig)
+
+
+def test_cardan_life_draws_an_open_worst_case_as_an_arrow(life_answers):
+    """paper's worst cases are open: each row's bar runs to the axis' left edge and
+    ends there in an arrow pointing left, without a cap; its best end has one."""
+    answer = life_answers["paper"]
+    assert all(e["interval"]["open"] for e in answer["bearings"])
+    with images.styled():
+        fig = life.figure(answer)
+    arrows = _open_arrows(fig, life.OPEN_WORST_LABEL, "left")
+    assert len(arrows) == len(answer["bearings"])
+    left = fig.axes[0].get_xlim()[0]
+    bars = [line for line in fig.axes[0].lines if line.get_label() == life.SET_BAR_LABEL]
+    assert len(bars) == len(answer["bearings"])
+    for bar in bars:
+        x = np.asarray(bar.get_xdata(), float)
+        assert x[0] == left and list(bar.get_markevery()) == [1]  # a cap at the best only
+    assert images.print_problems(fig) == []
+    plt.close(fig)
+    closed = life_answers["propshaft"]
+    with images.styled():
+        fig = life.figure(closed)
+    assert _open_arrows(fig, life.OPEN_WORST_LABEL, "left") == []
+    plt.close(fig)
+
+
+def test_cardan_life_s_figure_of_many_bearings_takes_pages(life_answers, tmp_path):
+    answer = dict(life_answers["paper"])
+    answer["bearings"] = [dict(e, bearing=f"{e['bearing']}{k}")
+                          for k in range(8) for e in answer["bearings"]]
+    with images.styled():
+        figs = life.figures(answer)
+    assert len(figs) == -(-len(answer["bearings"]) // life.ROWS_PER_PAGE) > 1
+    for fig in figs:
+        _check(fig)
+    paths = images.save_pages(figs, tmp_path / "life", ("png",))
+    assert [p.name for p in paths] == [f"life-{k}.png" for k in range(1, len(figs) + 1)]
+    for fig in figs:
+        plt.close(fig)
+
+
+@pytest.fixture(scope="module")
+def tolerance_answer(tmp_path_factory):
+    """``cardan tolerances propshaft``'s answer over three samples at three instants."""
+    answer, lost = tolerances.run_study("propshaft", 3, 0, 3,
+                                        tmp_path_factory.mktemp("tolerances"))
+    assert not lost
+    return answer
+
+
+def test_cardan_tolerances_figure_keeps_the_rules_of_print(tolerance_answer, tmp_path):
+    """The compliance median shows where the other lines lie on it (interleaved
+    dashes), and the panels say which lie on one another."""
+    with pytest.MonkeyPatch.context() as patch:
+        kept = _kept_pages(patch)
+        tolerances.write_outputs(tolerance_answer, tmp_path)
+    (stem, fig), = kept
+    assert stem == "tolerances"
+    _check(fig)
+    assert "compliance: median" in {t.get_text() for lg in fig.legends
+                                    for t in lg.get_texts()}
+    notes = [t.get_text() for ax in fig.axes for t in ax.texts]
+    assert any("on one another: compliance median = " in n for n in notes)
+    assert all(ax.get_position().width * fig.get_figwidth() <= images.COLUMN_IN
+               for ax in fig.axes if ax.get_visible())
+    plt.close(fig)
+
+
+def test_cardan_tolerances_figure_of_many_loads_takes_pages(tolerance_answer):
+    answer = {**tolerance_answer, "loads": {
+        form: {f"{name}{k}": entry for k in range(3) for name, entry in loads.items()
+               if name.startswith("P:")} for form, loads in tolerance_answer["loads"].items()}}
+    per_page = tolerances.COLUMNS * tolerances.ROWS_PER_PAGE
+    with images.styled():
+        figs = tolerances.figures(answer)
+    assert len(figs) == -(-len(answer["loads"]["compliance"]) // per_page) > 1
+    for fig in figs:
+        _check(fig)
+        plt.close(fig)
+
+
+def _softened_rows() -> list[dict]:
+    """Rows of the regularization study as :func:`regularization.measure` gives them,
+    made up: two scenes and formulations, their distances shrinking with ``R``, one
+    rigid answer exactly on the compliance member, and MuJoCo's point."""
+    rows = []
+    for s, scene in enumerate(("paper", "propshaft")):
+        for f, form in enumerate(("positive", "compliance")):
+            for k, R in enumerate(regularization.LADDER):
+                rows.append({"scene": scene, "formulation": form, "R": R,
+                             "time_us": 100.0 * (1 + s) + 10 * f + k,
+                             "rigid_median": R if R else 1e-14,
+                             "compliance_median": (R if R else 0.0) if form == "compliance"
+                             else max(R, 1e-6)})
+    rows.append({"scene": "paper", "formulation": "MuJoCo (default softness)",
+                 "R": float("nan"), "time_us": 3e4, "rigid_median": 2e-5,
+                 "compliance_median": 3e-5})
+    return rows
+
+
+def test_the_regularization_figure_keeps_the_rules_of_print(tmp_path):
+    """On a page of two columns; a distance of exactly 0 (the rigid compliance answer
+    on the compliance member) is an arrow on the panel's lower edge, not a floor."""
+    with pytest.MonkeyPatch.context() as patch:
+        kept = _kept(patch, regularization)
+        regularization.draw(_softened_rows(), tmp_path / "regularization")
+    (_, fig), = kept
+    _check(fig)
+    arrows = _open_arrows(fig, regularization.ZERO_LABEL, "bottom")
+    assert len(arrows) == 1 and arrows[0].axes is fig.axes[1]
+    assert len(arrows[0].get_xdata()) == 2  # paper's and propshaft's compliance
+    assert not any(np.nanmin(np.asarray(line.get_ydata(), float)) < fig.axes[1].get_ylim()[0]
+                   for line in fig.axes[1].lines if line not in arrows)
     plt.close(fig)
 
 
