@@ -6,12 +6,14 @@ import csv
 import datetime
 import math
 import numbers
+import textwrap
 from pathlib import Path
 
+import numpy as np
 from cardan_forces.formulations import BASELINE
 from cardan_forces.solvers.record import ACCEPT
 
-from . import files
+from . import files, images
 from .bench_metrics import PROFILES, SHIFT_S, TAUS, TIME_LIMIT_S, best_runs
 from .bench_run import CHECK_PASSES
 from .environment import json_number, machine, number_text, threads, versions
@@ -66,48 +68,110 @@ EMPTY_PARETO = "no solve of this formulation\ngave an answer"
 EMPTY_PROFILE = "no solve of this formulation\nreached this level"
 """The words on a panel that has no curve to draw."""
 
+COLUMNS = 2
+"""Panels side by side on a page (each about :data:`images.COLUMN_IN` wide)."""
+ROW_IN = 2.2
+"""A row of panels (inches): its title, a plotting area of about 1.45 in, its axis labels."""
+HEADER_LINE_IN = 0.2
+"""A line of a page's title (inches), and the room above and below it."""
+LEGEND_LINE_IN = 0.17
+"""A line of a page's legend (inches), and the room below it."""
+LEGEND_COLUMNS = 4
+"""Entries side by side in a page's legend."""
+MARKS_APART = 2
+"""Steps of tau between the markers of two backends of one profile panel (each
+backend's markers at tau steps of its own, so curves on one another still show theirs)."""
+MARKS_EVERY = 8
+"""The fewest steps of tau between two markers of one profile curve."""
+PLOT_IN = (2.6, 1.45)
+"""About the plotting area of a panel (inches): where markers overlap."""
+MARKER_PT = 4.5
+"""The Pareto figure's markers (points across)."""
+
 
 def backend_styles(solvers) -> dict[str, tuple]:
     """One (colour, marker) per backend, fixed by the sorted names of every backend of
-    one bench, so a backend looks the same in every panel and figure of that bench.
+    one bench, so a backend looks the same in every panel and figure of that bench; 20
+    dark colours (tab10's, then the darkest of tab20b's and tab20c's groups: a light
+    one fades in print) with the markers cycled independently.
     """
     import matplotlib
 
-    colours = matplotlib.colormaps["tab20"].colors
+    colours = (matplotlib.colormaps["tab10"].colors
+               + matplotlib.colormaps["tab20b"].colors[::4]
+               + matplotlib.colormaps["tab20c"].colors[::4])
     names = sorted(set(solvers))
-    return {name: (colours[2 * (k % 10) + k // 10 % 2], MARKERS[k % len(MARKERS)])  # dark, light
+    return {name: (colours[k % len(colours)], MARKERS[k % len(MARKERS)])
             for k, name in enumerate(names)}
 
 
-def _figure(panels: int, cols: int = 3):
+def _header_lines(title: str) -> int:
+    width = images.chars_across(images.PAGE_IN[0], images.TITLE_PT)
+    return sum(len(textwrap.wrap(line, width)) for line in title.split("\n"))
+
+
+def _legend_lines(entries: int) -> int:
+    return max(1, math.ceil(entries / LEGEND_COLUMNS))
+
+
+def _rows_per_page(title: tuple[str, str], entries: int) -> int:
+    """As many rows of :data:`ROW_IN` as a page holds under the title (wrapped, with
+    its page number) and over a legend of ``entries``.
+    """
+    header = HEADER_LINE_IN * (_header_lines(f"{title[0]}, page 9 of 9\n{title[1]}") + 1)
+    legend = LEGEND_LINE_IN * (_legend_lines(entries) + 1)
+    return max(1, int((images.PAGE_IN[1] - header - legend) // ROW_IN))
+
+
+def page_count(count: int, title: tuple[str, str], entries: int) -> int:
+    """Pages of ``count`` panels under ``title`` over a legend of ``entries``."""
+    return max(1, math.ceil(count / (COLUMNS * _rows_per_page(title, entries))))
+
+
+def _pages(count: int, title: tuple[str, str], entries: int):
+    """Figures (the print style's, :func:`images.styled`) for ``count`` panels in
+    :data:`COLUMNS` columns, as many pages as they take: yields each page's figure, its
+    panels and its title (``title``: what, with ``page k of n`` where there are
+    several, then how to read it).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    cols = max(1, min(cols, panels))
-    rows = math.ceil(panels / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.6 * rows + 1.4), squeeze=False)
-    for ax in axes.flat[panels:]:
-        ax.set_visible(False)
-    return plt, fig, axes
+    per_page = COLUMNS * _rows_per_page(title, entries)
+    total = page_count(count, title, entries)
+    for page, first in enumerate(range(0, max(count, 1), per_page), 1):
+        panels = min(per_page, count - first) if count else 1
+        rows = math.ceil(panels / COLUMNS)
+        what, how = title
+        heading = f"{what}{'' if total == 1 else f', page {page} of {total}'}\n{how}"
+        height = (HEADER_LINE_IN * (_header_lines(heading) + 1) + rows * ROW_IN
+                  + LEGEND_LINE_IN * (_legend_lines(entries) + 1))
+        fig, axes = plt.subplots(rows, COLUMNS, squeeze=False,
+                                 figsize=(images.PAGE_IN[0], min(images.PAGE_IN[1], height)))
+        for ax in axes.flat[panels:]:
+            ax.set_visible(False)
+        yield fig, list(axes.flat[:panels]), heading
 
 
-def _log_ticks(ax, axis: str) -> None:
-    """Labels on a log axis that never overlap, the limits the data's with a margin of
-    8 % of their span in log (at least 0.05 decade): plain numbers at a few even steps
-    over less than a factor of 6 (where the 1-2-5 values may hold fewer than two), the
-    1-2-5 values over less than two decades, the decades otherwise; no labels on the
-    minor ticks.
+def _log_ticks(ax, axis: str, span: tuple[float, float] | None = None) -> None:
+    """Limits and labels of a log axis: ``span`` where given, else the data's with a
+    margin of 8 % of their span in log (at least 0.05 decade); labels that never
+    overlap: plain numbers at a few even steps over less than a factor of 6 (where the
+    1-2-5 values may hold fewer than two), the 1-2-5 values over less than two decades,
+    the decades otherwise; no labels on the minor ticks.
     """
     from matplotlib import ticker
 
     which = ax.xaxis if axis == "x" else ax.yaxis
-    low, high = ax.dataLim.intervalx if axis == "x" else ax.dataLim.intervaly
-    if not (0 < low <= high and math.isfinite(high)):
-        return
-    pad = max(0.08 * math.log10(high / low), 0.05)
-    low, high = low / 10 ** pad, high * 10 ** pad
+    if span is None:
+        low, high = ax.dataLim.intervalx if axis == "x" else ax.dataLim.intervaly
+        if not (0 < low <= high and math.isfinite(high)):
+            return
+        pad = max(0.08 * math.log10(high / low), 0.05)
+        span = (low / 10 ** pad, high * 10 ** pad)
+    low, high = span
     (ax.set_xlim if axis == "x" else ax.set_ylim)(low, high)
     decades = math.log10(high / low)
     if decades < math.log10(6.0):
@@ -120,130 +184,276 @@ def _log_ticks(ax, axis: str) -> None:
     which.set_minor_formatter(ticker.NullFormatter())
 
 
+def _log_limits(values) -> tuple[float, float]:
+    """A log axis' range over positive ``values``: :func:`images.limits` of their
+    logarithms (the margins of every figure, in decades).
+    """
+    low, high = images.limits([np.log10(np.asarray(values, float))])
+    return 10.0 ** low, 10.0 ** high
+
+
 def _empty(ax, words: str) -> None:
     """A panel with nothing to draw says so in its middle."""
-    ax.text(0.5, 0.5, words, transform=ax.transAxes, ha="center", va="center",
-            fontsize=10, color="0.3")
+    ax.text(0.5, 0.5, words, transform=ax.transAxes, ha="center", va="center", color="0.3")
 
 
-def _shared_legend(fig, styles: dict, shown, title: str, extra=()) -> None:
-    """The figure's ``title`` above its panels and one legend under them: each backend
-    drawn, with its colour and marker, then ``extra`` (label, line style) entries, each
-    the label of a line drawn in the panels.
+def _panel_title(ax, letter: int, text: str, note: str = "") -> None:
+    """``(a) text`` over a panel, ``note`` (wrapped to the panel) under it."""
+    width = images.chars_across(images.COLUMN_IN - 0.5, images.MIN_TEXT_PT + 1)
+    lines = [f"({_letter(letter)}) {text}"] + (textwrap.wrap(note, width) if note else [])
+    ax.set_title(images.typeset("\n".join(lines)), loc="left")
+
+
+def _letter(k: int) -> str:
+    letters = "abcdefghijklmnopqrstuvwxyz"
+    return letters[k] if k < len(letters) else letters[k // 26 - 1] + letters[k % 26]
+
+
+def _finish(fig, styles: dict, shown, title: str, extra=(), line=":", hollow=False) -> None:
+    """The page's ``title`` above its panels and one legend under them: each backend
+    ``shown`` on the page with its colour and marker, then ``extra`` (label, line
+    style, marker) entries, each the label of a line drawn in the panels.
     """
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=styles[s][0], marker=styles[s][1], ls=":", lw=1.0,
-                      label=s) for s in sorted(set(shown))]
-    handles += [Line2D([], [], color="k", ls=ls, lw=1.2, label=label) for label, ls in extra]
-    cols = min(5, max(1, len(handles)))
-    rows = math.ceil(len(handles) / cols)
-    height = fig.get_figheight()
-    fig.suptitle(title, fontsize=11)
-    fig.legend(handles=handles, loc="lower center", ncol=cols, fontsize=9, frameon=False)
-    fig.tight_layout(rect=(0, min(0.4, (0.3 * rows + 0.2) / height), 1, 1 - 0.6 / height))
+    handles = [Line2D([], [], color=styles[s][0], marker=styles[s][1], ls=line,
+                      mfc="none" if hollow else styles[s][0], label=s)
+               for s in sorted(set(shown))]
+    handles += [Line2D([], [], color="k", ls=ls, marker=marker, ms=FRONT_DOT_PT, label=label)
+                for label, ls, marker in extra]
+    width = images.chars_across(images.PAGE_IN[0], images.TITLE_PT)
+    fig.suptitle(images.typeset("\n".join(textwrap.fill(line, width)
+                                          for line in title.split("\n"))))
+    if handles:
+        fig.legend(handles=handles, loc="lower center", ncol=min(LEGEND_COLUMNS, len(handles)))
+        fig.canvas.draw()
+        below = fig.legends[0].get_window_extent().height / fig.dpi + 0.08
+    else:
+        below = 0.05
+    fig.tight_layout(rect=(0, below / fig.get_figheight(), 1, 1), h_pad=0.8, w_pad=1.5)
 
 
-def _written(drawn, path: Path, formats) -> list[Path]:
-    """A drawn ``(plt, fig)`` saved as ``path.<format>`` for each of ``formats``."""
-    from .images import save
+def _written(figs: list, path: Path, formats) -> list[Path]:
+    """The pages ``figs`` of one figure saved as ``path`` (:func:`images.save_pages`:
+    ``path.<format>``, or a page each, ``path-1.<format>``, ..., where there are
+    several; a PDF holds them all), then closed.
+    """
+    import matplotlib.pyplot as plt
 
-    plt, fig = drawn
-    written = save(fig, path.with_suffix(""), formats)
-    plt.close(fig)
+    written = images.save_pages(figs, path.with_suffix(""), formats)
+    for fig in figs:
+        plt.close(fig)
     return written
 
 
 def plot_pareto(points: list[dict], path: Path, formats=("png",), styles=None,
                 scene: str = "") -> list[Path]:
-    """:func:`pareto_figure` written as ``path.<format>`` for each of ``formats``."""
-    return _written(pareto_figure(points, styles, scene), path, formats)
+    """:func:`pareto_pages` written as ``path.<format>`` for each of ``formats``."""
+    return _written(pareto_pages(points, styles, scene), path, formats)
 
 
-FRONT = "Pareto front (no answer both faster and more accurate)"
+FRONT = "Pareto front"
+FRONT_DOT_PT = 2.5
+"""The front's points: a black dot in their open markers (a front of one point shows)."""
 ERROR_FLOOR = 1e-17
 """A worst optimality measure of exactly 0 is drawn here (a log axis has no 0)."""
 
 
-def pareto_figure(points: list[dict], styles=None, scene: str = ""):
-    """Log-log time per instant vs worst optimality measure, one panel per formulation,
-    each backend in its colour and marker (:func:`backend_styles`, one legend for all
-    panels; each line labelled with its backend), its points (one per tolerance
-    setting) joined by a dotted line in time order, the front as a step line; 0 is
-    drawn at :data:`ERROR_FLOOR`; a panel without an answer says so. ``scene``: named in
-    the title. Returns pyplot and the figure.
+def pareto_pages(points: list[dict], styles=None, scene: str = "") -> list:
+    """Log-log time per instant vs worst optimality measure, one panel per formulation
+    (:data:`COLUMNS` side by side, as many pages as they take, in
+    :func:`images.styled`), each backend in its colour and marker (:func:`backend_styles`,
+    one legend a page; each line labelled with its backend), its points (one per
+    tolerance setting) open markers joined by a dotted line in time order, so that
+    points of several backends at one place all show; the front (no answer both faster
+    and more accurate) as a step line; 0 drawn at :data:`ERROR_FLOOR`; the y range
+    :func:`images.limits` of the measures' logarithms; a panel without an answer says
+    so. ``scene``: named in the title. Returns the pages' figures.
     """
     styles = styles or backend_styles(p["solver"] for p in points)
+    names, title, entries = _pareto_layout(points, scene)
+    figs, done = [], 0
+    with images.styled():
+        for fig, axes, heading in _pages(len(names), title, entries):
+            shown, fronts = set(), False
+            for ax, name in zip(axes, names[done:]):
+                shown |= _pareto_panel(ax, done, name, points, styles)
+                fronts |= any(line.get_label() == FRONT for line in ax.get_lines())
+                done += 1
+            _finish(fig, styles, shown, heading, [(FRONT, "-", ".")] if fronts else [],
+                    hollow=True)
+            figs.append(fig)
+    return figs
+
+
+def _pareto_layout(points: list[dict], scene: str = "") -> tuple:
+    """The Pareto figure's panels (formulations), title and legend entries."""
     names = list(dict.fromkeys(p["formulation"] for p in points))
-    plt, fig, axes = _figure(len(names))
+    title = _title("Time against accuracy per formulation", scene,
+                   "each open marker one tolerance setting of a backend, dotted lines join a "
+                   "backend's settings in time order; the black step line joins the points of "
+                   "the Pareto front (black dots: no answer both faster and more accurate); an "
+                   f"exact 0 is drawn at {ERROR_FLOOR:g}")
+    return names, title, len({p["solver"] for p in points}) + 1
+
+
+def _pareto_panel(ax, k: int, name: str, points: list[dict], styles: dict) -> set:
+    """The ``k``-th panel, formulation ``name``; the backends drawn."""
+    mine = [p for p in points if p["formulation"] == name and math.isfinite(p["error"])]
     shown = set()
-    for ax, name in zip(axes.flat, names):
-        mine = [p for p in points if p["formulation"] == name and math.isfinite(p["error"])]
-        for solver in dict.fromkeys(p["solver"] for p in mine):
-            pts = sorted((p for p in mine if p["solver"] == solver), key=lambda p: p["time_s"])
-            colour, marker = styles[solver]
-            ax.plot([p["time_s"] for p in pts], [max(p["error"], ERROR_FLOOR) for p in pts],
-                    marker=marker, color=colour, ls=":", lw=0.8, label=solver)
-            shown.add(solver)
-        front = sorted((p for p in mine if p["front"]), key=lambda p: p["time_s"])
-        if front:
-            ax.step([p["time_s"] for p in front], [max(p["error"], ERROR_FLOOR) for p in front],
-                    "k-", where="post", lw=1.2, label=FRONT)
-        ax.set(xscale="log", yscale="log", title=name, xlabel="time per instant [s]",
-               ylabel="worst optimality measure [-]")
-        if mine:
-            _log_ticks(ax, "x")
-            _log_ticks(ax, "y")
-        else:
-            _empty(ax, EMPTY_PARETO)
-    _shared_legend(fig, styles, shown, _title(
-        "Time against accuracy per formulation", scene,
-        "each point one tolerance setting of a backend, dotted lines join a backend's "
-        f"settings in time order; an exact 0 is drawn at {ERROR_FLOOR:g}"), [(FRONT, "-")])
-    return plt, fig
+    for solver in dict.fromkeys(p["solver"] for p in mine):
+        pts = sorted((p for p in mine if p["solver"] == solver), key=lambda p: p["time_s"])
+        colour, marker = styles[solver]
+        ax.plot([p["time_s"] for p in pts], [max(p["error"], ERROR_FLOOR) for p in pts],
+                marker=marker, color=colour, mfc="none", mew=0.9, ms=4.5, ls=":", lw=0.8,
+                label=solver)
+        shown.add(solver)
+    front = sorted((p for p in mine if p["front"]), key=lambda p: p["time_s"])
+    if front:
+        ax.step([p["time_s"] for p in front], [max(p["error"], ERROR_FLOOR) for p in front],
+                "k-", marker=".", ms=FRONT_DOT_PT, where="post", lw=1.0, label=FRONT,
+                zorder=1.5)
+    ax.set(xscale="log", yscale="log", xlabel="time per instant [s]",
+           ylabel="worst optimality measure [-]")
+    if mine:
+        _log_ticks(ax, "x")
+        _log_ticks(ax, "y", _log_limits([max(p["error"], ERROR_FLOOR) for p in mine]))
+    else:
+        _empty(ax, EMPTY_PARETO)
+    groups = on_one_another(ax, mine)
+    _panel_title(ax, k, name, "on one another: " + "; ".join(
+        f"{', '.join(g)} ({t:.2g} s, {e:.2g})" for g, (t, e) in groups) if groups else "")
+    return shown
 
 
-def _title(what: str, scene: str, how: str) -> str:
-    return f"{what}{f' (scene {scene})' if scene else ''}\n{how}"
+def on_one_another(ax, points: list[dict]) -> list[tuple[tuple[str, ...], tuple]]:
+    """Points of several backends whose markers lie on one another in ``ax`` (centres
+    closer than a marker, :data:`MARKER_PT`, on a plotting area of about
+    :data:`PLOT_IN`): each group's backends (in the points' order) and where (time s,
+    measure), the group's middle; where the open markers crowd, the panel names them.
+    """
+    if not points:
+        return []
+    place = ax.transScale + ax.transLimits  # data -> the panel's fraction
+    xy = place.transform([(p["time_s"], max(p["error"], ERROR_FLOOR)) for p in points])
+    inches = xy * np.array(PLOT_IN)
+    near = MARKER_PT / 72.0
+    group = list(range(len(points)))
+
+    def root(i):
+        while group[i] != i:
+            i = group[i]
+        return i
+
+    for i in range(len(points)):
+        for j in range(i):
+            if np.hypot(*(inches[i] - inches[j])) < near:
+                group[root(i)] = root(j)
+    found = {}
+    for i in range(len(points)):
+        found.setdefault(root(i), []).append(i)
+    out = []
+    for members in found.values():
+        names = tuple(dict.fromkeys(points[i]["solver"] for i in members))
+        if len(names) > 1:
+            t = float(np.exp(np.mean([np.log(points[i]["time_s"]) for i in members])))
+            e = float(np.exp(np.mean([np.log(max(points[i]["error"], ERROR_FLOOR))
+                                      for i in members])))
+            out.append((names, (t, e)))
+    return out
+
+
+def _title(what: str, scene: str, how: str) -> tuple[str, str]:
+    return f"{what}{f' (scene {scene})' if scene else ''}", how
 
 
 def plot_profiles(profiles: list[dict], path: Path, formats=("png",), styles=None,
                   scene: str = "") -> list[Path]:
-    """:func:`profiles_figure` written as ``path.<format>`` for each of ``formats``."""
-    return _written(profiles_figure(profiles, styles, scene), path, formats)
+    """:func:`profiles_pages` written as ``path.<format>`` for each of ``formats``."""
+    return _written(profiles_pages(profiles, styles, scene), path, formats)
 
 
-def profiles_figure(profiles: list[dict], styles=None, scene: str = ""):
-    """Dolan-Moré curves on the solver's time, one panel per formulation x profile,
-    each backend in its colour and marker (one legend for all panels; each line
-    labelled with its backend); the y axis a little beyond 0 and 1, so a curve at
-    either is not hidden by the frame; a panel where no solve reached the level says so
-    and draws nothing. ``scene``: named in the title. Returns pyplot and the figure.
+def profiles_pages(profiles: list[dict], styles=None, scene: str = "") -> list:
+    """Dolan-Moré curves on the solver's time, one panel per formulation x profile
+    (:data:`COLUMNS` side by side, as many pages as they take, in
+    :func:`images.styled`), each backend in its colour and marker (one legend a page;
+    each line labelled with its backend) with its markers at tau steps of its own in
+    the panel, so that curves on one another (many lie on 1) each show theirs; curves
+    equal at every tau (:func:`images.coinciding`) drawn in interleaved dashes
+    (:func:`images.interleave`) and named under the panel's title; the y range
+    :func:`images.limits` of the shares and 0 and 1; a panel where no solve reached the
+    level says so and draws nothing. ``scene``: named in the title. Returns the pages'
+    figures.
     """
     profiles = [p for p in profiles if p["clock"] == "solver"]
     styles = styles or backend_styles(p["solver"] for p in profiles)
+    panels, title, entries = _profiles_layout(profiles, scene)
+    figs, done = [], 0
+    with images.styled():
+        for fig, axes, heading in _pages(len(panels), title, entries):
+            shown = set()
+            for ax, panel in zip(axes, panels[done:]):
+                shown |= _profile_panel(ax, done, panel, profiles, styles)
+                done += 1
+            _finish(fig, styles, shown, heading, line="-")
+            figs.append(fig)
+    return figs
+
+
+def _profiles_layout(profiles: list[dict], scene: str = "") -> tuple:
+    """The profiles figure's panels (formulation, profile) on the solver's time, title
+    and legend entries.
+    """
+    profiles = [p for p in profiles if p["clock"] == "solver"]
     panels = list(dict.fromkeys((p["formulation"], p["profile"]) for p in profiles))
-    plt, fig, axes = _figure(len(panels), cols=4)
-    shown = set()
-    for ax, (formulation, name) in zip(axes.flat, panels):
-        curves = [p for p in profiles if (p["formulation"], p["profile"]) == (formulation, name)]
-        reached = any(max(p["curve"]) > 0 for p in curves)
-        for p in curves if reached else ():
-            colour, marker = styles[p["solver"]]
-            ax.step(TAUS, p["curve"], where="post", lw=1.0, color=colour, marker=marker,
-                    markevery=10, ms=4, label=p["solver"], clip_on=False)
-            shown.add(p["solver"])
-        level = next(p["level"] for p in profiles if p["profile"] == name)
-        ax.set(xscale="log", xlim=(TAUS[0], TAUS[-1]), ylim=(-0.06, 1.06),
-               title=f"{formulation}, {name} ({level:g})",
-               xlabel="tau: solver time / fastest [-]", ylabel="share of instants [-]")
-        if not reached:
-            _empty(ax, EMPTY_PROFILE)
-    _shared_legend(fig, styles, shown, _title(
-        "Performance profiles on the solver's time", scene,
-        "share of instants a backend solves to the panel's level within tau times the "
-        "fastest backend's time"))
-    return plt, fig
+    title = _title("Performance profiles on the solver's time", scene,
+                   "the share of instants a backend solves to the panel's level within tau "
+                   "times the fastest backend's time")
+    return panels, title, len({p["solver"] for p in profiles})
+
+
+def figure_files(stem: str, pages: int, fmt: str = "png") -> str:
+    """The files of a figure of ``pages`` (:func:`images.save_pages`' names), in words."""
+    names = [f"`{s.name}.{fmt}`" for s in images.page_stems(Path(stem), pages)]
+    return names[0] if pages == 1 else f"{', '.join(names)} (one page each)"
+
+
+def pareto_files(points: list[dict]) -> str:
+    """The Pareto figure's PNG files, in words."""
+    names, title, entries = _pareto_layout(points)
+    return figure_files("bench_pareto", page_count(len(names), title, entries))
+
+
+def profiles_files(profiles: list[dict]) -> str:
+    """The profiles figure's PNG files, in words."""
+    panels, title, entries = _profiles_layout(profiles)
+    return figure_files("bench_profiles", page_count(len(panels), title, entries))
+
+
+def _profile_panel(ax, k: int, panel: tuple, profiles: list[dict], styles: dict) -> set:
+    """The ``k``-th panel, ``(formulation, profile)``; the backends drawn."""
+    formulation, name = panel
+    curves = [p for p in profiles if (p["formulation"], p["profile"]) == panel]
+    reached = any(max(p["curve"]) > 0 for p in curves)
+    drawn = {p["solver"]: np.asarray(p["curve"], float) for p in curves} if reached else {}
+    groups = images.coinciding(drawn, images.COINCIDE * 1.0)  # shares span 0 to 1
+    step = max(MARKS_APART * len(drawn), MARKS_EVERY)
+    for j, (solver, curve) in enumerate(drawn.items()):
+        group = next((g for g in groups if solver in g), (solver,))
+        colour, marker = styles[solver]
+        ax.step(TAUS, curve, where="post", color=colour, marker=marker,
+                ls=images.interleave(group.index(solver), len(group)),
+                markevery=(MARKS_APART * j + 1, step), label=solver, clip_on=False)
+    level = next(p["level"] for p in curves)
+    ax.set(xscale="log", xlim=(TAUS[0], TAUS[-1]),
+           ylim=images.limits([*drawn.values(), [0.0, 1.0]]),
+           xlabel="tau: solver time / fastest [-]", ylabel="share of instants [-]")
+    note = "; ".join(" = ".join(g) for g in groups)
+    _panel_title(ax, k, f"{formulation}, {name} (level {level:g})",
+                 f"equal at every tau: {note}" if note else "")
+    if not reached:
+        _empty(ax, EMPTY_PROFILE)
+    return set(drawn)
 
 
 def _fmt(value: float | None, digits: int = 2) -> str:
@@ -413,7 +623,7 @@ def _profiles(profiles) -> list[str]:
              "Package optimality at the level; shifted geometric mean time over the best "
              f"backend's (shift {SHIFT_S:g} s; a run without an answer counts as "
              f"{TIME_LIMIT_S:g} s), on the solver's own time and end to end; curves (solver "
-             "time) in `bench_profiles.png`, points in `bench_profiles.csv`.", "",
+             f"time) in {profiles_files(profiles)}, points in `bench_profiles.csv`.", "",
              "| formulation | profile | solver | solved | sgm ratio (solver) | share within "
              "10x | sgm ratio (end to end) |", "|---|---|---|---:|---:|---:|---:|"]
     ten = int(abs(TAUS - 10.0).argmin())
@@ -475,7 +685,7 @@ def _views(tables, problems: int, qpbenchmark_ran: bool) -> list[str]:
 
 def _pareto(points, references) -> list[str]:
     lines = ["", "## Pareto front per formulation (time sgm vs worst optimality measure)", "",
-             "Figure: `bench_pareto.png`.", "",
+             f"Figure: {pareto_files(points)}.", "",
              "| formulation | reference | solver | tol | time ms | worst measure | median | "
              "max equil |", "|---|---|---|---|---:|---:|---:|---:|"]
     for p in sorted((p for p in points if p["front"]),

@@ -440,3 +440,49 @@ def test_a_curve_on_a_bound_of_the_set_is_named():
     assert found == {"positive": 0.002}
     assert images.bound_note(found, "lower", "N") == (
         "positive on the rigid set's lower bound within 0.002 N")
+
+
+def test_cardan_bench_s_figures_keep_the_rules_of_print(tmp_path, capsys):
+    """``cardan bench --quick`` on two formulations and four backends: the Pareto and
+    the profiles figures, every page in the print style and the rules of print."""
+    from cardan_forces.cli import main
+
+    with pytest.MonkeyPatch.context() as patch:
+        kept = _kept_pages(patch)
+        assert main(["bench", "--quick", "--quiet", "--formulation", "min_norm",
+                     "--formulation", "positive", "--solver", "numpy-kkt", "--solver",
+                     "qpsolvers-daqp", "--solver", "newton", "--solver", "numpy-batched",
+                     "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    assert {stem.split("-")[0] for stem, _ in kept} == {"bench_pareto", "bench_profiles"}
+    for _, fig in kept:
+        _check(fig)
+        assert max(t.get_fontsize() for t in fig.findobj(Text)
+                   if t.get_text().strip()) <= images.TITLE_PT  # no type of its own
+        plt.close(fig)
+
+
+def test_cardan_bench_s_figures_of_many_panels_take_pages(tmp_path):
+    """Nine formulations by two profiles, eighteen panels: two columns on pages of
+    :data:`images.PAGE_IN`, each a figure of its own (``bench_profiles-1``, ...) in the
+    rules of print, curves at 1 all showing."""
+    from cardan_forces.experiments import bench_report
+    from cardan_forces.experiments.bench_metrics import TAUS
+
+    solvers = ("clarabel", "moreau", "newton", "numpy-kkt", "qpsolvers-daqp")
+    profiles = [{"formulation": f"form-{f}", "profile": level, "clock": "solver",
+                 "level": 1e-8, "solver": s,
+                 "curve": list(np.where(TAUS >= 1 + k % 3, 1.0, 0.0))}
+                for f in range(9) for level in ("default", "high")
+                for k, s in enumerate(solvers)]
+    with pytest.MonkeyPatch.context() as patch:
+        kept = _kept_pages(patch)
+        bench_report.plot_profiles(profiles, tmp_path / "bench_profiles.png")
+    assert len(kept) > 1
+    assert [stem for stem, _ in kept] == [f"bench_profiles-{k}" for k in
+                                          range(1, len(kept) + 1)]
+    assert sum(ax.get_visible() for _, fig in kept for ax in fig.axes) == 18
+    for _, fig in kept:
+        assert fig.get_size_inches()[0] == pytest.approx(images.PAGE_IN[0])
+        _check(fig)
+        plt.close(fig)
