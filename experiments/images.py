@@ -154,11 +154,11 @@ def _drop_other_pages(stem: Path, fmt: str, kept: list[Path]) -> None:
             path.unlink()
 
 
-def write_study(out: Path, stem: str, write_csv, text: str, figure, formats=("png",)
+def write_study(out: Path, stem: str, write_csv, text: str, pages, formats=("png",)
                 ) -> list[Path]:
     """A study's outputs into ``out``: ``stem.csv`` (``write_csv(path)``), ``stem.md``
-    (``text``) and the figure ``figure()`` draws in each of ``formats``, each file
-    whole; their paths.
+    (``text``) and the figure's pages that ``pages()`` draws, in :data:`STYLE`, in each
+    of ``formats`` (:func:`save_pages`), each file whole; their paths.
     """
     import matplotlib
 
@@ -168,10 +168,12 @@ def write_study(out: Path, stem: str, write_csv, text: str, figure, formats=("pn
     out.mkdir(parents=True, exist_ok=True)
     write_csv(out / f"{stem}.csv")
     files.write_text(out / f"{stem}.md", text)
-    fig = figure()
-    images = save(fig, out / stem, formats)
-    plt.close(fig)
-    return [out / f"{stem}.csv", out / f"{stem}.md", *images]
+    with styled():
+        figs = pages()
+        written = save_pages(figs, out / stem, formats)
+    for fig in figs:
+        plt.close(fig)
+    return [out / f"{stem}.csv", out / f"{stem}.md", *written]
 
 
 def problems(fig) -> list[str]:

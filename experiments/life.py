@@ -749,20 +749,8 @@ def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
     """``life.csv``, ``life.md`` and the figure (``life.<format>``; a page each where
     its rows take more than one, :func:`images.save_pages`) into ``out``; their paths.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")  # files only, whatever display there is
-    import matplotlib.pyplot as plt
-
-    out.mkdir(parents=True, exist_ok=True)
-    write_csv(answer, out / "life.csv")
-    files.write_text(out / "life.md", markdown(answer))
-    with images.styled():
-        pages = figures(answer)
-        paths = images.save_pages(pages, out / "life", formats)
-    for fig in pages:
-        plt.close(fig)
-    return [out / "life.csv", out / "life.md", *paths]
+    return images.write_study(out, "life", lambda path: write_csv(answer, path),
+                              markdown(answer), lambda: figures(answer), formats)
 
 
 def add_parser(subparsers) -> None:

@@ -576,20 +576,8 @@ def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
     page each where its panels take more than one, :func:`images.save_pages`); their
     paths.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")  # files only, whatever display there is
-    import matplotlib.pyplot as plt
-
-    out.mkdir(parents=True, exist_ok=True)
-    write_csv(answer, out / "tolerances.csv")
-    files.write_text(out / "tolerances.md", markdown(answer))
-    with images.styled():
-        pages = figures(answer)
-        paths = images.save_pages(pages, out / "tolerances", formats)
-    for fig in pages:
-        plt.close(fig)
-    return [out / "tolerances.csv", out / "tolerances.md", *paths]
+    return images.write_study(out, "tolerances", lambda path: write_csv(answer, path),
+                              markdown(answer), lambda: figures(answer), formats)
 
 
 def add_parser(subparsers) -> None:
