@@ -149,7 +149,7 @@ def test_unreachable_scheduler_is_one_message(tmp_path, capsys):
 
 def test_bad_requests_exit_2(tmp_path, capsys):
     assert main(["sweep", "--formulation", "nonsense", "--out", str(tmp_path)]) == 2
-    assert "argument --formulation: invalid choice" in capsys.readouterr().err
+    assert "argument --formulation: unknown formulation 'nonsense'" in capsys.readouterr().err
     constant = tmp_path / "constant.toml"
     constant.write_text('extends = "paper"\n[torque]\ninput = 10.0\n')
     for extra, message in (
