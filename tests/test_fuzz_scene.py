@@ -83,16 +83,16 @@ def _mutate(raw: dict, path: tuple, value) -> None:
             parent = parent[key]
         except (KeyError, IndexError, TypeError):
             return  # an earlier mutation removed or replaced this place
-    if not isinstance(parent, (dict, list)) or \
-            (isinstance(parent, list) and not path[-1] < len(parent)):
-        return
+    if not isinstance(parent, (dict, list)) or (isinstance(parent, list) and not (
+            isinstance(path[-1], int) and path[-1] < len(parent))):
+        return  # an earlier mutation replaced this place by a value of another shape
     if value is DELETE:
         if isinstance(parent, dict):
             parent.pop(path[-1], None)
         else:
             del parent[path[-1]]
     elif isinstance(parent, dict) or isinstance(path[-1], int):
-        parent[path[-1]] = value
+        parent[path[-1]] = copy.deepcopy(value)  # never a list placed inside itself
 
 
 def _assert_valid(scene: Scene) -> None:
