@@ -163,6 +163,7 @@ def _crowded(formulations: int = 9):
     return points, profiles
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make", MAKERS, ids=["pareto", "profiles"])
 def test_pages_keep_the_print_rules_where_curves_lie_on_one_another(make):
     """Every page: within a page (7 x 9 in), the print style's type only (no text

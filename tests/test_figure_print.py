@@ -245,6 +245,7 @@ def test_cardan_life_draws_an_open_worst_case_as_an_arrow(life_answers):
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_cardan_life_s_figure_of_many_bearings_takes_pages(life_answers, tmp_path):
     answer = dict(life_answers["paper"])
     answer["bearings"] = [dict(e, bearing=f"{e['bearing']}{k}")
@@ -287,6 +288,7 @@ def test_cardan_tolerances_figure_keeps_the_rules_of_print(tolerance_answer, tmp
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_cardan_tolerances_figure_of_many_loads_takes_pages(tolerance_answer):
     answer = {**tolerance_answer, "loads": {
         form: {f"{name}{k}": entry for k in range(3) for name, entry in loads.items()
@@ -442,6 +444,7 @@ def test_a_curve_on_a_bound_of_the_set_is_named():
         "positive on the rigid set's lower bound within 0.002 N")
 
 
+@pytest.mark.slow
 def test_cardan_bench_s_figures_keep_the_rules_of_print(tmp_path, capsys):
     """``cardan bench --quick`` on two formulations and four backends: the Pareto and
     the profiles figures, every page in the print style and the rules of print."""
@@ -462,6 +465,7 @@ def test_cardan_bench_s_figures_keep_the_rules_of_print(tmp_path, capsys):
         plt.close(fig)
 
 
+@pytest.mark.slow
 def test_cardan_bench_s_figures_of_many_panels_take_pages(tmp_path):
     """Nine formulations by two profiles, eighteen panels: two columns on pages of
     :data:`images.PAGE_IN`, each a figure of its own (``bench_profiles-1``, ...) in the

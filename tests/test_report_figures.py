@@ -210,6 +210,7 @@ def test_engine_refused_in_one_line_before_any_work(tmp_path, capsys, monkeypatc
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_the_report_figure_keeps_the_print_rules(op, monkeypatch):
     """Titles, units, 8 pt type, every legend entry visible and off the data: on
     propshaft's contacts with a bounded, an open and a both-open component."""
