@@ -50,6 +50,7 @@ def test_the_api_writes_repro_where_the_command_does():
     assert inspect.signature(run_repro).parameters["out"].default == _out_defaults()["repro"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", sorted(SMALL))
 def test_a_command_names_its_files_on_stderr_and_what_it_replaced(command, tmp_path, capsys):
     """Two runs into one folder: each ends with one line on stderr naming the folder,

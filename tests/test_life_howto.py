@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 from cardan_forces.experiments import life
 
+pytestmark = pytest.mark.slow  # a docs check: three life studies
+
 PAGE = " ".join((Path(__file__).parents[1] / "docs/how-to/life.md").read_text().split())
 SCENES = ("paper", "propshaft", "axle-pinion")
 """The scenes the paragraph speaks of."""
