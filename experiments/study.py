@@ -9,8 +9,9 @@ this module, so that each piece of that knowledge has one home:
   it; :mod:`cardan_forces.formulations.registry`), so
   a missing optional package changes the backend, never the outcome;
 - :func:`solve_over_time`: one formulation with one backend at every instant, as one
-  :class:`History` (a package-judged record per instant; the least-norm family by its
-  own batch, the same on any install);
+  :class:`History` (a package-judged record per instant; by default through the
+  package's own NumPy batches where the formulation's backends list one, the same on
+  any install);
 - :func:`intervals`, :func:`value_range`, :func:`interval_history`: the rigid solution
   set's interval ``[min, max]`` of each force component (DESIGN §2, "Solution sets"),
   consistent by construction: a determinate component's interval is its one value, and
