@@ -24,6 +24,7 @@ up to millions of revolutions is refused at load rather than integrated for hour
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,14 +103,29 @@ def support(scene: Scene) -> Support:
     Remembered by the line's structure: variants that change only loads or the grid
     (sweep points, hard cases) reuse the answer.
     """
-    key = (scene.shafts, scene.joints, scene.slip_joints, scene.frame, scene.arrangement,
-           scene.initial_angle_rad)
+    key = structure(scene)
     if key not in _KNOWN:
         if len(_KNOWN) >= MAX_KNOWN:
             _KNOWN.pop(next(iter(_KNOWN)))
         op = build_operator(at_rest(scene, scene.initial_angle_rad + GENERIC_TURN_RAD))
         _KNOWN[key] = free_motions(op.A[0], op.rows)
     return _KNOWN[key]
+
+
+NOT_STRUCTURE = frozenset({"name", "description", "source", "input_torque", "load_torque",
+                           "initial_speed_rad_s", "time", "tolerances"})
+"""The scene's fields the support cannot depend on (names, loads, the time grid,
+tolerances): every other field, present or added later, is part of
+:func:`structure`, so a field forgotten here costs a recomputation, never another
+scene's answer."""
+
+
+def structure(scene: Scene) -> tuple:
+    """The scene's structural identity: every field but :data:`NOT_STRUCTURE`, as
+    ``(name, value)`` pairs (the records are frozen, so the tuple hashes by value).
+    """
+    return tuple((f.name, getattr(scene, f.name)) for f in dataclasses.fields(scene)
+                 if f.name not in NOT_STRUCTURE)
 
 
 _KNOWN: dict[tuple, Support] = {}

@@ -139,3 +139,21 @@ def test_the_refusal_agrees_with_the_rigid_set_being_empty(paper_raw):
         for i in range(2):
             record = solve(range_problems(op, i, np.zeros(len(op.names)))[0], "clarabel")
             assert (record.status == "solved") == feasible
+
+
+def test_structure_is_every_field_but_the_loads_names_and_grid():
+    """The support's cache key holds every scene field but the declared few, so a field
+    added to the scene is part of it without anyone listing it."""
+    from cardan_forces.driveline.scene import Scene
+    from cardan_forces.driveline.support import NOT_STRUCTURE, structure
+
+    fields = {f.name for f in dataclasses.fields(Scene)}
+    assert NOT_STRUCTURE <= fields
+    paper = load_scene("paper")
+    assert {name for name, _ in structure(paper)} == fields - NOT_STRUCTURE
+    louder = paper.with_changes(load_torque=dataclasses.replace(paper.load_torque,
+                                                                mean_N_m=3.0))
+    assert structure(louder) == structure(paper)
+    turned = paper.with_changes(arrangement="W")
+    assert structure(turned) != structure(paper)
+    assert support(turned) == Support(free=1, rows=())
