@@ -48,7 +48,7 @@ from .plugins import InvalidBackend, blame
 from .record import Outcome, Record, Results, Status
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
-            "numpy_batched_", "moreau_", "qocogen_", "newton_")
+            "numpy_batched_", "moreau_", "qocogen_", "newton_", "reduced_ipm_")
 """Adapter modules of this package, loaded lazily by :func:`available`."""
 
 

@@ -50,6 +50,7 @@ TOLERANCES: dict[str, tuple[str, ...]] = {
     "pgs": ("tol",),
     "fb-newton": ("tol",),
     "newton": ("tol",),
+    "reduced-ipm": ("tol",),
 }
 """Each solver's own parameters a requested tolerance sets, by the solver's name (the
 same names whichever package passes them on: Clarabel's through cvxpy, qpsolvers or its

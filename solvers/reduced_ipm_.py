@@ -1,0 +1,130 @@
+"""Backend ``reduced-ipm``: the package's own interior point on the reduced cone programs,
+every instant of a batch side by side (NumPy, :mod:`.reduced_ipm`).
+
+A formulation's conic batch (``min_max``, ``socp_face``, ``friction`` and any other with
+equality, nonnegative and second-order cones) is solved in the null space of its
+equality rows: ``z = z0 + N y`` (:func:`~.conversions.eliminate_equalities`, with the
+formulation's own orthonormal basis ``Conic.null_space`` where it gives one), the two-row
+cones a nonnegative row makes linear folded (:func:`.reduced_.fold`), so the interior
+point iterates on the 7-12 unknowns ``y`` of the built-in scenes with no equality rows;
+its answers and multipliers are lifted back (:meth:`~.conversions.Reduced.lift`) and
+judged by the package like every backend's.
+
+Degenerate cases end in a fallback, never an exception, and each is said in the
+instant's message:
+
+- the equality rows change rank between instants (no common reduced structure): the
+  instants are reduced in groups of one rank each;
+- an instant the interior point leaves unsolved (iteration limit, a stall, non-finite
+  numbers: a cone at its apex without strict complementarity is the usual cause, or a
+  primal infeasibility certificate) is solved again alone by Clarabel (a core
+  dependency, :data:`FALLBACK`), whose status it then carries.
+
+``tol`` is the interior point's relative tolerance (:data:`.reduced_ipm.TOL` by default);
+it takes no start (the iterates of the previous instant lie near its boundary, which an
+interior point cannot start from). ``stages``: ``reduce`` (elimination and folding),
+``ipm``, ``lift`` and ``fallback``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from cardan_forces.formulations.batch import ConicBatch
+
+from . import reduced_ipm, settings
+from .batch import BatchOutcome
+from .conversions import RANK_RTOL, eliminate_equalities
+from .record import Status
+from .reduced_ import fold
+from .registry import Backend, solve_unchecked
+
+EXTRAS: dict[str, str | None] = {"reduced-ipm": None}
+
+FALLBACK = "clarabel"
+"""The backend that solves an instant alone where the interior point leaves it unsolved."""
+
+
+def supports(batch: ConicBatch) -> bool:
+    """Equality rows and second-order cones, with nonnegative rows at most (the least-norm
+    family has ``numpy-batched``; a power cone needs another barrier).
+    """
+    kinds = {kind for kind, _ in batch.cones}
+    return "zero" in kinds and "soc" in kinds and kinds <= {"zero", "nonneg", "soc"}
+
+
+def _groups(batch: ConicBatch) -> list[np.ndarray]:
+    """The instants reduced together: all of them, unless their equality rows change
+    rank (then one group per rank, found from each instant's singular values).
+    """
+    T = len(batch.instants)
+    if batch.null_space is not None:
+        return [np.arange(T)]
+    eq = np.array([k for kind, size in batch.cones if kind == "zero"
+                   for k in range(int(size))])
+    s = np.linalg.svd(batch.A[:, eq], compute_uv=False)
+    ranks = np.sum(s > RANK_RTOL * s[:, :1], axis=1)
+    return [np.flatnonzero(ranks == r) for r in np.unique(ranks)]
+
+
+def _solve_group(batch: ConicBatch, rows: np.ndarray, tol: float, max_iter: int):
+    """One group's reduction, interior point and lift: ``(z, y, answer, seconds)``."""
+    clock = time.perf_counter()
+    P = batch.P if batch.P is None or batch.P.ndim == 2 else batch.P[rows]
+    red = eliminate_equalities(P, batch.q[rows], batch.A[rows], batch.b[rows], batch.cones,
+                               None if batch.null_space is None else batch.null_space[rows])
+    plan = fold(red.A_in, batch.b[rows][:, red.rows_in], red.cones)
+    G, h, cones = ((red.A, red.b, red.cones) if plan is None
+                   else (*plan.rows(red.A, red.b), plan.cones))
+    reduced = time.perf_counter()
+    answer = reduced_ipm.solve(red.P, red.q, G, h, cones, tol=tol, max_iter=max_iter)
+    solved = time.perf_counter()
+    z, y = red.lift(answer.x, answer.z if plan is None else plan.duals(answer.z))
+    return z, y, answer, {"reduce": reduced - clock, "ipm": solved - reduced,
+                          "lift": time.perf_counter() - solved}
+
+
+def solve_batch(batch: ConicBatch, tol=None,
+                max_iter: int = reduced_ipm.MAX_ITER) -> BatchOutcome:
+    """Every instant of the batch by the reduced interior point, the ones it leaves
+    unsolved by :data:`FALLBACK` alone (module docstring).
+    """
+    tol = reduced_ipm.TOL if tol is None else float(tol)
+    T, n = batch.q.shape
+    m = batch.b.shape[1]
+    z, y = np.full((T, n), np.nan), np.full((T, m), np.nan)
+    code = np.full(T, reduced_ipm.BROKEN)
+    iterations = np.zeros(T, int)
+    stages = {"reduce": 0.0, "ipm": 0.0, "lift": 0.0}
+    messages = [""] * T
+    groups = _groups(batch)
+    for rows in groups:
+        z[rows], y[rows], answer, seconds = _solve_group(batch, rows, tol, max_iter)
+        code[rows], iterations[rows] = answer.code, answer.iterations
+        stages = {k: stages[k] + seconds[k] for k in stages}
+        if len(groups) > 1:
+            for k in rows:
+                messages[k] = f"equality rank changes: reduced with {len(rows)} instants"
+    status = np.full(T, Status.SOLVED, object)
+    clock = time.perf_counter()
+    for k in np.flatnonzero(code != reduced_ipm.SOLVED):
+        out = solve_unchecked(batch.problems[k], FALLBACK, tol=tol).outcome
+        why = f"reduced-ipm: {reduced_ipm.CODES[code[k]]}, answered by {FALLBACK}"
+        messages[k] = "; ".join(filter(None, (messages[k], why, out.message)))
+        status[k] = out.status
+        iterations[k] += out.iterations or 0
+        z[k] = np.nan if out.z is None else out.z
+        y[k] = np.nan if out.y is None else out.y
+    stages["fallback"] = time.perf_counter() - clock
+    setup = stages["reduce"] + stages["lift"]
+    return BatchOutcome(status=status, z=z, y=y, iterations=iterations, setup_s=setup,
+                        solve_s=stages["ipm"] + stages["fallback"], stages=stages,
+                        messages=tuple(messages))
+
+
+def backends() -> list[Backend]:
+    """The reduced interior point (NumPy only, always present)."""
+    return [Backend(name="reduced-ipm", family="ipm", distributions=("cardan-forces", "numpy"),
+                    supports=supports, tolerances=settings.TOLERANCES["reduced-ipm"],
+                    batch=solve_batch, batch_accepts=(ConicBatch,))]
