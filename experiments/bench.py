@@ -23,7 +23,8 @@ package's ``solve`` — conversion, the solver, the checks — split in every ro
   exports them as a test set and runs qpbenchmark itself, its success and runtime
   tables beside the package's.
 
-Running: :mod:`.bench_run`; metrics: :mod:`.bench_metrics`; output: :mod:`.bench_report`.
+Running: :mod:`.bench_run`; metrics: :mod:`.bench_metrics`; output: :mod:`.bench_report`;
+the targets a developer's check holds a run to: :mod:`.bench_targets`.
 Results go to ``--out``: long-format CSVs, PNGs and ``report.md``; ``--json`` prints one
 strict-JSON object. A backend whose solver could not be built here (a generated solver:
 no working compiler, an unwritable cache) has failed rows with the reason, and the run
@@ -59,6 +60,7 @@ from . import bench_run as runs
 from . import export as exporting
 from . import files, progress
 from . import qpbench_harness as harness
+from .bench_targets import target_levels
 from .images import FORMATS, format_list
 
 
@@ -153,11 +155,11 @@ def _qp_formulations(op) -> list[str]:
 
 def evaluate(measured: dict, ladder) -> dict:
     """Every metric of the report from the measured rows: measurements only (the targets
-    a developer holds the bench to are :func:`~.bench_metrics.targets`').
+    a developer holds the bench to are :func:`~.bench_targets.targets`').
     """
     summary = metrics.summarize(measured["rows"], measured["setup"])
     success = metrics.success(measured["acc_rows"],
-                              sorted({*ladder, *metrics.target_levels()}, reverse=True))
+                              sorted({*ladder, *target_levels()}, reverse=True))
     return measured | {
         "summary": summary, "points": metrics.pareto(measured["acc_rows"]),
         "success": success, "profiles": metrics.profiles(measured["acc_rows"], ladder),

@@ -1,7 +1,7 @@
 """Metrics of ``cardan bench``: throughput summary, success per accuracy level, Pareto
-fronts, Dolan-Moré performance profiles, shifted geometric means, overhead; and the
-targets a developer check holds a run to (:func:`targets`, ``pytest -m targets``),
-which the bench's outputs, measurements only, leave out.
+fronts, Dolan-Moré performance profiles, shifted geometric means, overhead: the
+measurements the bench reports (what a developer's check wants of them is
+:mod:`.bench_targets`).
 
 The ladder's accuracy is the package's own view (:mod:`cardan_forces.solvers.
 optimality`, relative measures; not qpbenchmark's, which are absolute and live in
@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from cardan_forces.formulations import BASELINE, FORMULATIONS
 from cardan_forces.solvers import Status
 from cardan_forces.solvers.qp_measures import SHIFT_S
 from cardan_forces.solvers.settings import SETTINGS
@@ -46,31 +45,6 @@ setting (1: a solver's defaults are not asked for an accuracy they were not set 
 
 TAUS = np.logspace(0.0, 3.0, 61)
 """The profile's abscissa: time ratio to the fastest successful backend, 1 to 1000."""
-
-
-GLUE_SHARE = 0.25
-"""Largest share of a per-instant conic solve spent outside the solver."""
-WALL_S = 180.0
-"""Wanted wall time of the full benchmark."""
-CHECKS_S = 20e-6
-"""Largest time of the checks per instant (residuals, both optimality views and the
-record), in every run, per instant or batched."""
-
-
-def target_levels() -> tuple[float, ...]:
-    """The accuracy levels of the formulations' success targets
-    (:class:`~cardan_forces.formulations.Formulation`'s ``success_target``): the success
-    table must hold them beside the ladder's.
-    """
-    return tuple(sorted({f.success_target[0] for f in FORMULATIONS.values()
-                         if f.success_target}))
-
-
-def _target_rates() -> dict[str, float]:
-    """Instants per second wanted from the batched runs of each formulation that has a
-    target (:class:`~cardan_forces.formulations.Formulation`'s ``target_rate``).
-    """
-    return {f.name: f.target_rate for f in FORMULATIONS.values() if f.target_rate}
 
 
 def shifted_geometric_mean(values, shift: float = SHIFT_S) -> float:
@@ -264,100 +238,3 @@ def best_runs(summary: list[dict]) -> dict[str, dict]:
             if e["instants_per_s"] > out.get(e["formulation"], {}).get("instants_per_s", 0):
                 out[e["formulation"]] = e
     return out
-
-
-def targets(summary: list[dict], success_rows: list[dict], conic: set[str],
-            wall_s: float | None) -> list[dict]:
-    """The targets of a run, a developer's check (``tests/test_bench_targets.py``), not
-    a part of what the bench reports: ``{name, value, wanted, met, detail}`` rows.
-
-    The paper's fair baseline is its fastest run (warm-started, analytic Jacobian);
-    ``conic`` names the formulations whose problem is conic; a formulation with a
-    ``success_target`` is judged by its best backend's success at the target's level
-    (``success_rows`` must hold :func:`target_levels`).
-    """
-    best = best_runs(summary)
-    paper = max((e for e in summary if e["formulation"] == BASELINE),
-                key=lambda e: e["instants_per_s"], default=None)
-    out = []
-    for name, wanted in _target_rates().items():
-        runs = [e for e in summary if e["formulation"] == name and e["mode"] == "batched"]
-        run = max(runs, key=lambda e: e["instants_per_s"], default=None)
-        out.append(_target(f"{name} batched instants/s", run and run["instants_per_s"],
-                           wanted, run and f"{run['solver']}, solved "
-                           f"{100 * run['success_rate']:.1f}%"))
-    for name in sorted(conic):
-        run = best.get(name)
-        ratio = run and paper and run["instants_per_s"] / paper["instants_per_s"]
-        out.append(_target(f"{name} best run / paper", ratio, FORMULATIONS[name].paper_ratio,
-                           run and f"{run['solver']} {run['mode']}"))
-        cold = [e for e in summary if e["formulation"] == name and e["mode"] == "cold"
-                and e["solver"] == "clarabel"]
-        if cold:
-            glue = 1.0 - cold[0]["solver_share"]
-            out.append(_target(f"{name} glue share (clarabel per instant)", glue, GLUE_SHARE,
-                               "build + conversion + checks + dispatch", below=True))
-    out += _success_targets(success_rows) + _newton_targets(summary)
-    for mode, label in (("cold", "per-instant"), ("batched", "batched")):
-        runs = [e for e in summary if e["mode"] == mode]
-        worst = max(runs, key=lambda e: e["split_s"]["checks_s"], default=None)
-        out.append(_target(f"checks per instant, {label} runs, worst (us)",
-                           worst and 1e6 * worst["split_s"]["checks_s"], 1e6 * CHECKS_S,
-                           worst and f"{worst['formulation']} {worst['solver']}"
-                           + (_first_pass(runs) if mode == "cold" else ""), below=True))
-    out.append(_target("wall time of the run (s)", wall_s, WALL_S, None, below=True))
-    return out
-
-
-def _newton_targets(summary: list[dict]) -> list[dict]:
-    """One target per formulation with a ``newton_share``: the ``newton`` family's best
-    batched rate over ``numpy-batched``'s (both solving every instant).
-    """
-    out = []
-    for record in FORMULATIONS.values():
-        if record.newton_share is None:
-            continue
-        runs = [e for e in summary if e["formulation"] == record.name
-                and e["mode"] == "batched" and e["success_rate"] == 1.0]
-        mine = max((e for e in runs if e["solver"].startswith("newton")),
-                   key=lambda e: e["instants_per_s"], default=None)
-        theirs = next((e for e in runs if e["solver"] == "numpy-batched"), None)
-        share = mine and theirs and mine["instants_per_s"] / theirs["instants_per_s"]
-        out.append(_target(f"{record.name} newton / numpy-batched (batched)", share,
-                           record.newton_share, mine and mine["solver"]))
-    return out
-
-
-def _success_targets(success_rows: list[dict]) -> list[dict]:
-    """One target per formulation with a ``success_target``: its best backend's success
-    rate at the target's level.
-    """
-    out = []
-    for f in FORMULATIONS.values():
-        if not f.success_target:
-            continue
-        level, rate = f.success_target
-        mine = [r for r in success_rows if r["formulation"] == f.name and r["level"] == level]
-        top = max(mine, key=lambda r: r["rate"], default=None)
-        out.append(_target(f"{f.name} success at {level:g} (best backend)",
-                           None if top is None else top["rate"], rate,
-                           None if top is None else f"{top['solver']} at tol {top['tol']}"))
-    return out
-
-
-def _first_pass(runs: list[dict]) -> str:
-    """The first check pass of per-instant runs (cold after the solver's run, the one
-    their end-to-end time holds; ``checks_s`` is the fastest of
-    :data:`~.bench_run.CHECK_PASSES`): its worst and median, in words.
-    """
-    first = [(1e6 * e["split_s"]["checks_first_s"], e) for e in runs]
-    value, top = max(first, key=lambda pair: pair[0])
-    return (f"; first pass (cold, in the end-to-end time): worst {value:.1f} us "
-            f"({top['formulation']} {top['solver']}), median "
-            f"{float(np.median([v for v, _ in first])):.1f} us")
-
-
-def _target(name, value, wanted, detail, below=False) -> dict:
-    met = None if value is None else (value <= wanted if below else value >= wanted)
-    return {"name": name, "value": value, "wanted": wanted, "met": met,
-            "detail": detail or ""}

@@ -48,10 +48,14 @@ from cardan_forces.solvers.conversions import convert
 
 from . import files
 
-QP_FORMULATIONS = where(exported=True)
-"""Formulations exported by default (the ones qpbenchmark takes as QPs)."""
+QP_FORMULATIONS = ("min_norm", "positive", "compliance")
+"""Formulations exported by default: QPs that qpbenchmark takes, the least norm and the
+physical selections (export's choice; each is :attr:`~cardan_forces.formulations.
+Formulation.exportable`)."""
 EXPORTABLE = where(exportable=True)
-"""Formulations whose problems are QPs or conic problems (the others are refused)."""
+"""Formulations whose problems export writes (the record's
+:attr:`~cardan_forces.formulations.Formulation.exportable`): the ``--help`` lists them,
+and the others are refused before any work."""
 INSTANTS = 50
 """Evenly spaced instants per scene by default."""
 QP_KEYS = ("P", "q", "A", "b", "G", "h", "lb", "ub")
@@ -114,9 +118,16 @@ def collect(scenes, formulations, instants: int) -> dict[str, object]:
     """``{name: problem}`` of every scene x formulation at ``instants`` evenly spaced
     instants of the scene's time grid (a formulation a scene does not call for is left
     out for that scene). :class:`UsageError` for more instants than a scene's grid has
-    (every scene checked before any is simulated) and for a formulation whose problems
-    are neither a QP nor a conic problem.
+    (every scene checked before any is simulated) and for a formulation not in
+    :data:`EXPORTABLE`, both before any work.
     """
+    refused = [name for name in formulations if name not in EXPORTABLE]
+    if refused:
+        raise UsageError(
+            f"--formulation {refused[0]}: its problems "
+            f"({', '.join(cls.__name__ for cls in FORMULATIONS[refused[0]].problem)}) are "
+            "neither a QP nor a conic problem, which are the forms export writes; "
+            f"exportable: {', '.join(EXPORTABLE)}")
     loaded = [load_scene(name) for name in scenes]
     for scene in loaded:
         available = len(scene.time.instants())
@@ -130,22 +141,11 @@ def collect(scenes, formulations, instants: int) -> dict[str, object]:
         op = build_operator(simulate(scene, times[:chosen[-1] + 1]))
         for formulation in formulations:
             try:
-                problems = fbatch.build_problems(op, formulation, chosen[:1])
+                problems = fbatch.build_problems(op, formulation, chosen)
             except NotApplicable:
                 continue
-            _exportable(formulation, problems[0])
-            problems = fbatch.build_problems(op, formulation, chosen)
             out |= {f"{scene.name}_{formulation}_{i:04d}": p for i, p in zip(chosen, problems)}
     return out
-
-
-def _exportable(formulation: str, problem) -> None:
-    """:class:`UsageError` unless ``problem`` is written as a QP or a conic problem."""
-    if as_qp(problem) is None and convert(problem, (Conic,)) is None:
-        raise UsageError(
-            f"--formulation {formulation}: its problems ({type(problem).__name__}) are "
-            "neither a QP nor a conic problem, which are the forms export writes; "
-            f"exportable: {', '.join(EXPORTABLE)}")
 
 
 def as_qp(problem) -> QP | None:

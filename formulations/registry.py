@@ -27,7 +27,7 @@ from .convex import (
     socp_face,
 )
 from .paper import build_paper, end_faces_words
-from .problems import LCP, LS, NLS, QP, Conic
+from .problems import LCP, LP, LS, NLS, QP, Conic
 
 FALLBACK = "clarabel"
 """Tried after a formulation's own backends (a core dependency that takes every convex
@@ -38,13 +38,19 @@ SELECTION = "positive"
 (``sets``' member column, ``report``'s lines, the figures' reference curve): the least
 norm with end faces >= 0, so it lies inside every interval."""
 
+EXPORTED_FORMS = (LS, QP, LP, Conic)
+"""The problem classes ``cardan export`` writes: a least norm and a QP as a QP, an LP
+and a conic problem in the standard conic form (each reaches one by the conversions)."""
+
 BASELINE = "paper"
 """The paper's method: the bench's baseline, the reference of the paper's figures."""
 
 
 @dataclass(frozen=True)
 class Formulation:
-    """One contact formulation.
+    """One contact formulation: what it is, not how a command uses it (the bench's
+    targets, the figures' choice of methods, the export's default set live with those
+    commands).
 
     ``build(op, i)`` makes its problem, of one of the classes ``problem``; ``label`` names it in
     figures and reports; ``physical``: its answer is a physical selection of the rigid
@@ -52,23 +58,12 @@ class Formulation:
     ``backends``: the backends that solve it by default, best first (then
     :data:`FALLBACK`, then any that takes it; a batched backend serves runs over
     time, the first per-instant one a single instant); ``least_norm_batch``: the stacked
-    least-norm batch (``numpy-batched``) takes it, and its batched runs are held to
-    ``target_rate`` instants per second by the bench's targets (a developer's check,
-    ``pytest -m targets``, not in the bench's outputs); ``drawn``: drawn in the paper's
-    figures by default; ``beside_penalty``: compared with the penalty simulation on the
-    released line; ``job_cost``: relative CPU cost of a run over the whole time grid by
-    its default backend (the paper figures' worker queue starts the dearest first);
-    ``exported``: in the default export set (a QP that qpbenchmark takes);
-    ``batch_weights(A, first)``: the least-norm batch's weights from the stacked
-    ``A`` (T, m, n) and the first instant's problem (``None``: unit weights);
-    ``compliant``: its contacts have a stiffness (a compliance law), so a seat misfit
-    enters as work on them (``cardan tolerances``); ``design``: a physical selection
-    whose loads the design answers report (``cardan life``); ``success_target``:
-    ``(level, rate)``, the targets want the bench's best backend to solve at least ``rate`` of
-    the instants at accuracy ``level`` (``None``: no such target); ``paper_ratio``: the
-    speed-up over the paper's method the targets want of its best run (a conic one's);
-    ``newton_share``: the share of ``numpy-batched``'s rate the targets want of the
-    ``newton`` family's best batched run (a least-norm one's; ``None``: no such target).
+    least-norm batch (``numpy-batched``) takes it; ``batch_weights(A, first)``: the
+    least-norm batch's weights from the stacked ``A`` (T, m, n) and the first instant's
+    problem (``None``: unit weights); ``compliant``: its contacts have a stiffness (a
+    compliance law), so a seat misfit enters as work on them (``cardan tolerances``);
+    ``design``: a physical selection whose loads the design answers report (``cardan
+    life``); :attr:`exportable`: its problems are in a form ``cardan export`` writes.
 
     The builder is called with the record's ``name`` (``build(op, i, name=...)``), which
     its problems carry as their ``formulation``: each name is spelled here only.
@@ -81,17 +76,9 @@ class Formulation:
     physical: bool
     backends: tuple[str, ...]
     least_norm_batch: bool = False
-    target_rate: float | None = None
-    drawn: bool = False
-    beside_penalty: bool = False
-    job_cost: float = 1.0
-    exported: bool = False
     batch_weights: Callable[..., np.ndarray] | None = None
     compliant: bool = False
     design: bool = False
-    success_target: tuple[float, float] | None = None
-    paper_ratio: float = 20.0
-    newton_share: float | None = None
 
     def __call__(self, op, i: int):
         """The problem at instant ``i`` of ``op``, named after this record."""
@@ -99,8 +86,11 @@ class Formulation:
 
     @property
     def exportable(self) -> bool:
-        """Its problems are QPs or conic problems (a solver-independent file form)."""
-        return all(issubclass(cls, (LS, QP, Conic)) for cls in self.problem)
+        """Its problems are QPs (a least norm as its QP) or conic problems (an LP as
+        one): the solver-independent forms ``cardan export`` writes, the one test of
+        what it accepts and lists.
+        """
+        return all(issubclass(cls, EXPORTED_FORMS) for cls in self.problem)
 
 
 def _column_norms(A: np.ndarray, first) -> np.ndarray:
@@ -137,39 +127,30 @@ root)."""
 REGISTRY: tuple[Formulation, ...] = (
     Formulation("paper", build_paper, (NLS,),
                 f"the paper's method (as computed here; {end_faces_words(True)})",
-                physical=False, backends=("scipy-fsolve", "scipy-root-lm"), drawn=True,
-                job_cost=4.0),
+                physical=False, backends=("scipy-fsolve", "scipy-root-lm")),
     Formulation("min_norm", min_norm, (LS,), "min_norm (least norm: end faces may pull)",
-                physical=False, backends=("numpy-kkt",), least_norm_batch=True,
-                target_rate=1e5, beside_penalty=True, job_cost=0.6, exported=True),
+                physical=False, backends=("numpy-kkt",), least_norm_batch=True),
     Formulation("min_norm_scaled", min_norm_scaled, (LS,),
                 "min_norm_scaled (least norm, moments per reference length)",
                 physical=False, backends=("numpy-kkt",), least_norm_batch=True,
                 batch_weights=_column_norms),
     Formulation("positive", positive, (QP,), "positive (least norm, end faces push)",
-                physical=True, backends=_BATCH_FIRST, least_norm_batch=True,
-                target_rate=1e5, drawn=True, beside_penalty=True, exported=True,
-                design=True, newton_share=0.5),
+                physical=True, backends=_BATCH_FIRST, least_norm_batch=True, design=True),
     Formulation("min_max", min_max, (Conic,),
                 "min_max (comparison only: both end faces of a pair may push)",
-                physical=False, backends=("clarabel",), drawn=True, job_cost=2.0,
-                success_target=(1e-6, 0.9)),
+                physical=False, backends=("clarabel",)),
     Formulation("socp_face", socp_face, (Conic,),
                 "socp_face (end faces with a centre-of-pressure cone)",
                 physical=True, backends=("clarabel",)),
     Formulation("lcp", lcp, (LCP,), "lcp (positive as a complementarity problem)",
-                physical=True, backends=("lcp-lemke",), least_norm_batch=True,
-                target_rate=1e5),
+                physical=True, backends=("lcp-lemke",), least_norm_batch=True),
     Formulation("friction", friction, (Conic,), "friction (positive with Coulomb friction)",
                 physical=True, backends=("clarabel",)),
     Formulation("compliance", compliance, (QP, Conic), "compliance (linear contact stiffness)",
                 physical=True, backends=_BATCH_FIRST, least_norm_batch=True,
-                target_rate=1e5, drawn=True, beside_penalty=True, job_cost=0.5,
-                exported=True, batch_weights=_stiffness_weights, compliant=True,
-                design=True, newton_share=0.5),
+                batch_weights=_stiffness_weights, compliant=True, design=True),
     Formulation("compliance_hertz", _hertz, (Conic,), "compliance_hertz (Hertz contact law)",
-                physical=True, backends=_ENERGY_FIRST, beside_penalty=True, job_cost=2.7,
-                compliant=True, design=True, paper_ratio=50.0),
+                physical=True, backends=_ENERGY_FIRST, compliant=True, design=True),
 )
 
 FORMULATIONS: dict[str, Formulation] = {f.name: f for f in REGISTRY}
@@ -204,6 +185,6 @@ def default_backends() -> tuple[str, ...]:
 
 
 def where(**wanted) -> tuple[str, ...]:
-    """Names of the formulations whose fields equal ``wanted`` (e.g. ``drawn=True``)."""
+    """Names of the formulations whose fields equal ``wanted`` (e.g. ``design=True``)."""
     return tuple(f.name for f in REGISTRY
                  if all(getattr(f, key) == value for key, value in wanted.items()))

@@ -1,6 +1,6 @@
 """The compliance formulations against the penalty simulation, in ``cardan repro``.
 
-The methods of :data:`COMPLIANCE_VS_PENALTY` planned as jobs on the released scene's
+The methods of :data:`.methods.COMPLIANCE_VS_PENALTY` planned as jobs on the released scene's
 rigid operator (the same clearances, seen as gaps; a method that does not apply is left
 out with its reason), and the report's section and CSV of their distance from the
 penalty simulation per contact group. A comparison beside the paper's figures, so a
@@ -15,22 +15,17 @@ import numpy as np
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments import files
-from cardan_forces.formulations import where
 
 from .figures import SMOOTH_S, moving_average
 from .histories import history, released
+from .methods import COMPLIANCE_VS_PENALTY
 from .request import _refusal
 from .runs import _cost, _Job, _Runs
 from .verdicts import SETTLED_S, _settled
 
-COMPLIANCE_VS_PENALTY = where(beside_penalty=True)
-"""Methods compared with the penalty simulation (each by its default backend), on the
-released scene's operator (the same effects, so the compliance formulations see the
-same clearances as gaps)."""
-
 
 def _compliance_plan(runs: _Runs, scene: Scene):
-    """The methods of :data:`COMPLIANCE_VS_PENALTY` on the released scene's rigid
+    """The methods of :data:`.methods.COMPLIANCE_VS_PENALTY` on the released scene's rigid
     operator (those that do not apply left out, with why): the operator, the
     refusals, and the histories of those that apply as jobs (``args``: method,
     backend).

@@ -16,13 +16,8 @@ from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.penalty import PenaltyResult, released, simulate_penalty
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.study import History, solve_over_time
-from cardan_forces.formulations import BASELINE, where
+from cardan_forces.formulations import BASELINE
 from cardan_forces.solvers import Status
-
-METHODS = where(drawn=True)
-"""Methods (formulations) drawn in the figures (their records' ``drawn``), each by the
-study layer's default backend (:func:`cardan_forces.experiments.study.default_backend`).
-``min_norm`` is left out: its end faces pull, so it is no contact force."""
 
 
 def history(op: Operator, method: str, solver: str | None = None,

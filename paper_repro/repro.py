@@ -35,7 +35,7 @@ from cardan_forces.driveline.loading import load_scene
 from .compliance import _compliance_plan
 from .engine_section import _engine_section, _engine_work
 from .figures import PENALTY
-from .histories import METHODS
+from .methods import METHODS
 from .report import _report, _write_report
 from .request import ALL_METHODS, ENGINE, FIG15_SCENES, FIGURES, check_request, default_methods
 from .runs import _rigid_jobs, _rigid_result, _run_jobs, _Runs

@@ -20,7 +20,7 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.convex import NotApplicable
 
 from .figures import PENALTY
-from .histories import METHODS
+from .methods import METHODS
 
 FIGURES = (11, 12, 13, 14, 15)
 FIG15_SCENES = ("paper-fig15", "paper-fig15-axial")

@@ -25,15 +25,15 @@ from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.penalty import PenaltyResult
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.experiments.progress import bar
-from cardan_forces.formulations import FORMULATIONS
 
 from .histories import history, released, run_penalty
+from .methods import JOB_COST
 from .request import FIG15_SCENES
 from .rigid_set import bearing_quantities, joint_quantities, set_bounds
 
 BOUNDS_JOB_COST = 0.2
 """Relative CPU cost of a figure's rigid-set bounds, on the scale of the formulations'
-``job_cost`` (:class:`~cardan_forces.formulations.Formulation`): jobs are queued for the
+methods' (:data:`.methods.JOB_COST`): jobs are queued for the
 worker processes dearest first, so that they end together."""
 
 
@@ -187,8 +187,8 @@ def _rigid_jobs(scene: Scene, op: Operator, figs, rigid) -> list[_Job]:
 
 
 def _cost(method: str) -> float:
-    """A method's relative job cost (1 for one the registry does not hold)."""
-    return FORMULATIONS[method].job_cost if method in FORMULATIONS else 1.0
+    """A method's relative job cost (:data:`.methods.JOB_COST`; 1 for one not named)."""
+    return JOB_COST.get(method, 1.0)
 
 
 def _bounds(op: Operator, number: int) -> dict:

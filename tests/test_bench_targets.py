@@ -9,13 +9,13 @@ import json
 import time
 
 import pytest
-from cardan_forces.experiments import bench, bench_metrics
+from cardan_forces.experiments import bench, bench_targets
 
 from cardan_forces.cli import main
 
 
 def _run(summary, success=(), conic=(), wall_s=None) -> dict:
-    return {t["name"]: t for t in bench_metrics.targets(list(summary), list(success),
+    return {t["name"]: t for t in bench_targets.targets(list(summary), list(success),
                                                         set(conic), wall_s)}
 
 
@@ -23,8 +23,8 @@ def test_a_target_is_met_or_not_by_its_measured_value():
     """The wall time's target is met below its bound, not above, and not judged when
     not measured."""
     name = "wall time of the run (s)"
-    assert _run([], wall_s=bench_metrics.WALL_S / 2)[name]["met"] is True
-    assert _run([], wall_s=bench_metrics.WALL_S * 2)[name]["met"] is False
+    assert _run([], wall_s=bench_targets.WALL_S / 2)[name]["met"] is True
+    assert _run([], wall_s=bench_targets.WALL_S * 2)[name]["met"] is False
     assert _run([])[name]["met"] is None
 
 
@@ -40,7 +40,7 @@ def test_the_outputs_carry_no_target(tmp_path, capsys):
 
 @pytest.mark.targets
 def test_a_quick_bench_meets_every_target(tmp_path, monkeypatch, capsys):
-    """Every target of :func:`bench_metrics.targets` met by ``cardan bench --quick`` on
+    """Every target of :func:`bench_targets.targets` met by ``cardan bench --quick`` on
     this machine (a developer's check: ``pytest -m targets``)."""
     found = {}
     evaluate = bench.evaluate
@@ -53,7 +53,7 @@ def test_a_quick_bench_meets_every_target(tmp_path, monkeypatch, capsys):
     started = time.perf_counter()
     assert main(["bench", "--quick", "--out", str(tmp_path), "--quiet"]) == 0
     results = found["results"]
-    rows = bench_metrics.targets(results["summary"], results["success"], results["conic"],
+    rows = bench_targets.targets(results["summary"], results["success"], results["conic"],
                                  time.perf_counter() - started)
     unmet = [f"{t['name']}: {t['value']} (wanted {t['wanted']:g})" for t in rows
              if t["met"] is False]
