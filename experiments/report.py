@@ -393,7 +393,7 @@ MARGINS_IN = {"left": 0.75, "right": 0.15, "top": 0.15, "line": 0.17, "title": 0
 for its title (two lines at most), ``axis`` below it for its tick and axis labels,
 ``entry`` per entry of the longest legend below a panel and ``gap`` under it; ``line``
 per line of the page's title below ``top`` (a fixed layout: a constrained one
-measured every panel's text twice and took a third of the figure's time)."""
+measures every panel's text twice, a large share of the figure's time)."""
 COLUMNS = 2
 """Panels side by side on a page."""
 PANEL_IN = ((images.PAGE_IN[0] - MARGINS_IN["left"] - MARGINS_IN["right"]

@@ -446,13 +446,10 @@ def _compliance_conic(op: Operator, i: int, laws, is_bearing, hertz: bool, use_g
     second face of each end-face pair is held at 0, the first one signed.
 
     Every contact has ``r_c >= ||f_c||`` (a second-order cone) and its energy on
-    ``r_c`` (``P`` for a linear law), plus ``s_c`` (a power cone) for a Hertz law.
-    Shortcuts with the same optimum were measured and not kept: an end face's signed
-    force in its power cone itself, without ``r_c`` (4 unknowns fewer on ``paper``),
-    left Clarabel's full form at ``InsufficientProgress`` on a
-    straight ``propshaft`` (its idle faces at the cone's apex); a linear law's energy on
-    the force itself left Clarabel's equilibrium at 6e-8 of the load at 1e6 N m,
-    against 1e-9 on ``r_c``.
+    ``r_c`` (``P`` for a linear law), plus ``s_c`` (a power cone) for a Hertz law. The
+    energy sits on ``r_c``, not on the force itself, for every contact, end faces too:
+    the shortcuts with the same optimum leave an interior point stalled where idle faces
+    sit at a cone's apex, or less accurate under very large loads.
     """
     n = len(op.names)
     merged = {b_: a_ for a_, b_ in op.pairs}

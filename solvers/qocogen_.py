@@ -56,27 +56,19 @@ SETTINGS = ("max_iters", "bisect_iters", "iter_ref_iters", "kkt_static_reg",
 
 DEFAULTS = {"iter_ref_iters": 0, "bisect_iters": 7}
 """Settings that differ from the generated solver's own defaults (an option overrides
-them). No iterative refinement of the KKT solves: on the reduced ``min_max`` and
-``socp_face`` (1001 instants each) it changed no status or iteration count and left the
-package's measures at the same levels (dual residual at the default tolerance 4.5e-10
-with it, 5.8e-10 without; at 1e-10 4e-13 and 3e-11, the gap unchanged), and it costs a
-sizeable share of the solve. Badly scaled cases lose more: on ``cardan hard``'s 89 deg case the
-worst dual residual of ``min_max`` is 7.2e-8 without it against 4.5e-9 with it (every
-instant still solved). Steps on a grid of 2^-7 instead of 2^-5 (free with :data:`STEP`:
-the grid no longer sets the number of passes): on the paper's 1001 instants 9.0
-iterations an instant instead of 10 on ``min_max`` and 5.3 instead of 6.1 on
-``socp_face`` (worst gap 4.3e-7 and 5.5e-7, every instant solved), the propshaft's
-``socp_face`` 97 of 101 instants solved instead of 87, its ``min_max`` 11.1 iterations
-instead of 11.6; on the paper's 1e6 N m hard case ``socp_face`` stalls at every
-instant (the step falls below 1e-8), which :data:`REFINED` then solves."""
+them). No iterative refinement of the KKT solves: on the built-in scenes it changes no
+status or iteration count and leaves the package's measures at the same levels, at a
+sizeable share of the solve's time; badly scaled cases (``cardan hard``) lose some
+accuracy without it, and an instant it would have saved is solved again with
+:data:`REFINED`. Steps on a grid of 2^-7 instead of QOCO's 2^-5 (free with
+:data:`STEP`: the grid does not set the number of passes) take fewer iterations and
+solve more instants (the measurements: CHANGELOG)."""
 
 REFINED = {"iter_ref_iters": 1, "bisect_iters": 5}
 """The generated solver's own defaults, with which an instant that :data:`DEFAULTS`
-leave unsolved is solved again (its iterations are added to the first attempt's). On
-``cardan hard``'s windows (11 instants a case) at tolerance 1e-8, two reduced
-``min_max`` instants (``paper-fig15`` ``mass-1e6``, ``paper-slip`` ``torque-1e6``)
-stalled without refinement ("numerical error": the step fell below 1e-8 at a dual
-residual and gap below 1e-10); refined, both are solved."""
+leave unsolved is solved again (its iterations are added to the first attempt's): under
+very large loads (``cardan hard``) the step can fall below 1e-8 without refinement and
+the solve stop with a "numerical error"; refined, such instants are solved."""
 
 STATUS = {1: Status.SOLVED, 2: Status.INACCURATE, 4: Status.INACCURATE}
 """Generated solver status -> ours; anything else is failed."""
@@ -87,10 +79,7 @@ NAMES = ("unsolved", "solved", "solved inaccurate", "numerical error", "max iter
 CFLAGS = ("-O3", "-fno-math-errno", "-fPIC", "-shared")
 """Portable flags (no ``-march=native``: the cache may be shared between machines).
 ``-fno-math-errno``: a square root is one instruction, without the call that would set
-``errno`` for a negative argument (nothing reads it); the same answers to the bit, the
-generated solve a little faster. ``-march=native``, ``-flto``,
-``-fno-semantic-interposition`` and ``-funroll-loops`` gained nothing beyond the
-spread of repeated runs."""
+``errno`` for a negative argument (nothing reads it); the same answers to the bit."""
 
 DRIVER = r"""
 #include <stdlib.h>
@@ -186,11 +175,8 @@ double cardan_boundary_step(double* u, double* Du, double f, Workspace* work) {
 """The generated solver's line search (appended to ``cone.c``, after :data:`PROTOTYPE`):
 QOCO's step, one pass over the cones instead of one per halving of the bisection (each
 a pass that takes a square root per cone). The step is the bisection's (the same grid
-below the boundary), so the iterations are QOCO's: with its five halvings, on the
-paper's 1001 instants the same iterations and answers to the bit, in a faster
-generated solve. The step at the boundary itself (0.99 of it, up
-to the bisection's largest) took 7% fewer iterations on ``min_max`` but stalled every
-``socp_face`` instant of ``cardan hard``'s 1e6 N m case (step below 1e-8, gap 1e-5)."""
+below the boundary), so the iterations and answers are QOCO's. Not the step at the
+boundary itself (0.99 of it): under very large loads it stalls ``socp_face``."""
 
 BISECTION_CALL = "return bisection_search(u, Du, f, work);"
 """The call in the generated ``linesearch`` that :data:`STEP` replaces."""

@@ -52,9 +52,8 @@ class Folded:
     (``sign = -1``): there ``sign s1 >= 0``, so the cone is the one linear row
     ``s0 - sign s1 >= 0`` (the same feasible set, one row and one cone fewer). In
     ``min_max`` these are the end faces' ``|x| <= t`` next to ``x >= 0``: folded, the
-    generated QOCO solve takes less time with the same iterations and measures (the
-    paper's 1001 instants). The full form keeps the cones
-    (folded there, moreau's full form was left ``AlmostSolved`` at one instant).
+    generated QOCO solve takes less time with the same iterations and measures. The
+    full form keeps the cones (folded, moreau's full form solves fewer instants).
 
     ``apex``, ``member``, ``sign``: per folded cone its two rows (of the problem's cone
     rows) and the sign; ``order`` the rows the folded problem starts from (the apexes,
