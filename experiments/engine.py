@@ -1,7 +1,10 @@
-"""``cardan engine SCENE``: what MuJoCo says about the drive line's loads, set against
-the rigid analysis (:mod:`cardan_forces.driveline.engine_mujoco` builds and runs it).
+"""``cardan engine SCENE``: what the physics engines say about the drive line's loads,
+set against the rigid analysis. ``--engine mujoco`` (the default), ``drake`` or ``all``:
+MuJoCo (:mod:`cardan_forces.driveline.engine_mujoco`) and Drake
+(:mod:`cardan_forces.driveline.engine_drake`) build the same line from the element
+kinds and simulate it forward.
 
-At sampled instants, for the engine's forces ``x_e`` under each softness setting:
+At sampled instants, for the engine's forces ``x_e`` under each setting:
 
 - the residual of the package's equilibrium, ``||A x_e - b|| / ||b||``;
 - the determinate components: ``|x_e - x|`` against the rigid value (a point);
@@ -9,6 +12,9 @@ At sampled instants, for the engine's forces ``x_e`` under each softness setting
   (:func:`~cardan_forces.experiments.study.intervals`), within a tolerance of
   1e-6 of the largest load plus the equilibrium residual's size;
 - the formulation whose forces lie closest, ``||x_e - x_f|| / ||x_f||``;
+- the member of the rigid set the engine's regularisation selects, predicted without
+  simulating (:mod:`~cardan_forces.experiments.engine_member`), and its distance
+  ``||x_p - x_e|| / ||x_e||`` from the simulated forces;
 - the spread of each component over the softness settings: the determinate ones stay
   put (to the softness error), the indeterminate ones move with settings that have
   nothing to do with the machine.
@@ -17,28 +23,33 @@ The softness settings (:data:`SETTINGS`) vary MuJoCo's ``solref`` time constant 
 0.0005-0.008 s, its damping ratio 0.3-1, ``solimp``'s impedance (0.9, 0.95) to (0.99, 0.999)
 and width 1 mm to 1 um, all bearings alike; the relative softness of the input
 and output shafts' bearings (one shaft's time constant 4 times the other's); and the
-integration step (MuJoCo's coarsest, half the time constant, against 1/8). Instants
+integration step (MuJoCo's coarsest, half the time constant, against 1/8). Drake's
+settings (:data:`DRAKE_SETTINGS`) are its discrete step, the only parameter that
+softens its ball constraints (SAP fixes their near-rigid threshold). Instants
 within the engine's settling (the first 10 time constants of the softest constraint:
 the line starts unloaded and sags into its constraints) are left out of the
-statistics and said to be.
+statistics and said to be. An engine that is not installed, or cannot express the
+scene, is left out with one line saying why (an explicit ``--engine`` of it is refused).
 """
 
 from __future__ import annotations
 
 import csv
+import json
 import textwrap
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from cardan_forces.driveline import engine_mujoco
+from cardan_forces.driveline import engine_drake, engine_mujoco
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.engine_drake import Stepping
 from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
-from cardan_forces.experiments import files
+from cardan_forces.experiments import engine_member, files
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import (
     COINCIDE,
@@ -76,6 +87,21 @@ SETTINGS = (
 ``scaled`` shaft the scene lacks leaves that setting uniform."""
 
 FIGURE_SETTINGS = ("default", "output bearings 4x softer", "input bearings 4x softer")
+"""MuJoCo's settings drawn over time (Drake's first setting is drawn beside them)."""
+
+DRAKE_SETTINGS = (
+    Stepping(2.5e-4, "Drake, step 0.25 ms"),
+    Stepping(5e-4, "Drake, step 0.5 ms"),
+    Stepping(1e-3, "Drake, step 1 ms"),
+)
+"""Drake's settings compared (module doc): its discrete step; the first is its reference.
+A step that does not divide the scene's is left out."""
+
+ENGINES = {"mujoco": "MuJoCo", "drake": "Drake"}
+"""The engines ``--engine`` names, with the name the outputs give each."""
+
+PREDICTION_RTOL = 1e-2
+"""The prediction is said to match a simulation within this share of the force norm."""
 
 
 INSIDE_RTOL = 1e-6
@@ -84,7 +110,8 @@ INSIDE_RTOL = 1e-6
 @dataclass(frozen=True)
 class InstantComparison:
     """One setting at one instant (module doc). ``outside``: indeterminate components
-    outside their interval; ``closest``: (formulation, relative distance).
+    outside their interval; ``closest``: (formulation, relative distance);
+    ``predicted_error``: ``||x_p - x_e|| / ||x_e||`` (nan where not predicted).
     """
 
     setting: str
@@ -93,11 +120,16 @@ class InstantComparison:
     determinate_error_N: float
     outside: tuple[str, ...]
     closest: tuple[str, float]
+    predicted_error: float = float("nan")
 
 
 @dataclass(frozen=True)
 class EngineStudy:
-    """The runs, the operator they were read on, and the comparisons."""
+    """The runs, the operator they were read on, and the comparisons; ``predicted``:
+    per run, the predicted member at each sampled instant; ``compliances``: per run, the
+    bearing compliances the prediction used (relative); ``skipped``: per engine left
+    out, why.
+    """
 
     op: Operator
     runs: dict[str, EngineRun]
@@ -108,6 +140,9 @@ class EngineStudy:
     rigid: dict[int, np.ndarray]
     comparisons: tuple[InstantComparison, ...]
     formulations: dict[int, dict[str, np.ndarray]]
+    predicted: dict[str, dict[int, np.ndarray]] = field(default_factory=dict)
+    compliances: dict[str, dict[str, float]] = field(default_factory=dict)
+    skipped: dict[str, str] = field(default_factory=dict)
 
 
 def _formulation_forces(op, i: int) -> dict[str, np.ndarray]:
@@ -151,26 +186,48 @@ def settle_s(runs: dict[str, EngineRun]) -> float:
                     for r in runs.values())
 
 
-def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray) -> EngineStudy:
-    """Set every run against the rigid analysis at the ``sampled`` instants."""
+def engine_of(run: EngineRun) -> str:
+    """The engine's name of a run (:data:`ENGINES`), from its setting's type."""
+    return ENGINES["drake" if isinstance(run.softness, Stepping) else "mujoco"]
+
+
+def compliances(op, run: EngineRun) -> dict[str, float]:
+    """The bearing compliances (relative) the run's engine and setting give
+    (:mod:`~cardan_forces.experiments.engine_member`, eqs. 2 and 3).
+    """
+    if isinstance(run.softness, Stepping):
+        return engine_member.compliances_drake(op)
+    return engine_member.compliances_mujoco(op, run.softness)
+
+
+def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray,
+            skipped: dict[str, str] | None = None) -> EngineStudy:
+    """Set every run against the rigid analysis and against its predicted member at the
+    ``sampled`` instants; ``skipped``: the engines left out and why.
+    """
     settled = op.t[sampled] - op.t[0] >= settle_s(runs)
     det0 = determinacy(op, int(sampled[0]))
+    weights = {label: compliances(op, r) for label, r in runs.items()}
     intervals, rigid, forms, comparisons = {}, {}, {}, []
+    predicted: dict[str, dict[int, np.ndarray]] = {label: {} for label in runs}
     for i in sampled:
         det = determinacy(op, int(i))
         intervals[i], rigid[i] = _intervals(op, int(i)), det.min_norm
         forms[i] = _formulation_forces(op, int(i))
         for label, r in runs.items():
+            predicted[label][i] = engine_member.predicted(op, int(i), weights[label])
             comparisons.append(compare_instant(op, int(i), label, r.forces[i], det,
-                                               intervals[i], forms[i]))
+                                               intervals[i], forms[i], predicted[label][i]))
     return EngineStudy(op, runs, sampled, settled, intervals, det0.determinate, rigid,
-                       tuple(comparisons), forms)
+                       tuple(comparisons), forms, predicted, weights, dict(skipped or {}))
 
 
-def compare_instant(op, i, label, x, det, interval, forms) -> InstantComparison:
+def compare_instant(op, i, label, x, det, interval, forms,
+                    predicted: np.ndarray | None = None) -> InstantComparison:
     """The engine's forces ``x`` at instant ``i`` against the rigid model (module doc):
     ``det`` its determinacy there, ``interval`` (n, 2) each component's rigid interval
-    (+-inf where unbounded), ``forms`` formulation forces by name (may be empty).
+    (+-inf where unbounded), ``forms`` formulation forces by name (may be empty),
+    ``predicted`` the engine's predicted member (None: not predicted).
     """
     b = op.b[i]
     residual = float(np.linalg.norm(op.A[i] @ x - b) / np.linalg.norm(b))
@@ -181,19 +238,48 @@ def compare_instant(op, i, label, x, det, interval, forms) -> InstantComparison:
            if not fixed and not lo - slack <= v <= hi + slack]
     distances = {f: float(np.linalg.norm(x - xf) / np.linalg.norm(xf)) for f, xf in forms.items()}
     closest = min(distances.items(), key=lambda kv: kv[1]) if distances else ("-", np.nan)
-    return InstantComparison(label, float(op.t[i]), residual, error, tuple(out), closest)
+    off = (np.nan if predicted is None
+           else float(np.linalg.norm(predicted - x) / np.linalg.norm(x)))
+    return InstantComparison(label, float(op.t[i]), residual, error, tuple(out), closest, off)
+
+
+def _unusable(name: str, scene, op=None) -> str:
+    """Why engine ``name`` cannot run ``scene`` (its operator ``op`` where built), in
+    one line; empty where it can.
+    """
+    try:
+        if name == "drake":
+            engine_drake.drake_version()
+            if op is not None:
+                engine_drake.check_expressible(op)
+                return ""
+        else:
+            engine_mujoco.mujoco_version()
+        engine_mujoco.check_expressible(scene)
+    except EngineUnsupported as err:
+        return str(err).replace("MuJoCo cannot", f"{ENGINES[name]} cannot")
+    return ""
+
+
+def usable(engines, scene, op=None) -> tuple[tuple[str, ...], dict[str, str]]:
+    """The ``engines`` that run ``scene`` and, for each other, why not (one line each);
+    :class:`NotApplicable` where none can (every reason in its message).
+    """
+    why = {name: _unusable(name, scene, op) for name in engines}
+    ok = tuple(name for name in engines if not why[name])
+    if not ok:
+        raise NotApplicable("; ".join(why.values()))
+    return ok, {ENGINES[name]: text for name, text in why.items() if text}
 
 
 def study(spec: str, stop_s: float | None = None, instants: int = 6,
-          settings=SETTINGS) -> EngineStudy:
-    """Run the engine on scene ``spec`` up to ``stop_s`` (default its stop) under
-    every softness setting and compare at ``instants`` evenly spaced instants.
+          settings=SETTINGS, engines=("mujoco",), drake_settings=DRAKE_SETTINGS) -> EngineStudy:
+    """Run the ``engines`` on scene ``spec`` up to ``stop_s`` (default its stop) under
+    each of their settings and compare at ``instants`` evenly spaced instants; an
+    engine that cannot run the scene is left out (:func:`usable`).
     """
     scene = load_scene(spec)
-    try:
-        engine_mujoco.check_expressible(scene)
-    except EngineUnsupported as err:
-        raise NotApplicable(str(err)) from None
+    usable(engines, scene)
     t = scene.time.instants()
     if stop_s is not None:
         t = t[t <= stop_s + 1e-12]
@@ -201,27 +287,39 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
             raise NotApplicable(f"--stop {stop_s}: the scene's grid starts at "
                                 f"{scene.time.start_s} s with step {scene.time.step_s} s; "
                                 "give at least two of its instants")
-    return study_operator(build_operator(simulate(scene, t)), instants, settings)
+    return study_operator(build_operator(simulate(scene, t)), instants, settings, engines,
+                          drake_settings)
 
 
-def study_operator(op, instants: int = 6, settings=SETTINGS) -> EngineStudy:
+def study_operator(op, instants: int = 6, settings=SETTINGS, engines=("mujoco",),
+                   drake_settings=DRAKE_SETTINGS) -> EngineStudy:
     """:func:`study` on an operator already built: :func:`engine_runs`, compared at
     ``instants`` evenly spaced instants.
     """
+    ok, skipped = usable(engines, op.scene, op)
     sampled = np.unique(np.linspace(0, len(op.t) - 1, instants).round().astype(int))
-    return compare(op, engine_runs(op, settings), sampled)
+    return compare(op, engine_runs(op, settings, ok, drake_settings), sampled, skipped)
 
 
-def engine_runs(op, settings=SETTINGS) -> dict[str, EngineRun]:
-    """The engine on the operator's scene under every setting whose ``scaled`` shafts
-    the scene has, by label (:class:`NotApplicable` where it cannot run).
+def engine_runs(op, settings=SETTINGS, engines=("mujoco",),
+                drake_settings=DRAKE_SETTINGS) -> dict[str, EngineRun]:
+    """The ``engines`` on the operator's scene by setting label: MuJoCo under every
+    setting whose ``scaled`` shafts the scene has, Drake under every step that divides
+    the scene's (:class:`NotApplicable` where one cannot run).
     """
     shafts = {s.name for s in op.scene.shafts}
+    step = op.scene.time.step_s
+    runs = {}
     try:
-        return {s.label: engine_mujoco.run(op, s) for s in settings
-                if all(name in shafts for name, _ in s.scaled)}
+        if "mujoco" in engines:
+            runs.update({s.label: engine_mujoco.run(op, s) for s in settings
+                         if all(name in shafts for name, _ in s.scaled)})
+        if "drake" in engines:
+            runs.update({s.label: engine_drake.run(op, s) for s in drake_settings
+                         if abs(step / s.time_step_s - round(step / s.time_step_s)) < 1e-6})
     except EngineUnsupported as err:
         raise NotApplicable(str(err)) from None
+    return runs
 
 
 def _load_rows(op) -> dict[str, np.ndarray]:
@@ -278,17 +376,21 @@ def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
     import matplotlib.pyplot as plt
 
     op, rows = result.op, _load_rows(result.op)
-    names = [n for n in FIGURE_SETTINGS if n in result.runs]
+    drake = [n for n, r in result.runs.items() if engine_of(r) == ENGINES["drake"]]
+    names = [n for n in FIGURE_SETTINGS if n in result.runs] + drake[:1]
     start = float(op.t[0]) + settle_s(result.runs)
+    counts = [f"MuJoCo: {len(names) - len(drake[:1])} of its "
+              f"{len(result.runs) - len(drake)} softness settings"] if len(drake) < len(
+        result.runs) else []
+    counts += [f"Drake: {len(drake[:1])} of its {len(drake)} steps"] if drake else []
     with styled():
         fig, axes = plt.subplots(len(rows), 1, figsize=(PAGE_IN[0], 2.3 * len(rows) + 1.3),
                                  squeeze=False)
         handles = {}
         for ax, (label, c) in zip(axes[:, 0], rows.items()):
             handles.update(_draw_load(ax, result, label, c, names, start))
-        fig.suptitle(f"MuJoCo's first-shaft bearing loads over the rigid set "
-                     f"({op.scene.name}; {len(names)} of its {len(result.runs)} softness "
-                     f"settings, from {start:g} s)")
+        fig.suptitle(f"The engines' first-shaft bearing loads over the rigid set "
+                     f"({op.scene.name})\n{'; '.join(counts)}; from {start:g} s")
         fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=2)
         fig.canvas.draw()
         below = fig.legends[0].get_window_extent().height / fig.dpi + 0.08
@@ -309,8 +411,8 @@ def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: lis
     shown = op.t >= start - 1e-12
     sampled = result.sampled[shown[result.sampled]]
     band = _band(op, rows, sampled)
-    curves = {f"MuJoCo, {n}": np.where(shown, _load(result.runs[n].forces, rows), np.nan)
-              for n in names}
+    curves = {(n if engine_of(result.runs[n]) == ENGINES["drake"] else f"MuJoCo, {n}"):
+              np.where(shown, _load(result.runs[n].forces, rows), np.nan) for n in names}
     low, high = limits(list(curves.values()), [band[:, 0], band[:, 1]])
     step, first = max(1, int(shown.sum()) // 8), int(np.argmax(shown))
     for k, (name, values) in enumerate(curves.items()):
@@ -360,24 +462,68 @@ def spread(result: EngineStudy) -> np.ndarray:
     return np.max(np.ptp(stack, axis=0), axis=0)
 
 
-def report_lines(result: EngineStudy, mujoco_version: str) -> list[str]:
-    """``engine.md``: cost, agreement per setting and the sensitivity table."""
+def report_lines(result: EngineStudy, versions: str) -> list[str]:
+    """``engine.md``: cost, agreement per setting, the predicted members and the
+    sensitivity table; ``versions``: the engines' names and versions.
+    """
     op, settled = result.op, set(result.sampled[result.settled].tolist())
-    lines = [f"# MuJoCo {mujoco_version} beside the rigid analysis: {op.scene.name}", "",
+    lines = [f"# {versions} beside the rigid analysis: {op.scene.name}", "",
              "Forward simulation from the scene's start (module doc of "
              "`driveline/engine_mujoco.py`: inverse dynamics on the package's exact "
              "motion gives no constraint force in a soft-constraint engine); every bearing "
-             "a `connect` equality, the joints hinges; forces read at the scene's instants. "
-             f"Compared at {len(result.sampled)} instants, {len(settled)} of them after "
-             "the engine's settling (10 time constants), which the statistics use.", "",
-             "## Cost (one run)", "",
-             "| setting | step (s) | steps | wall (s) | s per simulated s |",
-             "|---|---|---|---|---|"]
-    span = op.t[-1] - op.t[0]
+             "a constraint to the ground (MuJoCo's `connect`, Drake's ball constraint to a "
+             "seat welded to the ground), the joints hinges; forces read at the scene's "
+             f"instants. Compared at {len(result.sampled)} instants, {len(settled)} of them "
+             "after the engines' settling (10 time constants), which the statistics use."]
+    lines += [f"Not run: {name}: {why}" for name, why in result.skipped.items()]
+    lines += ["", *cost_lines(result), "", *agreement_lines(result), "",
+              *prediction_lines(result), "", *_sensitivity_lines(result)]
+    return lines
+
+
+def cost_lines(result: EngineStudy) -> list[str]:
+    """Each run's cost: step, steps, wall time and wall time per simulated second."""
+    lines = ["## Cost (one run)", "",
+             "| engine | setting | step (s) | steps | wall (s) | s per simulated s |",
+             "|---|---|---|---|---|---|"]
+    span = result.op.t[-1] - result.op.t[0]
     for label, r in result.runs.items():
-        lines.append(f"| {label} | {r.timestep_s:.3g} | {r.steps} | {r.wall_s:.2f} | "
-                     f"{_g(r.wall_s / span if span > 0 else np.nan)} |")
-    return lines + [""] + agreement_lines(result) + [""] + _sensitivity_lines(result)
+        lines.append(f"| {engine_of(r)} | {label} | {r.timestep_s:.3g} | {r.steps} | "
+                     f"{r.wall_s:.2f} | {_g(r.wall_s / span if span > 0 else np.nan)} |")
+    return lines
+
+
+def prediction_lines(result: EngineStudy) -> list[str]:
+    """Per run, over the settled instants: the bearing compliances its engine's
+    regularisation gives (relative to the smallest), the largest distance of the
+    predicted member from the simulated forces, the engine's own largest residual, and
+    whether the two agree within :data:`PREDICTION_RTOL`.
+    """
+    op, settled = result.op, set(result.sampled[result.settled].tolist())
+    names = [link.name for link in op.bearings()]
+    lines = ["## The member each engine picks, predicted without simulating", "",
+             "Predicted: the least complementary energy of the bearings as springs of the "
+             "compliances the engine's regularisation gives (MuJoCo: `R / k` from `solref`, "
+             "`solimp` and `body_invweight0`; Drake: SAP's near-rigid `R`, proportional to "
+             "its Delassus estimate), over the rigid set (`experiments/engine_member.py`). "
+             f"Distance: ||x_predicted - x_engine|| / ||x_engine||; matches: within "
+             f"{PREDICTION_RTOL:g} of the force norm.", "",
+             "| engine | setting | compliances (" + ", ".join(names) + ") | "
+             "distance from the simulation | engine's residual of A x = b | matches |",
+             "|---|---|---|---|---|---|"]
+    for label, r in result.runs.items():
+        rows = [c for c in result.comparisons if c.setting == label
+                and np.argmin(np.abs(op.t - c.t)) in settled]
+        if not rows:
+            continue
+        c = result.compliances[label]
+        least = min(c.values())
+        far = max(x.predicted_error for x in rows)
+        lines.append(f"| {engine_of(r)} | {label} | "
+                     + ", ".join(_g(c[n] / least) for n in names)
+                     + f" | {_g(far)} | {_g(max(x.residual for x in rows))} | "
+                     f"{'yes' if far <= PREDICTION_RTOL else 'no'} |")
+    return lines
 
 
 def agreement_lines(result: EngineStudy) -> list[str]:
@@ -386,9 +532,9 @@ def agreement_lines(result: EngineStudy) -> list[str]:
     """
     op, settled = result.op, set(result.sampled[result.settled].tolist())
     lines = ["## Agreement with the rigid model (settled instants)", "",
-              "| setting | max residual of A x = b | max determinate error (N) | "
+              "| engine | setting | max residual of A x = b | max determinate error (N) | "
               "outside their interval | closest formulation (rel. distance) |",
-              "|---|---|---|---|---|"]
+              "|---|---|---|---|---|---|"]
     for label in result.runs:
         rows = [c for c in result.comparisons if c.setting == label
                 and np.argmin(np.abs(op.t - c.t)) in settled]
@@ -396,7 +542,8 @@ def agreement_lines(result: EngineStudy) -> list[str]:
             continue
         outside = sorted({n for c in rows for n in c.outside})
         worst = max(rows, key=lambda c: c.closest[1])
-        lines.append(f"| {label} | {_g(max(c.residual for c in rows))} | "
+        lines.append(f"| {engine_of(result.runs[label])} | {label} | "
+                     f"{_g(max(c.residual for c in rows))} | "
                      f"{_g(max(c.determinate_error_N for c in rows))} | "
                      f"{', '.join(outside) or 'none'} | {worst.closest[0]} "
                      f"({_g(worst.closest[1])}) |")
@@ -424,20 +571,54 @@ def _sensitivity_lines(result: EngineStudy) -> list[str]:
     return lines
 
 
-def write(result: EngineStudy, out: Path, mujoco_version: str,
+def checks(result: EngineStudy) -> dict:
+    """``engine.json``: per run its engine, setting and cost, and per sampled instant
+    the checks (module doc) and the predicted member; the engines left out and why.
+    """
+    op = result.op
+    settled = set(result.sampled[result.settled].tolist())
+
+    def number(value: float):
+        return None if not np.isfinite(value) else float(value)
+
+    runs = []
+    for label, r in result.runs.items():
+        instants = []
+        for c in (c for c in result.comparisons if c.setting == label):
+            i = int(np.argmin(np.abs(op.t - c.t)))
+            instants.append({
+                "t": c.t, "settled": i in settled, "residual": number(c.residual),
+                "determinate_error_N": number(c.determinate_error_N),
+                "outside": list(c.outside), "closest": c.closest[0],
+                "closest_distance": number(c.closest[1]),
+                "predicted_distance": number(c.predicted_error),
+                "predicted": [float(v) for v in result.predicted[label][i]],
+                "forces": [float(v) for v in r.forces[i]]})
+        runs.append({"engine": engine_of(r), "setting": label, "step_s": r.timestep_s,
+                     "steps": r.steps, "wall_s": r.wall_s,
+                     "compliances": result.compliances[label], "instants": instants})
+    return {"scene": op.scene.name, "names": list(op.names), "runs": runs,
+            "skipped": result.skipped}
+
+
+def write(result: EngineStudy, out: Path, versions: str,
           formats=("png",)) -> list[Path]:
-    """``engine.csv`` (every instant: each setting's forces), ``engine.md`` and the
-    figure ``engine.<format>`` for each of ``formats``.
+    """``engine.csv`` (every instant: each run's forces), ``engine.json``
+    (:func:`checks`), ``engine.md`` and the figure ``engine.<format>`` for each of
+    ``formats``; ``versions`` as :func:`report_lines` takes them.
     """
     out.mkdir(parents=True, exist_ok=True)
     with files.replacing(out / "engine.csv", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["setting", "t", *result.op.names])
+        writer.writerow(["engine", "setting", "t", *result.op.names])
         for label, r in result.runs.items():
             for t, x in zip(r.t, r.forces):
-                writer.writerow([label, f"{t:.6g}", *(number_text(v, ".9g", "") for v in x)])
-    files.write_text(out / "engine.md", "\n".join(report_lines(result, mujoco_version)) + "\n")
-    return [out / "engine.csv", out / "engine.md", *draw(result, out / "engine", formats)]
+                writer.writerow([engine_of(r), label, f"{t:.6g}",
+                                 *(number_text(v, ".9g", "") for v in x)])
+    files.write_text(out / "engine.json", json.dumps(checks(result), indent=1) + "\n")
+    files.write_text(out / "engine.md", "\n".join(report_lines(result, versions)) + "\n")
+    return [out / "engine.csv", out / "engine.json", out / "engine.md",
+            *draw(result, out / "engine", formats)]
 
 
 def add_parser(subparsers) -> None:
@@ -453,6 +634,9 @@ def add_parser(subparsers) -> None:
                    help="instants compared with the rigid set (default 6)")
     p.add_argument("--format", type=format_list, default=("png",), metavar="FORMATS",
                    help="figure formats, comma-separated: png, svg, pdf (default png)")
+    p.add_argument("--engine", choices=(*ENGINES, "all"), default="mujoco",
+                   help="the physics engine: mujoco (default), drake (the drake extra) "
+                   "or all (every installed engine that can express the scene)")
     p.set_defaults(func=run)
 
 
@@ -484,15 +668,25 @@ def _instants(text: str) -> int:
     return value
 
 
+def engine_versions(engines) -> str:
+    """``MuJoCo 3.x and Drake 1.y``: the installed ``engines``' names and versions."""
+    found = {"mujoco": engine_mujoco.mujoco_version, "drake": engine_drake.drake_version}
+    return " and ".join(f"{ENGINES[name]} {found[name]()}" for name in engines)
+
+
 def run(args) -> int:
-    """``cardan engine``: the study, its files, and a one-line summary per setting."""
-    try:
-        version = engine_mujoco.mujoco_version()
-    except EngineUnsupported as err:
-        raise NotApplicable(str(err)) from None
+    """``cardan engine``: the study, its files, and a one-line summary per setting; an
+    engine of ``--engine all`` that cannot run the scene said in one line on stderr.
+    """
+    import sys
+
+    engines = tuple(ENGINES) if args.engine == "all" else (args.engine,)
     start = time.perf_counter()
-    result = study(args.scene, args.stop, args.instants)
-    paths = write(result, Path(args.out), version, args.format)
+    result = study(args.scene, args.stop, args.instants, engines=engines)
+    ran = tuple(name for name in engines if ENGINES[name] not in result.skipped)
+    for name, why in result.skipped.items():
+        print(f"cardan engine: {name} left out: {why}", file=sys.stderr)
+    paths = write(result, Path(args.out), engine_versions(ran), args.format)
     print("\n".join(agreement_lines(result)))
     files.say_written("engine", paths, note=f"{time.perf_counter() - start:.1f} s")
     return 0
