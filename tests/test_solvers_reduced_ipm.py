@@ -1,0 +1,135 @@
+"""Backend ``reduced-ipm``: the reduced interior point against Clarabel and closed forms."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import builtin_names, load_scene
+from cardan_forces.formulations import batch as fbatch
+from cardan_forces.formulations.convex import NotApplicable
+from cardan_forces.solvers import reduced_ipm
+from cardan_forces.solvers import reduced_ipm_ as adapter
+from cardan_forces.solvers.registry import batch_backends, solve, solve_batch
+
+FORMULATIONS = ("min_max", "socp_face")
+LEVEL = 1e-8
+"""The package's optimality every instant the backend calls solved meets."""
+
+
+@pytest.fixture(scope="module")
+def op(paper):
+    return build_operator(simulate(paper, paper.time.instants()[:41]))
+
+
+def _batch(op, formulation, instants):
+    problems = fbatch.build_problems(op, formulation, instants)
+    return fbatch.conic_batch(problems, instants)
+
+
+def _agrees_with_clarabel(batch, result):
+    """Every instant solved, within :data:`LEVEL`, at Clarabel's forces (tol 1e-10)."""
+    assert all(s == "solved" for s in result.status)
+    assert result.within(LEVEL).all()
+    for k, problem in enumerate(batch.problems):
+        expected = solve(problem, "clarabel", tol=1e-10)
+        assert expected.solved
+        x = result.x[k]
+        assert np.linalg.norm(x - expected.x) <= 1e-5 * np.linalg.norm(expected.x)
+
+
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_agrees_with_clarabel_on_paper_instants(op, formulation):
+    batch = _batch(op, formulation, np.arange(0, 41, 8))
+    assert "reduced-ipm" in batch_backends(batch)
+    _agrees_with_clarabel(batch, solve_batch(batch, "reduced-ipm"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+@pytest.mark.parametrize("scene", builtin_names())
+def test_every_instant_of_every_builtin_scene(scene, formulation):
+    op = build_operator(simulate(load_scene(scene)))
+    try:
+        batch = _batch(op, formulation, np.arange(len(op.t)))
+    except NotApplicable:
+        pytest.skip(f"{formulation} does not apply to {scene}")
+    _agrees_with_clarabel(batch, solve_batch(batch, "reduced-ipm"))
+
+
+def test_an_instants_answer_does_not_depend_on_its_batch(op):
+    full = _batch(op, "socp_face", np.arange(41))
+    some = dataclasses.replace(full, **_rows(full, np.arange(3, 41, 7)))
+    a, b = adapter.solve_batch(full), adapter.solve_batch(some)
+    np.testing.assert_array_equal(a.z[3::7], b.z)
+
+
+def _rows(batch, rows):
+    """The fields of ``batch`` that hold instants, at ``rows``."""
+    return {"instants": batch.instants[rows], "q": batch.q[rows], "A": batch.A[rows],
+            "b": batch.b[rows], "problems": tuple(batch.problems[k] for k in rows),
+            "null_space": batch.null_space[rows]}
+
+
+def _unit_ball(q, extra_rows=(), extra_h=()):
+    """``min q'x s.t. ||x|| <= 1`` (and ``extra_rows x <= extra_h``) in the form (1)."""
+    k = len(q)
+    G = np.vstack([np.zeros((1, k)), -np.eye(k)])
+    h = np.concatenate([[1.0], np.zeros(k)])
+    cones = (("soc", k + 1),)
+    if len(extra_rows):
+        G = np.vstack([np.asarray(extra_rows, float), G])
+        h = np.concatenate([extra_h, h])
+        cones = (("nonneg", len(extra_h)), *cones)
+    return np.zeros((1, k, k)), np.asarray(q, float)[None], G[None], h[None], cones
+
+
+def test_closed_form_socp():
+    """``min q'x, ||x|| <= 1``: ``x = -q/||q||`` at the optimal value ``-||q||``, the
+    cone's multiplier ``(||q||, q)``; an inactive half-space beside it keeps a zero
+    multiplier. A linear objective on a ball: ``x`` is as close as the square root of
+    the gap.
+    """
+    q = np.array([1.0, 2.0, -2.0])
+    answer = reduced_ipm.solve(*_unit_ball(q, [[1.0, 0.0, 0.0]], [0.5]))
+    assert answer.code[0] == reduced_ipm.SOLVED
+    assert q @ answer.x[0] == pytest.approx(-3.0, abs=1e-8)
+    np.testing.assert_allclose(answer.x[0], -q / 3.0, atol=1e-4)
+    np.testing.assert_allclose(answer.z[0], [0.0, 3.0, *q], atol=1e-6)
+
+
+def test_infeasible_and_apex_end_as_codes_never_exceptions():
+    """``||x|| <= 1`` with ``x_0 >= 2`` has no point; ``||x|| <= 0`` only its apex,
+    where strict complementarity fails: neither raises, the first is not solved.
+    """
+    q = np.array([1.0, 2.0])
+    infeasible = reduced_ipm.solve(*_unit_ball(q, [[-1.0, 0.0]], [-2.0]))
+    assert infeasible.code[0] != reduced_ipm.SOLVED
+    P, q1, G, h, cones = _unit_ball(q)
+    apex = reduced_ipm.solve(P, q1, G, np.zeros_like(h), cones)
+    assert apex.code[0] in range(len(reduced_ipm.CODES) - 1)
+    if apex.code[0] == reduced_ipm.SOLVED:
+        assert np.abs(apex.x[0]).max() <= 1e-6
+
+
+def test_unsolved_instants_fall_back_and_say_so(op):
+    batch = _batch(op, "min_max", np.arange(0, 41, 20))
+    result = solve_batch(batch, "reduced-ipm", max_iter=1)
+    assert all(s == "solved" for s in result.status)
+    assert all(f"answered by {adapter.FALLBACK}" in m for m in result.message)
+
+
+def test_a_rank_change_of_the_equalities_is_reduced_in_groups(op):
+    """Instant 0 gets a copy of an equality row in place of another (its rank drops by
+    one): the instants are reduced in one group per rank, each said, none fails.
+    """
+    batch = _batch(op, "socp_face", np.arange(0, 41, 10))
+    A, b = batch.A.copy(), batch.b.copy()
+    A[0, 1], b[0, 1] = A[0, 0], b[0, 0]
+    changed = dataclasses.replace(batch, A=A, b=b, null_space=None)
+    out = adapter.solve_batch(changed)
+    assert all("equality rank changes" in m for m in out.messages)
+    assert all(s == "solved" for s in out.status)
+    same = adapter.solve_batch(batch)
+    np.testing.assert_allclose(out.z[1:], same.z[1:], atol=1e-7)
