@@ -416,9 +416,9 @@ def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: lis
     low, high = limits(list(curves.values()), [band[:, 0], band[:, 1]])
     step, first = max(1, int(shown.sum()) // 8), int(np.argmax(shown))
     for k, (name, values) in enumerate(curves.items()):
-        handles[name], = ax.plot(op.t, values, ("-", "--", "-.")[k % 3], color=f"C{k}",
-                                 marker="osD"[k % 3], markevery=(first + k * step // len(curves),
-                                                                 step), zorder=3, label=name)
+        handles[name], = ax.plot(op.t, values, ("-", "--", "-.", ":")[k % 4], color=f"C{k}",
+                                 marker="osD^"[k % 4], markevery=(first + k * step // len(curves),
+                                                                  step), zorder=3, label=name)
     drawn, note = draw_set(ax, op.t[sampled], band[:, 0], band[:, 1], "N", view=(low, high))
     handles.update(drawn)
     ax.set_ylim(low, high)
@@ -429,8 +429,9 @@ def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: lis
         coincide_note(curves, coinciding(curves, tol), "N"),
         *(bound_note(on_bound(curves, ends[:, k], tol), word, "N")
           for k, word in enumerate(("lower", "upper"))), note) if n)
+    above = textwrap.fill(above, chars_across(PAGE_IN[0] - 0.8))
     if above:
-        ax.annotate(textwrap.fill(above, chars_across(PAGE_IN[0] - 0.8)), xy=(0, 1),
+        ax.annotate(above, xy=(0, 1),
                     xycoords="axes fraction",
                     xytext=(0, 3), textcoords="offset points", va="bottom",
                     fontsize=MIN_TEXT_PT, color="0.25")
@@ -604,9 +605,13 @@ def checks(result: EngineStudy) -> dict:
 def write(result: EngineStudy, out: Path, versions: str,
           formats=("png",)) -> list[Path]:
     """``engine.csv`` (every instant: each run's forces), ``engine.json``
-    (:func:`checks`), ``engine.md`` and the figure ``engine.<format>`` for each of
-    ``formats``; ``versions`` as :func:`report_lines` takes them.
+    (:func:`checks`), ``engine.md``, the figure ``engine.<format>`` for each of
+    ``formats`` and the softening study's CSV and figure
+    (:mod:`~cardan_forces.experiments.engine_softening`, imported here as it reads this
+    module's loads); ``versions`` as :func:`report_lines` takes them.
     """
+    from cardan_forces.experiments import engine_softening
+
     out.mkdir(parents=True, exist_ok=True)
     with files.replacing(out / "engine.csv", newline="") as handle:
         writer = csv.writer(handle)
@@ -618,7 +623,8 @@ def write(result: EngineStudy, out: Path, versions: str,
     files.write_text(out / "engine.json", json.dumps(checks(result), indent=1) + "\n")
     files.write_text(out / "engine.md", "\n".join(report_lines(result, versions)) + "\n")
     return [out / "engine.csv", out / "engine.json", out / "engine.md",
-            *draw(result, out / "engine", formats)]
+            *draw(result, out / "engine", formats),
+            *engine_softening.write(result, out, formats)]
 
 
 def add_parser(subparsers) -> None:
