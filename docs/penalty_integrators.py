@@ -58,6 +58,7 @@ def _released_line(name: str) -> str | None:
     """The name of built-in scene ``name``'s released line, None where the penalty
     simulation refuses it (a quasi-static scene; a slip joint with friction).
     """
+    from cardan_forces.driveline.elements.registry import refusals
     from cardan_forces.driveline.loading import load_scene
     from cardan_forces.driveline.penalty import released
     from cardan_forces.driveline.scene import SceneError
@@ -66,7 +67,7 @@ def _released_line(name: str) -> str | None:
         line = released(load_scene(name))
     except SceneError:
         return None
-    if any(s.friction_coefficient > 0 for s in line.slip_joints):
+    if refusals(line, "the penalty-contact simulation"):
         return None
     return line.name
 

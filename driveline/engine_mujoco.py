@@ -53,6 +53,7 @@ import numpy as np
 
 from .elements import shaft_segments
 from .elements.base import mjcf_numbers as _vec
+from .elements.registry import refusals
 from .equilibrium import Link, Operator, body_references
 from .kinematics import kinematics, rest_geometry
 from .scene import Scene
@@ -139,9 +140,7 @@ def mujoco_version() -> str:
 
 def check_expressible(scene: Scene) -> None:
     """Raise :class:`EngineUnsupported` naming every element the engine cannot express."""
-    problems = [f"slip joint {s.name!r} has friction (coefficient {s.friction_coefficient:g}): "
-                "the engine's joint friction is a constant force, not mu |T| / r"
-                for s in scene.slip_joints if s.friction_coefficient > 0]
+    problems = refusals(scene, "the engine (its joint friction is a constant force)")
     if scene.has("friction"):
         problems.append("effect 'friction' (Coulomb cones in the joints) has no engine "
                         "counterpart on a hinge")
@@ -315,10 +314,12 @@ def _timestep(op: Operator, softness: Softness) -> float:
 def _initial_velocity(model, data, op: Operator, chain: list[_Body]) -> None:
     """Joint speeds of the scene's initial state: the first shaft turning at the initial
     speed, every other joint at the speed its kind gives (a hinge at its kinematic rate,
-    a slide still).
+    a slide still); a body without a joint has no speed of its own to set.
     """
     start = _start(op)
     for pos, body in enumerate(chain):
+        if model.body_jntnum[pos + 1] == 0:
+            continue  # welded to the body it hangs on: it has no speed of its own
         dof = model.jnt_dofadr[model.body_jntadr[pos + 1]]
         if body.link is None:
             data.qvel[dof + 3: dof + 6] = body.rot.T @ (start.speed * start.geo.axes[0])

@@ -17,8 +17,9 @@ that nothing overflows or integrates for ever), the size of the time grid and of
 motion over it, the elements' layout (:mod:`.elements`), the support check
 (:mod:`.support`: the line must turn with exactly one degree of freedom while its
 contacts hold it) and the loads a friction-bound line can carry. An element's own
-fields are read and checked by its kind (:mod:`.elements`: a bearing's by its
-``kind``, a joint's and a slip joint's by theirs) through this module's table reader.
+fields are read and checked by its kind (:mod:`.elements`: a bearing's and a joint's
+by their ``kind``, an element inside a shaft by the kind whose array of tables holds
+it) through this module's table reader; nothing here names a kind.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from cardan_forces.util.names import did_you_mean, nearest
 
 from .catalogue import read_rating, read_tolerances
 from .elements import check_elements
-from .elements.registry import BEARING_KINDS, JOINT, SLIP
+from .elements.registry import BEARING_KINDS, IN_SHAFT_KINDS, JOINT_KINDS, kind_of
 from .scene import (
     EFFECTS,
     LIMITS,
@@ -457,7 +458,8 @@ def scene_tables(scene: Scene) -> dict:
         "gravity_m_s2": scene.gravity_m_s2, "frame": dataclasses.asdict(scene.frame),
         "shafts": [dataclasses.asdict(s) for s in scene.shafts],
         "joints": [dataclasses.asdict(j) for j in scene.joints],
-        "slip_joints": [dataclasses.asdict(s) for s in scene.slip_joints],
+        **{kind.table: [dataclasses.asdict(e) for e in scene.elements if kind_of(e) is kind]
+           for kind in IN_SHAFT_KINDS},
         "crosspin": dataclasses.asdict(scene.crosspin),
         "torque": {"input": law(scene.input_torque), "load": law(scene.load_torque)},
         "initial": {"angle_rad": scene.initial_angle_rad,
@@ -505,7 +507,7 @@ def _chain(top: _Table) -> tuple[tuple[Shaft, ...], tuple[Joint, ...], list[str]
     if len(shaft_tables) > MAX_SHAFTS:
         top.fail("shafts", f"at most {MAX_SHAFTS} shafts, got {len(shaft_tables)}")
     shafts = tuple(_shaft(t) for t in shaft_tables)
-    joints = tuple(JOINT.read(t) for t in top.tables("joints"))
+    joints = tuple(_joint(t) for t in top.tables("joints"))
     if len(shafts) < 2:
         top.fail("shafts", "a drive line needs at least two shafts")
     if len(joints) != len(shafts) - 1:
@@ -514,6 +516,35 @@ def _chain(top: _Table) -> tuple[tuple[Shaft, ...], tuple[Joint, ...], list[str]
     if len(set(names)) != len(names):
         top.fail("shafts", f"shaft and joint names must be unique, got {names}")
     return shafts, joints, names
+
+
+def _joint(t: _Table) -> Joint:
+    """A joint, read by its kind (a Cardan joint unless ``kind`` names another)."""
+    return JOINT_KINDS[t.string("kind", "cardan", choices=tuple(JOINT_KINDS))].read(t)
+
+
+def _in_shaft(top: _Table, shafts: tuple[Shaft, ...], names: list[str]) -> tuple:
+    """The elements inside the shafts, each kind reading its own array of tables, in
+    chain order (by shaft, then offset): named apart from each other and from the shafts
+    and joints (``names``), no two cutting a shaft at one place.
+    """
+    by_name = {s.name: s for s in shafts}
+    elements = [kind.read(t, by_name) for kind in IN_SHAFT_KINDS
+                for t in top.tables(kind.table, [])]
+    taken = list(names)
+    for e in elements:
+        if e.name in taken:
+            top.fail(kind_of(e).table, f"{kind_of(e).noun} name {e.name!r} is taken: "
+                     "names differ from each other and from shafts and joints")
+        taken.append(e.name)
+    cuts: dict[tuple[str, float], str] = {}
+    for e in (e for e in elements if kind_of(e).cuts):
+        if (e.shaft, e.offset_m) in cuts:
+            top.fail(kind_of(e).table, f"{e.name!r} and {cuts[e.shaft, e.offset_m]!r} cut "
+                     f"shaft {e.shaft!r} at one place ({e.offset_m:g} m)")
+        cuts[e.shaft, e.offset_m] = e.name
+    order = {name: k for k, name in enumerate(by_name)}
+    return tuple(sorted(elements, key=lambda e: (order[e.shaft], e.offset_m)))
 
 
 def _time(top: _Table) -> TimeGrid:
@@ -588,7 +619,7 @@ def _fields(raw: dict, source: str) -> Scene:
     init.done()
     time = _time(top)
     material, contact = _material(top), _contact(top, effects)
-    slips = SLIP.read(top, shafts, names)
+    elements = _in_shaft(top, shafts, names)
     scene = Scene(
         name=_scene_name(top), description=top.string("description", ""),
         effects=frozenset(effects), arrangement=top.string("arrangement", "Z", choices=("Z", "W")),
@@ -596,7 +627,7 @@ def _fields(raw: dict, source: str) -> Scene:
         frame=frame, shafts=shafts, joints=joints, crosspin=crosspin,
         input_torque=input_torque, load_torque=load_torque,
         initial_angle_rad=initial[0], initial_speed_rad_s=initial[1],
-        time=time, material=material, contact=contact, source=source, slip_joints=slips,
+        time=time, material=material, contact=contact, source=source, elements=elements,
         tolerances=read_tolerances(top))
     top.done()
     for key, law in (("input", scene.input_torque), ("load", scene.load_torque)):
@@ -608,10 +639,11 @@ def _fields(raw: dict, source: str) -> Scene:
 
 
 def _check_elements(scene: Scene) -> None:
-    """Each element's kind's checks, then parts of the line left unheld by slip joints or
-    bearings a shaft slides through (a message more specific than the support check's).
+    """Each element's kind's checks, then parts of the line left unheld by elements inside
+    shafts or bearings a shaft slides through (a message more specific than the support
+    check's).
     """
-    check_elements(scene, sliding=bool(scene.slip_joints) or any(
+    check_elements(scene, sliding=bool(scene.elements) or any(
         BEARING_KINDS[b.kind].slides for s in scene.shafts for b in s.bearings))
 
 

@@ -120,6 +120,7 @@ from scipy.integrate import BDF, LSODA, Radau
 
 from . import penalty_kernels as kernels
 from .contact import hertz_stiffness
+from .elements.registry import refusals
 from .penalty_integrators import RTOL, Marks, run_compiled, run_odeint, run_stepped, timed
 from .penalty_model import Model, contact_law
 from .scene import Scene, SceneError
@@ -331,10 +332,8 @@ def simulate_penalty(
             f"{', '.join(sorted(scene.effects)) or 'none'}); add it to the scene's effects "
             "to run the penalty-contact simulation"
         )
-    if any(s.friction_coefficient > 0 for s in scene.slip_joints):
-        raise SceneError(
-            f"scene {scene.name!r}: the penalty-contact simulation models a slip joint's "
-            "spline as frictionless; set its friction_coefficient to 0")
+    if refused := refusals(scene, "the penalty-contact simulation"):
+        raise SceneError(f"scene {scene.name!r}: {'; '.join(refused)}")
     if kernel == "auto":
         kernel = "numba" if kernels.HAVE_NUMBA else "numpy"
     if kernel not in KERNELS or (kernel == "numba" and not kernels.HAVE_NUMBA):

@@ -71,7 +71,7 @@ def released_scene(scene: Scene, releases: list[Release] | tuple[Release, ...]) 
     labels = ", ".join(r.label for r in releases) or "none"
     variant = _variant(scene, releases)
     try:
-        return scene.with_changes(shafts=variant.shafts, slip_joints=variant.slip_joints,
+        return scene.with_changes(shafts=variant.shafts, elements=variant.elements,
                                   name=variant.name, description=variant.description)
     except SceneError as err:
         raise SceneError(f"releases {labels} do not apply: {err}") from None
@@ -81,13 +81,13 @@ def _variant(scene: Scene, releases) -> Scene:
     """``scene`` with ``releases`` applied, not yet validated: what the search builds
     its operators from (:func:`released_scene` validates it).
     """
-    shafts, slips = list(scene.shafts), list(scene.slip_joints)
+    shafts, elements = list(scene.shafts), list(scene.elements)
     for r in releases:
-        r.offered_by.apply_release(r, shafts, slips)
+        r.offered_by.apply_release(r, shafts, elements)
     order = {s.name: k for k, s in enumerate(shafts)}
-    slips.sort(key=lambda s: order[s.shaft])
+    elements.sort(key=lambda e: (order[e.shaft], e.offset_m))
     labels = ", ".join(r.label for r in releases) or "none"
-    return dataclasses.replace(scene, shafts=tuple(shafts), slip_joints=tuple(slips),
+    return dataclasses.replace(scene, shafts=tuple(shafts), elements=tuple(elements),
                                name=f"{scene.name}+released",
                                description=f"{scene.name} with releases: {labels}")
 

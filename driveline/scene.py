@@ -243,7 +243,8 @@ class Shaft:
 
 @dataclass(frozen=True)
 class Joint:
-    """A Cardan joint at the end of one shaft and the start of the next.
+    """A Cardan joint at the end of one shaft and the start of the next (``kind``: its
+    joint kind, :mod:`.elements`).
 
     ``articulation_deg`` is the angle between the two shafts; its sense follows the
     scene's arrangement. ``yoke_phase_deg`` turns this joint's driving yoke about the
@@ -261,6 +262,7 @@ class Joint:
     ht_m: float
     hb_m: float
     rt_m: float
+    kind: str = "cardan"
 
     @property
     def radial_clearance_m(self) -> float:
@@ -271,22 +273,6 @@ class Joint:
     def axial_clearance_m(self) -> float:
         """Paper: eps_a = hb - ht."""
         return self.hb_m - self.ht_m
-
-
-@dataclass(frozen=True)
-class SlipJoint:
-    """A slip (spline) joint inside one shaft, ``offset_m`` from its centre (downstream
-    positive): the shaft is two coaxial segments that turn together and may slide
-    axially. The spline carries torque, shear and bending; axially only friction, at
-    most ``friction_coefficient`` times its normal load ``T / pitch_radius_m`` (see
-    :mod:`cardan_forces.driveline.equilibrium`); none when frictionless.
-    """
-
-    name: str
-    shaft: str
-    offset_m: float
-    pitch_radius_m: float
-    friction_coefficient: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -358,7 +344,10 @@ class Contact:
 
 @dataclass(frozen=True)
 class Scene:
-    """A validated drive line: a chain of shafts joined by Cardan joints."""
+    """A validated drive line: a chain of shafts joined by joints, bearings on the
+    shafts, and ``elements`` inside the shafts (slip joints, ...: each a record of its
+    kind, :mod:`.elements`), in the order the loader read them.
+    """
 
     name: str
     description: str
@@ -377,7 +366,7 @@ class Scene:
     material: Material
     contact: Contact
     source: str = "<memory>"
-    slip_joints: tuple[SlipJoint, ...] = ()
+    elements: tuple = ()
     tolerances: Tolerances | None = None
 
     def has(self, effect: str) -> bool:

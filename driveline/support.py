@@ -31,6 +31,7 @@ import numpy as np
 
 from .determinacy import equilibrated, holding, numerical_rank
 from .dynamics import Motion, reduced_inertia
+from .elements.registry import kind_of
 from .equilibrium import build_operator
 from .kinematics import kinematics, rest_geometry
 from .scene import MAX_TURNS, Scene, SceneError
@@ -220,9 +221,11 @@ def check_loads(scene: Scene) -> None:
     for the whole grid, since every instant is the same; other lines are not judged
     here (their spline torques vary with time).
     """
-    if not still(scene) or not any(s.friction_coefficient > 0 for s in scene.slip_joints):
+    if not still(scene):
         return
     op = build_operator(at_rest(scene, scene.initial_angle_rad))
+    if not op.slip_friction:
+        return
     axial = {f.axial for f in op.slip_friction}
     A = op.A[0][:, [c for c in range(len(op.names)) if c not in axial]]
     b = op.b[0][:, None]
@@ -230,8 +233,9 @@ def check_loads(scene: Scene) -> None:
             <= numerical_rank(np.linalg.svd(equilibrated(A), compute_uv=False)):
         return
     slips = ", ".join(f.slip for f in op.slip_friction)
+    table = kind_of(next(e for e in scene.elements if e.name == op.slip_friction[0].slip)).table
     raise SceneError(
-        f"scene {scene.source}: field 'slip_joints': the line cannot carry its loads at any "
+        f"scene {scene.source}: field '{table}': the line cannot carry its loads at any "
         f"instant: it stays at rest with no torque, so the friction of slip joint(s) {slips} "
         "(at most mu T / r) is zero, and nothing else holds the part beyond the spline "
         "against its axial load: give the line a torque or that part a locating bearing")

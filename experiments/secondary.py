@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.elements.registry import kind_of
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import LIMITS, Scene, SceneError, TimeGrid, TorqueLaw
@@ -79,7 +80,7 @@ def requirements(scene: Scene) -> list[str]:
     if len(first.bearings) != 2 or first.bearings[0].offset_m == first.bearings[1].offset_m:
         missing.append(f"two bearings at different places on the first shaft "
                        f"{first.name!r} (it has {len(first.bearings)})")
-    if not any(slip.shaft == middle.name for slip in scene.slip_joints):
+    if not any(e.shaft == middle.name and kind_of(e).slides for e in scene.elements):
         missing.append(f"a slip joint in the middle shaft {middle.name!r}")
     return missing
 

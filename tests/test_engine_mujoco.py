@@ -91,9 +91,9 @@ def test_floating_bearing_carries_no_axial_force():
 
 def test_slip_joint_with_friction_is_refused_by_name():
     scene = cf.load_scene("paper-slip")
-    slip = dataclasses.replace(scene.slip_joints[0], friction_coefficient=0.1)
+    slip = dataclasses.replace(scene.elements[0], friction_coefficient=0.1)
     with pytest.raises(em.EngineUnsupported, match="slip joint 'slip' has friction"):
-        em.check_expressible(dataclasses.replace(scene, slip_joints=(slip,)))
+        em.check_expressible(dataclasses.replace(scene, elements=(slip,)))
 
 
 def test_quasi_static_scene_is_refused_before_any_work():

@@ -60,7 +60,7 @@ def test_the_cross_and_the_spline(scene):
                            r"(\d+) mm")
     assert all((j.hs_m, j.rs_m) == (contact / 1e3, radius / 1e3) for j in scene.joints)
     (pitch,) = said(r"spline pitch radius (\d+) mm")
-    assert scene.slip_joints[0].pitch_radius_m == pitch / 1e3
+    assert scene.elements[0].pitch_radius_m == pitch / 1e3
 
 
 def test_the_bearing_designations_their_ratings_and_journals(scene):

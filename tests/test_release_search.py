@@ -78,7 +78,7 @@ def test_every_release_applies_or_says_the_validations_reason(name):
         except SceneError as err:
             variant = _variant(scene, [release])
             with pytest.raises(SceneError) as own:
-                scene.with_changes(shafts=variant.shafts, slip_joints=variant.slip_joints)
+                scene.with_changes(shafts=variant.shafts, elements=variant.elements)
             assert str(err) == f"releases {release.label} do not apply: {own.value}"
             assert "not held" in str(err) or "no axial support" in str(err), str(err)
             continue

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from cardan_forces.driveline.elements.bearing import BearingKind
+from cardan_forces.driveline.elements.registry import scene_elements
 from cardan_forces.driveline.loading import builtin_names, builtin_text, load_scene
 
 
@@ -49,13 +51,9 @@ def show(scene) -> None:
                              for b in s.bearings) or "none"
         print(f"  shaft {s.name:13s} L={s.length_m} m  m={s.mass_kg} kg  "
               f"J={s.inertia_kg_m2} kg m^2  bearings: {bearings}")
-    for j in scene.joints:
-        print(f"  joint {j.name:13s} articulation {j.articulation_deg} deg, yoke phase "
-              f"{j.yoke_phase_deg} deg, clearance radial {j.radial_clearance_m:.3g} m, "
-              f"axial {j.axial_clearance_m:.3g} m")
-    for slip in scene.slip_joints:
-        print(f"  slip joint {slip.name:8s} in shaft {slip.shaft} @ {slip.offset_m:+g} m, pitch "
-              f"radius {slip.pitch_radius_m} m, friction {slip.friction_coefficient}")
+    for kind, element, _, _ in scene_elements(scene):
+        if not isinstance(kind, BearingKind):
+            print(f"  {kind.describe(element)}")
     tq = scene.input_torque
     print(f"  input torque {tq.mean_N_m:+g} {tq.amplitude_N_m:+g} cos(2 pi {tq.frequency_hz:g} t"
           f" + {tq.phase_rad:g}) N m")

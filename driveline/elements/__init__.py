@@ -3,7 +3,8 @@ per kind; :mod:`.registry`: the list), the shaft bodies they act on (:mod:`.bodi
 and the checks that the line is held (:mod:`.checks`).
 """
 
-from .bodies import Segment, segment_of, shaft_segments
+from .base import Segment, segment_of
+from .bodies import shaft_segments
 from .checks import check_elements, sliding_bodies
 
 __all__ = ["Segment", "check_elements", "segment_of", "shaft_segments", "sliding_bodies"]

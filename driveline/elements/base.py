@@ -34,7 +34,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..scene import Scene
-from .bodies import segment_of
 
 
 def mjcf_numbers(values) -> str:
@@ -49,6 +48,33 @@ kinds (this module is below them)."""
 RELEASES: dict[str, ElementKind] = {}
 """The kinds that offer a release, by its name (:attr:`Release.kind`), in the advisor's
 order; filled by :mod:`.registry`."""
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A rigid shaft body: shaft ``shaft`` (scene index) from ``lo_m`` to ``hi_m`` along
+    its axis (offsets from the shaft's centre, downstream positive); :mod:`.bodies`
+    cuts the shafts into them.
+    """
+
+    name: str
+    shaft: int
+    lo_m: float
+    hi_m: float
+    fraction: float  # its share of the shaft's length, mass and axial inertia
+
+    @property
+    def middle_m(self) -> float:
+        """Its centre of mass: the middle of its span (m from the shaft's centre)."""
+        return 0.5 * (self.lo_m + self.hi_m)
+
+
+def segment_of(segments: list[Segment], shaft: int, offset_m: float) -> int:
+    """Index (into ``segments``) of the segment of shaft ``shaft`` holding ``offset_m``."""
+    for g, seg in enumerate(segments):
+        if seg.shaft == shaft and seg.lo_m <= offset_m <= seg.hi_m:
+            return g
+    raise ValueError(f"offset {offset_m} m lies on no segment of shaft {shaft}")
 
 
 @dataclass(frozen=True)
@@ -277,6 +303,12 @@ class ElementKind:
         """What the contact is, in words (figure titles, reports)."""
         return link.kind
 
+    def refusal(self, element, engine: str) -> str | None:
+        """Why ``engine`` (the penalty simulation, a physics engine; named in the
+        message) cannot model ``element``, None where it can.
+        """
+        return None
+
     # ------------------------------------------------------------ releases
 
     def releases(self, scene: Scene) -> list[Release]:
@@ -293,8 +325,8 @@ class ElementKind:
     def release_words(self, release: Release) -> str:
         raise NotImplementedError
 
-    def apply_release(self, release: Release, shafts: list, slips: list) -> None:
-        """Apply ``release`` to a scene's ``shafts`` and ``slip_joints`` (lists, in place)."""
+    def apply_release(self, release: Release, shafts: list, elements: list) -> None:
+        """Apply ``release`` to a scene's ``shafts`` and ``elements`` (lists, in place)."""
         raise NotImplementedError
 
     # ------------------------------------------------------------ MuJoCo's tree

@@ -16,8 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import Bearing, Scene, table_keys
-from .base import Column, ElementKind, Law, Layout, Link, mjcf_numbers
-from .bodies import segment_of
+from .base import Column, ElementKind, Law, Layout, Link, mjcf_numbers, segment_of
 
 
 class BearingKind(ElementKind):

@@ -1,63 +1,48 @@
-"""Shaft bodies of a real drive line: whole shafts, and shaft segments cut by slip
-joints (DESIGN §1), with each shaft's frame.
+"""Shaft bodies of a real drive line: whole shafts, and shaft segments cut by the
+elements inside them (DESIGN §1), with each shaft's frame.
 
-A slip joint cuts its shaft into two coaxial **segments**, ``<shaft>.upstream`` and
-``<shaft>.downstream``, each a rigid body of the equilibrium operator with the shaft's
-mass and axial inertia split by length, its centre of mass at its own middle. A shaft
-without a slip joint is one body named after the shaft. The 1-DOF motion is the same
-(the spline makes the segments turn together).
+An element whose kind ``cuts`` (a slip joint, a flexible coupling) splits its shaft at
+its offset into coaxial **segments**, each a rigid body of the equilibrium operator with
+the shaft's mass and axial inertia split by length, its centre of mass at its own
+middle. One cut makes ``<shaft>.upstream`` and ``<shaft>.downstream``; more cuts make
+the segments between them ``<shaft>.after-<element>``. A shaft without a cut is one
+body named after the shaft. The 1-DOF motion is the same (the elements make the
+segments turn together).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..scene import Scene
+from .base import Segment
+from .registry import kind_of
 
 
-@dataclass(frozen=True)
-class Segment:
-    """A rigid shaft body: shaft ``shaft`` (scene index) from ``lo_m`` to ``hi_m`` along
-    its axis (offsets from the shaft's centre, downstream positive).
-    """
-
-    name: str
-    shaft: int
-    lo_m: float
-    hi_m: float
-    fraction: float  # its share of the shaft's length, mass and axial inertia
-
-    @property
-    def middle_m(self) -> float:
-        """Its centre of mass: the middle of its span (m from the shaft's centre)."""
-        return 0.5 * (self.lo_m + self.hi_m)
+def cuts_of(scene: Scene) -> dict[str, list]:
+    """Per shaft name, the elements that cut it, upstream first."""
+    cuts: dict[str, list] = {}
+    for element in scene.elements:
+        if kind_of(element).cuts:
+            cuts.setdefault(element.shaft, []).append(element)
+    return {shaft: sorted(els, key=lambda e: e.offset_m) for shaft, els in cuts.items()}
 
 
 def shaft_segments(scene: Scene) -> list[Segment]:
-    """Every shaft body in chain order: one per shaft, two where a slip joint cuts it."""
-    cut = {s.shaft: s.offset_m for s in scene.slip_joints}
+    """Every shaft body in chain order: one per shaft, one more per cut in it."""
+    cuts = cuts_of(scene)
     out = []
     for k, shaft in enumerate(scene.shafts):
         half = shaft.length_m / 2
-        if shaft.name in cut:
-            at = cut[shaft.name]
-            out.append(Segment(f"{shaft.name}.upstream", k, -half, at,
-                               (at + half) / shaft.length_m))
-            out.append(Segment(f"{shaft.name}.downstream", k, at, half,
-                               (half - at) / shaft.length_m))
-        else:
-            out.append(Segment(shaft.name, k, -half, half, 1.0))
+        mine = cuts.get(shaft.name, [])
+        bounds = [-half, *(e.offset_m for e in mine), half]
+        names = ["upstream", *(f"after-{e.name}" for e in mine[:-1]), "downstream"]
+        if not mine:
+            names = [None]
+        for (lo, hi), name in zip(zip(bounds[:-1], bounds[1:]), names):
+            out.append(Segment(shaft.name if name is None else f"{shaft.name}.{name}", k,
+                               lo, hi, (hi - lo) / shaft.length_m))
     return out
-
-
-def segment_of(segments: list[Segment], shaft: int, offset_m: float) -> int:
-    """Index (into ``segments``) of the segment of shaft ``shaft`` holding ``offset_m``."""
-    for g, seg in enumerate(segments):
-        if seg.shaft == shaft and seg.lo_m <= offset_m <= seg.hi_m:
-            return g
-    raise ValueError(f"offset {offset_m} m lies on no segment of shaft {shaft}")
 
 
 def frames_of(geo) -> np.ndarray:

@@ -31,7 +31,8 @@ import numpy as np
 
 from ..contact import hertz_stiffness
 from ..scene import CROSSPIN_ASPECT, MAX_ARTICULATION_DEG, Joint, Range, Scene, table_keys
-from .base import Body, Column, ElementKind, Law, Layout, Link, PairMode
+from .base import Body, Column, Law, Layout, Link, PairMode
+from .joint import JointKind
 
 RADIAL, FACE = "trunnion-radial", "end-face"
 
@@ -71,9 +72,10 @@ def _check_proportions(t, joint: Joint) -> None:
                    "scale)")
 
 
-class Cardan(ElementKind):
+class Cardan(JointKind):
     """The Cardan joint kind (module doc)."""
 
+    name = "cardan"
     link_kinds = (RADIAL, FACE)
     paper = True
 
@@ -89,7 +91,7 @@ class Cardan(ElementKind):
         gamma = t.number("articulation_deg", kind="angle_deg", within=Range(
             -MAX_ARTICULATION_DEG, MAX_ARTICULATION_DEG, "deg"), why="below 90 deg: the "
             "velocity ratio 1/cos grows without bound")
-        joint = Joint(name=name, articulation_deg=gamma,
+        joint = Joint(name=name, kind=self.name, articulation_deg=gamma,
                       yoke_phase_deg=t.number("yoke_phase_deg", 0.0, kind="angle_deg"),
                       **{key: t.number(key, positive=True, kind="length_m")
                          for key in CROSSPIN_KEYS})
@@ -102,6 +104,11 @@ class Cardan(ElementKind):
                    f"{joint.ht_m} m")
         t.done()
         return joint
+
+    def describe(self, joint: Joint) -> str:
+        return (f"joint {joint.name:13s} articulation {joint.articulation_deg} deg, yoke "
+                f"phase {joint.yoke_phase_deg} deg, clearance radial "
+                f"{joint.radial_clearance_m:.3g} m, axial {joint.axial_clearance_m:.3g} m")
 
     def holds(self, element: Joint, shaft, segments, frames):
         a, b = _yokes(segments, shaft)

@@ -1,10 +1,12 @@
 """The element kinds of the package, and the walk over a scene's elements.
 
 A kind is registered by naming its module in :data:`MODULES` (each module's ``KIND``
-is its one instance). A scene holds its elements in three places: bearings on their
-shafts (any registered bearing kind, by their ``kind``), slip joints, and the joints
-between shafts (Cardan joints); :func:`scene_elements` walks them in the operator's
-column order.
+is its one instance). Where a kind's elements live in a scene follows from its base:
+a bearing kind's on their shafts (``[[shafts.bearings]]``, by their ``kind``), an
+in-shaft kind's in the scene's one list :attr:`~..scene.Scene.elements` (read from the
+kind's own array of tables), a joint kind's between the shafts (``[[joints]]``, by their
+``kind``). :func:`scene_elements` walks them in the operator's column order; nothing
+here or in the loader names a kind.
 """
 
 from __future__ import annotations
@@ -14,8 +16,8 @@ from importlib import import_module
 from ..scene import Scene
 from .base import LINK_KINDS, RELEASES, ElementKind
 from .bearing import BearingKind
-from .cardan import KIND as JOINT
-from .slip import KIND as SLIP
+from .inshaft import InShaftKind
+from .joint import JointKind
 
 MODULES = ("locating", "floating", "slip", "cardan", "angular_contact")
 """The kinds' modules (in this package), in the order their pairs are listed."""
@@ -28,24 +30,45 @@ BEARING_KINDS: dict[str, BearingKind] = {k.name: k for k in KINDS
                                          if isinstance(k, BearingKind)}
 """Bearing kinds by their ``kind`` in a scene."""
 
+IN_SHAFT_KINDS: tuple[InShaftKind, ...] = tuple(k for k in KINDS
+                                                if isinstance(k, InShaftKind))
+"""The kinds of elements inside a shaft, in the order their tables are read."""
+
+JOINT_KINDS: dict[str, JointKind] = {k.name: k for k in KINDS if isinstance(k, JointKind)}
+"""Joint kinds by their ``kind`` in a scene."""
+
 LINK_KINDS.update({name: k for k in KINDS for name in k.link_kinds})
-
-
 
 RELEASES.update({k.release_name: k for k in sorted(KINDS, key=lambda k: k.release_rank)
                  if k.release_name})
 
+_BY_RECORD = {k.record: k for k in IN_SHAFT_KINDS}
+
+
+def kind_of(element) -> InShaftKind:
+    """The kind of an element of :attr:`~..scene.Scene.elements` (by its record's type)."""
+    return _BY_RECORD[type(element)]
+
+
+def refusals(scene: Scene, engine: str) -> list[str]:
+    """Why ``engine`` cannot model elements of ``scene``, one line per element (each
+    kind's :meth:`~.base.ElementKind.refusal`); empty where it can.
+    """
+    return [why for kind, element, _, _ in scene_elements(scene)
+            if (why := kind.refusal(element, engine)) is not None]
+
 
 def scene_elements(scene: Scene):
     """``(kind, element, shaft, index)`` of every element of ``scene`` in column order:
-    each shaft's bearings, then the slip joints, then the joints (``shaft``: the
-    element's shaft, a joint's upstream one; ``index``: its place in its list).
+    each shaft's bearings, then the elements inside shafts, then the joints
+    (``shaft``: the element's shaft, a joint's upstream one; ``index``: its place in
+    its list).
     """
     for k, shaft in enumerate(scene.shafts):
         for b, bearing in enumerate(shaft.bearings):
             yield BEARING_KINDS[bearing.kind], bearing, k, b
     names = [s.name for s in scene.shafts]
-    for s, slip in enumerate(scene.slip_joints):
-        yield SLIP, slip, names.index(slip.shaft), s
+    for e, element in enumerate(scene.elements):
+        yield kind_of(element), element, names.index(element.shaft), e
     for j, joint in enumerate(scene.joints):
-        yield JOINT, joint, j, j
+        yield JOINT_KINDS[joint.kind], joint, j, j

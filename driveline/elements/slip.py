@@ -1,5 +1,5 @@
 """The slip (spline) joint: a shaft cut into two coaxial segments that turn together
-and may slide axially (:mod:`.segments` makes the two bodies).
+and may slide axially (:mod:`.bodies` makes the two bodies).
 
 Its link acts on the downstream segment at the joint and the opposite on the upstream
 one, in the shaft's frame: ``<slip>.shear.<r1|r2>`` (N), ``<slip>.bending.<r1|r2>``,
@@ -28,8 +28,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import SPLINE_PITCH_RADIUS_M, Scene, SceneError, SlipJoint, table_keys
-from .base import Column, ElementKind, Law, Layout, Link, Release
+from ..scene import SPLINE_PITCH_RADIUS_M, Scene
+from .base import Column, Law, Layout, Link, Release
+from .inshaft import InShaftKind, sides
 
 SLIP_LENGTH_M = 1.0
 """Length that turns the bearing stiffness (N/m) into a slip joint's bending and torsion
@@ -42,6 +43,22 @@ SPLINE_STIFFNESS_FACTOR = 1.0
 """A slip joint's spline is as stiff as a bearing (``bearing_stiffness_N_m``) per
 penalty contact: the scenes give no spline stiffness, and any stiffness far above the
 shafts' loads over the play leaves the rigid model's loads."""
+
+
+@dataclass(frozen=True)
+class SlipJoint:
+    """A slip (spline) joint inside one shaft, ``offset_m`` from its centre (downstream
+    positive): the shaft is two coaxial segments that turn together and may slide
+    axially. The spline carries torque, shear and bending; axially only friction, at
+    most ``friction_coefficient`` times its normal load ``T / pitch_radius_m``; none
+    when frictionless.
+    """
+
+    name: str
+    shaft: str
+    offset_m: float
+    pitch_radius_m: float
+    friction_coefficient: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -66,78 +83,47 @@ class SlipFriction:
     ratio_per_m: float
 
 
-def _parts(segments: list, shaft: int) -> list[int]:
-    return [g for g, s in enumerate(segments) if s.shaft == shaft]
-
-
-class Slip(ElementKind):
+class Slip(InShaftKind):
     """The slip joint kind (module doc)."""
 
+    name, table, record, noun = "slip", "slip_joints", SlipJoint, "slip joint"
     link_kinds = ("slip",)
+    slides = True
 
-    def read(self, top, shafts: tuple, names: list[str]) -> tuple[SlipJoint, ...]:
-        """The scene's ``[[slip_joints]]`` array (none without it): at most one per shaft,
-        strictly inside it, not at a bearing, named apart from the shafts and joints
-        (``names``).
+    def read_fields(self, t) -> dict:
+        """Its pitch radius (within :data:`~..scene.SPLINE_PITCH_RADIUS_M`) and its
+        flanks' friction coefficient.
         """
-        if "slip_joints" not in top.raw:
-            top.used.add("slip_joints")
-            return ()
-        by_name = {s.name: s for s in shafts}
-        slips = [self._read_one(t, by_name) for t in top.tables("slip_joints")]
-        taken = names + [s.name for s in slips]
-        if len(set(taken)) != len(taken):
-            top.fail("slip_joints", f"slip joint names must differ from each other and from "
-                     f"shafts and joints, got {[s.name for s in slips]}")
-        on = [s.shaft for s in slips]
-        if len(set(on)) != len(on):
-            top.fail("slip_joints", "at most one slip joint per shaft")
-        return tuple(slips)
-
-    def _read_one(self, t, by_name: dict) -> SlipJoint:
-        t.expect(table_keys(SlipJoint))
-        shaft_name = t.string("shaft", name=True)
-        if shaft_name not in by_name:
-            t.fail("shaft", f"no shaft {shaft_name!r}; shafts: {', '.join(by_name)}")
-        shaft = by_name[shaft_name]
-        offset = t.number("offset_m", 0.0, kind="position_m")
-        if not abs(offset) < shaft.length_m / 2:
-            t.fail("offset_m", f"the slip joint must lie inside shaft {shaft_name!r} "
-                   f"(|offset| < {shaft.length_m / 2} m), got {offset}")
-        if any(abs(b.offset_m - offset) < 1e-9 for b in shaft.bearings):
-            t.fail("offset_m", "a slip joint cannot sit exactly at a bearing")
-        slip = SlipJoint(
-            name=t.string("name", name=True), shaft=shaft_name, offset_m=offset,
+        return dict(
             pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m",
                                     within=SPLINE_PITCH_RADIUS_M,
                                     why="the pitch radii of ISO 4156's involute splines"),
             friction_coefficient=t.number("friction_coefficient", 0.0, nonnegative=True,
                                           kind="ratio"))
-        t.done()
-        return slip
 
-    def check(self, element: SlipJoint, shaft: int, scene: Scene) -> None:
-        """Each segment needs a neighbour: a Cardan joint at its end or a bearing on it."""
-        last = len(scene.shafts) - 1
-        body = scene.shafts[shaft]
-        for side, has_joint, sign in (("upstream", shaft > 0, -1.0),
-                                      ("downstream", shaft < last, 1.0)):
-            if not has_joint and not any(sign * (b.offset_m - element.offset_m) > 0
-                                         for b in body.bearings):
-                raise SceneError(
-                    f"scene {scene.source}: slip joint {element.name!r} on shaft "
-                    f"{body.name!r}: its {side} segment has no neighbour (no Cardan joint at "
-                    "its end, no bearing on it): nothing but the spline would hold it")
+    def describe(self, slip: SlipJoint) -> str:
+        return (f"slip joint {slip.name:8s} in shaft {slip.shaft} @ {slip.offset_m:+g} m, "
+                f"pitch radius {slip.pitch_radius_m} m, friction {slip.friction_coefficient}")
+
+    def refusal(self, slip: SlipJoint, engine: str) -> str | None:
+        """Its spline friction ``mu |T| / r`` has no counterpart in a penalty contact or
+        an engine joint's constant ``frictionloss``.
+        """
+        if slip.friction_coefficient <= 0:
+            return None
+        return (f"slip joint {slip.name!r} has friction (coefficient "
+                f"{slip.friction_coefficient:g}): {engine} models a spline as frictionless; "
+                "set its friction_coefficient to 0")
 
     def holds(self, element: SlipJoint, shaft, segments, frames):
-        up, down = _parts(segments, shaft)
+        up, down = sides(segments, shaft, element.offset_m)
         axis = frames[shaft][2]
         stops = np.eye(3) if element.friction_coefficient > 0 else \
             np.eye(3) - np.outer(axis, axis)
         return [(up, stops, down)]
 
     def add_links(self, element: SlipJoint, shaft: int, index: int, layout: Layout) -> None:
-        up, down = _parts(layout.segments, shaft)
+        up, down = sides(layout.segments, shaft, element.offset_m)
         geo = layout.geo
         point = geo.centres[shaft] + element.offset_m * geo.axes[shaft]
         r1, r2, axis = layout.frames[shaft]
@@ -161,7 +147,7 @@ class Slip(ElementKind):
 
     def friction(self, link: Link, scene: Scene) -> SlipFriction | None:
         """Its friction bound, if it has friction."""
-        slip = next(s for s in scene.slip_joints if s.name == link.element)
+        slip = next(s for s in scene.elements if s.name == link.element)
         if slip.friction_coefficient <= 0:
             return None
         return SlipFriction(slip=link.name, axial=link.column("axial"),
@@ -177,7 +163,7 @@ class Slip(ElementKind):
         op = rows.op
         point = op.points[0, link.columns[0]]
         r1, _, axis = op.shaft_frames[link.shaft]
-        reach = next(s for s in rows.scene.slip_joints
+        reach = next(s for s in rows.scene.elements
                      if s.name == link.element).pitch_radius_m
         spline = rows.law(SPLINE_STIFFNESS_FACTOR * rows.scene.contact.bearing_stiffness_N_m)
         for sign in (1.0, -1.0):
@@ -193,7 +179,7 @@ class Slip(ElementKind):
     release_name, release_form, release_rank, adds_joint = "slip", "slip:<shaft>", 0, True
 
     def releases(self, scene):
-        slipped = {s.shaft for s in scene.slip_joints}
+        slipped = {s.shaft for s in scene.elements if isinstance(s, SlipJoint)}
         return [Release(self.release_name, s.name) for s in scene.shafts
                 if s.name not in slipped]
 
@@ -208,11 +194,11 @@ class Slip(ElementKind):
     def release_words(self, release):
         return f"add a slip joint in shaft {release.shaft}"
 
-    def apply_release(self, release, shafts, slips):
-        if any(s.shaft == release.shaft for s in slips):
+    def apply_release(self, release, shafts, elements):
+        if any(isinstance(s, SlipJoint) and s.shaft == release.shaft for s in elements):
             return
         shaft = next(s for s in shafts if s.name == release.shaft)
-        slips.append(SlipJoint(name=f"slip_{release.shaft}", shaft=release.shaft,
+        elements.append(SlipJoint(name=f"slip_{release.shaft}", shaft=release.shaft,
                                offset_m=_slip_offset(shaft),
                                pitch_radius_m=SLIP_PITCH_RADIUS_M))
 
