@@ -197,8 +197,9 @@ def test_ctrl_c_stops_the_workers_at_once_and_keeps_the_csv_whole(tmp_path):
     """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) once the first
     point's row is in the CSV: the queued points are dropped and the point in flight is
     not finished (each takes seconds here), one line on stderr, exit 130, and the CSV
-    holds whole rows only, which a rerun resumes."""
-    args = ["sweep", "--angle", "5:20:4", "--instants", "6000", "--formulation", "min_max",
+    holds whole rows only, which a rerun resumes. 1000 instants: a point takes several
+    times the stop's latency, and the test waits for one point only."""
+    args = ["sweep", "--angle", "5:20:4", "--instants", "1000", "--formulation", "min_max",
             "--workers", "2", "--out", str(tmp_path)]
     proc = subprocess.Popen([sys.executable, "-m", "cardan_forces.cli", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
