@@ -50,11 +50,12 @@ def _run_kernel(folder, cache):
     return done.returncode, done.stdout, done.stderr
 
 
-@pytest.mark.parametrize("suffix, corrupt", [
+@pytest.mark.parametrize("suffix, corrupt", [  # one index and one data file by default
     (".nbi", lambda text: b"\x80\x04garbage" + text[:7]),  # an unpickling error
-    (".nbi", lambda text: b"\x80\x04\x95" + b"\xff" * 8 + text[11:]),  # a huge length
+    pytest.param(".nbi", lambda text: b"\x80\x04\x95" + b"\xff" * 8 + text[11:],
+                 marks=pytest.mark.slow),  # a huge length
     (".nbc", lambda text: text[: len(text) // 2]),  # cut short: EOFError
-    (".nbc", lambda text: b""),  # empty
+    pytest.param(".nbc", lambda text: b"", marks=pytest.mark.slow),  # empty
 ], ids=["index-garbage", "index-huge-length", "data-cut-short", "data-empty"])
 def test_a_corrupted_numba_cache_file_is_rebuilt_with_one_warning(tmp_path, suffix, corrupt):
     """A kernel's cache index or data file overwritten with bytes numba cannot read:

@@ -167,6 +167,8 @@ def test_compiled_kernels_equal_the_numpy_model(model, seed):
     assert np.abs(force - on_a[:, :, 0].T).max() <= 1e-12 * np.abs(on_a).max()
 
 
+@pytest.mark.slow  # the NumPy model over the whole run; its formulas stay held in the
+# default run by test_compiled_integration_follows_the_numpy_reference
 @pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
 def test_compiled_run_has_the_statistics_of_the_numpy_run(scene, run):
     """The same short run with the NumPy model: the released line rattles chaotically

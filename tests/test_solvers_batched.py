@@ -286,7 +286,14 @@ def _batched_backends() -> list[str]:
     return [name for name, backend in available().items() if backend.batch is not None]
 
 
-@pytest.mark.parametrize("scene", builtin_names())
+DEFAULT_RUN_SCENES = ("paper", "axle-pinion", "paper-slip")
+"""Scenes of the default run here: the plain line, a clearance (compliance conic) with
+angular-contact bearings, a slip joint; the others run in the slow job."""
+
+
+@pytest.mark.parametrize("scene", [
+    s if s in DEFAULT_RUN_SCENES else pytest.param(s, marks=pytest.mark.slow)
+    for s in builtin_names()])
 def test_every_batched_backend_runs_each_formulation_it_is_offered_or_says_why(scene):
     """Every batched backend x every formulation x every built-in scene, a few instants:
     the batch a backend takes is the one the scene's problem forms (a clearance makes

@@ -64,6 +64,7 @@ def test_rounding_and_signed_zeros_are_all_that_is_set_aside():
     assert comparable("-0.0001") != comparable("0.0001")
 
 
+@pytest.mark.slow  # a check of the page against the commands' output, run by the slow job
 @pytest.mark.skipif(shutil.which("bash") is None, reason="the tutorial's steps are bash")
 def test_the_tutorial_runs(tmp_path):
     for commands, shown in steps():
