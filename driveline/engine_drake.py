@@ -40,8 +40,9 @@ push, as the package resolves it.
 each of its rows the regulariser ``R_i = beta^2 / (4 pi^2) w_i`` with ``beta = 0.1``
 (fixed in ``SapBallConstraint``) and ``w_i`` the RMS norm of the constraint's block of
 ``J diag(M)^-1 J'`` divided by its row count, and a relaxation time of one step. The
-member of the rigid set this selects is :func:`delassus_estimates` with
-:func:`cardan_forces.experiments.engine_member.predicted`.
+member of the rigid set this selects is
+:func:`cardan_forces.experiments.engine_member.predicted` with the compliances of
+:func:`delassus_estimates`, the line posed at the rigid motion's angle.
 
 **What Drake cannot express here** (:class:`EngineUnsupported`): what MuJoCo cannot
 (:func:`~.engine_mujoco.check_expressible`), and a bearing that adds bodies of its
@@ -365,28 +366,71 @@ def run(op: Operator, stepping: Stepping = Stepping()) -> EngineRun:
                      _time.perf_counter() - began)
 
 
-def delassus_estimates(op: Operator) -> dict[str, float]:
+POSE_STEP_RAD = 0.2
+"""The largest turn of the first shaft between two poses of :func:`delassus_estimates`'
+continuation (each pose starts from the one before, so it stays on the line's branch)."""
+
+
+def delassus_estimates(op: Operator, angles) -> list[dict[str, float]]:
     """SAP's ``w`` of each bearing's ball constraint (1/kg), by the bearing's contact
-    name: ``||J_c diag(M)^-1 J_c'||_F / 3`` with ``J_c`` the constraint's (3, nv)
-    Jacobian (the translational velocity of its point on the shaft; the seat does not
-    move) and ``M`` the plant's mass matrix (Drake's
-    ``SapModel::CalcDelassusDiagonalApproximation``), in the scene's start
-    configuration: nothing is simulated.
+    name, with the line posed at each of the first shaft's ``angles`` (rad, increasing,
+    the rigid motion's: nothing is simulated): ``||J_c diag(M)^-1 J_c'||_F / 3`` with
+    ``J_c`` the constraint's (3, nv) Jacobian (the translational velocity of its point on
+    the shaft; the seat does not move) and ``M`` the plant's mass matrix (Drake's
+    ``SapModel::CalcDelassusDiagonalApproximation``). Both change as the line turns.
+
+    The pose: the first shaft turned about its axis from the scene's initial angle, every
+    other joint's position solved (least squares) so that each bearing's point sits on
+    its seat, by continuation in turns of at most :data:`POSE_STEP_RAD`.
     """
+    from scipy.optimize import least_squares
+
     drake = _pydrake()
     check_expressible(op)
     plant = drake.MultibodyPlant(0.0)
     drake.Parser(plant).AddModelsFromString(drake_mjcf(op), "xml")
     plant.Finalize()
     context = plant.CreateDefaultContext()
-    inverse = 1.0 / np.diag(plant.CalcMassMatrix(context))
     world = plant.world_frame()
-    out = {}
+    axis = rest_geometry(op.scene).axes[0]
+    first = plant.GetBodyByName(op.bodies[0].name)
+    start = plant.EvalBodyPoseInWorld(context, first)
+    held = []  # per bearing: its contact name, shaft body, point on it (body frame), seat
     for link in op.bearings():
-        point = plant.GetBodyByName(SEAT + link.name).EvalPoseInWorld(context).translation()
+        seat = plant.GetBodyByName(SEAT + link.name).EvalPoseInWorld(context).translation()
         body = plant.GetBodyByName(op.bodies[link.body].name)
-        at = body.EvalPoseInWorld(context).inverse() @ point
-        jac = plant.CalcJacobianTranslationalVelocity(
-            context, drake.JacobianWrtVariable.kV, body.body_frame(), at, world, world)
-        out[link.name] = float(np.linalg.norm(jac @ (inverse[:, None] * jac.T)) / 3)
+        held.append((link.name, body, body.EvalPoseInWorld(context).inverse() @ seat, seat))
+    free = [plant.get_joint(j).position_start() for j in plant.GetJointIndices()
+            if plant.get_joint(j).num_positions() == 1]
+
+    def place(z):
+        q = plant.GetPositions(context)
+        q[free] = z
+        plant.SetPositions(context, q)
+
+    def misfit(z):
+        place(z)
+        return np.concatenate([body.EvalPoseInWorld(context) @ at - seat
+                               for _, body, at, seat in held])
+
+    def turn(angle):
+        rot = drake.RotationMatrix(drake.AngleAxis(angle - op.scene.initial_angle_rad, axis))
+        plant.SetFreeBodyPose(context, first, drake.RigidTransform(
+            rot @ start.rotation(), start.translation()))
+
+    z, now, out = plant.GetPositions(context)[free], op.scene.initial_angle_rad, []
+    for angle in angles:
+        for a in np.linspace(now, angle, 1 + int(np.ceil(abs(angle - now) / POSE_STEP_RAD)))[1:]:
+            turn(a)
+            z = least_squares(misfit, z, method="lm", xtol=1e-15, ftol=1e-15).x
+        now = angle
+        turn(angle)
+        place(z)
+        inverse = 1.0 / np.diag(plant.CalcMassMatrix(context))
+        w = {}
+        for name, body, at, _ in held:
+            jac = plant.CalcJacobianTranslationalVelocity(
+                context, drake.JacobianWrtVariable.kV, body.body_frame(), at, world, world)
+            w[name] = float(np.linalg.norm(jac @ (inverse[:, None] * jac.T)) / 3)
+        out.append(w)
     return out

@@ -91,8 +91,8 @@ FIGURE_SETTINGS = ("default", "output bearings 4x softer", "input bearings 4x so
 
 DRAKE_SETTINGS = (
     Stepping(2.5e-4, "Drake, step 0.25 ms"),
+    Stepping(1.25e-4, "Drake, step 0.125 ms"),
     Stepping(5e-4, "Drake, step 0.5 ms"),
-    Stepping(1e-3, "Drake, step 1 ms"),
 )
 """Drake's settings compared (module doc): its discrete step; the first is its reference.
 A step that does not divide the scene's is left out."""
@@ -126,9 +126,9 @@ class InstantComparison:
 @dataclass(frozen=True)
 class EngineStudy:
     """The runs, the operator they were read on, and the comparisons; ``predicted``:
-    per run, the predicted member at each sampled instant; ``compliances``: per run, the
-    bearing compliances the prediction used (relative); ``skipped``: per engine left
-    out, why.
+    per run, the predicted member at each sampled instant; ``compliances``: per run and
+    sampled instant, the bearing compliances the prediction used (relative);
+    ``skipped``: per engine left out, why.
     """
 
     op: Operator
@@ -141,7 +141,7 @@ class EngineStudy:
     comparisons: tuple[InstantComparison, ...]
     formulations: dict[int, dict[str, np.ndarray]]
     predicted: dict[str, dict[int, np.ndarray]] = field(default_factory=dict)
-    compliances: dict[str, dict[str, float]] = field(default_factory=dict)
+    compliances: dict[str, dict[int, dict[str, float]]] = field(default_factory=dict)
     skipped: dict[str, str] = field(default_factory=dict)
 
 
@@ -191,13 +191,17 @@ def engine_of(run: EngineRun) -> str:
     return ENGINES["drake" if isinstance(run.softness, Stepping) else "mujoco"]
 
 
-def compliances(op, run: EngineRun) -> dict[str, float]:
-    """The bearing compliances (relative) the run's engine and setting give
-    (:mod:`~cardan_forces.experiments.engine_member`, eqs. 2 and 3).
+def compliances(op, run: EngineRun, sampled: np.ndarray) -> dict[int, dict[str, float]]:
+    """The bearing compliances (relative) the run's engine and setting give at each
+    ``sampled`` instant (:mod:`~cardan_forces.experiments.engine_member`, eqs. 2 and 3):
+    MuJoCo's stay as the line turns, Drake's are taken with the line posed at the rigid
+    motion's angle of the instant.
     """
     if isinstance(run.softness, Stepping):
-        return engine_member.compliances_drake(op)
-    return engine_member.compliances_mujoco(op, run.softness)
+        angles = simulate(op.scene, op.t[sampled]).q
+        return dict(zip(sampled.tolist(), engine_member.compliances_drake(op, angles)))
+    found = engine_member.compliances_mujoco(op, run.softness)
+    return {i: found for i in sampled.tolist()}
 
 
 def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray,
@@ -207,7 +211,13 @@ def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray,
     """
     settled = op.t[sampled] - op.t[0] >= settle_s(runs)
     det0 = determinacy(op, int(sampled[0]))
-    weights = {label: compliances(op, r) for label, r in runs.items()}
+    weights, drake = {}, None
+    for label, r in runs.items():
+        if engine_of(r) == ENGINES["drake"]:  # its step does not move them: taken once
+            drake = drake or compliances(op, r, sampled)
+            weights[label] = drake
+        else:
+            weights[label] = compliances(op, r, sampled)
     intervals, rigid, forms, comparisons = {}, {}, {}, []
     predicted: dict[str, dict[int, np.ndarray]] = {label: {} for label in runs}
     for i in sampled:
@@ -215,7 +225,7 @@ def compare(op, runs: dict[str, EngineRun], sampled: np.ndarray,
         intervals[i], rigid[i] = _intervals(op, int(i)), det.min_norm
         forms[i] = _formulation_forces(op, int(i))
         for label, r in runs.items():
-            predicted[label][i] = engine_member.predicted(op, int(i), weights[label])
+            predicted[label][i] = engine_member.predicted(op, int(i), weights[label][int(i)])
             comparisons.append(compare_instant(op, int(i), label, r.forces[i], det,
                                                intervals[i], forms[i], predicted[label][i]))
     return EngineStudy(op, runs, sampled, settled, intervals, det0.determinate, rigid,
@@ -509,7 +519,7 @@ def prediction_lines(result: EngineStudy) -> list[str]:
              "its Delassus estimate), over the rigid set (`experiments/engine_member.py`). "
              f"Distance: ||x_predicted - x_engine|| / ||x_engine||; matches: within "
              f"{PREDICTION_RTOL:g} of the force norm.", "",
-             "| engine | setting | compliances (" + ", ".join(names) + ") | "
+             "| engine | setting | compliances at the last instant (" + ", ".join(names) + ") | "
              "distance from the simulation | engine's residual of A x = b | matches |",
              "|---|---|---|---|---|---|"]
     for label, r in result.runs.items():
@@ -517,7 +527,7 @@ def prediction_lines(result: EngineStudy) -> list[str]:
                 and np.argmin(np.abs(op.t - c.t)) in settled]
         if not rows:
             continue
-        c = result.compliances[label]
+        c = result.compliances[label][max(i for i in result.sampled.tolist() if i in settled)]
         least = min(c.values())
         far = max(x.predicted_error for x in rows)
         lines.append(f"| {engine_of(r)} | {label} | "
@@ -594,10 +604,11 @@ def checks(result: EngineStudy) -> dict:
                 "closest_distance": number(c.closest[1]),
                 "predicted_distance": number(c.predicted_error),
                 "predicted": [float(v) for v in result.predicted[label][i]],
+                "compliances": result.compliances[label][i],
                 "forces": [float(v) for v in r.forces[i]]})
         runs.append({"engine": engine_of(r), "setting": label, "step_s": r.timestep_s,
                      "steps": r.steps, "wall_s": r.wall_s,
-                     "compliances": result.compliances[label], "instants": instants})
+                     "instants": instants})
     return {"scene": op.scene.name, "names": list(op.names), "runs": runs,
             "skipped": result.skipped}
 

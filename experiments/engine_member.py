@@ -39,7 +39,8 @@ their net push as the engines' forces are read. Only the ratios of the ``c_k`` m
       c = 2 dt^2 beta^2 / (4 pi^2) * w_i                                      (3)
 
   the same factor for every row: the step does not move the member, and Drake's is (1)
-  with ``c_k = w_k``, the Delassus estimate of the bearing's ball constraint
+  with ``c_k = w_k``, the Delassus estimate of the bearing's ball constraint in the
+  line's configuration at the instant
   (:func:`~cardan_forces.driveline.engine_drake.delassus_estimates`).
 """
 
@@ -68,13 +69,15 @@ def compliances_mujoco(op, softness) -> dict[str, float]:
     return out
 
 
-def compliances_drake(op) -> dict[str, float]:
-    """``c_k`` of eq. (3) by bearing contact name, up to the common factor: SAP's
-    Delassus estimate ``w_k`` of the bearing's ball constraint.
+def compliances_drake(op, angles) -> list[dict[str, float]]:
+    """``c_k`` of eq. (3) by bearing contact name, up to the common factor, at each of
+    the first shaft's ``angles`` (rad, increasing: the rigid motion's at the instants
+    predicted): SAP's Delassus estimate ``w_k`` of the bearing's ball constraint, which
+    changes as the line turns (the mass matrix's diagonal and the Jacobian do).
     """
     from cardan_forces.driveline import engine_drake
 
-    return engine_drake.delassus_estimates(op)
+    return engine_drake.delassus_estimates(op, angles)
 
 
 def predicted(op, i: int, compliance: dict[str, float]) -> np.ndarray:
