@@ -41,7 +41,7 @@ Stopping, with ``tol`` (:data:`TOL` by default), relative as Clarabel's:
 A primal infeasibility certificate (``h'z < 0``, ``||G'z||_inf <= tol |h'z|``) ends an
 instant as infeasible; a step below :data:`MIN_STEP`, a non-finite iterate or
 :data:`MAX_ITER` iterations end it unsolved (:data:`STALLED`, :data:`BROKEN`,
-:data:`LIMIT`), never in an exception.
+:data:`LIMIT`) at its best iterate, or :data:`ALMOST` solved, never in an exception.
 
 Second-order blocks are laid out padded to the longest (``soc`` (p, qmax) row indices,
 the pad pointing at a zero row): the pads of every iterate, direction and scaling
@@ -50,6 +50,7 @@ vector stay zero, so one array shape serves every block.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from dataclasses import dataclass
 
@@ -62,28 +63,32 @@ of the lifted answers then sit near 1e-10, below the bench's 1e-8 level)."""
 MAX_ITER = 50
 """Iterations before an instant stops unsolved."""
 
+CENTRALITY = 1e-3
+"""Least ``sqrt(s'Js z'Jz) / mu`` of a second-order block after a step (:func:`_central`)."""
+
+BACKTRACKS = 10
+"""Halvings of a step that leaves a block off centre, at most."""
+
 MIN_STEP = 1e-8
 """A step below this ends an instant unsolved (a stall)."""
 
-REGULARIZATION = 1e-15
-"""Static regularization of the reduced Newton matrix, relative to its mean diagonal
-(removed by :data:`REFINEMENTS`)."""
-
-REFINEMENTS = 2
-"""Steps of iterative refinement of each Newton solve on the unassembled residual
-``-r_x - P dx - G'dz``: near the optimum ``P + G'W^-2 G`` is as ill-conditioned as the
-scaling makes it, and without them the dual residual grows again by orders of magnitude
-while the gap falls."""
+REFINEMENTS = 1
+"""Steps of iterative refinement of each Newton solve."""
 
 STEP_FRACTION = 0.99
 """Fraction of the step to the cones' boundary taken."""
 
-SOLVED, INFEASIBLE, LIMIT, STALLED, BROKEN, RUNNING = range(6)
-"""Per-instant exit codes: converged, primal infeasibility certificate, iteration
-limit, step below :data:`MIN_STEP`, non-finite numbers, still iterating."""
+REDUCED = 10.0
+"""An instant that stops unsolved ends at its best iterate, which is :data:`ALMOST`
+solved where it meets the stopping rules at ``REDUCED * tol``."""
 
-CODES = ("solved", "primal infeasible", "iteration limit", "stalled", "non-finite",
-         "running")
+SOLVED, ALMOST, INFEASIBLE, LIMIT, STALLED, BROKEN, RUNNING = range(7)
+"""Per-instant exit codes: converged, stopped near the optimum (:data:`REDUCED`), primal
+infeasibility certificate, iteration limit, step below :data:`MIN_STEP`, non-finite
+numbers, still iterating."""
+
+CODES = ("solved", "almost solved", "primal infeasible", "iteration limit", "stalled",
+         "non-finite", "running")
 """The exit codes' words, by value."""
 
 
@@ -214,6 +219,18 @@ class Scaling:
         scaling = cls(d, eta, w, ())
         return cls(d, eta, w, scaling.apply(z))
 
+    def squared(self, lay: Layout) -> np.ndarray:
+        """``W^2`` (T, m, m): ``d^2`` on the orthant, ``eta^2 (2 w w' - J)`` per block."""
+        T, m = len(self.d), lay.m
+        out = np.zeros((T, m + 1, m + 1))
+        out[:, lay.nonneg, lay.nonneg] = self.d ** 2
+        block = 2.0 * self.w[..., :, None] * self.w[..., None, :]
+        width = self.w.shape[-1]
+        block += np.diag(np.r_[-1.0, np.ones(width - 1)])
+        block *= (self.eta ** 2)[..., None, None]
+        out[:, lay.soc[:, :, None], lay.soc[:, None, :]] = block
+        return out[:, :m, :m]
+
     def apply(self, v, inverse: bool = False):
         """``W v`` (``W^-1 v`` with ``inverse``); ``v`` a pair with any trailing axes."""
         vl, vq = v
@@ -290,6 +307,7 @@ def _solve(P, q, G, h, lay: Layout, tol: float, max_iter: int) -> Answer:
     code = np.full(T, RUNNING)
     iterations = np.zeros(T, np.int64)
     h_norm = _inf(hs)
+    best = (x, s, z, np.full(T, np.inf))
     for it in range(max_iter + 1):
         Gx = _times(Gs, x)
         Px = np.einsum("tij,tj->ti", P, x)
@@ -299,19 +317,15 @@ def _solve(P, q, G, h, lay: Layout, tol: float, max_iter: int) -> Answer:
         gap = dot(s, z)
         primal = np.einsum("ti,ti->t", x, 0.5 * Px + q)
         dual = -np.einsum("ti,ti->t", x, 0.5 * Px) - dot(hs, z)
-        near = ((_inf(rz) <= tol * (1 + np.maximum.reduce([h_norm, _inf(Gx), _inf(s)])))
-                & (gap <= tol * np.maximum(1.0, np.minimum(np.abs(primal), np.abs(dual)))))
         scale = 1 + np.maximum.reduce([np.abs(Px).max(axis=1), np.abs(q).max(axis=1),
                                        np.abs(Gtz).max(axis=1)])
-        done = near & (np.abs(rx).max(axis=1) <= tol * scale)
-        polish = np.flatnonzero(near & ~done & (code == RUNNING))
-        if len(polish):
-            pick = (s[0][polish], s[1][polish]), (z[0][polish], z[1][polish])
-            zp, rxp = _polished((Gs[0][polish], Gs[1][polish]), rx[polish], *pick)
-            better = np.abs(rxp).max(axis=1) <= tol * scale[polish]
-            take = polish[better]
-            z[0][take], z[1][take] = zp[0][better], zp[1][better]
-            done[take] = True
+        merit = np.maximum.reduce([
+            _inf(rz) / (1 + np.maximum.reduce([h_norm, _inf(Gx), _inf(s)])),
+            np.abs(rx).max(axis=1) / scale,
+            gap / np.maximum(1.0, np.minimum(np.abs(primal), np.abs(dual)))]) / tol
+        done = merit <= 1.0
+        better = (code == RUNNING) & (merit < best[3])
+        best = _keep(better, (x, s, z, merit), best)
         hz = dot(hs, z)
         infeasible = (hz < 0) & (np.abs(Gtz).max(axis=1) <= tol * -hz)
         finite = np.isfinite(x).all(axis=1) & np.isfinite(gap)
@@ -326,19 +340,16 @@ def _solve(P, q, G, h, lay: Layout, tol: float, max_iter: int) -> Answer:
             break
         iterations[go] += 1
         W = Scaling.of(s, z)
-        Gw = W.apply(Gs, inverse=True)
-        H = P + np.einsum("tli,tlj->tij", Gw[0], Gw[0]) + np.einsum("tpqi,tpqj->tij",
-                                                                      Gw[1], Gw[1])
-        H[~go] = np.eye(k)  # stopped instants: any well-posed system
-        H += REGULARIZATION * np.trace(H, axis1=1, axis2=2)[:, None, None] * np.eye(k)
-        L, broken = _cholesky(H)
+        K = np.concatenate([np.concatenate([P, np.transpose(G, (0, 2, 1))], axis=2),
+                            np.concatenate([G, -W.squared(lay)], axis=2)], axis=1)
+        K[~go] = np.eye(K.shape[1])  # stopped instants: any well-posed system
+        broken = ~np.isfinite(K).all(axis=(1, 2))
         code[go & broken] = BROKEN
         go &= ~broken
+        K[broken] = np.eye(K.shape[1])
         lam = W.lam
-        rzw = W.apply(rz, inverse=True)
         mu = gap / lay.degree
-
-        system = (P, Gs, Gw, W, L, rx, rzw)
+        system = (K, W, lay, rx, rz, Gs)
         _, dzw_a, dsw_a = _newton(system, _negate(lam))
         alpha_a = np.minimum(1.0, np.minimum(max_step(lam, dsw_a), max_step(lam, dzw_a)))
         sigma = np.clip(1.0 - alpha_a, 0.0, 1.0) ** 3
@@ -347,53 +358,85 @@ def _solve(P, q, G, h, lay: Layout, tol: float, max_iter: int) -> Answer:
         dx, dzw, dsw = _newton(system, _negate(jordan_solve(lam, rs)))
         alpha = np.minimum(1.0, STEP_FRACTION * np.minimum(max_step(lam, dsw),
                                                            max_step(lam, dzw)))
+        ds, dz = W.apply(dsw), W.apply(dzw, inverse=True)
+        alpha = _central(s, z, ds, dz, alpha, lay.degree)
         stall = go & ~(alpha >= MIN_STEP)
         code[stall] = STALLED
         go &= ~stall
         x = np.where(go[:, None], x + alpha[:, None] * dx, x)
-        s = _where(go, axpy(alpha, W.apply(dsw), s), s)
-        z = _where(go, axpy(alpha, W.apply(dzw, inverse=True), z), z)
+        s = _where(go, axpy(alpha, ds, s), s)
+        z = _where(go, axpy(alpha, dz, z), z)
+    unsolved = code >= LIMIT
+    x, s, z, merit = _keep(unsolved, best, (x, s, z, best[3]))
+    code[unsolved & (merit <= REDUCED)] = ALMOST
     return Answer(x, join(*z, lay), join(*s, lay), iterations, code)
+
+
+def _keep(chosen: np.ndarray, new: tuple, old: tuple) -> tuple:
+    """``(x, s, z, merit)`` of ``new`` at the instants ``chosen``, of ``old`` elsewhere."""
+    return (np.where(chosen[:, None], new[0], old[0]), _where(chosen, new[1], old[1]),
+            _where(chosen, new[2], old[2]), np.where(chosen, new[3], old[3]))
+
+
+def _central(s, z, ds, dz, alpha: np.ndarray, degree: int) -> np.ndarray:
+    """``alpha`` halved (at most :data:`BACKTRACKS` times) until every second-order
+    block of the new point keeps ``sqrt(s'Js z'Jz) >= CENTRALITY mu``: a block whose
+    ``s`` and ``z`` near the boundary much faster than ``mu`` falls, at a relative
+    distance below the rounding of ``s0 - ||s1||``, where its scaling is lost.
+    """
+    alpha = alpha.copy()
+    for _ in range(BACKTRACKS):
+        s_new, z_new = axpy(alpha, ds, s), axpy(alpha, dz, z)
+        mu = dot(s_new, z_new) / degree
+        product = _jsquare(s_new[1]) * _jsquare(z_new[1])
+        low = ~(np.sqrt(np.maximum(product, 0.0)).min(axis=1, initial=np.inf)
+                >= CENTRALITY * mu)
+        if not low.any():
+            break
+        alpha[low] *= 0.5
+    return alpha
+
+
+def _jsquare(u: np.ndarray) -> np.ndarray:
+    """``u'Ju`` per block."""
+    return u[..., 0] ** 2 - np.einsum("tpq,tpq->tp", u[..., 1:], u[..., 1:])
 
 
 def _newton(system, u):
     """The Newton direction (3) for the scaled right-hand side ``u``: ``(dx, W dz,
-    W^-1 ds)``; ``system`` is ``(P, G, W^-1 G, W, Cholesky factor, r_x, W^-1 r_z)``.
+    W^-1 ds)`` from the augmented system ``[P G'; G -W^2] (dx, dz) = (-r_x, -r_z -
+    W u)`` (``system``: its matrix, ``W``, the layout, ``r_x``, ``r_z``, ``G``), with
+    :data:`REFINEMENTS` steps of iterative refinement. On a row or block far from its
+    bound (``W`` above 1) ``ds = -r_z - G dx`` (the primal equation, exact) rather than
+    ``W (u - W dz)``: there ``W^2`` is large, and the latter carries the solve's
+    rounding into the primal residual, which then grows while the gap falls; near its
+    bound the latter keeps the step consistent with the centring.
     """
-    P, Gs, Gw, W, L, rx, rzw = system
-    rhs = -rx - _transposed(Gw, _plus(rzw, u))
-    dx = np.zeros_like(rx)
-    for _ in range(1 + REFINEMENTS):  # on the true residual of P dx + G'dz = -r_x
-        dx += _cholesky_solve(L, rhs - np.einsum("tij,tj->ti", P, dx)
-                              - _transposed(Gw, W.apply(_times(Gs, dx), inverse=True)))
-    dzw = _plus(W.apply(_times(Gs, dx), inverse=True), _plus(rzw, u))
-    return dx, dzw, _plus(u, _negate(dzw))
+    K, W, lay, rx, rz, Gs = system
+    rhs = np.concatenate([-rx, -join(*rz, lay) - join(*W.apply(u), lay)], axis=1)
+    step = _solve_each(K, rhs)
+    for _ in range(REFINEMENTS):
+        step += _solve_each(K, rhs - np.einsum("tij,tj->ti", K, step))
+    k = rx.shape[1]
+    dx, dzw = step[:, :k], W.apply(split(step[:, k:], lay))
+    exact = W.apply(_negate(_plus(rz, _times(Gs, dx))), inverse=True)  # G dx + ds = -r_z
+    linear = _plus(u, _negate(dzw))
+    return dx, dzw, (np.where(W.d > 1, exact[0], linear[0]),
+                     np.where((W.eta > 1)[..., None], exact[1], linear[1]))
 
 
-def _polished(Gs, rx, s, z):
-    """Multipliers ``z + dz`` that close the dual residual ``r_x`` left by the Newton
-    solves' rounding (near the optimum ``P + G'W^-2 G`` is as ill-conditioned as the
-    scaling, and ``dz = W^-2 (...)`` carries the solve's error amplified), and the new
-    residual: ``dz`` moves each active multiplier along itself, ``dz_i = a_i`` on an
-    orthant row, ``dz_c = a_c z_c / ||z_c||`` on a block (complementarity kept), with
-    ``a`` the least-norm solution of ``sum_j a_j G_j'(.) = -r_x`` (a block or row is
-    active where ``||s_c|| < ||z_c||``). Where a multiplier would leave its cone, ``z``
-    stays as it is.
+def _solve_each(K: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``K^-1 rhs`` per instant (LU with partial pivoting); an instant whose ``K`` is
+    singular gets NaN (it then ends as :data:`BROKEN`).
     """
-    active_l = s[0] < z[0]
-    norm = np.sqrt(np.einsum("tpq,tpq->tp", z[1], z[1]))
-    active_q = np.sqrt(np.einsum("tpq,tpq->tp", s[1], s[1])) < norm
-    unit = z[1] / np.where(norm > 0, norm, 1.0)[..., None]
-    V = np.concatenate([np.transpose(Gs[0], (0, 2, 1)) * active_l[:, None, :],
-                        np.einsum("tpqi,tpq->tip", Gs[1], unit) * active_q[:, None, :]],
-                       axis=2)
-    a = -np.einsum("tji,ti->tj", np.linalg.pinv(V, rcond=1e-13), rx)
-    rows = z[0].shape[1]
-    out = (z[0] + a[:, :rows], z[1] + a[:, rows:, None] * unit)
-    inside = (out[0] >= 0).all(axis=1) & (a[:, rows:] >= -norm).all(axis=1)
-    out = (np.where(inside[:, None], out[0], z[0]),
-           np.where(inside[:, None, None], out[1], z[1]))
-    return out, np.where(inside[:, None], rx + np.einsum("tij,tj->ti", V, a), rx)
+    try:
+        return np.linalg.solve(K, rhs[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        out = np.full_like(rhs, np.nan)
+        for t in range(len(K)):
+            with contextlib.suppress(np.linalg.LinAlgError):
+                out[t] = np.linalg.solve(K[t], rhs[t])
+        return out
 
 
 def _start_x(P, q, G, h) -> np.ndarray:
@@ -440,26 +483,3 @@ def _times(Gs, x):
 def _transposed(Gs, v) -> np.ndarray:
     """``G'v`` (T, k) of ``G`` as a pair (rows first, the column axis last)."""
     return np.einsum("tli,tl->ti", Gs[0], v[0]) + np.einsum("tpqi,tpq->ti", Gs[1], v[1])
-
-
-def _cholesky(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cholesky factors of ``H`` (T, k, k) and where there is none (not finite, or not
-    positive definite to rounding): those instants get the identity's.
-    """
-    broken = ~np.isfinite(H).all(axis=(1, 2))
-    H = np.where(broken[:, None, None], np.eye(H.shape[1]), H)
-    try:
-        return np.linalg.cholesky(H), broken
-    except np.linalg.LinAlgError:
-        L = np.empty_like(H)
-        for t in range(len(H)):
-            try:
-                L[t] = np.linalg.cholesky(H[t])
-            except np.linalg.LinAlgError:
-                L[t], broken[t] = np.eye(H.shape[1]), True
-        return L, broken
-
-
-def _cholesky_solve(L: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    y = np.linalg.solve(L, rhs[..., None])
-    return np.linalg.solve(np.transpose(L, (0, 2, 1)), y)[..., 0]

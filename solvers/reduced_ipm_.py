@@ -15,10 +15,14 @@ instant's message:
 
 - the equality rows change rank between instants (no common reduced structure): the
   instants are reduced in groups of one rank each;
-- an instant the interior point leaves unsolved (iteration limit, a stall, non-finite
-  numbers: a cone at its apex without strict complementarity is the usual cause, or a
-  primal infeasibility certificate) is solved again alone by Clarabel (a core
-  dependency, :data:`FALLBACK`), whose status it then carries.
+- an instant the interior point stops short of ``tol`` (iteration limit, a stall,
+  non-finite numbers: near the optimum the scaling of a second-order block on its
+  boundary loses the precision the next steps need) ends at its best iterate; within
+  :data:`.reduced_ipm.REDUCED` times ``tol`` it is "almost solved", reported
+  inaccurate (the package's measures then decide, as for every backend);
+- one farther from it, or with a primal infeasibility certificate, is solved again
+  alone by Clarabel (a core dependency, :data:`FALLBACK`), whose status it then
+  carries.
 
 ``tol`` is the interior point's relative tolerance (:data:`.reduced_ipm.TOL` by default);
 it takes no start (the iterates of the previous instant lie near its boundary, which an
@@ -106,9 +110,11 @@ def solve_batch(batch: ConicBatch, tol=None,
         if len(groups) > 1:
             for k in rows:
                 messages[k] = f"equality rank changes: reduced with {len(rows)} instants"
-    status = np.full(T, Status.SOLVED, object)
+    status = np.where(code == reduced_ipm.SOLVED, Status.SOLVED, Status.INACCURATE)
+    for k in np.flatnonzero(code == reduced_ipm.ALMOST):
+        messages[k] = "; ".join(filter(None, (messages[k], "reduced-ipm: almost solved")))
     clock = time.perf_counter()
-    for k in np.flatnonzero(code != reduced_ipm.SOLVED):
+    for k in np.flatnonzero(code > reduced_ipm.ALMOST):
         out = solve_unchecked(batch.problems[k], FALLBACK, tol=tol).outcome
         why = f"reduced-ipm: {reduced_ipm.CODES[code[k]]}, answered by {FALLBACK}"
         messages[k] = "; ".join(filter(None, (messages[k], why, out.message)))

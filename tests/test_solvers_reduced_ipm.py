@@ -11,11 +11,16 @@ from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import reduced_ipm
 from cardan_forces.solvers import reduced_ipm_ as adapter
+from cardan_forces.solvers.optimality import objective_value
 from cardan_forces.solvers.registry import batch_backends, solve, solve_batch
 
 FORMULATIONS = ("min_max", "socp_face")
 LEVEL = 1e-8
 """The package's optimality every instant the backend calls solved meets."""
+FORCES_RTOL = {"min_max": 1e-2, "socp_face": 1e-5}
+"""Agreement of the forces with Clarabel's: ``min_max`` picks its forces by a
+tie-breaking term of weight 1e-4 (``MIN_MAX_NORM_WEIGHT``), so two answers within a gap
+``g`` may differ by about ``sqrt(g / 1e-4)``; its objective is held to the gap."""
 
 
 @pytest.fixture(scope="module")
@@ -29,14 +34,19 @@ def _batch(op, formulation, instants):
 
 
 def _agrees_with_clarabel(batch, result):
-    """Every instant solved, within :data:`LEVEL`, at Clarabel's forces (tol 1e-10)."""
+    """Every instant solved, within :data:`LEVEL`, at Clarabel's optimal value and
+    forces (tol 1e-10).
+    """
     assert all(s == "solved" for s in result.status)
     assert result.within(LEVEL).all()
     for k, problem in enumerate(batch.problems):
         expected = solve(problem, "clarabel", tol=1e-10)
         assert expected.solved
-        x = result.x[k]
-        assert np.linalg.norm(x - expected.x) <= 1e-5 * np.linalg.norm(expected.x)
+        value = objective_value(problem, expected.z)
+        assert objective_value(problem, result.z[k]) == pytest.approx(value, rel=1e-8,
+                                                                      abs=1e-10)
+        x, rtol = result.x[k], FORCES_RTOL[batch.formulation]
+        assert np.linalg.norm(x - expected.x) <= rtol * np.linalg.norm(expected.x)
 
 
 @pytest.mark.parametrize("formulation", FORMULATIONS)
