@@ -30,9 +30,17 @@ def test_sets_table_and_time_outside_span(capsys):
     assert "outside the scene's time span" in capsys.readouterr().err
 
 
-def test_repro_quick_writes_fig11_fig12(tmp_path):
-    assert main(["repro", "--fig", "11", "--fig", "12", "--quick", "--no-penalty", "--out",
-                 str(tmp_path)]) == 0
+@pytest.fixture(scope="module")
+def quick_repro(tmp_path_factory):
+    """The folder ``cardan repro --quick --no-penalty`` wrote (every figure), read by the
+    tests of its figures."""
+    out = tmp_path_factory.mktemp("repro-quick")
+    assert main(["repro", "--quick", "--no-penalty", "--out", str(out)]) == 0
+    return out
+
+
+def test_repro_quick_writes_fig11_fig12(quick_repro):
+    tmp_path = quick_repro
     fig11 = read_csv(tmp_path / "fig11.csv")
     fig12 = read_csv(tmp_path / "fig12.csv")
     assert list(fig11) == ["t", "omega_input", "omega_output"]
@@ -83,8 +91,8 @@ def test_sets_multistart_points_lie_in_the_intervals(capsys):
         assert all(lo - 1e-6 <= p <= hi + 1e-6 for p in points)
 
 
-def test_repro_quick_writes_all_figures_and_report(tmp_path):
-    assert main(["repro", "--quick", "--no-penalty", "--out", str(tmp_path)]) == 0
+def test_repro_quick_writes_all_figures_and_report(quick_repro):
+    tmp_path = quick_repro
     for n in ("11", "12", "13", "14", "15_paper-fig15", "15_paper-fig15-axial"):
         assert (tmp_path / f"fig{n}.csv").is_file() and (tmp_path / f"fig{n}.png").is_file()
     report = (tmp_path / "report.md").read_text()
