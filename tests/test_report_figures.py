@@ -151,9 +151,9 @@ def test_set_words(lo, hi, det, words):
 
 
 def test_report_writes_every_format_asked_a_page_each_and_one_pdf(tmp_path, capsys):
-    """A report of many panels on pages: a PNG and an SVG per page, one PDF of them all,
-    and ``report.md`` naming them."""
-    assert main(["report", "propshaft", "--instants", "2", "--format", "png,svg,pdf",
+    """A report of many panels on pages (paper's five): a PNG and an SVG per page, one
+    PDF of them all, and ``report.md`` naming them."""
+    assert main(["report", "paper", "--instants", "2", "--format", "png,svg,pdf",
                  "--out", str(tmp_path), "--quiet"]) == 0
     written = [p.name for p in tmp_path.iterdir()]
     assert {p.rsplit(".", 1)[1] for p in written} == {"csv", "png", "svg", "pdf", "md"}
