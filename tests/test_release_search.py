@@ -33,7 +33,7 @@ def test_advice_on_a_whole_motion_is_the_advice_at_its_instant():
         [m.release for m in named_modes(simulate(scene, [motion.t[4]]), 0)]
 
 
-@pytest.mark.parametrize("name", ["paper", "paper-slip"])
+@pytest.mark.parametrize("name", ["paper", pytest.param("paper-slip", marks=pytest.mark.slow)])
 def test_the_sets_the_search_keeps_are_those_that_validate_whole(name):
     """Every release set that passes the search's checks is kept exactly when the
     released scene validates whole (the cheaper check validates each release once)."""

@@ -197,6 +197,8 @@ def test_default_backend_falls_back_when_its_first_choice_is_absent(monkeypatch,
         study.default_backend("positive", problem)
 
 
+@pytest.mark.slow  # the command end to end; the fallback itself is held in the default run
+# by test_default_backend_falls_back_when_its_first_choice_is_absent and test_same_answers
 def test_repro_without_the_optional_qp_backend(monkeypatch, tmp_path):
     """``cardan repro --fig 13 --quick --no-penalty`` on the core dependencies alone."""
     from cardan_forces.cli import main

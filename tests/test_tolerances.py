@@ -296,10 +296,11 @@ def _write_scene(path, *top: str, seat: float = 1e-4, tables: str = "") -> str:
     return str(path)
 
 
-@pytest.mark.parametrize("edit", [
+@pytest.mark.parametrize("edit", [  # one kind of edit by default, the others in the slow job
     {"top": ["gravity_m_s2 = [0.0, 0.0, -9.0]"]},
-    {"seat": 2e-4},
-    {"tables": "[time]\nstart_s = 0.0\nstop_s = 0.5\nstep_s = 0.005"},
+    pytest.param({"seat": 2e-4}, marks=pytest.mark.slow),
+    pytest.param({"tables": "[time]\nstart_s = 0.0\nstop_s = 0.5\nstep_s = 0.005"},
+                 marks=pytest.mark.slow),
 ], ids=["a value outside the tolerances", "a tolerance", "the window"])
 def test_an_edited_scene_is_another_study_and_an_unchanged_one_resumes(edit, tmp_path,
                                                                        capsys):
