@@ -16,9 +16,11 @@ and measures, per run over the scene's instants:
   ``numpy-batched``): ``||f - f_c|| / ||f_c||``;
 - its time per instant (the batched solve, fastest of :data:`REPEATS`) and Newton steps.
 
-MuJoCo's own answer (``driveline.engine_mujoco``, its default softness) is one point
-beside the curves where MuJoCo is installed: its forces after the engine has settled,
-its time the simulation's wall time per instant read. Writes ``regularization.csv``,
+MuJoCo's own answer (``driveline.engine_mujoco``, its default softness) and Drake's
+(``driveline.engine_drake``, SAP at a 0.25 ms step) are one point each beside the
+curves where the engine is installed: its forces after the engine has settled, its
+time the simulation's wall time per instant read; the report sets the two engines'
+wall time per simulated second side by side. Writes ``regularization.csv``,
 ``regularization.md`` (a section for the bench report) and ``regularization.png``.
 """
 
@@ -56,7 +58,7 @@ INSTANTS = 101
 REPEATS = 3
 COLUMNS = ("scene", "formulation", "R", "instants", "time_us", "iterations",
            "solved_share", "rigid_median", "rigid_worst", "compliance_median",
-           "compliance_worst")
+           "compliance_worst", "wall_s_per_simulated_s")
 
 
 def operator(name: str, instants: int = INSTANTS):
@@ -100,6 +102,10 @@ def _measures(scene, formulation, R, x, primal, member, seconds, iterations, sol
             "compliance_worst": float(np.max(away))}
 
 
+ENGINE_MARKERS = {"MuJoCo": "*", "Drake": "P"}
+"""The engines' points in the figure, by the start of their row's formulation."""
+
+
 def mujoco_row(op) -> dict | None:
     """MuJoCo's answer at its default softness as a row (``None`` where MuJoCo is not
     installed or cannot express the scene): the instants after it settled.
@@ -107,19 +113,40 @@ def mujoco_row(op) -> dict | None:
     try:
         from cardan_forces.driveline import engine_mujoco
 
-        from .engine import settle_s
         found = engine_mujoco.run(op, engine_mujoco.Softness(label="default"))
     except Exception:  # an optional engine: absent or unable, the study goes on
         return None
+    return _engine_row(op, "MuJoCo (default softness)", found)
+
+
+def drake_row(op) -> dict | None:
+    """Drake's answer at its reference step as a row (``None`` where Drake is not
+    installed or cannot express the scene): the instants after it settled.
+    """
+    try:
+        from cardan_forces.driveline import engine_drake
+
+        from .engine import DRAKE_SETTINGS
+        found = engine_drake.run(op, DRAKE_SETTINGS[0])
+    except Exception:  # an optional engine: absent or unable, the study goes on
+        return None
+    return _engine_row(op, "Drake (SAP, step 0.25 ms)", found)
+
+
+def _engine_row(op, label: str, found) -> dict | None:
+    """An engine run's row (:func:`mujoco_row`), with its wall time per simulated second."""
+    from .engine import settle_s
+
     keep = op.t >= settle_s({"default": found})
     if not keep.any() or tuple(found.names) != tuple(op.names):
         return None
     residuals = fbatch.least_norm_batch(op, SELECTION).checks.residuals(found.forces)
     primal = np.max(list(residuals.values()), axis=0)[keep]
     member = solve_batch(fbatch.least_norm_batch(op, MEMBER), "numpy-batched").x[keep]
-    return _measures(op.scene.name, "MuJoCo (default softness)", float("nan"),
-                     found.forces[keep], primal, member, found.wall_s / len(op.t),
-                     float("nan"), float("nan"))
+    span = float(op.t[-1] - op.t[0])
+    return {**_measures(op.scene.name, label, float("nan"), found.forces[keep], primal,
+                        member, found.wall_s / len(op.t), float("nan"), float("nan")),
+            "wall_s_per_simulated_s": found.wall_s / span if span > 0 else float("nan")}
 
 
 def write(rows: list[dict], folder: Path, formats=("png",)) -> list[Path]:
@@ -139,17 +166,36 @@ def markdown(rows: list[dict]) -> list[str]:
              "the package's worst residual over `||b||`; compliance member: "
              "`||f - f_c|| / ||f_c||` against `numpy-batched`'s exact answer. Time: "
              "the batched solve per instant (fastest of "
-             f"{REPEATS}); MuJoCo's: its simulation's wall time per instant read.", "",
+             f"{REPEATS}); an engine's: its simulation's wall time per instant read.", "",
              "| scene | formulation | R | time (us) | Newton steps | solved | rigid set "
              "(median / worst) | compliance member (median / worst) |",
              "|---|---|---|---|---|---|---|---|"]
     lines += [_table_row(r) for r in rows]
-    engine = {r["scene"] for r in rows if r["formulation"].startswith("MuJoCo")}
-    without = sorted({r["scene"] for r in rows} - engine)
-    if without:
-        lines += ["", f"No MuJoCo point for {', '.join(without)}: MuJoCo is not installed or "
-                  "cannot express the scene (a quasi-static one: the engine integrates "
-                  "dynamics)."]
+    for name in ENGINE_MARKERS:
+        engine = {r["scene"] for r in rows if r["formulation"].startswith(name)}
+        without = sorted({r["scene"] for r in rows} - engine)
+        if without:
+            lines += ["", f"No {name} point for {', '.join(without)}: {name} is not installed "
+                      "or cannot express the scene (a quasi-static one: the engine integrates "
+                      "dynamics)."]
+    return lines + _engine_cost_lines(rows)
+
+
+def _engine_cost_lines(rows: list[dict]) -> list[str]:
+    """The engines side by side: wall time per simulated second and distance from the
+    rigid set, per scene (nothing where no engine ran).
+    """
+    engines = [r for r in rows if r["formulation"].startswith(tuple(ENGINE_MARKERS))]
+    if not engines:
+        return []
+    lines = ["", "### The engines side by side (one run each)", "",
+             "| engine | scene | wall s per simulated s | rigid set (median / worst) |",
+             "|---|---|---|---|"]
+    for r in engines:
+        lines.append(f"| {r['formulation']} | {r['scene']} | "
+                     f"{number_text(r['wall_s_per_simulated_s'], '.3g')} | "
+                     f"{number_text(r['rigid_median'], '.1e')} / "
+                     f"{number_text(r['rigid_worst'], '.1e')} |")
     return lines
 
 
@@ -161,7 +207,7 @@ def _table_row(r: dict) -> str:
              number_text(r["time_us"], ".1f"), number_text(r["iterations"], "g"),
              number_text(r["solved_share"], ".1%"),
              *(f"{number_text(r[median], '.1e')} / {number_text(r[worst], '.1e')}"
-               for median, worst in (COLUMNS[-4:-2], COLUMNS[-2:]))]
+               for median, worst in (COLUMNS[-5:-3], COLUMNS[-3:-1]))]
     return f"| {' | '.join(cells)} |"
 
 
@@ -186,8 +232,8 @@ def _down_arrow():
 def draw(rows: list[dict], stem: Path, formats=("png",)) -> list[Path]:
     """Two panels against the time per instant, a column each: distance from the rigid
     set and from the compliance member, one curve per scene and formulation (its points
-    the softenings, the rigid answer ``R = 0`` marked), MuJoCo a star; a distance of
-    exactly 0 as an arrow on the panel's lower edge. In the print style
+    the softenings, the rigid answer ``R = 0`` marked), MuJoCo a star and Drake a plus;
+    a distance of exactly 0 as an arrow on the panel's lower edge. In the print style
     (:mod:`~cardan_forces.experiments.images`), one legend under the panels.
     """
     import matplotlib
@@ -221,10 +267,12 @@ def _panel(ax, rows: list[dict], key: str, title: str) -> dict:
     low, high = (10.0 ** v for v in images.limits([np.log10(shown)]))
     for (scene, formulation), group in _curves(rows).items():
         label = f"{scene}: {formulation}"
-        star = formulation.startswith("MuJoCo")
+        marker = next((m for name, m in ENGINE_MARKERS.items()
+                       if formulation.startswith(name)), None)
+        star = marker is not None
         x = np.array([r["time_us"] for r in group], float)
         y = np.array([r[key] for r in group], float)
-        handles[label], = ax.plot(x, np.where(y > 0, y, np.nan), marker="*" if star else "o",
+        handles[label], = ax.plot(x, np.where(y > 0, y, np.nan), marker=marker or "o",
                                   ms=8 if star else 3.5, ls="none" if star else "-",
                                   zorder=3 if star else 2, label=label)
         rigid += [(xi, yi) for r, xi, yi in zip(group, x, y) if r["R"] == 0.0 and yi > 0]
@@ -252,14 +300,14 @@ def _curves(rows: list[dict]) -> dict:
 
 
 def study(folder: Path, scenes=SCENES, instants: int = INSTANTS, formats=("png",),
-          with_mujoco: bool = True) -> list[Path]:
+          with_engines: bool = True) -> list[Path]:
     """The study on ``scenes``, written into ``folder``; the paths written."""
     rows = []
     for name in scenes:
         op = operator(name, instants)
         rows += measure(op)
-        found = mujoco_row(op) if with_mujoco else None
-        rows += [found] if found is not None else []
+        found = [mujoco_row(op), drake_row(op)] if with_engines else []
+        rows += [r for r in found if r is not None]
     return write(rows, Path(folder), formats)
 
 

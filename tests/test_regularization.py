@@ -62,3 +62,26 @@ def test_mujoco_answer_is_near_the_rigid_set():
     if found is None:
         pytest.skip("MuJoCo cannot express the scene here")
     assert np.isfinite(found["rigid_median"]) and found["rigid_median"] <= 1e-2
+
+
+def test_the_engines_cost_per_simulated_second_side_by_side():
+    """Each engine's row carries its wall time per simulated second, and the section
+    sets the engines side by side in a table of their own (rows built by hand)."""
+    rows = [{"scene": "paper", "formulation": name, "R": float("nan"), "instants": 5,
+             "time_us": 1e5, "iterations": float("nan"), "solved_share": float("nan"),
+             "rigid_median": 1e-5, "rigid_worst": 2e-5, "compliance_median": 1e-3,
+             "compliance_worst": 2e-3, "wall_s_per_simulated_s": cost}
+            for name, cost in (("MuJoCo (default softness)", 0.5),
+                               ("Drake (SAP, step 0.25 ms)", 3.0))]
+    text = "\n".join(reg.markdown(rows))
+    side = text.split("### The engines side by side")[1]
+    assert "| MuJoCo (default softness) | paper | 0.5 |" in side
+    assert "| Drake (SAP, step 0.25 ms) | paper | 3 |" in side
+
+
+@pytest.mark.slow
+def test_drake_s_row_is_near_the_rigid_set():
+    pytest.importorskip("pydrake")
+    found = reg.drake_row(reg.operator("paper", 5))
+    assert found is not None and np.isfinite(found["wall_s_per_simulated_s"])
+    assert found["rigid_median"] <= 5e-2  # first order in its step: ~1e-2 at 13 rad/s

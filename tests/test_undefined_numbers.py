@@ -177,6 +177,7 @@ def test_bench_and_regularization_write_no_inf_or_nan(tmp_path, monkeypatch, cap
     monkeypatch.setitem(registry._CACHE, "half-ls", _failing_at_odd_instants())
     study = regularization.study
     monkeypatch.setattr(regularization, "mujoco_row", _undefined_engine_row)
+    monkeypatch.setattr(regularization, "drake_row", lambda op: None)  # no Drake run here
     monkeypatch.setattr(regularization, "study", lambda folder, formats: study(
         folder, scenes=("paper",), instants=5, formats=formats))
     assert main(["bench", "--quick", "--quiet", "--formulation", "min_norm", "--solver",
