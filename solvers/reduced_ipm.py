@@ -23,14 +23,17 @@ predictor-corrector:
   ``W = eta [w0 w1'; w1 I + w1 w1' / (1 + w0)]``, ``eta = (s'Js / z'Jz)^(1/4)``,
   ``w = (s/sqrt(s'Js) + J z/sqrt(z'Jz)) / (2 gamma)``, ``J = diag(1, -1, ..., -1)``,
   ``gamma = sqrt((1 + s'z / sqrt(s'Js z'Jz)) / 2)``;
-- the Newton step of (2) with ``lambda o (W dz + W^-1 ds) = -r_s`` reduces to the
-  ``k x k`` system ``(P + Gw'Gw) dx = -r_x - Gw'(W^-1 r_z + u)``, ``Gw = W^-1 G``,
-  ``u = lambda \ (-r_s)`` (3), solved by Cholesky; then ``W dz = W^-1(G dx + r_z) + u``
-  and ``W^-1 ds = u - W dz``;
+- the Newton step of (2) with ``lambda o (W dz + W^-1 ds) = -r_s`` is, with
+  ``u = lambda \ (-r_s)``, the augmented system (3)
+  ``[P G'; G -W^2] (dx, dz) = (-r_x, -r_z - W u)`` of size ``k + m``, solved by LU
+  with partial pivoting. Not the ``k x k`` normal equations ``P + G'W^-2 G``: near the
+  optimum ``W^-2`` spans many decades, and on ``min_max`` (its tie-break weight 1e-4)
+  their rounding left the dual residual near 1e-7 while the gap fell;
 - predictor ``r_s = lambda o lambda``; corrector ``r_s = lambda o lambda +
   (W^-1 ds_a) o (W dz_a) - sigma mu e`` with ``sigma = (1 - alpha_a)^3``,
   ``mu = s'z / (l + p)``; step ``min(1, 0.99 alpha_max)`` to the cones' boundary
-  (a second-order block's by the closed form of ECOS's ``conicline``);
+  (a second-order block's by the closed form of ECOS's ``conicline``), halved while it
+  leaves a block off centre (:func:`_central`);
 - start (CVXOPT's): ``x`` from ``(P + G'G) x = -q + G'h``, ``s = h - G x``, ``z = -s``,
   each moved into its cone along ``e`` by its most negative eigenvalue plus one.
 
@@ -71,9 +74,6 @@ BACKTRACKS = 10
 
 MIN_STEP = 1e-8
 """A step below this ends an instant unsolved (a stall)."""
-
-REFINEMENTS = 1
-"""Steps of iterative refinement of each Newton solve."""
 
 STEP_FRACTION = 0.99
 """Fraction of the step to the cones' boundary taken."""
@@ -405,18 +405,18 @@ def _jsquare(u: np.ndarray) -> np.ndarray:
 def _newton(system, u):
     """The Newton direction (3) for the scaled right-hand side ``u``: ``(dx, W dz,
     W^-1 ds)`` from the augmented system ``[P G'; G -W^2] (dx, dz) = (-r_x, -r_z -
-    W u)`` (``system``: its matrix, ``W``, the layout, ``r_x``, ``r_z``, ``G``), with
-    :data:`REFINEMENTS` steps of iterative refinement. On a row or block far from its
-    bound (``W`` above 1) ``ds = -r_z - G dx`` (the primal equation, exact) rather than
-    ``W (u - W dz)``: there ``W^2`` is large, and the latter carries the solve's
-    rounding into the primal residual, which then grows while the gap falls; near its
-    bound the latter keeps the step consistent with the centring.
+    W u)`` (``system``: its matrix, ``W``, the layout, ``r_x``, ``r_z``, ``G``), by LU
+    with partial pivoting (a step of iterative refinement changed no status on the
+    built-in scenes' ``min_max`` and ``socp_face``, and costs a second solve). On a row
+    or block far from its bound (``W`` above 1) ``ds = -r_z - G dx`` (the primal
+    equation, exact) rather than ``W (u - W dz)``: there ``W^2`` is large, and the
+    latter carries the solve's rounding into the primal residual, which then grows
+    while the gap falls; near its bound the latter keeps the step consistent with the
+    centring.
     """
     K, W, lay, rx, rz, Gs = system
     rhs = np.concatenate([-rx, -join(*rz, lay) - join(*W.apply(u), lay)], axis=1)
     step = _solve_each(K, rhs)
-    for _ in range(REFINEMENTS):
-        step += _solve_each(K, rhs - np.einsum("tij,tj->ti", K, step))
     k = rx.shape[1]
     dx, dzw = step[:, :k], W.apply(split(step[:, k:], lay))
     exact = W.apply(_negate(_plus(rz, _times(Gs, dx))), inverse=True)  # G dx + ds = -r_z
