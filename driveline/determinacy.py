@@ -17,12 +17,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cardan_forces.util.rank import RANK_RTOL, numerical_rank
+
 if TYPE_CHECKING:
     from .equilibrium import Operator
-
-RANK_RTOL = 1e-9
-"""Singular values below ``RANK_RTOL * sigma_max`` count as zero (every rank in the
-package: determinacy, the support check, releases, the elements' translations)."""
 
 DETERMINATE_TOL = 1e-8
 """A component is determinate when its null-space row norm is below this (the basis
@@ -65,11 +63,6 @@ class Determinacy:
                 for name, det, value in zip(self.names, self.determinate, self.min_norm)
             },
         }
-
-
-def numerical_rank(s: np.ndarray) -> int:
-    """Singular values ``s`` (descending) above :data:`RANK_RTOL` times the largest."""
-    return int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
 
 
 def equilibrated(A: np.ndarray) -> np.ndarray:

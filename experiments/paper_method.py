@@ -13,11 +13,12 @@ solved again from the flipped point (see :func:`_solve`).
 from __future__ import annotations
 
 import numpy as np
-from cardan_forces.driveline.determinacy import numerical_rank
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.scene import Scene
 from cardan_forces.formulations.paper import PaperNLS, build_paper
 from cardan_forces.solvers import Record, solve
+
+from cardan_forces.util.rank import numerical_rank
 
 METHODS = {"hybr": "scipy-fsolve", "lm": "scipy-root-lm"}
 """The paper method's names for its root finders -> their registry backends."""

@@ -31,9 +31,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from cardan_forces.driveline.determinacy import determinacy, numerical_rank
+from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.elements.base import Law
 from cardan_forces.driveline.equilibrium import Operator
+
+from cardan_forces.util.rank import numerical_rank
 
 from .problems import LCP, LS, QP, Conic, ForceChecks, LastMade, Scaled, SecondOrderCone
 

@@ -41,10 +41,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
-from cardan_forces.driveline.determinacy import RANK_RTOL
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.driveline.kinematics import rest_geometry
 from cardan_forces.driveline.scene import Scene
+
+from cardan_forces.util.rank import RANK_RTOL
 
 from .convex import NotApplicable, socp_face
 from .problems import NLS, ForceChecks, LastMade

@@ -14,8 +14,9 @@ model) is a choice inside it.
 from __future__ import annotations
 
 import numpy as np
-from cardan_forces.driveline.determinacy import numerical_rank
 from cardan_forces.driveline.equilibrium import Operator
+
+from cardan_forces.util.rank import numerical_rank
 
 from .convex import checks, equalities, slip_rows
 from .problems import LP

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
+from cardan_forces.util.rank import RANK_RTOL, numerical_ranks
+
 
 def lp_as_conic(lp: LP) -> Conic:
     """The LP in Clarabel's standard form (zero cone for ``A z = b``, then nonnegative)."""
@@ -48,11 +50,6 @@ def convert(problem, accepts: tuple[type, ...]):
     while not isinstance(problem, accepts):
         problem = NEXT_STEP[type(problem)][1](problem)
     return problem
-
-
-RANK_RTOL = 1e-10
-"""Zero-cone rows whose QR diagonal (singular values) fall below this, relative to the
-largest, are dependent: their null space then comes from the SVD."""
 
 
 @dataclass(frozen=True)
@@ -170,7 +167,8 @@ def _null_space(A_eq: np.ndarray, b_eq: np.ndarray):
     """``(z0, N, factors)`` per instant: the least-norm solution of ``A_eq z = b_eq``,
     an orthonormal basis of the null space of ``A_eq`` and ``(Q, R, U)`` with ``A_eq' =
     Q R U'`` (see :class:`Reduced`). From one complete QR of the stacked ``A_eq'``;
-    where the rows are dependent (the QR's diagonal says so), from the SVD at the rank
+    where the rows are dependent (the QR's diagonal, or the singular values, under the
+    package's rank rule :data:`~cardan_forces.util.rank.RANK_RTOL`), from the SVD at the rank
     every instant shares (``ValueError`` if the rank changes: the reduced structure
     would).
     """
@@ -183,7 +181,7 @@ def _null_space(A_eq: np.ndarray, b_eq: np.ndarray):
         w = _triangular(R[:, :r], b_eq, transposed=True)
         return _mv(Q[:, :, :r], w), Q[:, :, r:], factors
     V, s, Ut = np.linalg.svd(At)
-    ranks = np.sum(s > RANK_RTOL * s[:, :1], axis=1)
+    ranks = numerical_ranks(s)
     if np.any(ranks != ranks[0]):
         raise ValueError("the zero-cone rows change rank between instants: no reduced form")
     k = int(ranks[0])

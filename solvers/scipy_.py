@@ -21,6 +21,8 @@ import time
 import numpy as np
 from cardan_forces.formulations.problems import LP, LS, NLS, QP
 
+from cardan_forces.util.rank import numerical_rank
+
 from . import settings
 from .qp_measures import qp_duals
 from .record import Outcome, Status
@@ -136,7 +138,7 @@ def _jacobian_note(problem: NLS, z: np.ndarray) -> str:
     s = np.linalg.svd(problem.jac(z), compute_uv=False)
     if not np.all(np.isfinite(s)) or s[0] == 0:
         return ""
-    rank = int(np.sum(s > 1e-9 * s[0]))
+    rank = numerical_rank(s)
     cond = s[0] / s[-1] if s[-1] > 0 else float("inf")
     return f"; jacobian rank {rank} of {len(s)}, cond {cond:.1e}"
 
