@@ -13,6 +13,7 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import formulation as registered
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import Record, backends_for, solve
+from cardan_forces.solvers.settings import REFERENCE_TOL
 
 
 def solve_all(
@@ -27,8 +28,9 @@ def solve_all(
     """Every requested formulation with every requested backend that accepts it.
 
     The reference of each record is the ``clarabel`` answer of the same formulation at
-    tolerance 1e-10 where that backend takes it. ``built``: the problems at instant
-    ``i`` already built (:func:`build_all`), so none is built twice.
+    :data:`~cardan_forces.solvers.settings.REFERENCE_TOL` where that backend takes it.
+    ``built``: the problems at instant ``i`` already built (:func:`build_all`), so none is
+    built twice.
     """
     names = [registered(f).name for f in formulations or FORMULATIONS]  # a typo: its hint
     built = built if built is not None else build_all(op, i, names)
@@ -43,7 +45,7 @@ def solve_all(
         chosen = usable if solvers is None else [s for s in solvers if s in usable]
         reference = None
         if "clarabel" in usable:
-            ref = solve(problem, "clarabel", tol=1e-10)
+            ref = solve(problem, "clarabel", tol=REFERENCE_TOL)
             reference = ref.x if ref.status == "solved" else None
         for solver in chosen:
             if progress:

@@ -27,7 +27,7 @@ from cardan_forces.solvers import Status
 from cardan_forces.solvers.qp_measures import SHIFT_S
 from cardan_forces.solvers.settings import SETTINGS
 
-from .bench_run import MEASURES, SPLIT
+from .bench_run import MEASURES, SPLIT, TIME_FLOOR_S
 
 CLOCKS = {"solver": "solve_s", "end_to_end": "time_s"}
 """The two times of a row: the solver's own call, and the package's whole ``solve``;
@@ -93,7 +93,7 @@ def summarize(rows: list[dict], setup: dict[str, float]) -> list[dict]:
         split["other_s"] = max(split["time_s"] - sum(split[k] for k in SPLIT), 0.0)
         out.append({
             "formulation": formulation, "solver": solver, "mode": mode,
-            "instants": len(group), "instants_per_s": len(group) / max(sum(times), 1e-12),
+            "instants": len(group), "instants_per_s": len(group) / max(sum(times), TIME_FLOOR_S),
             "sgm_s": shifted_geometric_mean(solver_times),
             "sgm_end_to_end_s": shifted_geometric_mean(times),
             "setup_s": setup.get(formulation, 0.0),
@@ -102,7 +102,7 @@ def summarize(rows: list[dict], setup: dict[str, float]) -> list[dict]:
             "solved_equilibrium": max((r["equilibrium"] for r in group
                                        if r["status"] == "solved"), default=math.inf),
             "split_s": split,
-            "solver_share": split["solve_s"] / max(split["time_s"], 1e-12),
+            "solver_share": split["solve_s"] / max(split["time_s"], TIME_FLOOR_S),
             "iterations": _mean_iterations(group),
             "note": next((m for m in unsolved if m), ""),
         })

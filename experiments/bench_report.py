@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.formulations import BASELINE
 from cardan_forces.solvers.record import ACCEPT
+from cardan_forces.solvers.settings import REFERENCE_TOL
 
 from . import files, images
 from .bench_metrics import PROFILES, SHIFT_S, TAUS, TIME_LIMIT_S, best_runs
@@ -733,7 +734,8 @@ def _limitations(results, settings) -> list[str]:
         "instants; its `conversion` is the layout and setup of the batch.",
         "- References (for the objective gap and, where the optimum is unique, the "
         "distance): the SVD for least norm and quadprog for QPs are exact; conic references "
-        f"are Clarabel at 1e-10, not `solved` at: {', '.join(unsolved) or 'no sample'}.",
+        f"are Clarabel at {REFERENCE_TOL:g}, not `solved` at: "
+        f"{', '.join(unsolved) or 'no sample'}.",
         "- The paper's root finding and the LCP have no objective: their accuracy is their "
         "own residuals (and, for the LCP, its complementarity).",
         "- Wall-clock times of one process on a shared machine; single runs of the "

@@ -29,6 +29,11 @@ from cardan_forces.solvers import get as get_backend
 from cardan_forces.solvers.checks import Stacks, stack_all
 from cardan_forces.solvers.optimality import objective_value
 from cardan_forces.solvers.registry import batch_backends, solve_batch
+from cardan_forces.solvers.settings import REFERENCE_TOL
+
+TIME_FLOOR_S = 1e-12
+"""Least time (s) a count of instants is divided by: a run too short for the clock still
+has a finite rate."""
 
 LADDER = (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)
 QUICK_LADDER = (1e-4, 1e-8)
@@ -328,7 +333,7 @@ def _warm_up(prepared: Prepared, solvers: list[str]) -> None:
 
 def _report_progress(rows: list[dict]) -> None:
     r = rows[0]
-    rate = len(rows) / max(sum(x["time_s"] for x in rows), 1e-12)
+    rate = len(rows) / max(sum(x["time_s"] for x in rows), TIME_FLOOR_S)
     solved = sum(x["status"] == "solved" for x in rows)
     progress(f"bench: {r['formulation']:16s} {r['solver']:20s} {r['mode']:7s} "
               f"{len(rows):5d} instants {rate:10.1f}/s, {solved} solved")
@@ -339,7 +344,8 @@ def references(prepared: Prepared, samples) -> tuple[dict | None, str, int]:
     method's name, and the number of samples where it is not ``solved``.
 
     Least norm: the SVD (``numpy-kkt``); QP: quadprog's dual active set where installed,
-    else Clarabel at 1e-10; conic: Clarabel at 1e-10. The paper's root finding and the
+    else Clarabel at :data:`~cardan_forces.solvers.settings.REFERENCE_TOL`; conic: Clarabel
+    at it. The paper's root finding and the
     LCP have no objective (their optimality is their own residuals): none.
     """
     problem = prepared.problems[int(samples[0])]
@@ -350,7 +356,7 @@ def references(prepared: Prepared, samples) -> tuple[dict | None, str, int]:
     elif isinstance(problem, QP) and "qpsolvers-quadprog" in available():
         solver, tol = "qpsolvers-quadprog", None
     else:
-        solver, tol = "clarabel", 1e-10
+        solver, tol = "clarabel", REFERENCE_TOL
     refs, unsolved = {}, 0
     for i in samples:
         record = solve(prepared.problems[int(i)], solver, tol=tol)

@@ -49,6 +49,10 @@ points at the figure's printed size, from :data:`MIN_TEXT_PT` for ticks and lege
 COINCIDE = 0.005
 """Curves closer than this share of their panel's y range at every instant are drawn
 on one another (:func:`coinciding`); the figure says which, and within how much."""
+SAME_RTOL = 1e-6
+"""Values within this share of their scale are one value on a figure (a rigid set whose
+ends meet, a component that is zero beside its panel's largest): the package's
+acceptance of an answer (``solvers.ACCEPT``), below which answers are not told apart."""
 BOUND_REACH = 0.25
 """A finite bound of a rigid set is held in a panel's y range when it widens the range
 of the curves by at most this share; one farther off (a near-zero lower bound under
@@ -386,7 +390,7 @@ def draw_set(ax, t, set_min, set_max, unit: str = "N", view=None) -> tuple[dict,
         handles[SET_LABEL] = ax.fill_between(tc, lo_b, hi_b, color=SET_COLOUR, alpha=0.35,
                                              lw=0, zorder=0, label=SET_LABEL)
         ax.plot(tc, lo_b, tc, hi_b, color=SET_COLOUR, lw=0.8, zorder=0.5)
-        single = both & (hi - lo <= 1e-6 * max(np.max(np.abs(hi[both])), 1e-9))
+        single = both & (hi - lo <= SAME_RTOL * max(np.max(np.abs(hi[both])), 1e-9))
         if single.any():  # a determinate quantity: the band is a line under the curves
             notes.append(f"one value (determinate) {_share(int(single.sum()), n)}")
     low, high = view if view is not None else (-np.inf, np.inf)

@@ -224,7 +224,7 @@ class Panel:
 SCALE_GROUP = 10.0
 """Components of one panel span at most this factor in their largest magnitude (of the
 value and finite ends); a smaller one goes to a panel of its own scale (a component
-below 1e-6 of the panel's largest counts as zero and stays)."""
+below :data:`~.images.SAME_RTOL` of the panel's largest counts as zero and stays)."""
 
 
 def panels(op: Operator, h: dict[str, np.ndarray] | None = None) -> list[Panel]:
@@ -252,7 +252,7 @@ def _scale_groups(h: dict[str, np.ndarray], columns: list[int]) -> list[list[int
     top = max(size.values(), default=0.0)
     groups: list[list[int]] = []
     for j in sorted(columns, key=lambda j: -size[j]):
-        if groups and size[j] <= 1e-6 * top:  # zero: drawn as well beside any scale
+        if groups and size[j] <= images.SAME_RTOL * top:  # zero: drawn beside any scale
             groups[0].append(j)
         elif groups and size[j] * SCALE_GROUP >= size[groups[-1][0]]:
             groups[-1].append(j)

@@ -37,7 +37,17 @@ from cardan_forces.driveline.equilibrium import Operator
 
 from cardan_forces.util.rank import numerical_rank
 
-from .problems import LCP, LS, QP, Conic, ForceChecks, LastMade, Scaled, SecondOrderCone
+from .problems import (
+    LCP,
+    LS,
+    QP,
+    SCALE_FLOOR_N,
+    Conic,
+    ForceChecks,
+    LastMade,
+    Scaled,
+    SecondOrderCone,
+)
 
 MIN_MAX_NORM_WEIGHT = 1e-4
 """Weight of the tie-breaking ``1/2 ||x / ||b|| ||^2`` term of ``min_max`` (its cost in
@@ -140,7 +150,7 @@ def _padded(basis: np.ndarray, extra: int) -> np.ndarray:
 
 def _load_scale(b: np.ndarray) -> float:
     """``||b||``, the unit in which the conic and QP recasts state their unknowns."""
-    return max(float(np.linalg.norm(b)), 1e-12)
+    return max(float(np.linalg.norm(b)), SCALE_FLOOR_N)
 
 
 def _minus_identity_rows(columns, n: int) -> np.ndarray:

@@ -48,7 +48,7 @@ from cardan_forces.driveline.scene import Scene
 from cardan_forces.util.rank import RANK_RTOL
 
 from .convex import NotApplicable, socp_face
-from .problems import NLS, ForceChecks, LastMade
+from .problems import NLS, SCALE_FLOOR_N, ForceChecks, LastMade
 
 TINY = 1e-12
 """Relative magnitude under which a start's contact angle is set to 0."""
@@ -388,7 +388,7 @@ def build_paper(op: Operator, i: int, name: str = "", rim: bool = True,
     applies(op)
     lay, t = _layout(op, i, scene), _terms(op, scene, rim)
     A, b = op.A[i], op.b[i]
-    scale = max(float(np.linalg.norm(b)), 1e-12)
+    scale = max(float(np.linalg.norm(b)), SCALE_FLOOR_N)
 
     def fun(z):
         return _residual(lay, A, b, rim, np.asarray(z, float))

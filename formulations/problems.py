@@ -30,6 +30,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+SCALE_FLOOR_N = 1e-12
+"""Least force scale (N) a residual, a recast's unknowns or a distance is made relative
+to: an unloaded line (``b = 0``) keeps them absolute instead of dividing by zero; far
+below any load a scene carries, so a loaded line is never floored."""
+
 
 class ProblemError(ValueError):
     """A problem whose data are malformed (shapes, NaN, inconsistent sizes)."""
@@ -86,8 +91,10 @@ class ForceChecks:
 
     @property
     def scale(self) -> float:
-        """Force scale used to make residuals relative: ``||b||`` (at least 1e-12)."""
-        return max(float(np.linalg.norm(self.b)), 1e-12)
+        """Force scale used to make residuals relative: ``||b||`` (at least
+        :data:`SCALE_FLOOR_N`).
+        """
+        return max(float(np.linalg.norm(self.b)), SCALE_FLOOR_N)
 
     def residuals(self, x: np.ndarray) -> dict[str, float]:
         """Relative residuals of ``x``; ``inf`` everywhere when ``x`` is not finite.
@@ -134,7 +141,7 @@ def residuals_batch(A: np.ndarray, b: np.ndarray, X: np.ndarray, unilateral, pai
     bad = ~np.all(np.isfinite(X), axis=1)
     if bad.any():
         X = np.where(bad[:, None], 0.0, X)
-    scale = np.maximum(np.linalg.norm(b, axis=-1), 1e-12)
+    scale = np.maximum(np.linalg.norm(b, axis=-1), SCALE_FLOOR_N)
     xu = X[:, np.asarray(unilateral, bool)]
     sign = np.maximum(0.0, -xu.min(axis=1, initial=np.inf)) if xu.shape[1] else np.zeros(T)
     pair = np.asarray(pairs, int).reshape(-1, 2)

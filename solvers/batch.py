@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
-from cardan_forces.formulations.problems import LastMade, map_all
+from cardan_forces.formulations.problems import SCALE_FLOOR_N, LastMade, map_all
 
 from .optimality import combine, multipliers, stacked_measures, unique_optimum
 from .record import (
@@ -137,7 +137,7 @@ def finalize_batch(batch, solver: str, outcome: BatchOutcome,
     if reference is not None:
         ref = np.asarray(reference, float)
         distance = (np.linalg.norm(x - ref, axis=1)
-                    / np.maximum(np.linalg.norm(ref, axis=1), 1e-12))
+                    / np.maximum(np.linalg.norm(ref, axis=1), SCALE_FLOOR_N))
         distance[~answered] = np.inf
         residuals = Residuals(**residuals, reference=distance)
         if _unique(batch):

@@ -21,6 +21,21 @@ import numpy as np
 
 from .record import Status
 
+PIVOT_RTOL = 1e-12
+"""Lemke's pivots: a column entry at most this times the largest of ``|M|`` (at least 1)
+is rounding, not a pivot; ratios within this relatively of the least one tie (the
+artificial variable then leaves first). About 4500 times machine epsilon, so rounding
+never makes a pivot."""
+
+DESCENT_RTOL = 1e-10
+"""The Fischer-Burmeister Newton step is used when its slope on ``1/2 ||Phi||^2`` is below
+``-DESCENT_RTOL ||d||^2`` (a descent direction by a margin above rounding), else the
+steepest descent is taken."""
+
+MIN_STEP = 1e-12
+"""The Armijo line search's least step: below it the search has failed (the merit cannot
+decrease along the direction within rounding)."""
+
 
 class LCPResult(NamedTuple):
     """Answer of one LCP method, with the record's status."""
@@ -49,7 +64,7 @@ def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> LCPRes
     tableau = np.hstack([np.eye(n), -M, -np.ones((n, 1)), q[:, None]])
     basis = np.arange(n)
     artificial = 2 * n
-    pivot_tol = 1e-12 * max(1.0, float(np.abs(M).max(initial=0.0)))
+    pivot_tol = PIVOT_RTOL * max(1.0, float(np.abs(M).max(initial=0.0)))
     row, entering = int(np.argmin(q)), artificial
     for pivots in range(1, max_pivots + 1):
         tableau[row] /= tableau[row, entering]
@@ -68,7 +83,7 @@ def lemke(M: np.ndarray, q: np.ndarray, max_pivots: int | None = None) -> LCPRes
             message = "secondary ray: no solution found"
             return LCPResult(np.full(n, np.nan), Status.FAILED, pivots, message)
         ratios = tableau[candidates, -1] / column[candidates]
-        ties = candidates[ratios <= ratios.min() + 1e-12 * max(1.0, abs(ratios.min()))]
+        ties = candidates[ratios <= ratios.min() + PIVOT_RTOL * max(1.0, abs(ratios.min()))]
         leaves_artificial = ties[basis[ties] == artificial]
         row = int(leaves_artificial[0] if leaves_artificial.size else ties[0])
     return LCPResult(np.full(n, np.nan), Status.FAILED, max_pivots,
@@ -127,10 +142,10 @@ def fb_newton(M: np.ndarray, q: np.ndarray, z0: np.ndarray | None = None, tol: f
             d = np.linalg.solve(J, -phi)
         except np.linalg.LinAlgError:
             d = -grad
-        if not np.all(np.isfinite(d)) or grad @ d > -1e-10 * float(d @ d):
+        if not np.all(np.isfinite(d)) or grad @ d > -DESCENT_RTOL * float(d @ d):
             d = -grad  # Newton direction unusable: steepest descent on 1/2||Phi||^2
         merit, slope, step = 0.5 * float(phi @ phi), float(grad @ d), 1.0
-        while step > 1e-12:
+        while step > MIN_STEP:
             trial = z + step * d
             phi_trial = fischer_burmeister(trial, M @ trial + q)
             if 0.5 * float(phi_trial @ phi_trial) <= merit + sigma * step * slope:

@@ -74,6 +74,11 @@ TIME_LIMITED = ("highs",)
 TIKHONOV_DEFAULT = 1e-10
 """Relative Tikhonov weight of ``scipy-lsq_linear`` when no ``tol`` is given."""
 
+REFERENCE_TOL = 1e-10
+"""The tolerance a reference answer by Clarabel is asked for (``cardan solve``'s
+reference, the bench's conic references): two decades below the bench's finest judged
+level (1e-8), so the reference's own error does not count against the answer judged."""
+
 
 def options_for(parameters: tuple[str, ...], tol: float | None,
                 smallest: float = 0.0) -> dict[str, float]:
