@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-import numpy as np
 from cardan_forces.driveline.equilibrium import Operator
 from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations import formulation as registered
@@ -65,11 +64,3 @@ def build_all(op: Operator, i: int, names: Iterable[str]) -> dict:
         except NotApplicable as err:
             built[name] = err
     return built
-
-
-def median_times(records: list[Record]) -> dict[str, float]:
-    """Median setup + solve time (s) per backend."""
-    by: dict[str, list[float]] = {}
-    for r in records:
-        by.setdefault(r.solver, []).append(r.setup_s + r.solve_s)
-    return {k: float(np.median(v)) for k, v in by.items()}

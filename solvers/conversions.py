@@ -224,15 +224,3 @@ def eliminate_equalities(P, q, A, b, cones, null_space=None) -> Reduced:
         A=A_in @ N, b=_part(b, rest) - _mv(A_in, z0), cones=kept, z0=z0, N=N,
         factors=factors, rows_eq=eq, rows_in=rest,
         offset=np.einsum("tn,tn->t", z0, 0.5 * Pz0 + q), P_full=P, q_full=q, A_in=A_in)
-
-
-def reduced_conic(conic: Conic) -> tuple[Conic, Reduced]:
-    """One :class:`Conic` in its reduced form (a problem in ``y`` whose checks are still
-    the original's: only a solver sees it) and the :class:`Reduced` that lifts answers.
-    """
-    red = eliminate_equalities(conic.P, conic.q[None], np.asarray(conic.A, float)[None],
-                               np.asarray(conic.b, float)[None], conic.cones,
-                               None if conic.null_space is None else conic.null_space[None])
-    problem = Conic(checks=conic.checks, formulation=conic.formulation, P=red.P[0],
-                    q=red.q[0], A=red.A[0], b=red.b[0], cones=red.cones)
-    return problem, red

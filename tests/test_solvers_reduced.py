@@ -18,7 +18,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.problems import Conic, ForceChecks
 from cardan_forces.solvers import ACCEPT, available, solve
-from cardan_forces.solvers.conversions import eliminate_equalities, reduced_conic
+from cardan_forces.solvers.conversions import eliminate_equalities
 from cardan_forces.solvers.optimality import measures, objective_value
 from cardan_forces.solvers.registry import solve_batch
 
@@ -27,6 +27,18 @@ INSTANTS = (0, 7, 15)
 TOL = 1e-8
 AGREE = 100 * TOL
 """Relative objective difference allowed between two interior-point answers at TOL."""
+
+
+def reduced_conic(conic: Conic):
+    """One :class:`Conic` in its reduced form (a problem in ``y``, the original's checks)
+    and the :class:`~cardan_forces.solvers.conversions.Reduced` that lifts answers.
+    """
+    red = eliminate_equalities(conic.P, conic.q[None], np.asarray(conic.A, float)[None],
+                               np.asarray(conic.b, float)[None], conic.cones,
+                               None if conic.null_space is None else conic.null_space[None])
+    problem = Conic(checks=conic.checks, formulation=conic.formulation, P=red.P[0],
+                    q=red.q[0], A=red.A[0], b=red.b[0], cones=red.cones)
+    return problem, red
 
 
 def _need(name: str) -> None:
