@@ -51,8 +51,9 @@ COINCIDE = 0.005
 on one another (:func:`coinciding`); the figure says which, and within how much."""
 SAME_RTOL = 1e-6
 """Values within this share of their scale are one value on a figure (a rigid set whose
-ends meet, a component that is zero beside its panel's largest): the package's
-acceptance of an answer (``solvers.ACCEPT``), below which answers are not told apart."""
+ends meet, a component that is zero beside its panel's largest, loads that coincide
+over a revolution): the package's acceptance of an answer (``solvers.ACCEPT``), below
+which answers are not told apart."""
 BOUND_REACH = 0.25
 """A finite bound of a rigid set is held in a panel's y range when it widens the range
 of the curves by at most this share; one farther off (a near-zero lower bound under

@@ -52,6 +52,7 @@ from cardan_forces.experiments import files
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import (
     PAGE_IN,
+    SAME_RTOL,
     TITLE_PT,
     chars_across,
     coinciding,
@@ -193,7 +194,7 @@ def _panel(ax, title: str, angle_deg, loads: dict, colours: dict, marks: dict) -
     """
     drawn = {n: v for n, v in loads.items() if np.isfinite(v).any()}
     scale = max((np.nanmax(np.abs(v)) for v in drawn.values()), default=1.0)
-    together = coinciding(drawn, 1e-6 * max(scale, 1.0))
+    together = coinciding(drawn, SAME_RTOL * max(scale, 1.0))
     hidden = {n for g in together for n in g[1:]}
     for name, values in drawn.items():
         if name in hidden:

@@ -13,8 +13,7 @@ contact forces, N) or map back to them with ``to_forces``.
   complementarity of each end-face pair falls out of the least norm, exactly with an
   active-set solver; at a pair that carries no load, pushing both faces by ``d`` raises
   the objective only by ``d^2``, so an interior-point solver leaves both at
-  ``~sqrt(tol) ||b||`` (seen with Clarabel at 1e6 N m: 7e-4) and its record is
-  ``inaccurate``.
+  ``~sqrt(tol) ||b||`` and its record is ``inaccurate``.
 - ``min_max``: least peak contact load ``t`` with ``||f_c|| <= t`` for every contact
   (a bearing's 3-vector, a trunnion's radial 2-vector, an end face), then least norm
   (weight ``MIN_MAX_NORM_WEIGHT``) to make the answer unique; end-face pairs may both
