@@ -44,8 +44,7 @@ the built-in grids each order fewer costs about a tenth more Newton steps."""
 WARM_ITER = 20
 """Steps a chain's warm start takes before the instant starts again cold: a start
 across a change of the contacts' states (a clearance closing, a cone's load passing
-zero) can make the steps crawl where a cold start converges (on ``axle-pinion``'s
-``compliance`` one instant took 184 steps warm, 25 cold)."""
+zero) can make the steps crawl where a cold start converges in far fewer."""
 
 STATUS = (Status.SOLVED, Status.INACCURATE, Status.INACCURATE, Status.FAILED, Status.FAILED)
 """Status codes of :func:`newton_numpy` and the kernel, by index."""
