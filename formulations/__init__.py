@@ -3,7 +3,8 @@
 ``FORMULATIONS[name](op, i)`` builds the problem of formulation ``name`` at instant
 ``i`` of the equilibrium operator ``op``; each entry is a
 :class:`~cardan_forces.formulations.registry.Formulation` record, the one place that
-says how the package uses that formulation.
+says what that formulation is (a command's choices of formulations live with the
+command).
 """
 
 from .registry import (

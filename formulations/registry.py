@@ -1,7 +1,10 @@
 """The formulation registry: one :class:`Formulation` record per contact formulation,
-the one place that says how its problem is built and how the package uses it (DESIGN
-§2). The study layer, the bench, the hard cases, sweeps, the paper's figures, reports
-and export read these records; none of them keeps a table of formulations of its own.
+the one place that says what it is (DESIGN §2): how its problem is built, its problem
+classes, its label, its physical meaning, the backends that take it and whether it can
+be exported. The study layer, the bench, the hard cases, sweeps, the paper's figures,
+reports and export read these records; a command's own choices (the bench's targets,
+the figures' methods, export's default set) are tables of that command, keyed by the
+names spelled here. Nothing here knows the commands: the data flows one way.
 
 ``FORMULATIONS[name](op, i)`` builds formulation ``name``'s problem at instant ``i`` of
 the equilibrium operator ``op`` (a record is called as its builder is).
