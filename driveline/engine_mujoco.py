@@ -140,7 +140,7 @@ def mujoco_version() -> str:
 
 def check_expressible(scene: Scene) -> None:
     """Raise :class:`EngineUnsupported` naming every element the engine cannot express."""
-    problems = refusals(scene, "the engine (its joint friction is a constant force)")
+    problems = refusals(scene, "the engine")
     if scene.has("friction"):
         problems.append("effect 'friction' (Coulomb cones in the joints) has no engine "
                         "counterpart on a hinge")

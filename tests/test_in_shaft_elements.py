@@ -33,7 +33,7 @@ def test_two_cuts_make_three_segments_that_span_the_shaft():
 
 def test_a_middle_segment_between_two_splines_is_refused_as_unheld():
     with pytest.raises(SceneError, match="'s0' on shaft 'intermediate': its downstream "
-                                         "segment has no neighbour"):
+                                         "segment is not held"):
         _slips(-0.2, 0.3)
 
 

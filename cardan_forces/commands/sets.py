@@ -145,8 +145,8 @@ def print_table(name, result, ranges, member, starts=None, n_starts=0) -> None:
         print(f"rigid set: {words}: no component has a value or an interval")
     print(f"determinate: null-space row norm < {DETERMINATE_TOL:g}; '{SIGNED}': the least-"
           f"norm solution with end faces >= 0 ({backend}), one member of the rigid set, in N "
-          "(N m for a slip joint's bending and torque); interval over all solutions with end "
-          "faces >= 0 (-inf/+inf: unbounded)")
+          "(N m for moments: an element's bending and torque); interval over all solutions "
+          "with end faces >= 0 (-inf/+inf: unbounded)")
     width = max(24, *(len(n) for n in result.names))
     print(f"{'component':{width}s} {'determinate':>11s} {SIGNED + ' N':>14s} {'min N':>12s} "
           f"{'max N':>12s}")

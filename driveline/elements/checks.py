@@ -3,7 +3,7 @@
 Bad layouts raise :class:`~cardan_forces.driveline.scene.SceneError`:
 
 - an element its kind refuses (:meth:`~.base.ElementKind.check`), e.g. a slip joint
-  whose segment has no neighbour: neither a Cardan joint at its end nor a bearing on
+  whose segment is not held: neither a joint at its end nor a bearing on
   it, so nothing but the spline holds it;
 - a line that can slide as a whole (or a part of it between slip joints): its
   bearings are all floating along a common direction, no locating bearing holds it.
