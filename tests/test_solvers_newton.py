@@ -48,6 +48,20 @@ def _relative(x, ref):
     return float(np.linalg.norm(x - ref) / max(np.linalg.norm(ref), 1e-300))
 
 
+REFERENCES = ("clarabel", "qpsolvers-daqp")
+"""Independent references, Clarabel first: an answer is one where the package's own
+measures hold it optimal (Clarabel's interior point loses primal accuracy on the soft
+disc coupling of ``propshaft-disc`` in ``compliance``, where DAQP's active set does not)."""
+
+
+def _reference(problem):
+    for solver in REFERENCES:
+        theirs = solve(problem, solver, tol=1e-10)
+        if theirs.x is not None and theirs.within(1e-8):
+            return theirs
+    raise AssertionError(f"no reference of {REFERENCES} is optimal")
+
+
 @pytest.mark.parametrize("formulation", FORMULATIONS_TAKEN)
 def test_answers_equal_clarabels_at_every_scene(scene_op, formulation):
     name, op = scene_op
@@ -58,7 +72,7 @@ def test_answers_equal_clarabels_at_every_scene(scene_op, formulation):
             pytest.skip(f"{formulation} does not apply to {name}")
         mine = solve(problem, "newton")
         against = problem if formulation != "lcp" else FORMULATIONS["positive"](op, i)
-        theirs = solve(against, "clarabel", tol=1e-10)
+        theirs = _reference(against)
         assert mine.status == "solved", (name, i, mine.message)
         assert _relative(mine.x, theirs.x) <= CLARABEL_RTOL[formulation], (name, i)
         if mine.solver_status == "solved":  # its claim, held to the package's measures

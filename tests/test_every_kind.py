@@ -1,0 +1,75 @@
+"""Every element kind in one line (``tests/data/every_kind.toml``: locating, floating
+and angular-contact bearings, a slip joint, a disc coupling, Cardan joints): the rigid
+set carries its loads, the disc coupling is a weld in it, and every command runs on it
+or refuses in one line."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from cardan_forces.driveline.determinacy import determinacy
+from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.elements.registry import KINDS, scene_elements
+from cardan_forces.driveline.equilibrium import build_operator
+from cardan_forces.driveline.loading import load_scene
+
+from cardan_forces.cli import main
+
+SCENE = str(Path(__file__).parent / "data" / "every_kind.toml")
+
+
+@pytest.fixture(scope="module")
+def op():
+    return build_operator(simulate(load_scene(SCENE), [0.3]))
+
+
+def test_the_scene_holds_every_kind():
+    held = {type(kind) for kind, *_ in scene_elements(load_scene(SCENE))}
+    assert held == {type(kind) for kind in KINDS}
+
+
+def test_its_loads_are_carried_and_the_disc_torque_is_the_line_torque(op):
+    """A weld carries the shaft's torque: between the input's 2500 N m over the first
+    joint's ratio bounds (4 deg: cos and 1/cos) with no inertia in a quasi-static line."""
+    d = determinacy(op, 0)
+    assert np.linalg.norm(op.A[0] @ d.min_norm - op.b[0]) <= 1e-9 * np.linalg.norm(op.b[0])
+    torque = op.names.index("disc.torque")
+    assert d.determinate[torque]
+    gamma = np.radians(4.0)
+    assert 2500 * np.cos(gamma) <= d.min_norm[torque] <= 2500 / np.cos(gamma)
+
+
+COMMANDS = {
+    "sets": ["sets", SCENE, "--t", "0.3", "--release"],
+    "solve": ["solve", SCENE, "--t", "0.3"],
+    "report": ["report", SCENE, "--instants", "5", "--out", "{out}"],
+    "repro": ["repro", SCENE, "--quick", "--no-penalty", "--methods",
+              "positive,min_max,compliance", "--out", "{out}"],
+    "bench": ["bench", SCENE, "--quick", "--out", "{out}"],
+    "hard": ["hard", SCENE, "--quick", "--out", "{out}"],
+    "life": ["life", SCENE, "--instants", "5", "--out", "{out}"],
+    "tolerances": ["tolerances", SCENE, "--samples", "4", "--instants", "3", "--out", "{out}"],
+    "sweep": ["sweep", SCENE, "--quick", "--out", "{out}"],
+    "export": ["export", SCENE, "--instants", "2", "--out", "{out}"],
+}
+"""Every command that takes a scene with its quickest run (``scene`` is the loader's)."""
+
+REFUSING = {"engine": (["engine", SCENE, "--instants", "5", "--out", "{out}"],
+                       "disc coupling 'disc'"),
+            "secondary": (["secondary", SCENE, "--out", "{out}"], "three shafts")}
+"""Commands that cannot take the scene, and what their one line names."""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", COMMANDS)
+def test_every_command_runs_on_every_kind(command, tmp_path, capsys):
+    argv = [a.format(out=tmp_path / command) for a in COMMANDS[command]]
+    assert main(argv) == 0
+
+
+@pytest.mark.parametrize("command", REFUSING)
+def test_a_command_that_cannot_take_a_kind_says_so_in_one_line(command, tmp_path, capsys):
+    argv, named = REFUSING[command]
+    assert main([a.format(out=tmp_path / command) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert named in err and err.count("\n") == 1
