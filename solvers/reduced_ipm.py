@@ -303,7 +303,6 @@ def _solve(P, q, G, h, lay: Layout, tol: float, max_iter: int) -> Answer:
     residual = _plus(_times(Gs, x), _negate(hs))
     s = _into_cone(_negate(residual), lay)
     z = _into_cone(residual, lay)
-    e = identity(lay, T)
     code = np.full(T, RUNNING)
     iterations = np.zeros(T, np.int64)
     h_norm = _inf(hs)
@@ -339,33 +338,17 @@ def _solve(P, q, G, h, lay: Layout, tol: float, max_iter: int) -> Answer:
         if not go.any():
             break
         iterations[go] += 1
-        W = Scaling.of(s, z)
-        K = np.concatenate([np.concatenate([P, np.transpose(G, (0, 2, 1))], axis=2),
-                            np.concatenate([G, -W.squared(lay)], axis=2)], axis=1)
-        K[~go] = np.eye(K.shape[1])  # stopped instants: any well-posed system
-        broken = ~np.isfinite(K).all(axis=(1, 2))
-        code[go & broken] = BROKEN
-        go &= ~broken
-        K[broken] = np.eye(K.shape[1])
-        lam = W.lam
-        mu = gap / lay.degree
-        system = (K, W, lay, rx, rz, Gs)
-        _, dzw_a, dsw_a = _newton(system, _negate(lam))
-        alpha_a = np.minimum(1.0, np.minimum(max_step(lam, dsw_a), max_step(lam, dzw_a)))
-        sigma = np.clip(1.0 - alpha_a, 0.0, 1.0) ** 3
-        rs = _plus(jordan(lam, lam), jordan(dsw_a, dzw_a))
-        rs = axpy(-sigma * mu, e, rs)
-        dx, dzw, dsw = _newton(system, _negate(jordan_solve(lam, rs)))
-        alpha = np.minimum(1.0, STEP_FRACTION * np.minimum(max_step(lam, dsw),
-                                                           max_step(lam, dzw)))
-        ds, dz = W.apply(dsw), W.apply(dzw, inverse=True)
-        alpha = _central(s, z, ds, dz, alpha, lay.degree)
-        stall = go & ~(alpha >= MIN_STEP)
-        code[stall] = STALLED
-        go &= ~stall
-        x = np.where(go[:, None], x + alpha[:, None] * dx, x)
-        s = _where(go, axpy(alpha, ds, s), s)
-        z = _where(go, axpy(alpha, dz, z), z)
+        i = np.flatnonzero(go)  # the step of the running instants only
+        dx, ds, dz, alpha = _step(P[i], G[i], _take(Gs, i), _take(s, i), _take(z, i), rx[i],
+                                  _take(rz, i), gap[i], lay)
+        stall = ~(alpha >= MIN_STEP)  # a NaN step too (a singular or non-finite system)
+        code[i[stall]] = STALLED
+        i, alpha, dx, ds, dz = i[~stall], alpha[~stall], dx[~stall], _take(ds, ~stall), \
+            _take(dz, ~stall)
+        x[i] += alpha[:, None] * dx
+        for mine, step in ((s, ds), (z, dz)):
+            mine[0][i] += alpha[:, None] * step[0]
+            mine[1][i] += alpha[:, None, None] * step[1]
     unsolved = code >= LIMIT
     x, s, z, merit = _keep(unsolved, best, (x, s, z, best[3]))
     code[unsolved & (merit <= REDUCED)] = ALMOST
@@ -376,6 +359,35 @@ def _keep(chosen: np.ndarray, new: tuple, old: tuple) -> tuple:
     """``(x, s, z, merit)`` of ``new`` at the instants ``chosen``, of ``old`` elsewhere."""
     return (np.where(chosen[:, None], new[0], old[0]), _where(chosen, new[1], old[1]),
             _where(chosen, new[2], old[2]), np.where(chosen, new[3], old[3]))
+
+
+def _step(P, G, Gs, s, z, rx, rz, gap, lay: Layout):
+    """The predictor-corrector step of the instants given: ``(dx, ds, dz, alpha)``
+    (module docstring; ``alpha`` NaN where the Newton system is not finite).
+    """
+    W = Scaling.of(s, z)
+    K = np.concatenate([np.concatenate([P, np.transpose(G, (0, 2, 1))], axis=2),
+                        np.concatenate([G, -W.squared(lay)], axis=2)], axis=1)
+    broken = ~np.isfinite(K).all(axis=(1, 2))
+    K[broken] = np.eye(K.shape[1])
+    lam = W.lam
+    system = (K, W, lay, rx, rz, Gs)
+    _, dzw_a, dsw_a = _newton(system, _negate(lam))
+    alpha_a = np.minimum(1.0, np.minimum(max_step(lam, dsw_a), max_step(lam, dzw_a)))
+    sigma = np.clip(1.0 - alpha_a, 0.0, 1.0) ** 3
+    rs = _plus(jordan(lam, lam), jordan(dsw_a, dzw_a))
+    rs = axpy(-sigma * gap / lay.degree, identity(lay, len(gap)), rs)
+    dx, dzw, dsw = _newton(system, _negate(jordan_solve(lam, rs)))
+    alpha = np.minimum(1.0, STEP_FRACTION * np.minimum(max_step(lam, dsw),
+                                                       max_step(lam, dzw)))
+    ds, dz = W.apply(dsw), W.apply(dzw, inverse=True)
+    alpha = _central(s, z, ds, dz, alpha, lay.degree)
+    return dx, ds, dz, np.where(broken, np.nan, alpha)
+
+
+def _take(u, rows):
+    """The pair ``u`` at ``rows`` (indices or a mask)."""
+    return u[0][rows], u[1][rows]
 
 
 def _central(s, z, ds, dz, alpha: np.ndarray, degree: int) -> np.ndarray:

@@ -35,7 +35,8 @@ def _batch(op, formulation, instants):
 
 def _agrees_with_clarabel(batch, result):
     """Every instant solved, within :data:`LEVEL`, at Clarabel's optimal value and
-    forces (tol 1e-10).
+    forces (tol 1e-10; its value as close as its own measured gap says: on
+    ``axle-pinion``'s ``min_max`` Clarabel stops at a gap of 7e-8 even at 1e-12).
     """
     assert all(s == "solved" for s in result.status)
     assert result.within(LEVEL).all()
@@ -43,7 +44,8 @@ def _agrees_with_clarabel(batch, result):
         expected = solve(problem, "clarabel", tol=1e-10)
         assert expected.solved
         value = objective_value(problem, expected.z)
-        assert objective_value(problem, result.z[k]) == pytest.approx(value, rel=1e-8,
+        rel = max(LEVEL, 2 * expected.optimality.gap)
+        assert objective_value(problem, result.z[k]) == pytest.approx(value, rel=rel,
                                                                       abs=1e-10)
         x, rtol = result.x[k], FORCES_RTOL[batch.formulation]
         assert np.linalg.norm(x - expected.x) <= rtol * np.linalg.norm(expected.x)
