@@ -14,7 +14,7 @@ how the force is read (Drake reports joint reactions, not constraint impulses).
 MuJoCo-only attributes (integrator, step, solver tolerance, ``solref``/``solimp``)
 are dropped: Drake softens the constraints its own way. Building the plant through
 pydrake directly would repeat, kind by kind, what the MJCF already says; the text
-edit is a dozen lines.
+edit is short and knows no kind.
 
 **Simulation.** Discrete plant, SAP solver (the only one that takes ball
 constraints), step :attr:`Stepping.time_step_s`; from the scene's initial state
@@ -70,9 +70,6 @@ MUJOCO_ONLY = {"option": ("timestep", "integrator", "tolerance", "iterations"),
 
 SEAT = "seat."
 """Prefix of a bearing's seat body: ``seat.<bearing contact name>``."""
-
-BETA = 0.1
-"""SAP's near-rigid threshold for ball constraints (``SapBallConstraint``: fixed)."""
 
 
 @dataclass(frozen=True)

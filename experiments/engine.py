@@ -692,8 +692,9 @@ def engine_versions(engines) -> str:
 
 
 def run(args) -> int:
-    """``cardan engine``: the study, its files, and a one-line summary per setting; an
-    engine of ``--engine all`` that cannot run the scene said in one line on stderr.
+    """``cardan engine``: the study, its files, and per setting a line of agreement and
+    one of the predicted member; an engine of ``--engine all`` that cannot run the
+    scene said in one line on stderr.
     """
     import sys
 
@@ -704,7 +705,7 @@ def run(args) -> int:
     for name, why in result.skipped.items():
         print(f"cardan engine: {name} left out: {why}", file=sys.stderr)
     paths = write(result, Path(args.out), engine_versions(ran), args.format)
-    print("\n".join(agreement_lines(result)))
+    print("\n".join(agreement_lines(result) + [""] + prediction_lines(result)))
     files.say_written("engine", paths, note=f"{time.perf_counter() - start:.1f} s")
     return 0
 
