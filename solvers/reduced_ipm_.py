@@ -24,10 +24,12 @@ instant's message:
   alone by Clarabel (a core dependency, :data:`FALLBACK`), whose status it then
   carries.
 
-``tol`` is the interior point's relative tolerance (:data:`.reduced_ipm.TOL` by default);
-it takes no start (the iterates of the previous instant lie near its boundary, which an
-interior point cannot start from). ``stages``: ``reduce`` (elimination and folding),
-``ipm``, ``lift`` and ``fallback``.
+``tol`` is the interior point's relative tolerance (:data:`.reduced_ipm.TOL` by default).
+It takes no start: the previous instant's answer moved into the cones' interior halved
+the iterations of ``paper``'s ``min_max`` and cut ``socp_face``'s by a quarter, but it
+chains the instants (an answer would depend on those before it), and every instant of a
+batch steps together here. ``stages``: ``reduce`` (elimination and folding), ``ipm``,
+``lift`` and ``fallback``.
 """
 
 from __future__ import annotations
