@@ -26,6 +26,23 @@ def paper_raw():
     return copy.deepcopy(tomllib.loads(builtin_text("paper")))
 
 
+@pytest.fixture
+def empty_pictures(monkeypatch):
+    """Every figure a command saves through ``images.save`` written as an empty file at
+    the path it would have: for tests of what a command computes, writes beside its
+    figures and says, whose pictures other tests hold (drawing and encoding them is most
+    of such a command's time)."""
+    from cardan_forces.experiments import images
+
+    def empty(fig, stem, formats=("png",)):
+        paths = [stem.with_suffix(f".{fmt}") for fmt in formats]
+        for path in paths:
+            path.write_bytes(b"")
+        return paths
+
+    monkeypatch.setattr(images, "save", empty)
+
+
 def variant(**overrides):
     """The paper scene with top-level keys replaced (tables merge key by key)."""
     return scene_from_dict({"extends": "paper", **overrides}, source="<variant>")

@@ -114,7 +114,7 @@ def test_repro_quick_writes_all_figures_and_report(quick_repro):
         assert np.all((low[done] - 1e-6 <= v) & (v <= high[done] + 1e-6))
 
 
-def test_repro_overlays_the_penalty_simulation(tmp_path):
+def test_repro_overlays_the_penalty_simulation(tmp_path, empty_pictures):
     """The released line's speeds and forces beside the rigid ones, and the compliance
     vs penalty comparison: the bearing loads of the compliant world are a member of the
     rigid set close to the convex selections (measured: ~2 % after smoothing)."""

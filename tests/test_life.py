@@ -158,7 +158,7 @@ def test_paper_worst_case_is_open_and_the_release_bounds_it(paper):
         assert math.isfinite(entry["fr"][1]) and math.isfinite(entry["fa"][1])
 
 
-def test_life_json_is_strict_and_files_are_written(tmp_path, capsys):
+def test_life_json_is_strict_and_files_are_written(tmp_path, capsys, empty_pictures):
     assert main(["life", "paper-slip", "--instants", "3", "--json", "--quiet"]) == 0
     answer = _strict(capsys.readouterr().out)
     assert answer["scene"] == "paper-slip" and len(answer["bearings"]) == 4

@@ -59,19 +59,10 @@ def test_python_api_draws_no_bar_even_on_a_terminal(monkeypatch, restore):
     assert not progress.shown()
 
 
-def test_quiet_report_says_nothing(tmp_path, capsys, monkeypatch, restore):
+def test_quiet_report_says_nothing(tmp_path, capsys, empty_pictures, restore):
     """Progress and the files written go to stderr, which --quiet silences; a report has
     no answer for stdout (its files are it). The pages are written as empty files: what
     is said is the subject here, the pictures are test_report_figures'."""
-    from cardan_forces.experiments import images
-
-    def empty(fig, stem, formats=("png",)):
-        paths = [stem.with_suffix(f".{fmt}") for fmt in formats]
-        for path in paths:
-            path.write_bytes(b"")
-        return paths
-
-    monkeypatch.setattr(images, "save", empty)
     assert main(["report", "propshaft", "--instants", "2", "--out", str(tmp_path)]) == 0
     assert "report:" in capsys.readouterr().err  # the plain progress lines, not a TTY
     assert main(["report", "propshaft", "--instants", "2", "--out", str(tmp_path),

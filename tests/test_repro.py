@@ -108,7 +108,8 @@ def test_both_fig15_scenes_by_default_in_every_format_asked(tmp_path):
     assert "not judged (needs the paper's method and the penalty simulation)" in text
 
 
-def test_a_slip_joint_scene_gets_its_figures_with_the_methods_that_apply(tmp_path, capsys):
+def test_a_slip_joint_scene_gets_its_figures_with_the_methods_that_apply(tmp_path, capsys,
+                                                                         empty_pictures):
     out = str(tmp_path)
     args = ["repro", "paper-slip", "--quick", "--no-penalty", "--fig", "13", "--out", out]
     assert main(args) == 2  # the paper's method does not apply to a slip joint
@@ -127,7 +128,8 @@ def test_moving_average_of_a_line_is_the_line():
     assert np.allclose(figures.moving_average(3 * t + 1, t)[20:-20], (3 * t + 1)[20:-20])
 
 
-def test_one_penalty_simulation_per_scene_and_the_runs_listed(tmp_path, monkeypatch):
+def test_one_penalty_simulation_per_scene_and_the_runs_listed(tmp_path, monkeypatch,
+                                                              empty_pictures):
     """Fig. 15 on the same scene as Figs. 11-14 reuses its penalty simulation; the report
     lists what was made and what for; without the penalty nothing is simulated."""
     made = []

@@ -164,7 +164,8 @@ def _undefined_engine_row(op) -> dict:
             "instants": 0}
 
 
-def test_bench_and_regularization_write_no_inf_or_nan(tmp_path, monkeypatch, capsys):
+def test_bench_and_regularization_write_no_inf_or_nan(tmp_path, monkeypatch, capsys,
+                                                     empty_pictures):
     """Every CSV a bench run writes, ``regularization.csv`` with it, holds an empty cell
     where a number is undefined: a backend's failed instants (no residuals, no
     optimality, no time ratio for a profile none solved), the engine's row (no
