@@ -124,6 +124,8 @@ def paper_report():
     return op, report.histories(op)
 
 
+@pytest.mark.slow  # every page; the default run holds the first page to the rules of print
+# (test_report_pages_with_the_engine_draw_nothing_in_its_settling)
 def test_report_pages_keep_the_rules_of_print(paper_report):
     op, h = paper_report
     with images.styled():
