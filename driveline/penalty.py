@@ -29,7 +29,23 @@ hold these laws); those of the built-in kinds:
 - **slip joint** (frictionless spline between the two segments of its shaft): shear and
   bending by two radial contacts without clearance a pitch radius either side of the
   joint, torque by two teeth at the pitch radius; no axial contact; linear, as stiff as
-  a bearing (:mod:`.elements.slip`).
+  a bearing (:mod:`.elements.slip`);
+- **disc coupling** (:mod:`.elements.disc_coupling`): a bushing (:meth:`ContactRows.bushing`).
+
+**Bushing.** A linear six-way spring-damper between a link's two bodies at a point,
+bilateral (it pulls as it pushes, with no clearance and no step): along each axis
+``x_i`` of a frame fixed in both bodies at the start, a spring ``f_i = k_i d_i + c_i
+d_i'`` with ``d_i`` the offset of the body's point from the other's along the other's
+``x_i``, acting on the body along its own ``x_i``; about each axis a torsion spring
+``M_i = kr_i theta_i + cr_i theta_i'`` with ``theta_i = (x_j.x_k' - x_k.x_j') / 2``
+(``x'`` the other body's axes, ``(i, j, k)`` cyclic: the small rotation's component),
+a pure couple along ``d theta_i`` per rotation (from the energy ``kr_i theta_i^2 /
+2``): turned by ``phi`` about ``x_i``, ``theta_i = sin(phi)`` and the couple ``kr_i
+sin(phi) cos(phi)``, ``kr_i phi`` to within ``phi^2`` (:class:`~.penalty_model._Contacts`,
+``SPRING`` and ``TWIST``). Damping: the
+scene's fraction of each stiffness, as eqs. 75-78's ``c_max`` of a linear contact
+(``c = fraction * k``, 0.01 s by default), at every deflection: a bilateral spring has
+no moment of first touch for eq. 78's step to soften.
 
 Every contact is built from the equilibrium operator's links (where each column acts,
 along what), so the bodies are the operator's (a shaft cut by a slip joint is two
@@ -120,6 +136,7 @@ from scipy.integrate import BDF, LSODA, Radau
 
 from . import penalty_kernels as kernels
 from .contact import hertz_stiffness
+from .elements.base import PENALTY_SIMULATION
 from .elements.registry import refusals
 from .penalty_integrators import RTOL, Marks, run_compiled, run_odeint, run_stepped, timed
 from .penalty_model import Model, contact_law
@@ -238,8 +255,9 @@ class ContactRows:
 
     ``scene``, ``op``: the model's; :meth:`law` the eqs. 75-78 parameters of a
     stiffness (:meth:`hertz` of a joint's Hertz contacts); :meth:`add` one contact of a
-    link between its two bodies (the ground for ``other`` None); :meth:`centre` a
-    body's rest centre. ``parts[k]``: the contacts of link ``k``.
+    link between its two bodies (the ground for ``other`` None), :meth:`bushing` a
+    six-way spring-damper; :meth:`centre` a body's rest centre. ``parts[k]``: the
+    contacts of link ``k``.
     """
 
     def __init__(self, model: _Model, damping_length_unit_m: float):
@@ -268,12 +286,37 @@ class ContactRows:
         """One contact of ``link``: ``point_a``/``axis_a`` on its body, ``point_b``/
         ``axis_b`` on the other (global, at the start), as :class:`_Contacts` reads them.
         """
-        model = self.model
-        a = link.body
-        b = model.n_bodies if link.other is None else link.other
-        self.rows.append((a, b, model.local(a, point_a), model.local(a, vector=axis_a),
-                          model.local(b, point_b), model.local(b, vector=axis_b), offset,
-                          radial, *law))
+        model, (a, b) = self.model, self._bodies(link)
+        self._row(a, b, model.local(a, point_a), model.local(a, vector=axis_a),
+                  model.local(b, point_b), model.local(b, vector=axis_b), offset,
+                  kernels.RADIAL if radial else kernels.FACE, law)
+
+    def bushing(self, link, point, frame, k_trans, k_rot) -> None:
+        """A bushing (module doc) of ``link`` at ``point`` (global, at the start) in
+        ``frame`` (three orthonormal global axes, right-handed, at the start; fixed in
+        both bodies): translational stiffness ``k_trans[i]`` (N/m) along axis ``i``,
+        rotational ``k_rot[i]`` (N m/rad) about it, damping by :meth:`law`. Six rows:
+        three springs, three twists, in the frame's order.
+        """
+        model, (a, b) = self.model, self._bodies(link)
+
+        def on(body, vector):
+            return model.local(body, vector=np.asarray(vector, float))
+
+        for axis, k in zip(frame, k_trans):
+            self._row(a, b, model.local(a, point), on(a, axis), model.local(b, point),
+                      on(b, axis), 0.0, kernels.SPRING, self.law(k))
+        for i, k in enumerate(k_rot):  # theta_i = (R_a x_j . R_b x_k - R_a x_k . R_b x_j) / 2
+            x_j, x_k = frame[(i + 1) % 3], frame[(i + 2) % 3]
+            self._row(a, b, on(a, x_k), on(a, x_j), on(b, x_j), on(b, x_k), 0.0,
+                      kernels.TWIST, self.law(k))
+
+    def _bodies(self, link) -> tuple[int, int]:
+        """``link``'s body and its other (the ground, ``n_bodies``, for None)."""
+        return link.body, self.model.n_bodies if link.other is None else link.other
+
+    def _row(self, a, b, s, e, j, u, offset, kind, law) -> None:
+        self.rows.append((a, b, s, e, j, u, offset, kind, *law))
         self.parts[-1].append(len(self.rows) - 1)
 
 
@@ -332,7 +375,7 @@ def simulate_penalty(
             f"{', '.join(sorted(scene.effects)) or 'none'}); add it to the scene's effects "
             "to run the penalty-contact simulation"
         )
-    if refused := refusals(scene, "the penalty-contact simulation"):
+    if refused := refusals(scene, PENALTY_SIMULATION):
         raise SceneError(f"scene {scene.name!r}: {'; '.join(refused)}")
     if kernel == "auto":
         kernel = "numba" if kernels.HAVE_NUMBA else "numpy"
@@ -466,14 +509,15 @@ def cache_folder() -> str:
 
 def _sample(model: _Model, states: np.ndarray):
     """Named forces (the equilibrium operator's columns, :meth:`_Model.link_values`),
-    shaft speeds about their own axes and the deepest penetration at sampled states
-    (T, n).
+    shaft speeds about their own axes and the deepest penetration of a unilateral
+    contact at sampled states (T, n).
     """
     bodies = model.bodies(states.T)
-    depth, _, force, arms = model.contacts(bodies)
+    depth, _, force, arms, couple = model.contacts(bodies)
     rot, omega = bodies[4:]
     first = [next(g for g, s in enumerate(model.segments) if s.shaft == k)
              for k in range(len(model.scene.shafts))]
     speeds = (omega[first] * rot[first, :, 1]).sum(axis=1)
-    values = model.link_values(force, arms, rot)
-    return dict(zip(model.operator.names, values)), speeds, depth.max(axis=0)
+    values = model.link_values(force, arms, couple, rot)
+    unilateral = model.c.radial <= kernels.RADIAL  # a bushing's deflections are no depth
+    return dict(zip(model.operator.names, values)), speeds, depth[unilateral].max(axis=0)

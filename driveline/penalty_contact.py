@@ -33,6 +33,11 @@ kernel = partial(njit, cache=True, depends=KERNEL_FILES)
 """The penalty modules' ``njit``: cached, and compiled again when any of
 :data:`KERNEL_FILES` changes."""
 
+FACE, RADIAL, SPRING, TWIST = 0, 1, 2, 3
+"""A contact's kind (the third column of :attr:`ModelArrays.topology`): a unilateral
+end face or radial contact (eqs. 75-78), a bilateral linear spring along a face's axis,
+a bilateral linear torsion spring (:class:`~.penalty_model._Contacts` defines each)."""
+
 
 class ModelArrays(NamedTuple):
     """The released line's model as the compiled kernels take it (one argument, its
@@ -41,13 +46,14 @@ class ModelArrays(NamedTuple):
     Per body (``nb``: shaft segments first, then cross-pins): ``mass`` (kg), principal
     ``inertia`` (nb, 3) (kg m^2, body axes), ``rest_centre`` (nb, 3) (m, global). Per
     contact, one row each: ``topology`` (m, 3) int: body ``a``, body ``b`` (the ground:
-    ``nb``), radial (1) or end face (0); ``geometry`` (m, 12): ``s``, ``e`` (point and
-    axis on ``a``), ``j``, ``u`` (on ``b``), body coordinates (m); ``laws`` (m, 4):
-    offset (the clearance, m), stiffness, exponent, ``c_max`` of the contact law (eqs.
-    75-78). Loads: ``gravity`` (3,) (m/s^2), ``input_torque`` and ``load_torque`` (4,):
-    mean, amplitude, frequency, phase of the torque about the first shaft's axis and
-    against the last's (N m); ``n_shafts`` the shaft segments; ``d_max`` the depth of
-    full damping (m).
+    ``nb``), its kind (:data:`FACE`, :data:`RADIAL`, :data:`SPRING`, :data:`TWIST`);
+    ``geometry`` (m, 12): ``s``, ``e`` (point and axis on ``a``), ``j``, ``u`` (on
+    ``b``), body coordinates (m; a twist's four axes); ``laws`` (m, 4): offset (the
+    clearance, m), stiffness, exponent, ``c_max`` of the contact law (eqs. 75-78; a
+    spring's or twist's ``K`` and ``c``). Loads: ``gravity`` (3,) (m/s^2),
+    ``input_torque`` and ``load_torque`` (4,): mean, amplitude, frequency, phase of the
+    torque about the first shaft's axis and against the last's (N m); ``n_shafts`` the
+    shaft segments; ``d_max`` the depth of full damping (m).
     """
 
     n_shafts: int
@@ -146,6 +152,23 @@ def _law(d, rate, stiffness, exponent, c_max, d_max):
         power = d**exponent
     f = stiffness * power + c_max * x * x * (3.0 - 2.0 * x) * rate
     return f if f.real > 0.0 else 0.0 * f
+
+
+@kernel(inline="always")
+def _twist(ea, ub, sa, jb, omega, ka, kb, law, g):
+    """A :data:`TWIST` contact: its ``theta = (ea.ub - sa.jb) / 2`` (rad) and moment
+    ``K theta + c theta'`` (N m), ``theta' = g . (omega_a - omega_b)``, with ``g = (ea x
+    ub - sa x jb) / 2`` into ``g`` (:class:`~.penalty_model._Contacts`; the couple on
+    ``a`` is ``-moment g``).
+    """
+    theta = 0.5 * (ea[0] * ub[0] + ea[1] * ub[1] + ea[2] * ub[2]
+                   - sa[0] * jb[0] - sa[1] * jb[1] - sa[2] * jb[2])
+    rate = 0.0 * theta
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        g[i] = 0.5 * (ea[j] * ub[k] - ea[k] * ub[j] - sa[j] * jb[k] + sa[k] * jb[j])
+        rate += g[i] * (omega[ka, i] - omega[kb, i])
+    return theta, law[1] * theta + law[3] * rate
 
 
 @kernel(inline="always")
@@ -254,22 +277,25 @@ def _depth(p, ea, ub, radial, clearance, normal):
 
 
 @kernel(inline="always")
-def _push(p, ea, ub, rel, radial, law, d_max, force):
-    """Penetration ``d`` and push ``f`` of one contact (eqs. 75-78), and its force on
-    body ``a`` into ``force``: radial contacts along their normal (:func:`_depth`),
-    faces along ``-ea``.
+def _push(p, ea, ub, rel, radial, spring, law, d_max, force):
+    """Penetration ``d`` and push ``f`` of one contact (eqs. 75-78; a :data:`SPRING`'s
+    bilateral law if ``spring``), and its force on body ``a`` into ``force``: radial
+    contacts along their normal (:func:`_depth`), faces and springs along ``-ea``.
     """
     d = _depth(p, ea, ub, radial, law[0], force)  # the normal, for now
-    return d, _pressed(d, ea, rel, radial, law, d_max, force)
+    return d, _pressed(d, ea, rel, radial, spring, law, d_max, force)
 
 
 @kernel(inline="always")
-def _pressed(d, ea, rel, radial, law, d_max, force):
+def _pressed(d, ea, rel, radial, spring, law, d_max, force):
     """:func:`_push` of a contact whose penetration ``d`` and normal (in ``force``,
     :func:`_depth`'s) are known: its push ``f``, and its force on ``a`` into ``force``.
     """
-    f = _law(d, force[0] * rel[0] + force[1] * rel[1] + force[2] * rel[2], law[1], law[2],
-             law[3], d_max)
+    rate = force[0] * rel[0] + force[1] * rel[1] + force[2] * rel[2]
+    if spring:
+        f = law[1] * d + law[3] * rate
+    else:
+        f = _law(d, rate, law[1], law[2], law[3], d_max)
     for i in range(3):
         force[i] = -f * (force[i] if radial else ea[i])
     return f
@@ -288,16 +314,24 @@ def _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force,
     centre, vel, rot = frames.centre, frames.vel, frames.rot
     rate, omega = frames.rate, frames.omega
     for c in range(topology.shape[0]):
-        ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
+        ka, kb, kind = topology[c, 0], topology[c, 1], topology[c, 2]
+        radial, spring = kind == RADIAL, kind == SPRING
         _offset(centre, rot, ka, kb, geometry, c, p, ea, ub, arm, arm_b)
+        if kind == TWIST:  # a pure couple: arm and arm_b are its axes R_a s, R_b j
+            depth[c], push[c] = _twist(ea, ub, arm, arm_b, omega, ka, kb, laws[c], normal)
+            for i in range(3):
+                on_a[c, i] = 0.0
+                moment[ka, i] -= push[c] * normal[i]
+                moment[kb, i] += push[c] * normal[i]
+            continue
         depth[c] = _depth(p, ea, ub, radial, laws[c, 0], normal)
-        if depth[c].real <= 0.0:  # out of touch: no force (eq. 75)
+        if depth[c].real <= 0.0 and not spring:  # out of touch: no force (eq. 75)
             push[c] = 0.0
             for i in range(3):
                 on_a[c, i] = 0.0
             continue
         _relative(vel, rate, omega, ka, kb, geometry, c, p, rel)
-        push[c] = _pressed(depth[c], ea, rel, radial, laws[c], d_max, normal)
+        push[c] = _pressed(depth[c], ea, rel, radial, spring, laws[c], d_max, normal)
         for i in range(3):
             on_a[c, i] = normal[i]  # now the force on a
             force[ka, i] += normal[i]

@@ -4,11 +4,12 @@ Per contact in touch, the force law's derivative with respect to the contact's l
 kinematics (offset, axes, relative velocity), by hand (:func:`_push_rates`: the law's
 rates in ``d`` and ``d'`` times theirs in the kinematics); times the derivatives of
 those kinematics with respect to the 13 states of each of the contact's two bodies
-(:func:`_local_rates`); then the Newton-Euler equations differentiated by hand
-(:func:`_body_rates`). Exact where a forward difference loses half the digits (the
-tests hold it to the NumPy model's complex-step Jacobian,
-:meth:`penalty_model._Model.jacobian`). Its scratch is one :class:`JacobianScratch`
-made once per run.
+(:func:`_local_rates`); a bushing's torsion spring, a pure couple, from the rates of
+its four axes and of the bodies' angular velocities (:func:`_twist_rows`); then the
+Newton-Euler equations differentiated by hand (:func:`_body_rates`). Exact where a
+forward difference loses half the digits (the tests hold it to the NumPy model's
+complex-step Jacobian, :meth:`penalty_model._Model.jacobian`). Its scratch is one
+:class:`JacobianScratch` made once per run.
 """
 
 from __future__ import annotations
@@ -19,10 +20,14 @@ import numpy as np
 
 from .harmonic import harmonic
 from .penalty_contact import (
+    RADIAL,
+    SPRING,
+    TWIST,
     Local,
     _contacts_into,
     _local,
     _push,
+    _twist,
     kernel,
     new_contact_state,
     new_local,
@@ -141,17 +146,22 @@ def _jacobian_into(t, y, model, jac, linked, state, own):
     jac[:] = 0.0
     dmoment[:] = 0.0
     for c in range(m):
-        if pushes[c] <= 0.0:
+        ka, kb, kind = topology[c, 0], topology[c, 1], topology[c, 2]
+        if kind <= RADIAL and pushes[c] <= 0.0:
             continue  # out of touch (or pulled off by the damping): no force, no rate
-        ka, kb, radial = topology[c, 0], topology[c, 1], topology[c, 2] == 1
-        _local(frames, ka, kb, geometry, c, work)
-        depth, push = _push(work.p, work.ea, work.ub, work.rel, radial, laws[c], d_max,
-                            work.normal)
-        _push_rates(work.p, work.ea, work.ub, work.rel, radial, laws[c], d_max, depth,
-                    push, grad, rates)
-        _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work, dloc, cols)
+        radial, spring = kind == RADIAL, kind == SPRING
         width = 13 if kb == nb else 26  # the ground's columns stay zero
-        _contact_rows(grad, dloc, work, width, rows)
+        _local(frames, ka, kb, geometry, c, work)
+        if kind == TWIST:
+            _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work, dloc, cols)
+            _twist_rows(y, nb, ka, kb, laws[c], frames, drot, work, dloc, width, rows)
+        else:
+            depth, push = _push(work.p, work.ea, work.ub, work.rel, radial, spring, laws[c],
+                                d_max, work.normal)
+            _push_rates(work.p, work.ea, work.ub, work.rel, radial, spring, laws[c], d_max,
+                        depth, push, grad, rates)
+            _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work, dloc, cols)
+            _contact_rows(grad, dloc, work, width, rows)
         for k in range(width):
             col = cols[k]
             if col < 0:
@@ -204,10 +214,59 @@ def _contact_rows(grad, dloc, work, width, rows):
 
 
 @kernel(inline="always")
-def _push_rates(p, ea, ub, rel, radial, law, d_max, d, f, grad, rates):
+def _twist_rows(y, nb, ka, kb, law, frames, drot, work, dloc, width, rows):
+    """One :data:`~.penalty_contact.TWIST`'s rates in the first ``width`` states of its
+    bodies into ``rows`` (as :func:`_contact_rows`): no force; its couple ``-h g`` on
+    ``a`` and ``+h g`` on ``b`` (:func:`~.penalty_contact._twist`), by hand: ``dh = K
+    dtheta + c (dg . omega + g . domega)``, ``dtheta`` and ``dg`` from the rates of its
+    four axes (``dloc``'s rows of ``ea``, ``ub``, ``arm`` = ``R_a s`` and ``arm_b`` =
+    ``R_b j``, :func:`_local_rates`), ``omega = omega_a - omega_b`` (global,
+    ``R w``). ``work``: the contact's :class:`Local` (``normal`` takes ``g``, the spare
+    rows ``dg`` and ``domega``).
+    """
+    ea, ub, sa, jb, g = work.ea, work.ub, work.arm, work.arm_b, work.normal
+    dg, spin = work.spare, work.spare_b
+    rot, omega = frames.rot, frames.omega
+    _, h = _twist(ea, ub, sa, jb, omega, ka, kb, law, g)
+    dforce, dmom_a, dmom_b = rows[0], rows[1], rows[2]
+    for col in range(width):
+        dtheta = 0.0
+        for i in range(3):
+            dtheta += 0.5 * (dloc[3 + i, col] * ub[i] + ea[i] * dloc[6 + i, col]
+                             - dloc[12 + i, col] * jb[i] - sa[i] * dloc[15 + i, col])
+        for i in range(3):
+            j, k = (i + 1) % 3, (i + 2) % 3
+            dg[i] = 0.5 * (dloc[3 + j, col] * ub[k] - dloc[3 + k, col] * ub[j]
+                           + ea[j] * dloc[6 + k, col] - ea[k] * dloc[6 + j, col]
+                           - dloc[12 + j, col] * jb[k] + dloc[12 + k, col] * jb[j]
+                           - sa[j] * dloc[15 + k, col] + sa[k] * dloc[15 + j, col])
+        body, local, sign = (ka, col, 1.0) if col < 13 else (kb, col - 13, -1.0)
+        w = 10 * nb + 3 * body
+        for i in range(3):
+            if 3 <= local < 7:  # d(R w)/dq
+                spin[i] = sign * (drot[body, local - 3, i, 0] * y[w]
+                                  + drot[body, local - 3, i, 1] * y[w + 1]
+                                  + drot[body, local - 3, i, 2] * y[w + 2])
+            elif local >= 10:  # d(R w)/dw
+                spin[i] = sign * rot[body, i, local - 10]
+            else:
+                spin[i] = 0.0
+        drate = 0.0
+        for i in range(3):
+            drate += dg[i] * (omega[ka, i] - omega[kb, i]) + g[i] * spin[i]
+        dh = law[1] * dtheta + law[3] * drate
+        for i in range(3):
+            dforce[i, col] = 0.0
+            dmom_a[i, col] = -(dh * g[i] + h * dg[i])
+            dmom_b[i, col] = dh * g[i] + h * dg[i]
+
+
+@kernel(inline="always")
+def _push_rates(p, ea, ub, rel, radial, spring, law, d_max, d, f, grad, rates):
     """``d(force on a)/d(p, ea, ub, rel)`` of one contact in touch (:func:`_push` gave
-    its penetration ``d`` and push ``f > 0``) into ``grad`` (3, 12), by hand: the law's
-    rates in ``d`` and ``d'`` (eqs. 75, 78) times those of ``d`` and ``d'`` in the local
+    its penetration ``d`` and push ``f > 0``; a spring's any ``d`` and ``f``) into
+    ``grad`` (3, 12), by hand: the law's rates in ``d`` and ``d'`` (eqs. 75, 78; a
+    spring's ``K`` and ``c``) times those of ``d`` and ``d'`` in the local
     kinematics. ``rates``: (9, 12) scratch (rows 0-2 ``dr``, 3-5 ``dn``, 6 ``dd``,
     7 ``dd'``, 8 the normal ``n``).
     """
@@ -241,17 +300,17 @@ def _push_rates(p, ea, ub, rel, radial, law, d_max, d, f, grad, rates):
             drate[6 + i], drate[9 + i] = rel[i], ub[i]
     rate = n[0] * rel[0] + n[1] * rel[1] + n[2] * rel[2]
     x = d / d_max
-    if x > 1.0:
+    if spring or x > 1.0:
         damping, slope = c_max, 0.0
     else:
         damping, slope = c_max * x * x * (3.0 - 2.0 * x), c_max * 6.0 * x * (1.0 - x) / d_max
-    if exponent == 1.0:
-        spring = stiffness
+    if spring or exponent == 1.0:
+        along_d = stiffness
     elif exponent == 1.5:
-        spring = 1.5 * stiffness * np.sqrt(d)
+        along_d = 1.5 * stiffness * np.sqrt(d)
     else:
-        spring = exponent * stiffness * d ** (exponent - 1.0)
-    along_d, along_rate = spring + slope * rate, damping
+        along_d = exponent * stiffness * d ** (exponent - 1.0)
+    along_d, along_rate = along_d + slope * rate, damping
     axis = n if radial else ea
     for k in range(12):
         df = along_d * dd[k] + along_rate * drate[k]

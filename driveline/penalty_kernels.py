@@ -56,12 +56,12 @@ from .penalty_bdf import (
     advance,
     start,
 )
-from .penalty_contact import ModelArrays, contact_forces, rhs
+from .penalty_contact import FACE, RADIAL, SPRING, TWIST, ModelArrays, contact_forces, rhs
 from .penalty_jacobian import jacobian
 
-__all__ = ["COMPLEX_STEP", "FINISHED", "HAVE_NUMBA", "MESSAGES", "ModelArrays", "NOT_FINITE",
-           "RUNNING", "STEP_TOO_SMALL", "Run", "advance", "contact_forces", "jacobian", "rhs",
-           "start"]
+__all__ = ["COMPLEX_STEP", "FACE", "FINISHED", "HAVE_NUMBA", "MESSAGES", "ModelArrays",
+           "NOT_FINITE", "RADIAL", "RUNNING", "SPRING", "STEP_TOO_SMALL", "TWIST", "Run",
+           "advance", "contact_forces", "jacobian", "rhs", "start"]
 
 COMPLEX_STEP = 1e-30
 """Imaginary step (per unit of a quantity's scale) of the NumPy model's Jacobian; far

@@ -25,6 +25,7 @@ from .dynamics import simulate
 from .elements import shaft_segments
 from .equilibrium import body_references, build_operator
 from .harmonic import harmonic_law
+from .penalty_contact import RADIAL, SPRING, TWIST
 from .scene import Scene
 
 _TAU_S = 1e-3
@@ -96,11 +97,19 @@ class _Contacts:
     of bodies).
 
     Body ``a`` carries the point ``s`` and the axis ``e``, body ``b`` the point ``j`` and
-    the axis ``u``, in body coordinates (the ground's: global). ``radial``: ``d`` is the
-    distance of the point from ``b``'s axis line in ``a``'s cross-section, minus
-    ``offset`` (the clearance), the force normal to ``e``; else a face: ``d`` is the
-    point's height over ``j`` along ``u`` (outward) minus ``offset``, the force along
-    ``-e``. ``stiffness``, ``exponent``, ``c_max``: eqs. 75-78.
+    the axis ``u``, in body coordinates (the ground's: global). ``radial`` is the
+    contact's kind (:mod:`.penalty_contact`'s codes): ``RADIAL``: ``d`` is the distance
+    of the point from ``b``'s axis line in ``a``'s cross-section, minus ``offset`` (the
+    clearance), the force normal to ``e``; ``FACE``: ``d`` is the point's height over
+    ``j`` along ``u`` (outward) minus ``offset``, the force along ``-e``; both
+    unilateral, ``stiffness``, ``exponent``, ``c_max`` of eqs. 75-78. ``SPRING``: a
+    face's ``d`` and force, bilateral and linear, ``f = K d + c_max d'``. ``TWIST``: a
+    torsion spring between the two bodies, ``s``, ``e`` two axes on ``a`` and ``j``,
+    ``u`` two on ``b`` (their points unused): ``d = theta = (e.u - s.j) / 2`` (global
+    vectors; the sine of the relative angle about ``e x u`` for a rotation about it),
+    a pure couple ``-(K theta + c_max theta') g`` on ``a`` and its opposite on ``b``,
+    ``g = (e x u - s x j) / 2`` (``d theta`` per rotation of ``a``, so the couple
+    derives from ``K theta^2 / 2``) and ``theta' = g . (omega_a - omega_b)``.
     """
 
     a: np.ndarray
@@ -276,8 +285,10 @@ class Model:
 
     def contacts(self, bodies: tuple[np.ndarray, ...]):
         """From :meth:`bodies`: penetration ``d`` (m, k), push ``f`` (m, k), force on
-        body ``a`` (3, m, k) and the arms of the contact point from ``a``'s and ``b``'s
-        centres (3, 2m, k).
+        body ``a`` (3, m, k), the arms of the contact point from ``a``'s and ``b``'s
+        centres (3, 2m, k) and the pure couple on ``a`` (3, m, k; a ``TWIST``'s, zero
+        for the others). A ``TWIST``'s ``d`` is its ``theta`` (rad) and ``f`` its
+        moment (N m) (:class:`_Contacts`).
         """
         u, _, v, w, rot, omega = bodies
         c, nb, k = self.c, self.n_bodies, u.shape[-1]
@@ -288,22 +299,36 @@ class Model:
         offset, e, axis, moving, arm, arm_j, omega_b = vectors.reshape(7, 3, -1, k)
         relative = moving - _cross(omega_b, offset)
         # radial: the bore axis meets the trunnion's cross-section plane at p - r
-        r = offset - ((offset * e).sum(0) / (axis * e).sum(0)) * axis
+        kind = c.radial[:, None]
+        radial = kind == RADIAL
+        across = np.where(radial, (axis * e).sum(0), 1.0)  # a twist's axes are normal
+        r = offset - ((offset * e).sum(0) / across) * axis
         rho = np.sqrt((r * r).sum(0))
-        radial = c.radial[:, None]
         normal = np.where(radial, r / np.maximum(rho, 1e-300), axis)
         d = np.where(radial, rho, (offset * axis).sum(0)) - c.offset[:, None]
-        f = contact_law(d, (normal * relative).sum(0), c.stiffness[:, None],
-                        c.exponent[:, None], c.c_max[:, None], self.d_max)
-        force = -f * np.where(radial, normal, e)
-        return d, f, force, np.concatenate([arm, offset + arm_j], axis=1)
+        rate = (normal * relative).sum(0)
+        stiffness, c_max = c.stiffness[:, None], c.c_max[:, None]
+        f = contact_law(d, rate, stiffness, c.exponent[:, None], c_max, self.d_max)
+        f = np.where(kind == SPRING, stiffness * d + c_max * rate, f)
+        # TWIST: e, u, arm (= R_a s) and arm_j (= R_b j) are its four axes
+        twist = kind == TWIST
+        omega_a = np.concatenate([omega, np.zeros((1, 3, k))])[c.a].transpose(1, 0, 2)
+        theta = 0.5 * ((e * axis).sum(0) - (arm * arm_j).sum(0))
+        g = 0.5 * (_cross(e, axis) - _cross(arm, arm_j))
+        moment = stiffness * theta + c_max * (g * (omega_a - omega_b)).sum(0)
+        d, f = np.where(twist, theta, d), np.where(twist, moment, f)
+        force = np.where(twist, 0.0, -f * np.where(radial, normal, e))
+        couple = np.where(twist, -moment * g, 0.0)
+        return d, f, force, np.concatenate([arm, offset + arm_j], axis=1), couple
 
-    def link_values(self, force: np.ndarray, arms: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    def link_values(self, force: np.ndarray, arms: np.ndarray, couple: np.ndarray,
+                    rot: np.ndarray) -> np.ndarray:
         """The operator's columns (n, k) from the contacts' forces on body ``a`` (3, m, k),
-        their arms from ``a``'s centre (3, 2m, k) and the bodies' rotations: per link, the
-        net force of its contacts on the link's body and their net moment about the
-        link's point, along each column's direction (turning with the cross-pin for a
-        link in the pin's frame, fixed otherwise, as the operator's columns).
+        their arms from ``a``'s centre (3, 2m, k), their pure couples on ``a`` (3, m, k)
+        and the bodies' rotations: per link, the net force of its contacts on the link's
+        body and their net moment about the link's point, along each column's direction
+        (turning with the cross-pin for a link in the pin's frame, fixed otherwise, as
+        the operator's columns).
         """
         op, k = self.operator, force.shape[-1]
         out = np.empty((len(op.names), k))
@@ -312,7 +337,8 @@ class Model:
             net = force[:, rows].sum(axis=1)
             point = self.local(body, op.points[0, link.columns[0]])
             lever = np.einsum("ijk,j->ik", rot[body], point)
-            moment = _cross(arms[:, rows] - lever[:, None], force[:, rows]).sum(axis=1)
+            moment = (_cross(arms[:, rows] - lever[:, None], force[:, rows]).sum(axis=1)
+                      + couple[:, rows].sum(axis=1))
             for c in link.columns:
                 direction = op.directions[0, c]
                 if link.frame == "pin":
@@ -335,9 +361,10 @@ class Model:
         bodies = self.bodies(y)
         _, q, v, w, rot, _ = bodies
         nb, ns, k = self.n_bodies, self.n_shafts, y.shape[1]
-        _, _, f, arms = self.contacts(bodies)
+        _, _, f, arms, couple = self.contacts(bodies)
         force = self.gather_force @ f
-        moment = self.gather_moment @ _cross(arms, np.concatenate([f, f], axis=1))
+        moment = (self.gather_moment @ _cross(arms, np.concatenate([f, f], axis=1))
+                  + self.gather_force @ couple)
         moment[:, 0] += self.scene.input_torque(t) * rot[0, :, 1]
         moment[:, ns - 1] -= self.scene.load_torque(t) * rot[ns - 1, :, 1]
         torque = (rot * moment.transpose(1, 0, 2)[:, :, None]).sum(axis=1)

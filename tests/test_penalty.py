@@ -161,7 +161,7 @@ def test_compiled_kernels_equal_the_numpy_model(model, seed):
     _, step = model.tolerances(1e-8)
     assert _close(model.jacobian_compiled(t, y), model.jacobian(t, y, step), 1e-11)
     depth, push, force, _, _, _ = penalty.kernels.contact_forces(y, model.arrays)
-    d, f, on_a, _ = model.contacts(model.bodies(y[:, None]))
+    d, f, on_a, _, _ = model.contacts(model.bodies(y[:, None]))
     assert np.allclose(depth, d[:, 0], rtol=0, atol=1e-15)
     assert np.abs(push - f[:, 0]).max() <= 1e-12 * np.abs(f).max()
     assert np.abs(force - on_a[:, :, 0].T).max() <= 1e-12 * np.abs(on_a).max()

@@ -49,6 +49,10 @@ RELEASES: dict[str, ElementKind] = {}
 """The kinds that offer a release, by its name (:attr:`Release.kind`), in the advisor's
 order; filled by :mod:`.registry`."""
 
+PENALTY_SIMULATION = "the penalty-contact simulation"
+"""The ``engine`` the penalty simulation asks :meth:`ElementKind.refusal` as: a kind
+that it models and a physics engine does not refuses every other ``engine``."""
+
 
 @dataclass(frozen=True)
 class Segment:
@@ -304,7 +308,7 @@ class ElementKind:
         return link.kind
 
     def refusal(self, element, engine: str) -> str | None:
-        """Why ``engine`` (the penalty simulation, a physics engine; named in the
+        """Why ``engine`` (:data:`PENALTY_SIMULATION`, a physics engine; named in the
         message) cannot model ``element``, None where it can.
         """
         return None

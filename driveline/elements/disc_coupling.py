@@ -13,8 +13,11 @@ coupling's own stiffness, without gap (``radial_stiffness_N_m`` for the shear,
 coupling's data sheet lists torsional, axial, angular and radial stiffness); the
 ranges accepted (:data:`STIFFNESS`) span rubber discs to steel disc packs.
 
-The penalty simulation and the physics engines have no six-way spring-damper
-("bushing") to model it with: they refuse a scene that holds one, in one line.
+The penalty simulation models it as a bushing (:meth:`~..penalty.ContactRows.bushing`:
+a linear six-way spring-damper at the coupling, in the shaft's frame, with these
+stiffnesses and the scene's damping fraction of each); its reported forces are the
+link's six columns. The physics engines have no bushing to model it with: they
+refuse a scene that holds one, in one line.
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Range
-from .base import Column, Law, Layout, Link
+from .base import PENALTY_SIMULATION, Column, Law, Layout, Link
 from .inshaft import InShaftKind, sides
 
 STIFFNESS = {
@@ -102,7 +105,17 @@ class Disc(InShaftKind):
                 Law(c[3:5], disc.angular_stiffness_N_m_rad, 0.0),
                 Law(c[5:6], disc.torsional_stiffness_N_m_rad, 0.0)]
 
+    def penalty(self, link: Link, rows) -> None:
+        """One bushing at the coupling, in the shaft's frame (r1, r2, axis)."""
+        disc = next(e for e in rows.scene.elements if e.name == link.element)
+        radial, angular = disc.radial_stiffness_N_m, disc.angular_stiffness_N_m_rad
+        rows.bushing(link, rows.op.points[0, link.columns[0]], rows.op.shaft_frames[link.shaft],
+                     (radial, radial, disc.axial_stiffness_N_m),
+                     (angular, angular, disc.torsional_stiffness_N_m_rad))
+
     def refusal(self, disc: DiscCoupling, engine: str) -> str | None:
+        if engine == PENALTY_SIMULATION:
+            return None
         return (f"disc coupling {disc.name!r}: {engine} has no six-way spring-damper "
                 "(bushing) to model it with")
 
