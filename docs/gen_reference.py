@@ -200,7 +200,11 @@ def _inner(hint) -> list[type]:
 
 
 def scene_classes() -> list[type]:
-    """The scene model's dataclasses, from :class:`Scene` down, each once."""
+    """The scene model's dataclasses, from :class:`Scene` down, then each element kind's
+    record (the records of :attr:`Scene.elements` and of the joint kinds), each once.
+    """
+    from cardan_forces.driveline.elements.registry import KINDS
+
     found: list[type] = []
 
     def walk(cls: type) -> None:
@@ -212,6 +216,9 @@ def scene_classes() -> list[type]:
                 walk(inner)
 
     walk(scene.Scene)
+    for kind in KINDS:
+        if dataclasses.is_dataclass(getattr(kind, "record", None)):
+            walk(kind.record)
     return found
 
 

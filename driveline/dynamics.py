@@ -63,10 +63,13 @@ class Motion:
 
 
 def _pin_inertia_global(scene: Scene, kin: Kinematics) -> np.ndarray:
-    """Cross-pin inertia tensors in the global frame, shape (joints, T, 3, 3)."""
+    """Cross-pin inertia tensors in the global frame, shape (joints, T, 3, 3); zero for
+    a joint without a pin.
+    """
     frames = np.stack([kin.e1, kin.e2, kin.e3], axis=-1)  # columns e1, e2, e3
     diag = np.diag(scene.crosspin.inertia_kg_m2)
-    return frames @ diag @ np.swapaxes(frames, -1, -2)
+    tensors = frames @ diag @ np.swapaxes(frames, -1, -2)
+    return tensors * np.array(kin.pinned, bool)[:, None, None, None]
 
 
 def reduced_inertia(scene: Scene, kin: Kinematics) -> tuple[np.ndarray, np.ndarray]:
@@ -112,7 +115,8 @@ def _right_hand_side(scene: Scene, geometry: Geometry):
     jax = np.array([s.axial_inertia_kg_m2 for s in scene.shafts], float)
     pins = (np.array(scene.crosspin.inertia_kg_m2, float) if scene.has("crosspin_inertia")
             else np.zeros(3))
-    arrays = (geometry.axes, geometry.yoke_in, geometry.yoke_out, jax, pins)
+    arrays = (geometry.axes, geometry.yoke_in, geometry.yoke_out, jax, pins,
+              geometry.homokinetic)
     drive, load = harmonic_law(scene.input_torque), harmonic_law(scene.load_torque)
     compiled = lambda time, y: _compiled_rhs(time, y, drive, load, arrays)  # noqa: E731
     probe = np.array([0.3, 1.1, 2.0, 4.4]) + scene.initial_angle_rad
@@ -160,7 +164,7 @@ def simulate(scene: Scene, times=None, rtol: float = 1e-11, atol: float = 1e-12)
     alpha = kin.ratio * qdd + kin.ratio_dq * qd**2
     pin_omega = kin.pin_rate * qd[:, None]
     pin_alpha = kin.pin_rate * qdd[:, None] + kin.pin_rate_dq * (qd**2)[:, None]
-    n_bodies = len(scene.shafts) + len(scene.joints)
+    n_bodies = len(scene.shafts) + sum(kin.pinned)
     return Motion(
         scene=scene,
         geometry=geometry,

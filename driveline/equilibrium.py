@@ -197,10 +197,11 @@ def _layout(motion: Motion) -> Layout:
 
 def body_references(geo, segments) -> np.ndarray:
     """(bodies, 3): each body's moment reference at rest (m, global), in the operator's
-    body order: a shaft segment's centre of mass, then each cross-pin's centre.
+    body order: a shaft segment's centre of mass, then each cross-pin's centre (the
+    joints that add one, in chain order).
     """
     return np.concatenate([[geo.centres[s.shaft] + s.middle_m * geo.axes[s.shaft]
-                            for s in segments], geo.joint_centres]).reshape(-1, 3)
+                            for s in segments], geo.joint_centres[geo.pinned]]).reshape(-1, 3)
 
 
 def build_operator(motion: Motion) -> Operator:
@@ -254,7 +255,8 @@ def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray
     """``b``'s terms, one per effect the scene calls for (and ``applied``, always)."""
     scene, geo = motion.scene, motion.geometry
     n_seg = len(segments)
-    n_rows = 6 * (n_seg + len(scene.joints))
+    pins = np.flatnonzero(np.array(motion.kin.pinned, bool))  # their bodies: n_seg + p
+    n_rows = 6 * (n_seg + len(pins))
     T = len(motion.t)
     moment = lambda body: slice(6 * body + 3, 6 * body + 6)  # noqa: E731
     force = lambda body: slice(6 * body, 6 * body + 3)  # noqa: E731
@@ -271,8 +273,8 @@ def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray
         for b, seg in enumerate(segments):
             weight[:, force(b)] -= seg.fraction * scene.shafts[seg.shaft].mass_kg * g
         if scene.has("crosspin_inertia"):
-            for j in range(len(scene.joints)):
-                weight[:, force(n_seg + j)] -= scene.crosspin.mass_kg * g
+            for p in range(len(pins)):
+                weight[:, force(n_seg + p)] -= scene.crosspin.mass_kg * g
         terms["gravity"] = weight
 
     if scene.has("inertia"):
@@ -285,12 +287,12 @@ def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray
             inertial[:, force(b)] += seg.fraction * shaft.mass_kg * motion.com_acceleration[k]
         terms["inertia"] = inertial
 
-    if scene.has("crosspin_inertia") and scene.joints:
+    if scene.has("crosspin_inertia") and len(pins):
         jp = _pin_inertia_global(scene, motion.kin)
         w, dw = motion.pin_omega, motion.pin_alpha
         gyro = np.einsum("jtab,jtb->jta", jp, dw) + np.cross(w, np.einsum("jtab,jtb->jta", jp, w))
-        pins = np.zeros((T, n_rows))
-        for j in range(len(scene.joints)):
-            pins[:, moment(n_seg + j)] += gyro[j]
-        terms["crosspin_inertia"] = pins
+        pinned = np.zeros((T, n_rows))
+        for p, j in enumerate(pins):
+            pinned[:, moment(n_seg + p)] += gyro[j]
+        terms["crosspin_inertia"] = pinned
     return terms

@@ -1,11 +1,9 @@
-"""Rest geometry and 1-DOF kinematics of a chain of shafts and Cardan joints.
+"""Rest geometry and 1-DOF kinematics of a chain of shafts and joints.
 
-The joint is built from 3-D frames, not from the closed forms: each cross-pin has a
-driving trunnion axis ``e1`` fixed in the driving yoke and a driven trunnion axis
-``e2`` fixed in the driven yoke, and the only condition is ``e1 · e2 = 0`` (both
-trunnions lie in one rigid cross). The driven shaft's angle solves that condition;
-its derivatives come from implicit differentiation. The closed forms of the paper's
-eqs. (1)-(4) are tests of this construction, not its implementation.
+The chain is walked joint by joint, each joint's kind giving the driven shaft's angle
+and its derivatives from the driving shaft's (:meth:`~.elements.joint.JointKind.kinematics`:
+a Cardan joint solves its cross-pin's condition ``e1 · e2 = 0``, a constant-velocity
+joint passes the angle on).
 
 Everything is batched over instants: angles have shape ``(n_shafts, T)`` and
 vectors ``(n_joints, T, 3)``.
@@ -23,17 +21,13 @@ import numpy as np
 
 from cardan_forces.util.compiled import njit
 
+from .elements.joint import rotate_perp
+from .elements.registry import JOINT_KINDS
 from .scene import Scene
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-
-def _rotate_perp(v: np.ndarray, axis: np.ndarray, angle) -> np.ndarray:
-    """Rotate ``v`` (perpendicular to the unit ``axis``) by ``angle`` (rad), batched."""
-    angle = np.asarray(angle, float)[..., None]
-    return v * np.cos(angle) + np.cross(axis, v) * np.sin(angle)
 
 
 @dataclass(frozen=True)
@@ -44,7 +38,10 @@ class Geometry:
     ``centres[k]`` are its upstream end and centre; joint ``j`` sits at
     ``joint_centres[j]``, the end of shaft ``j`` and start of shaft ``j + 1``.
     ``yoke_in[j]`` / ``yoke_out[j]`` are the driving / driven trunnion axes of joint
-    ``j`` at rest. ``bearing_points[k]`` are the bearing positions on shaft ``k``.
+    ``j`` at rest (for a joint without trunnions, the references its shafts' angles are
+    measured from). ``bearing_points[k]`` are the bearing positions on shaft ``k``;
+    ``joint_kinds[j]`` the kind of joint ``j`` (:mod:`.elements`), which owns its
+    kinematics.
     """
 
     axes: np.ndarray
@@ -55,6 +52,19 @@ class Geometry:
     yoke_out: np.ndarray
     bearing_points: tuple[np.ndarray, ...]
     plane_normal: np.ndarray
+    joint_kinds: tuple = ()
+
+    @property
+    def pinned(self) -> np.ndarray:
+        """Per joint: it adds a body at its centre (a Cardan joint's cross-pin)."""
+        return np.array([k.pinned for k in self.joint_kinds], bool)
+
+    @property
+    def homokinetic(self) -> np.ndarray:
+        """Per joint: its shafts turn at one speed at any angle (a constant-velocity
+        joint), the flag the compiled :func:`reduced_terms` reads.
+        """
+        return np.array([k.homokinetic for k in self.joint_kinds], bool)
 
 
 def rest_geometry(scene: Scene) -> Geometry:
@@ -76,7 +86,7 @@ def rest_geometry(scene: Scene) -> Geometry:
             # yoke phase reference: the articulation plane for the first joint, the
             # previous joint's driven yoke on the same shaft for later ones
             reference = outs[-1] if outs else u
-            y_in = _rotate_perp(reference, a, math.radians(joint.yoke_phase_deg))
+            y_in = rotate_perp(reference, a, JOINT_KINDS[joint.kind].phase_rad(joint))
             gamma = math.radians(joint.articulation_deg) * scene.articulation_signs()[k]
             a, u = (
                 math.cos(gamma) * a + math.sin(gamma) * u,
@@ -100,6 +110,7 @@ def rest_geometry(scene: Scene) -> Geometry:
         yoke_out=np.array(outs).reshape(-1, 3),
         bearing_points=bearing_points,
         plane_normal=normal,
+        joint_kinds=tuple(JOINT_KINDS[j.kind] for j in scene.joints),
     )
 
 
@@ -112,7 +123,9 @@ class Kinematics:
     trunnion), ``e2`` (driven trunnion), ``e3 = e1 x e2``, and the cross-pin's angular
     velocity per unit input speed ``pin_rate`` and its ``q``-derivative
     ``pin_rate_dq`` (so ``omega = pin_rate q'``, ``alpha = pin_rate q'' +
-    pin_rate_dq q'²``).
+    pin_rate_dq q'²``); ``pinned[j]``: joint ``j`` has that body (a tuple, not indexed
+    by instant; a joint without one gives its frame and rate all the same,
+    :class:`~.elements.joint.JointStep`).
     """
 
     q: np.ndarray
@@ -124,6 +137,7 @@ class Kinematics:
     e3: np.ndarray
     pin_rate: np.ndarray
     pin_rate_dq: np.ndarray
+    pinned: tuple[bool, ...]
 
 
 def kinematics(geometry: Geometry, q) -> Kinematics:
@@ -132,46 +146,16 @@ def kinematics(geometry: Geometry, q) -> Kinematics:
     axes = geometry.axes
     phi, ratio, ratio_dq = [q], [np.ones_like(q)], [np.zeros_like(q)]
     e1s, e2s, rates, rates_dq = [], [], [], []
-    for j in range(len(geometry.yoke_in)):
-        a_in, a_out = axes[j], axes[j + 1]
-        y_out = geometry.yoke_out[j]
-        e1 = _rotate_perp(geometry.yoke_in[j], a_in, phi[j])
-        w_out = np.cross(a_out, y_out)
-        raw = np.arctan2(-(e1 @ y_out), e1 @ w_out)
-        # e2 and -e2 are the same trunnion: the solution is defined modulo pi; take the
-        # branch nearest to the driving shaft's angle, which keeps it continuous.
-        psi = phi[j] + np.mod(raw - phi[j] + 0.5 * np.pi, np.pi) - 0.5 * np.pi
-        e2 = _rotate_perp(y_out, a_out, psi)
-        # implicit derivatives of g(phi, psi) = e1 · e2 = 0
-        de1 = np.cross(a_in, e1)
-        de2 = np.cross(a_out, e2)
-        g_phi = np.einsum("ti,ti->t", de1, e2)
-        g_psi = np.einsum("ti,ti->t", e1, de2)
-        g_phiphi = np.einsum("ti,ti->t", np.cross(a_in, de1), e2)
-        g_psipsi = np.einsum("ti,ti->t", e1, np.cross(a_out, de2))
-        g_phipsi = np.einsum("ti,ti->t", de1, de2)
-        rho = -g_phi / g_psi
-        rho_dphi = -(g_phiphi + 2.0 * g_phipsi * rho + g_psipsi * rho**2) / g_psi
-        j_in, h_in = ratio[j], ratio_dq[j]
-        j_out = rho * j_in
-        h_out = rho_dphi * j_in**2 + rho * h_in
-        # cross-pin: omega = omega_in a_in + omega_out (a_out · e1) e1 (rotation about e1
-        # relative to the driving yoke); differentiate for its rate of change.
-        c = e1 @ a_out
-        de1_dq = j_in[:, None] * de1
-        rate = j_in[:, None] * a_in + (j_out * c)[:, None] * e1
-        rate_dq = (
-            h_in[:, None] * a_in
-            + (h_out * c + j_out * (de1_dq @ a_out))[:, None] * e1
-            + (j_out * c)[:, None] * de1_dq
-        )
-        phi.append(psi)
-        ratio.append(j_out)
-        ratio_dq.append(h_out)
-        e1s.append(e1)
-        e2s.append(e2)
-        rates.append(rate)
-        rates_dq.append(rate_dq)
+    for j, kind in enumerate(geometry.joint_kinds):
+        step = kind.kinematics(axes[j], axes[j + 1], geometry.yoke_in[j],
+                               geometry.yoke_out[j], phi[j], ratio[j], ratio_dq[j])
+        phi.append(step.angle)
+        ratio.append(step.ratio)
+        ratio_dq.append(step.ratio_dq)
+        e1s.append(step.e1)
+        e2s.append(step.e2)
+        rates.append(step.rate)
+        rates_dq.append(step.rate_dq)
     e1a = np.array(e1s).reshape(-1, len(q), 3)
     e2a = np.array(e2s).reshape(-1, len(q), 3)
     return Kinematics(
@@ -184,6 +168,7 @@ def kinematics(geometry: Geometry, q) -> Kinematics:
         e3=np.cross(e1a, e2a),
         pin_rate=np.array(rates).reshape(-1, len(q), 3),
         pin_rate_dq=np.array(rates_dq).reshape(-1, len(q), 3),
+        pinned=tuple(bool(p) for p in geometry.pinned),
     )
 
 
@@ -197,17 +182,22 @@ def _cross3(a, b):
 
 
 @njit(cache=True)
-def reduced_terms(q, axes, yoke_in, yoke_out, axial_inertia, pin_inertia):
+def reduced_terms(q, axes, yoke_in, yoke_out, axial_inertia, pin_inertia, homokinetic):
     """At one input angle ``q`` (rad): ``I(q)`` (kg m²), ``1/2 I'(q)`` and the last
-    shaft's ratio ``dphi_out/dq``; the construction of :func:`kinematics` for one
-    instant, compiled, for the equation of motion's right-hand side. ``pin_inertia``:
-    the cross-pins' principal inertias about (e1, e2, e3), or zeros without the
-    ``crosspin_inertia`` effect.
+    shaft's ratio ``dphi_out/dq``; the joint kinds' kinematics
+    (:meth:`~.elements.joint.JointKind.kinematics`) for one instant, compiled, for the
+    equation of motion's right-hand side: a ``homokinetic`` joint passes the angle on,
+    any other is a Cardan joint. ``pin_inertia``: the cross-pins' principal inertias
+    about (e1, e2, e3), or zeros without the ``crosspin_inertia`` effect.
     """
     phi, j_in, h_in = q, 1.0, 0.0
     inertia = axial_inertia[0]
     half_slope = 0.0
     for j in range(yoke_in.shape[0]):
+        if homokinetic[j]:
+            inertia += axial_inertia[j + 1] * j_in**2
+            half_slope += axial_inertia[j + 1] * j_in * h_in
+            continue
         a_in, a_out, y_out = axes[j], axes[j + 1], yoke_out[j]
         e1 = yoke_in[j] * np.cos(phi) + _cross3(a_in, yoke_in[j]) * np.sin(phi)
         w_out = _cross3(a_out, y_out)

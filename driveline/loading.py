@@ -34,7 +34,7 @@ import numpy as np
 from cardan_forces.util.names import did_you_mean, nearest
 
 from .catalogue import read_rating, read_tolerances
-from .elements import check_elements
+from .elements.checks import check_elements
 from .elements.registry import BEARING_KINDS, IN_SHAFT_KINDS, JOINT_KINDS, kind_of
 from .scene import (
     EFFECTS,

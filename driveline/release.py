@@ -28,8 +28,8 @@ import numpy as np
 
 from .determinacy import Determinacy, determinacy, holding
 from .dynamics import Motion
-from .elements import check_elements
 from .elements.base import Release
+from .elements.checks import check_elements
 from .elements.registry import BEARING_KINDS, RELEASES
 from .equilibrium import Operator, build_operator
 from .modes import Mode, counts, name_modes

@@ -147,7 +147,7 @@ def at_rest(scene: Scene, q: float) -> Motion:
     return Motion(scene=scene, geometry=geometry, t=t, q=angle, qd=zero, qdd=zero, kin=kin,
                   omega=kin.ratio * 0.0, alpha=kin.ratio * 0.0, pin_omega=kin.pin_rate * 0.0,
                   pin_alpha=kin.pin_rate * 0.0,
-                  com_acceleration=np.zeros((len(scene.shafts) + len(scene.joints), 1, 3)),
+                  com_acceleration=np.zeros((len(scene.shafts) + sum(kin.pinned), 1, 3)),
                   input_torque=scene.input_torque(t) * 1.0,
                   load_torque=scene.load_torque(t) * 1.0)
 

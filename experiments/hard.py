@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from cardan_forces.driveline.contact import hertz_stiffness
 from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.elements.registry import JOINT_KINDS
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.scene import Scene, SceneError, TorqueLaw
@@ -105,17 +105,20 @@ def _stiffness_ratio(ratio: float) -> Changes:
     one the ``compliance`` formulation uses (K d_max^(n-1)).
     """
     def build(scene: Scene) -> dict:
-        joint = hertz_stiffness(scene, scene.joints[0]) * \
-            scene.contact.damping_full_depth_m ** (scene.contact.exponent - 1.0)
+        stiffness = [k for j in scene.joints
+                     if (k := JOINT_KINDS[j.kind].secant_stiffness(j, scene)) is not None]
+        if not stiffness:
+            raise SceneError(f"scene {scene.name}: its joints have no contact stiffness "
+                             "to set the bearings' against")
         return {"contact": dataclasses.replace(scene.contact,
-                                               bearing_stiffness_N_m=ratio * float(joint))}
+                                               bearing_stiffness_N_m=ratio * float(stiffness[0]))}
     return build
 
 
 def _clearance(gap_m: float) -> Changes:
     """Radial, axial and bearing clearances all ``gap_m``, the ``clearance`` effect on."""
     def build(scene: Scene) -> dict:
-        return {"joints": tuple(dataclasses.replace(j, rb_m=j.rs_m + gap_m, hb_m=j.ht_m + gap_m)
+        return {"joints": tuple(JOINT_KINDS[j.kind].with_clearance(j, gap_m)
                                 for j in scene.joints),
                 "effects": scene.effects | {"clearance"},
                 "contact": dataclasses.replace(scene.contact, bearing_clearance_m=gap_m)}

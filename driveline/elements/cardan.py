@@ -27,12 +27,14 @@ axis through the joint centre), and the trunnion end beyond the housing bottom a
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..contact import hertz_stiffness
 from ..scene import CROSSPIN_ASPECT, MAX_ARTICULATION_DEG, Joint, Range, Scene, table_keys
 from .base import Body, Column, Law, Layout, Link, PairMode
-from .joint import JointKind
+from .joint import JointKind, JointStep, rotate_perp
 
 RADIAL, FACE = "trunnion-radial", "end-face"
 
@@ -75,7 +77,7 @@ def _check_proportions(t, joint: Joint) -> None:
 class Cardan(JointKind):
     """The Cardan joint kind (module doc)."""
 
-    name = "cardan"
+    name, record = "cardan", Joint
     link_kinds = (RADIAL, FACE)
     paper = True
 
@@ -104,6 +106,56 @@ class Cardan(JointKind):
                    f"{joint.ht_m} m")
         t.done()
         return joint
+
+    pinned = True
+
+    def phase_rad(self, joint: Joint) -> float:
+        return np.radians(joint.yoke_phase_deg)
+
+    def secant_stiffness(self, joint: Joint, scene: Scene) -> float:
+        """Its Hertz stiffness's secant at ``damping_full_depth_m`` (N/m)."""
+        ct = scene.contact
+        return hertz_stiffness(scene, joint) * ct.damping_full_depth_m ** (ct.exponent - 1.0)
+
+    def with_clearance(self, joint: Joint, gap_m: float) -> Joint:
+        """Radial and axial clearance ``gap_m``: the bore ``rs + gap``, the housing
+        bottom ``ht + gap``.
+        """
+        return dataclasses.replace(joint, rb_m=joint.rs_m + gap_m, hb_m=joint.ht_m + gap_m)
+
+    def kinematics(self, a_in, a_out, yoke_in, yoke_out, phi, ratio, ratio_dq):
+        """From 3-D frames, not from the closed forms: the cross-pin's driving trunnion
+        ``e1`` turns with the driving yoke, its driven trunnion ``e2`` with the driven
+        one, and the only condition is ``e1 · e2 = 0`` (both trunnions in one rigid
+        cross). The driven angle solves it; its derivatives come from implicit
+        differentiation. The paper's eqs. (1)-(4) are tests of this construction, not its
+        implementation. The pin turns with the driving yoke and about ``e1`` relative to
+        it: ``omega = omega_in a_in + omega_out (a_out · e1) e1``.
+        """
+        e1 = rotate_perp(yoke_in, a_in, phi)
+        w_out = np.cross(a_out, yoke_out)
+        raw = np.arctan2(-(e1 @ yoke_out), e1 @ w_out)
+        # e2 and -e2 are the same trunnion: the solution is defined modulo pi; take the
+        # branch nearest to the driving shaft's angle, which keeps it continuous.
+        psi = phi + np.mod(raw - phi + 0.5 * np.pi, np.pi) - 0.5 * np.pi
+        e2 = rotate_perp(yoke_out, a_out, psi)
+        de1, de2 = np.cross(a_in, e1), np.cross(a_out, e2)
+        g_phi = np.einsum("ti,ti->t", de1, e2)
+        g_psi = np.einsum("ti,ti->t", e1, de2)
+        g_phiphi = np.einsum("ti,ti->t", np.cross(a_in, de1), e2)
+        g_psipsi = np.einsum("ti,ti->t", e1, np.cross(a_out, de2))
+        g_phipsi = np.einsum("ti,ti->t", de1, de2)
+        rho = -g_phi / g_psi
+        rho_dphi = -(g_phiphi + 2.0 * g_phipsi * rho + g_psipsi * rho**2) / g_psi
+        j_out = rho * ratio
+        h_out = rho_dphi * ratio**2 + rho * ratio_dq
+        c = e1 @ a_out
+        de1_dq = ratio[:, None] * de1
+        rate = ratio[:, None] * a_in + (j_out * c)[:, None] * e1
+        rate_dq = (ratio_dq[:, None] * a_in
+                   + (h_out * c + j_out * (de1_dq @ a_out))[:, None] * e1
+                   + (j_out * c)[:, None] * de1_dq)
+        return JointStep(psi, j_out, h_out, e1, e2, rate, rate_dq)
 
     def describe(self, joint: Joint) -> str:
         return (f"joint {joint.name:13s} articulation {joint.articulation_deg} deg, yoke "

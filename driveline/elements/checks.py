@@ -20,12 +20,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..contact import hertz_stiffness
 from ..determinacy import left_null_space
 from ..kinematics import rest_geometry
 from ..scene import MAX_STIFFNESS_RATIO, Range, Scene, SceneError
 from .bodies import Segment, frames_of, shaft_segments
-from .registry import scene_elements
+from .registry import JOINT_KINDS, scene_elements
 
 
 def check_elements(scene: Scene, sliding: bool = True) -> None:
@@ -46,14 +45,16 @@ def check_elements(scene: Scene, sliding: bool = True) -> None:
 
 def check_stiffness(scene: Scene) -> None:
     """Refuse a bearing stiffness beyond :data:`~..scene.MAX_STIFFNESS_RATIO` times the
-    joints' (their Hertz stiffness's secant at ``damping_full_depth_m``) either way.
+    joints' (:meth:`~.joint.JointKind.secant_stiffness`: a Cardan joint's Hertz
+    stiffness's secant at ``damping_full_depth_m``) either way.
     """
-    ct = scene.contact
-    secants = [hertz_stiffness(scene, j) * ct.damping_full_depth_m ** (ct.exponent - 1.0)
-               for j in scene.joints]
+    secants = [k for j in scene.joints
+               if (k := JOINT_KINDS[j.kind].secant_stiffness(j, scene)) is not None]
+    if not secants:
+        return
     allowed = Range(max(secants) / MAX_STIFFNESS_RATIO, min(secants) * MAX_STIFFNESS_RATIO,
                     "N/m")
-    if (refusal := allowed.refusal(ct.bearing_stiffness_N_m)) is not None:
+    if (refusal := allowed.refusal(scene.contact.bearing_stiffness_N_m)) is not None:
         raise SceneError(
             f"scene {scene.source}: field 'contact.bearing_stiffness_N_m': {refusal} "
             f"({1 / MAX_STIFFNESS_RATIO:g} to {MAX_STIFFNESS_RATIO:g} times the joints' "

@@ -74,8 +74,8 @@ class InShaftKind(ElementKind):
             if not has_joint and not any(lo < b.offset_m < hi for b in body.bearings):
                 raise SceneError(
                     f"scene {scene.source}: {self.noun} {element.name!r} on shaft "
-                    f"{body.name!r}: its {side} segment is not held (no joint at its end, "
-                    f"no bearing on it): nothing but the {self.noun} would hold it")
+                    f"{body.name!r}: its {side} segment is not held: no neighbour (no joint at "
+                    f"its end, no bearing on it), nothing but the {self.noun} would hold it")
 
     def describe(self, element) -> str:
         """One line of ``scene show``: what it is, where, its own fields with units."""
