@@ -292,6 +292,9 @@ def socp_face(op: Operator, i: int, name: str = "") -> Conic:
     """
     extra = [(members, _cone(spec)) for c in op.contacts
              for members, spec in c.element_kind.rim_moments(op, i, c)]
+    if not extra:
+        raise NotApplicable(f"formulation {name!r} adds moments to end faces; scene "
+                            f"{op.scene.name!r} has none (its joints have no cross-pins)")
     return _extended(op, i, extra, name,
                      idle=_idle_faces(op, determinacy(op, i).min_norm))
 
@@ -358,7 +361,7 @@ def _extended(op: Operator, i: int, extra, formulation: str, idle=()) -> Conic:
             columns.append(col)
             weights.append(weight)
         cones.append(make_cone(tuple(idx)))
-    A = np.hstack([op.A[i], np.array(columns).T])
+    A = np.column_stack([op.A[i], *columns])
     n0, n = len(op.names), A.shape[1]
     unilateral = np.concatenate([op.unilateral, np.zeros(n - n0, bool)])
     check = ForceChecks(A=A, b=op.b[i], names=tuple(names), unilateral=unilateral,
