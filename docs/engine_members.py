@@ -130,9 +130,19 @@ def _g(value: float) -> str:
 
 
 def matches(run: dict) -> bool:
-    from cardan_forces.experiments.engine import PREDICTION_RTOL
+    return verdict(run) == "yes"
 
-    return worst(run, "predicted_distance") <= PREDICTION_RTOL
+
+def verdict(run: dict) -> str:
+    """``cardan engine``'s verdict (:func:`cardan_forces.experiments.engine.verdict`) on
+    a stored run's settled instants.
+    """
+    from cardan_forces.experiments.engine import InstantComparison
+    from cardan_forces.experiments.engine import verdict as judged
+
+    return judged([InstantComparison(run["setting"], i["t"], i["residual"], 0.0, (),
+                                     ("-", 0.0), i["predicted_distance"])
+                   for i in run["instants"] if i["settled"]])
 
 
 def _setting(run: dict) -> str:
@@ -184,8 +194,9 @@ def markdown(data: dict) -> str:
              "spaced instants, those after the engines' settling counted. Residual: "
              "`||A x - b|| / ||b||` of the engine's forces; distance: "
              "`||x_predicted - x_engine|| / ||x_engine||`; matches: distance within "
-             f"{PREDICTION_RTOL:.0%} at every counted instant; wall time per simulated "
-             "second of one run.", "",
+             f"{PREDICTION_RTOL:.0%} at every counted instant, or where not, whether within "
+             "the engine's residual at the instant; wall time per simulated second of one "
+             "run.", "",
              "| scene | engine | setting | largest residual | largest distance | matches "
              "| outside the rigid set | wall s per simulated s |",
              "|---|---|---|---:|---:|---|---:|---:|"]
@@ -194,7 +205,7 @@ def markdown(data: dict) -> str:
             outside = sum(i["outside"] for i in r["instants"] if i["settled"])
             lines.append(f"| {scene['scene']} | {r['engine']} | {_setting(r)} | "
                          f"{_g(worst(r, 'residual'))} | {_g(worst(r, 'predicted_distance'))} "
-                         f"| {'yes' if matches(r) else 'no'} | {outside} | "
+                         f"| {verdict(r)} | {outside} | "
                          f"{r['wall_s_per_simulated_s']:.3g} |")
     notes = [line for scene in data["scenes"] for line in note(scene)]
     if notes:

@@ -37,3 +37,18 @@ def test_all_without_drake_runs_mujoco_and_says_why_drake_is_left_out(tmp_path, 
     report = (out / "engine.md").read_text()
     assert "Not run: Drake: Drake is not installed" in report
     assert "| Drake |" not in report and "| MuJoCo | default |" in report
+
+
+def test_the_verdict_says_whether_a_miss_is_within_the_engine_s_residual():
+    """Comparisons built by hand: a distance within the rule matches; a larger one is
+    within the engine's own residual at its instant, or beyond it (the report then says
+    why)."""
+    from cardan_forces.experiments.engine import PREDICTION_RTOL, InstantComparison, verdict
+
+    def at(distance, residual):
+        return InstantComparison("s", 0.0, residual, 0.0, (), ("-", 0.0), distance)
+
+    small, large = PREDICTION_RTOL / 2, 3 * PREDICTION_RTOL
+    assert verdict([at(small, 1e-6), at(small, 1e-6)]) == "yes"
+    assert verdict([at(small, 1e-6), at(large, 2 * large)]) == "no, within its residual"
+    assert verdict([at(large, 2 * large), at(large, large / 3)]) == "no, beyond its residual"

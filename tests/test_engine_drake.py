@@ -164,4 +164,4 @@ def test_cardan_engine_all_reports_both_engines_members(tmp_path):
     assert {r["engine"] for r in rows} == {"MuJoCo", "Drake"}
     report = (out / "engine.md").read_text()
     section = report.split("## The member each engine picks")[1].split("##")[0]
-    assert "| Drake |" in section and "| MuJoCo |" in section and "| no |" not in section
+    assert "| Drake |" in section and "| MuJoCo |" in section and "| no" not in section
