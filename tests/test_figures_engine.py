@@ -84,3 +84,21 @@ def test_a_radial_load_is_the_length_of_its_two_components():
     assert np.allclose(engine._load(forces, rows), np.linalg.norm(forces @ rows.T, axis=1))
     band = engine._band(result.op, rows, np.array([1]))
     assert 0.0 <= band[0, 0] <= band[0, 1]
+
+
+def test_drake_is_drawn_beside_mujoco_in_a_style_of_its_own(tmp_path, drawn):
+    """With Drake's runs (forces built by hand), its first step is drawn beside MuJoCo's
+    settings, counted in the title, and the figure keeps the rules of print."""
+    result = _result(np.linspace(0.0, 0.2, 21))
+    rng = np.random.default_rng(1)
+    for s in engine.DRAKE_SETTINGS:
+        result.runs[s.label] = SimpleNamespace(softness=s, forces=100.0 * rng.standard_normal(
+            (len(result.op.t), len(result.op.names))))
+    engine.draw(result, tmp_path / "engine")
+    fig, = drawn
+    assert images.print_problems(fig) == []
+    assert f"Drake: 1 of its {len(engine.DRAKE_SETTINGS)} steps" in fig.get_suptitle()
+    styles = {line.get_label(): (line.get_linestyle(), line.get_marker())
+              for line in fig.axes[0].lines if not line.get_label().startswith("_")}
+    drake = styles.pop(engine.DRAKE_SETTINGS[0].label)
+    assert drake not in styles.values()
