@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import Motion, _pin_inertia_global
-from .elements import Segment, shaft_segments
+from .elements import Segment, segment_of, shaft_segments
 from .elements.base import Body, Layout, Link
 from .elements.bodies import frames_of
 from .elements.registry import KINDS, LINK_KINDS, scene_elements
@@ -264,7 +264,16 @@ def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray
 
     applied = np.zeros((T, n_rows))
     applied[:, moment(first)] -= motion.input_torque[:, None] * geo.axes[0]
-    applied[:, moment(last)] += motion.load_torque[:, None] * geo.axes[-1]
+    takers = [(kind, e, k) for kind, e, k, _ in scene_elements(scene) if kind.takes_load]
+    if not takers:
+        applied[:, moment(last)] += motion.load_torque[:, None] * geo.axes[-1]
+    for kind, element, k in takers:  # the load as the element's forces
+        point, load = kind.load(element, motion.load_torque, frames_of(geo)[k],
+                                geo.centres[k])
+        body = segment_of(segments, k, element.offset_m)
+        reference = body_references(geo, segments)[body]
+        applied[:, force(body)] -= load
+        applied[:, moment(body)] -= np.cross(point - reference, load)
     terms = {"applied": applied}
 
     if scene.has("gravity"):

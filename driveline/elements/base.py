@@ -241,7 +241,8 @@ class ElementKind:
     it makes); ``locates``: it carries axial force both ways (a shaft body with two
     such has an axial split); ``slides``: its shaft slides through it axially;
     ``paper``: the paper's polar method takes it (eqs. 11-14 for bearings, 33-46 for
-    joints).
+    joints); ``takes_load``: it applies the line's load torque as forces of its own
+    (:meth:`load`) instead of a pure torque on the last shaft.
 
     A kind that offers a release names it ``release_name`` (``release_form``: how it is
     typed; ``release_rank``: the advisor tries lower ranks first; ``adds_joint``: the
@@ -256,6 +257,7 @@ class ElementKind:
     release_form: str = ""
     release_rank: int = 0
     adds_joint: bool = False
+    takes_load: bool = False
 
     def check(self, element, shaft: int, scene: Scene) -> None:
         """Raise :class:`~.scene.SceneError` where ``element`` cannot be used in
@@ -306,6 +308,14 @@ class ElementKind:
     def words(self, link: Link) -> str:
         """What the contact is, in words (figure titles, reports)."""
         return link.kind
+
+    def load(self, element, torque_N_m: np.ndarray, frame: np.ndarray,
+             centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A ``takes_load`` kind's load on its shaft at the load torque ``torque_N_m``
+        (T,): ``(point, force)``, a point (3,) and the force (T, 3) there (N), on a shaft
+        of frame rows ``r1, r2, axis`` and centre ``centre``.
+        """
+        raise NotImplementedError
 
     def refusal(self, element, engine: str) -> str | None:
         """Why ``engine`` (:data:`PENALTY_SIMULATION`, a physics engine; named in the
