@@ -62,8 +62,9 @@ class InShaftKind(ElementKind):
         body = scene.shafts[shaft]
         if not self.cuts:
             return
-        cuts = sorted(e.offset_m for e in scene.elements
-                      if e.shaft == body.name and e.offset_m != element.offset_m)
+        from .bodies import cuts_of  # below the registry, which imports this module
+
+        cuts = [e.offset_m for e in cuts_of(scene).get(body.name, []) if e is not element]
         below = max((c for c in cuts if c < element.offset_m), default=None)
         above = min((c for c in cuts if c > element.offset_m), default=None)
         spans = (("upstream", below, element.offset_m, shaft > 0 and below is None),

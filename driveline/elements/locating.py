@@ -45,7 +45,7 @@ class Locating(BearingKind):
     def release_words(self, release):
         return f"make bearing {release.shaft}.{release.bearing} floating"
 
-    def apply_release(self, release, shafts, slips):
+    def apply_release(self, release, shafts, elements):
         k = [s.name for s in shafts].index(release.shaft)
         bearings = tuple(FLOATING.made_from(b) if b.name == release.bearing else b
                          for b in shafts[k].bearings)

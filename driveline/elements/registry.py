@@ -20,7 +20,7 @@ from .inshaft import InShaftKind
 from .joint import JointKind
 
 MODULES = ("locating", "floating", "slip", "cardan", "angular_contact", "disc_coupling", "cv",
-           "gear_mesh")
+           "gear_mesh", "centring")
 """The kinds' modules (in this package), in the order their pairs are listed."""
 
 KINDS: tuple[ElementKind, ...] = tuple(import_module(f".{m}", __package__).KIND
