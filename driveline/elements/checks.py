@@ -18,13 +18,15 @@ Bad layouts raise :class:`~cardan_forces.driveline.scene.SceneError`:
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..determinacy import left_null_space
 from ..kinematics import rest_geometry
 from ..scene import MAX_STIFFNESS_RATIO, Range, Scene, SceneError
-from .bodies import Segment, frames_of, shaft_segments
-from .registry import JOINT_KINDS, scene_elements
+from .bodies import Segment, cuts_of, frames_of, shaft_segments
+from .registry import JOINT_KINDS, kind_of, scene_elements
 
 
 def check_elements(scene: Scene, sliding: bool = True) -> None:
@@ -33,6 +35,7 @@ def check_elements(scene: Scene, sliding: bool = True) -> None:
     slide (module doc).
     """
     check_stiffness(scene)
+    check_segments(scene)
     for kind, element, shaft, _ in scene_elements(scene):
         kind.check(element, shaft, scene)
     free = sliding_bodies(scene) if sliding else []
@@ -41,6 +44,30 @@ def check_elements(scene: Scene, sliding: bool = True) -> None:
             f"scene {scene.source}: no axial support: {', '.join(free)} can slide along "
             "their axis (a floating bearing carries no axial force; make one bearing "
             "of that part of the line locating)")
+
+
+def check_segments(scene: Scene) -> None:
+    """Each shaft body that elements cut a shaft into needs a neighbour: a joint at the
+    shaft's end or a bearing on it (the cutting elements do not count: between two cuts
+    nothing but the elements would hold it). The refusal names the element on the
+    body's upstream side (the first cut's, for the shaft's first body).
+    """
+    last = len(scene.shafts) - 1
+    cuts = cuts_of(scene)
+    for k, shaft in enumerate(scene.shafts):
+        mine = cuts.get(shaft.name, [])
+        bounds = [-math.inf, *(e.offset_m for e in mine), math.inf]
+        for s, (lo, hi) in enumerate(zip(bounds[:-1], bounds[1:])):
+            if not mine or (s == 0 and k > 0) or (s == len(mine) and k < last):
+                continue
+            if any(lo < b.offset_m < hi for b in shaft.bearings):
+                continue
+            element, side = (mine[0], "upstream") if s == 0 else (mine[s - 1], "downstream")
+            noun = kind_of(element).noun
+            raise SceneError(
+                f"scene {scene.source}: {noun} {element.name!r} on shaft {shaft.name!r}: its "
+                f"{side} segment is not held: no neighbour (no joint at its end, no bearing "
+                f"on it), nothing but the {noun} would hold it")
 
 
 def check_stiffness(scene: Scene) -> None:

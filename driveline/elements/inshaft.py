@@ -5,12 +5,14 @@ there into two bodies (:mod:`.bodies`), any number of cuts per shaft.
 
 The kind reads its own fields (:meth:`InShaftKind.read_fields`); the fields every such
 element has (``name``, ``shaft``, ``offset_m``) and their checks are read here once:
-the shaft exists, the element lies strictly inside it and not at a bearing.
+the shaft exists, the element lies strictly inside it and, if it cuts, not at a
+bearing. That every segment the cuts make is held is checked over the segments
+(:func:`~.checks.check_segments`).
 """
 
 from __future__ import annotations
 
-from ..scene import Scene, SceneError, table_keys
+from ..scene import table_keys
 from .base import ElementKind
 
 
@@ -52,31 +54,6 @@ class InShaftKind(ElementKind):
         table reader, which names a misspelled key).
         """
         return {}
-
-    def check(self, element, shaft: int, scene: Scene) -> None:
-        """Each body it cuts its shaft into needs a neighbour: a joint at the shaft's
-        end or a bearing on it (elements it shares the shaft with do not count: between
-        two cuts nothing but the elements would hold it).
-        """
-        last = len(scene.shafts) - 1
-        body = scene.shafts[shaft]
-        if not self.cuts:
-            return
-        from .bodies import cuts_of  # below the registry, which imports this module
-
-        cuts = [e.offset_m for e in cuts_of(scene).get(body.name, []) if e is not element]
-        below = max((c for c in cuts if c < element.offset_m), default=None)
-        above = min((c for c in cuts if c > element.offset_m), default=None)
-        spans = (("upstream", below, element.offset_m, shaft > 0 and below is None),
-                 ("downstream", element.offset_m, above, shaft < last and above is None))
-        for side, lo, hi, has_joint in spans:
-            lo = -body.length_m if lo is None else lo
-            hi = body.length_m if hi is None else hi
-            if not has_joint and not any(lo < b.offset_m < hi for b in body.bearings):
-                raise SceneError(
-                    f"scene {scene.source}: {self.noun} {element.name!r} on shaft "
-                    f"{body.name!r}: its {side} segment is not held: no neighbour (no joint at "
-                    f"its end, no bearing on it), nothing but the {self.noun} would hold it")
 
     def describe(self, element) -> str:
         """One line of ``scene show``: what it is, where, its own fields with units."""
