@@ -11,7 +11,7 @@ first body and the opposite on the driving shaft's last, ``<device>.r1``,
 ``<device>.r2`` (N), normal to the driven shaft's axis (the bore lets the ball slide
 along it as the angle changes). It adds a loop around the centre yoke: the joint's
 secondary couples are shared between the crosses and the ball, a redundancy the rigid
-set exposes; its release ``unball:<device>`` takes the ball out. Contact law (an
+set exposes; its release ``unball:<centre yoke>`` takes the ball out. Contact law (an
 assumption): as stiff as a bearing, without gap.
 
 The penalty simulation and the physics engines have no contact between non-adjacent
@@ -92,29 +92,29 @@ class Centring(InShaftKind):
     def laws(self, link: Link, scene) -> list[Law]:
         return [Law(link.columns, scene.contact.bearing_stiffness_N_m, 0.0)]
 
-    release_name, release_form, release_rank = "unball", "unball:<device>", 2
+    release_name, release_form, release_rank = "unball", "unball:<centre yoke>", 2
 
     def releases(self, scene):
         """Taking the ball out: the crosses alone centre the yoke (the pair then runs at
         constant velocity only at equal angles).
         """
-        return [Release(self.release_name, d.shaft, d.name) for d in scene.elements
+        return [Release(self.release_name, d.shaft) for d in scene.elements
                 if isinstance(d, CentringDevice)]
 
     def parse_release(self, target, scene):
-        found = [d for d in scene.elements
-                 if isinstance(d, CentringDevice) and d.name == target]
-        return Release(self.release_name, found[0].shaft, target) if found else None
+        found = any(isinstance(d, CentringDevice) and d.shaft == target
+                    for d in scene.elements)
+        return Release(self.release_name, target) if found else None
 
     def release_label(self, release):
-        return f"unball:{release.bearing}"
+        return f"unball:{release.shaft}"
 
     def release_words(self, release):
-        return f"take out the centring device {release.bearing!r} (around {release.shaft})"
+        return f"take out the centring ball around {release.shaft}"
 
     def apply_release(self, release, shafts, elements):
         elements[:] = [e for e in elements if not (isinstance(e, CentringDevice)
-                                                   and e.name == release.bearing)]
+                                                   and e.shaft == release.shaft)]
 
     def refusal(self, device: CentringDevice, engine: str) -> str | None:
         return (f"centring device {device.name!r}: {engine} has no contact between shafts "
