@@ -50,6 +50,7 @@ from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, 
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.experiments import engine_member, files
+from cardan_forces.experiments.engine_loads import ENGINES, engine_of, load_of, load_rows
 from cardan_forces.experiments.environment import number_text
 from cardan_forces.experiments.images import (
     COINCIDE,
@@ -96,9 +97,6 @@ DRAKE_SETTINGS = (
 )
 """Drake's settings compared (module doc): its discrete step; the first is its reference.
 A step that does not divide the scene's is left out."""
-
-ENGINES = {"mujoco": "MuJoCo", "drake": "Drake"}
-"""The engines ``--engine`` names, with the name the outputs give each."""
 
 PREDICTION_RTOL = 1e-2
 """The prediction is said to match a simulation within this share of the force norm."""
@@ -184,11 +182,6 @@ def settle_s(runs: dict[str, EngineRun]) -> float:
     """
     return 10 * max(r.softness.timeconst_s * max([1.0] + [f for _, f in r.softness.scaled])
                     for r in runs.values())
-
-
-def engine_of(run: EngineRun) -> str:
-    """The engine's name of a run (:data:`ENGINES`), from its setting's type."""
-    return ENGINES["drake" if isinstance(run.softness, Stepping) else "mujoco"]
 
 
 def compliances(op, run: EngineRun, sampled: np.ndarray) -> dict[int, dict[str, float]]:
@@ -332,29 +325,6 @@ def engine_runs(op, settings=SETTINGS, engines=("mujoco",),
     return runs
 
 
-def _load_rows(op) -> dict[str, np.ndarray]:
-    """The first shaft's loads the figure draws, as Figs. 14-15 and ``cardan repro``'s
-    MuJoCo figure draw them, by panel title: per bearing the magnitude of its radial
-    load (the length of its two components normal to the axis: two rows over the
-    forces) and the shaft's axial load (sum over its bearings, signed: one row).
-    """
-    bearings = op.bearings(0)
-    matrices = [op.bearing_matrix(link) for link in bearings]  # rows (r1, r2, axis)
-    rows = {f"({'abcdefgh'[k]}) bearing '{link.label}': magnitude of its radial load": m[:2]
-            for k, (link, m) in enumerate(zip(bearings, matrices))}
-    rows[f"({'abcdefgh'[len(rows)]}) axial load of shaft '{op.scene.shafts[0].name}' (sum "
-         "over its bearings, signed)"] = sum(m[2] for m in matrices)[None, :]
-    return rows
-
-
-def _load(forces: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """The load ``rows`` (k, n) makes of ``forces`` (T, n): its length for two rows, its
-    signed value for one.
-    """
-    values = np.asarray(forces) @ rows.T
-    return values[:, 0] if len(rows) == 1 else np.linalg.norm(values, axis=1)
-
-
 def _band(op, rows: np.ndarray, sampled: np.ndarray) -> np.ndarray:
     """(k, 2): the rigid interval of the load ``rows`` (:func:`_load`) at the sampled
     instants (+-inf: unbounded): of one row exact; of a length, the range its two
@@ -385,7 +355,7 @@ def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    op, rows = result.op, _load_rows(result.op)
+    op, rows = result.op, load_rows(result.op)
     drake = [n for n, r in result.runs.items() if engine_of(r) == ENGINES["drake"]]
     names = [n for n in FIGURE_SETTINGS if n in result.runs] + drake[:1]
     start = float(op.t[0]) + settle_s(result.runs)
@@ -422,7 +392,7 @@ def _draw_load(ax, result: EngineStudy, label: str, rows: np.ndarray, names: lis
     sampled = result.sampled[shown[result.sampled]]
     band = _band(op, rows, sampled)
     curves = {(n if engine_of(result.runs[n]) == ENGINES["drake"] else f"MuJoCo, {n}"):
-              np.where(shown, _load(result.runs[n].forces, rows), np.nan) for n in names}
+              np.where(shown, load_of(result.runs[n].forces, rows), np.nan) for n in names}
     low, high = limits(list(curves.values()), [band[:, 0], band[:, 1]])
     step, first = max(1, int(shown.sum()) // 8), int(np.argmax(shown))
     for k, (name, values) in enumerate(curves.items()):

@@ -12,7 +12,7 @@ points, at the study's last settled sampled instant.
   no other softness for ball constraints.
 
 The loads are the first shaft's, as ``cardan engine``'s figure draws them over time
-(:func:`~cardan_forces.experiments.engine._load_rows`): its bearings' radial
+(:func:`~cardan_forces.experiments.engine_loads.load_rows`): its bearings' radial
 magnitudes and its signed axial load. Writes ``engine_softening.csv`` (every number the
 figure draws) and the figure ``engine_softening.<format>``.
 """
@@ -24,8 +24,10 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+from cardan_forces.driveline.engine_mujoco import Softness
 
-from . import engine, engine_member, files
+from . import engine_member, files
+from .engine_loads import ENGINES, engine_of, load_of, load_rows
 from .images import PAGE_IN, chars_across, limits, save, styled
 
 RATIOS = np.geomspace(1 / 8, 8, 49)
@@ -52,20 +54,20 @@ def rows(result) -> list[dict]:
     and ``simulated`` (one per run, its setting named) values (N).
     """
     op, i = result.op, _instant(result)
-    loads = engine._load_rows(op)
+    loads = load_rows(op)
     out = []
 
     def add(engine_name, source, setting, x, forces):
-        for name, load_rows in loads.items():
+        for name, rows in loads.items():
             out.append({"engine": engine_name, "source": source, "setting": setting, "x": x,
-                        "load": name, "value_N": float(engine._load(forces[None], load_rows)[0]),
+                        "load": name, "value_N": float(load_of(forces[None], rows)[0]),
                         "t": float(op.t[i])})
 
     runs = {label: r for label, r in result.runs.items()}
-    mujoco = {k: r for k, r in runs.items() if engine.engine_of(r) == engine.ENGINES["mujoco"]}
-    drake = {k: r for k, r in runs.items() if engine.engine_of(r) == engine.ENGINES["drake"]}
+    mujoco = {k: r for k, r in runs.items() if engine_of(r) == ENGINES["mujoco"]}
+    drake = {k: r for k, r in runs.items() if engine_of(r) == ENGINES["drake"]}
     if mujoco:
-        base = engine_member.compliances_mujoco(op, engine.SETTINGS[0])
+        base = engine_member.compliances_mujoco(op, Softness(label="default"))
         last = {link.name for link in op.bearings() if link.shaft == len(op.scene.shafts) - 1}
         for s in RATIOS:
             c = {n: v * (s * s if n in last else 1.0) for n, v in base.items()}

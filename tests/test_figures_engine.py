@@ -16,6 +16,7 @@ from cardan_forces.driveline.dynamics import simulate  # noqa: E402
 from cardan_forces.driveline.equilibrium import build_operator  # noqa: E402
 from cardan_forces.driveline.loading import load_scene  # noqa: E402
 from cardan_forces.experiments import engine, images  # noqa: E402
+from cardan_forces.experiments.engine_loads import load_of, load_rows  # noqa: E402
 
 
 @pytest.fixture
@@ -46,7 +47,7 @@ def test_the_engine_figure_draws_the_rigid_set_behind_its_curves(tmp_path, drawn
     assert op.scene.name in fig.get_suptitle()
     start = engine.settle_s(result.runs)
     shown = result.sampled[op.t[result.sampled] >= start]
-    for ax, c in zip(fig.axes, engine._load_rows(op).values()):
+    for ax, c in zip(fig.axes, load_rows(op).values()):
         band = engine._band(op, c, shown)
         notes = " ".join(t.get_text() for t in ax.texts)
         assert "rigid set:" in notes  # every panel says what its set is
@@ -79,9 +80,9 @@ def test_the_engine_figure_counts_its_settings_and_draws_after_the_settling(tmp_
 
 def test_a_radial_load_is_the_length_of_its_two_components():
     result = _result(np.linspace(0.0, 0.02, 3))
-    rows = next(iter(engine._load_rows(result.op).values()))
+    rows = next(iter(load_rows(result.op).values()))
     forces = result.runs["default"].forces
-    assert np.allclose(engine._load(forces, rows), np.linalg.norm(forces @ rows.T, axis=1))
+    assert np.allclose(load_of(forces, rows), np.linalg.norm(forces @ rows.T, axis=1))
     band = engine._band(result.op, rows, np.array([1]))
     assert 0.0 <= band[0, 0] <= band[0, 1]
 
