@@ -87,7 +87,7 @@ SOLVED, ALMOST, INFEASIBLE, LIMIT, STALLED, BROKEN, RUNNING = range(7)
 infeasibility certificate, iteration limit, step below :data:`MIN_STEP`, non-finite
 numbers, still iterating."""
 
-CODES = ("solved", "almost solved", "primal infeasible", "iteration limit", "stalled",
+CODES = ("converged", "almost converged", "primal infeasible", "iteration limit", "stalled",
          "non-finite", "running")
 """The exit codes' words, by value."""
 
