@@ -19,7 +19,8 @@ the window's second half.
 Writes ``docs/data/penalty_integrators.json`` (the measurements with the command, the UTC
 date, the machine and the versions) and rewrites the generated part of
 ``docs/explanation/physical.md`` (between its ``penalty-integrators`` markers) from it:
-the table and the decision (:func:`decision`). ``tests/test_penalty_integrators_page.py``
+the table and the decision (:func:`decision`). The scenes refused are stored, not shown:
+a new quasi-static built-in scene would stale the page. ``tests/test_penalty_integrators_page.py``
 holds the page to the stored data.
 """
 
@@ -58,6 +59,7 @@ def _released_line(name: str) -> str | None:
     """The name of built-in scene ``name``'s released line, None where the penalty
     simulation refuses it (a quasi-static scene; a slip joint with friction).
     """
+    from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
     from cardan_forces.driveline.elements.registry import refusals
     from cardan_forces.driveline.loading import load_scene
     from cardan_forces.driveline.penalty import released
@@ -67,7 +69,7 @@ def _released_line(name: str) -> str | None:
         line = released(load_scene(name))
     except SceneError:
         return None
-    if refusals(line, "the penalty-contact simulation"):
+    if refusals(line, PENALTY_SIMULATION):
         return None
     return line.name
 
@@ -259,10 +261,6 @@ def markdown(data: dict) -> str:
             lines.append(f"| {scene['scene']} | {method} | {r['cpu_per_simulated_s']:.3g} "
                          f"| {ratio} | {r['steps']} | {r['failures']}/{r['runs']} "
                          f"| {sampled} | {averaged} |")
-    refused = data.get("refused") or []
-    if refused:
-        lines += ["", "Not measured: " + ", ".join(f"`{n}`" for n in refused)
-                  + " (the penalty simulation refuses its released line)."]
     lines += ["", decision(data), "", END]
     return "\n".join(lines)
 

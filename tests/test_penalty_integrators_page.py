@@ -45,9 +45,11 @@ def test_the_run_says_where_and_when(data):
 
 
 def test_every_scene_the_penalty_simulation_takes_is_measured(script, data):
+    """The scenes it refuses (quasi-static ones, kinds it has no model for) are the
+    run's record, not held: a new built-in scene it refuses changes nothing measured.
+    """
     assert [s["scene"] for s in data["scenes"]] == list(script.penalty_scenes())
     assert [s["from"] for s in data["scenes"]] == list(script.penalty_scenes().values())
-    assert data["refused"] == script.refused_scenes()
 
 
 def test_each_integrator_is_repeated_and_the_smaller_cpu_time_kept(script, data):
