@@ -185,11 +185,13 @@ class PenaltyResult:
     """The penalty simulation sampled at ``t`` (s).
 
     ``omega[k]``: shaft ``k``'s angular velocity about its own current axis (rad/s).
-    ``forces``: the equilibrium operator's 36 names and sign conventions (N): bearing
+    ``forces``: the equilibrium operator's names and sign conventions (N; N m for a
+    moment column, such as a disc coupling's bending and torque): bearing
     forces on the shafts in the global frame; joint contact forces on the cross-pins in
     each pin's own current frame (``e1`` its driving trunnion axis, ``e2`` its driven
     one, ``e3 = e1 x e2``); end faces as pushes >= 0. ``penetration``: the deepest
-    contact penetration (m) at each instant (negative: no contact). ``status`` is 0 on
+    penetration of a unilateral contact (m) at each instant (negative: none touches;
+    a bushing's deflection is none). ``status`` is 0 on
     success, -1 on failure (then ``message`` says why and samples after the failure
     are NaN). ``nfev`` counts right-hand-side evaluations (a vectorized Jacobian call
     counts as one), ``njev`` Jacobians, ``nlu`` LU factorizations, ``nsteps`` steps.
