@@ -42,7 +42,10 @@ d_i'`` with ``d_i`` the offset of the body's point from the other's along the ot
 a pure couple along ``d theta_i`` per rotation (from the energy ``kr_i theta_i^2 /
 2``): turned by ``phi`` about ``x_i``, ``theta_i = sin(phi)`` and the couple ``kr_i
 sin(phi) cos(phi)``, ``kr_i phi`` to within ``phi^2`` (:class:`~.penalty_model._Contacts`,
-``SPRING`` and ``TWIST``). Damping: the
+``SPRING`` and ``TWIST``). A small-rotation law: its couple peaks at ``kr_i / 2`` at 45
+degrees, so a load that would wind it further has no equilibrium (the softest disc
+coupling the kind accepts, 1e2 N m/rad in torsion, under ``propshaft``'s 2.5 kN m: its
+segments spin apart and the run fails). Damping: the
 scene's fraction of each stiffness, as eqs. 75-78's ``c_max`` of a linear contact
 (``c = fraction * k``, 0.01 s by default), at every deflection: a bilateral spring has
 no moment of first touch for eq. 78's step to soften.
