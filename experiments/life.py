@@ -700,6 +700,8 @@ def _page(answer: dict, entries: list, span: tuple, page: int, pages: int):
         fig.legend(handles.values(), handles.keys(), loc="upper right",
                    bbox_to_anchor=(1.0, 1 - FRAME_IN / 2 / height), labelspacing=0.7)
     else:
+        ax.set_axis_off()  # no rows, no lives: the page says so and draws no axes
+        ax.set_title("", loc="left")
         ax.text(0.5, 0.5, "no bearing of the scene has catalogue data", ha="center",
                 transform=ax.transAxes)
     fig.canvas.draw()
