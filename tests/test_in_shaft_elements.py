@@ -82,3 +82,11 @@ def test_a_joint_of_an_unknown_kind_is_refused_with_the_kinds():
         scene_from_dict({"extends": "paper", "joints": [
             {**dataclasses.asdict(load_scene("paper").joints[0]), "kind": "tripod"},
             dataclasses.asdict(load_scene("paper").joints[1])]})
+
+
+@pytest.mark.parametrize("shaft,offset,side", [("output", 0.45, "downstream"),
+                                               ("input", -0.45, "upstream")])
+def test_a_cut_beyond_the_end_shafts_bearings_is_refused(shaft, offset, side):
+    """The line's ends have no joint: a segment past the last bearing there is unheld."""
+    with pytest.raises(SceneError, match=f"'s0' on shaft '{shaft}': its {side} segment"):
+        _slips(offset, shaft=shaft)
