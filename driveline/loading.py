@@ -34,6 +34,7 @@ import numpy as np
 from cardan_forces.util.names import did_you_mean, nearest
 
 from .catalogue import read_rating, read_tolerances
+from .duty import read_duty_cycle
 from .elements.checks import check_elements
 from .elements.registry import BEARING_KINDS, IN_SHAFT_KINDS, JOINT_KINDS, kind_of
 from .scene import (
@@ -468,6 +469,7 @@ def scene_tables(scene: Scene) -> dict:
         "material": dataclasses.asdict(scene.material),
         "contact": dataclasses.asdict(scene.contact),
         "tolerances": dataclasses.asdict(scene.tolerances) if scene.tolerances else None,
+        "duty_cycle": [dataclasses.asdict(b) for b in scene.duty_cycle],
     })
 
 
@@ -628,7 +630,7 @@ def _fields(raw: dict, source: str) -> Scene:
         input_torque=input_torque, load_torque=load_torque,
         initial_angle_rad=initial[0], initial_speed_rad_s=initial[1],
         time=time, material=material, contact=contact, source=source, elements=elements,
-        tolerances=read_tolerances(top))
+        tolerances=read_tolerances(top), duty_cycle=read_duty_cycle(top))
     top.done()
     for key, law in (("input", scene.input_torque), ("load", scene.load_torque)):
         periods = law.frequency_hz * (time.stop_s - time.start_s)

@@ -37,6 +37,7 @@ LIMITS = {
     "torque_N_m": (0.0, 1e9),
     "frequency_hz": (0.0, 1e4),
     "speed_rad_s": (0.0, 1e4),
+    "speed_rpm": (1e-3, 1e5),
     "angle_rad": (0.0, 1e6),
     "angle_deg": (0.0, 360.0),
     "gravity_m_s2": (0.0, 1e3),
@@ -172,6 +173,11 @@ class BearingRating:
     radial and axial factors of the equivalent dynamic load ``P = X Fr + Y Fa`` where
     ``Fa / Fr > e`` (``P = Fr`` below it); ``None`` takes them from ISO 281's tables by
     type and angle.
+
+    ISO 281:2007's modified rating life needs four more, all four or none: the fatigue
+    load limit ``C_u_N`` (N), the mean diameter ``mean_diameter_m`` ((d + D) / 2, m),
+    the lubricant's kinematic viscosity at operating temperature ``viscosity_mm2_s``
+    (mm^2/s) and the contamination factor ``contamination`` (``e_C``, 0 to 1).
     """
 
     type: str
@@ -181,6 +187,10 @@ class BearingRating:
     X: float | None = None
     Y: float | None = None
     e: float | None = None
+    C_u_N: float | None = None
+    mean_diameter_m: float | None = None
+    viscosity_mm2_s: float | None = None
+    contamination: float | None = None
 
     @property
     def roller(self) -> bool:
@@ -284,6 +294,18 @@ class Crosspin:
 
 
 @dataclass(frozen=True)
+class DutyBin:
+    """One bin of a load spectrum (duty cycle): the line's input torque ``torque_N_m``
+    (N m) at the input speed ``speed_rpm`` (r/min) for the share ``share`` of the
+    operating time (the shares of a spectrum sum to 1).
+    """
+
+    torque_N_m: float
+    speed_rpm: float
+    share: float
+
+
+@dataclass(frozen=True)
 class TorqueLaw:
     """``M(t) = mean + amplitude * cos(2 pi f t + phase)`` in N·m (constant: amplitude 0)."""
 
@@ -368,6 +390,7 @@ class Scene:
     source: str = "<memory>"
     elements: tuple = ()
     tolerances: Tolerances | None = None
+    duty_cycle: tuple[DutyBin, ...] = ()
 
     def has(self, effect: str) -> bool:
         """Whether the scene calls for ``effect`` (one of :data:`EFFECTS`)."""
