@@ -5,8 +5,8 @@ moment about the shaft axis is the scene's load torque, with the radial and axia
 components the tooth geometry adds. Those load the shaft's bearings; they do no work
 on the 1-DOF motion (the axes are fixed), which stays the scene's.
 
-Nominal loads of a helical (spur for ``helix_angle_deg = 0``) gear from the torque
-``T`` (ISO 6336-1:2019, 5.2, with the pitch diameter ``d = 2 r``):
+``type = "helical"`` (the default; spur for ``helix_angle_deg = 0``): the nominal loads
+from the torque ``T`` (ISO 6336-1:2019, 5.2, with the pitch diameter ``d = 2 r``):
 
     Ft = T / r,   Fr = Ft tan(alpha_n) / cos(beta),   Fa = Ft tan(|beta|)
 
@@ -15,8 +15,41 @@ The mesh point sits ``mesh_angle_deg`` about the shaft axis from the shaft frame
 ``r1`` (in the articulation plane), ``offset_m`` along it; the tangential force opposes
 the rotation, the radial one points to the axis, and the axial one acts along the axis,
 downstream for a positive ``helix_angle_deg``, upstream for a negative one (the sign
-stands for the hand of the helix and the sense of the load). Bevel and hypoid meshes
-(ISO 10300) and duty cycles are the next step.
+stands for the hand of the helix and the sense of the load).
+
+``type = "bevel"`` (spiral bevel; straight bevel for ``spiral_angle_deg = 0``) and
+``type = "hypoid"``: the shaft is the pinion, at the end of the line with its pitch
+cone's apex downstream (toward the ring gear's axis). ``pitch_radius_m`` is then the
+mean pitch radius ``r_m = d_m1 / 2`` (the mean point, at mid face width, ISO
+23509:2016 ``d_m1``) and ``offset_m`` the mean point's place along the axis. With the
+pitch cone angle ``delta`` (ISO 23509 ``delta_1``), the pinion's mean spiral angle
+``psi`` (``beta_m1``) and the normal pressure angle ``alpha_n`` of the loaded flank,
+the loads at the mean point (ISO 10300-1:2014, 6.1: ``F_mt1 = 2000 T1 / d_m1`` with
+``T1`` in N m and ``d_m1`` in mm; the components as in Machinery's Handbook, "Bevel
+gearing", thrust and separating forces, and Carvill, *Mechanical Engineer's Data
+Handbook*, 1993, 2.10.5):
+
+    Ft = T / r_m
+    Fa = |Ft| / cos(psi) (tan(alpha_n) sin(delta) + s sin(psi) cos(delta))
+    Fr = |Ft| / cos(psi) (tan(alpha_n) cos(delta) - s sin(psi) sin(delta))
+
+``Fa`` positive away from the cone apex (upstream here), ``Fr`` positive toward the
+pinion axis (separating). ``s = +1`` (the upper signs of the handbooks' ``±``/``∓``)
+where the pinion drives turning clockwise seen from its back toward the apex with a
+left-hand spiral (or counter-clockwise with a right-hand one): it is pushed out of
+mesh; ``s = -1`` where it is drawn into mesh. The line's shafts turn positive about
+their axes, downstream, so the pinion turns clockwise seen from its back, and the load
+torque opposes the rotation: at ``T > 0`` a ``hand = "left"`` pinion has ``s = +1``, a
+``"right"`` one ``s = -1`` (a right-hand pinion driving clockwise moves toward the cone
+centre: Crosher, "Tooth Tips", Gear Solutions). At ``T < 0`` the other flank carries
+the load: ``s`` changes sign, the pressure terms keep their separating sense.
+
+A hypoid pinion's ``psi`` exceeds its ring gear's (``gear_spiral_angle_deg``,
+``beta_m2``) by the offset angle in the pitch plane; the normal force is common, so the
+gear's tangential force is ``Ft2 = Ft1 cos(beta_m2) / cos(beta_m1)``
+(:func:`gear_tangential_force`). One normal pressure angle stands for the hypoid's
+drive and coast flanks (ISO 23509 gives them apart); the limit pressure angle is not
+modelled.
 
 A line has at most one, on its last shaft. The penalty simulation and the physics
 engines apply the load as a torque: they refuse a scene with a mesh, in one line.
@@ -41,14 +74,43 @@ HELIX_ANGLE_DEG = Range(-45.0, 45.0, "deg")
 gears run 15 to 30 deg."""
 
 PITCH_RADIUS_M = Range(5e-3, 2.0, "m")
-"""Pitch radii of the gears such a line drives: a few millimetres to a 4 m wheel."""
+"""Pitch radii of the gears such a line drives: a few millimetres to a 4 m wheel (a
+bevel or hypoid pinion's mean pitch radius)."""
+
+PITCH_CONE_ANGLE_DEG = Range(1.0, 89.0, "deg")
+"""Pitch cone angles of bevel and hypoid pinions, strictly between the cylinder (0 deg)
+and the crown gear (90 deg): a 90 deg drive's pinion has ``atan(z1 / z2)``, about 8 deg
+at 7:1 to 45 deg for a mitre pair."""
+
+SPIRAL_ANGLE_DEG = Range(0.0, 60.0, "deg")
+"""Mean spiral angles of bevel and hypoid gears (the hand apart): 0 deg straight (or
+Zerol), 35 deg the usual spiral bevel, 45 to 50 deg a hypoid pinion's, 60 deg about the
+most cut."""
+
+GEAR_TYPES = ("helical", "bevel", "hypoid")
+"""What a gear mesh's ``type`` names: a cylindrical (spur or helical) gear, a bevel
+pinion (straight or spiral) or a hypoid pinion."""
+
+HANDS = ("left", "right")
+"""The hand of a bevel or hypoid pinion's spiral: a right-hand tooth's outer half turns
+clockwise from the axial plane through its mean point, seen from the cone's apex (a
+right-hand helix in the limit of a cylinder)."""
+
+_ONLY = {"helix_angle_deg": ("helical",), "pitch_cone_angle_deg": ("bevel", "hypoid"),
+         "spiral_angle_deg": ("bevel", "hypoid"), "hand": ("bevel", "hypoid"),
+         "gear_spiral_angle_deg": ("hypoid",)}
+"""The fields that apply to some types of gear only, with those types."""
 
 
 @dataclass(frozen=True)
 class GearMesh:
     """A gear on shaft ``shaft`` at ``offset_m`` from its centre meshing with a gear
-    outside the line (module doc): pitch radius (m), normal pressure and helix angles
-    (deg) and where on the circle the mesh sits (deg about the axis from ``r1``).
+    outside the line (module doc): its ``type`` (:data:`GEAR_TYPES`), pitch radius (m;
+    the mean one of a bevel or hypoid pinion), normal pressure angle (deg), where on
+    the circle the mesh sits (deg about the axis from ``r1``); a helical gear's helix
+    angle (deg, signed); a bevel or hypoid pinion's pitch cone angle, mean spiral angle
+    (deg) and hand (:data:`HANDS`); a hypoid ring gear's mean spiral angle (deg). The
+    fields of the other types are None.
     """
 
     name: str
@@ -56,17 +118,53 @@ class GearMesh:
     offset_m: float
     pitch_radius_m: float
     pressure_angle_deg: float = 20.0
-    helix_angle_deg: float = 0.0
+    helix_angle_deg: float | None = 0.0
     mesh_angle_deg: float = 0.0
+    type: str = "helical"
+    pitch_cone_angle_deg: float | None = None
+    spiral_angle_deg: float | None = None
+    hand: str | None = None
+    gear_spiral_angle_deg: float | None = None
+
+
+def spiral_sign(torque_N_m, gear: GearMesh) -> np.ndarray:
+    """``s`` of the module doc, +1 where the pinion is pushed out of mesh (a left-hand
+    spiral driving, ``T >= 0``), -1 where it is drawn in; arrays like the torque.
+    """
+    hand = 1.0 if gear.hand == "left" else -1.0
+    return np.where(np.asarray(torque_N_m, float) < 0, -hand, hand)
 
 
 def nominal_forces(torque_N_m, gear: GearMesh) -> tuple:
-    """``(Ft, Fr, Fa)`` (N) of ISO 6336-1's nominal loads at torque ``torque_N_m``
-    (module doc); arrays over instants where the torque is one.
+    """``(Ft, Fr, Fa)`` (N) at the load torque ``torque_N_m`` (N m; arrays over instants
+    where the torque is one): ISO 6336-1's nominal loads of a helical gear, or a bevel
+    or hypoid pinion's loads at the mean point (module doc: ``Ft`` signed as the
+    torque, ``Fr`` positive toward the axis, ``Fa`` positive away from the cone apex).
     """
     ft = np.asarray(torque_N_m, float) / gear.pitch_radius_m
-    beta, alpha = math.radians(gear.helix_angle_deg), math.radians(gear.pressure_angle_deg)
-    return ft, ft * math.tan(alpha) / math.cos(beta), ft * math.tan(abs(beta))
+    alpha = math.radians(gear.pressure_angle_deg)
+    if gear.type == "helical":
+        beta = math.radians(gear.helix_angle_deg)
+        return ft, ft * math.tan(alpha) / math.cos(beta), ft * math.tan(abs(beta))
+    delta, psi = math.radians(gear.pitch_cone_angle_deg), math.radians(gear.spiral_angle_deg)
+    s, normal = spiral_sign(torque_N_m, gear), np.abs(ft) / math.cos(psi)
+    fa = normal * (math.tan(alpha) * math.sin(delta) + s * math.sin(psi) * math.cos(delta))
+    fr = normal * (math.tan(alpha) * math.cos(delta) - s * math.sin(psi) * math.sin(delta))
+    return ft, fr, fa
+
+
+def gear_tangential_force(pinion_tangential_N, gear: GearMesh):
+    """The ring gear's tangential force (N) at its mean point from the pinion's
+    ``pinion_tangential_N``: ``Ft2 = Ft1 cos(beta_m2) / cos(beta_m1)``, the one normal
+    force's share along each member's pitch-plane tangent (module doc); equal to
+    ``Ft1`` for a bevel pair (one spiral angle), refused for a helical gear.
+    """
+    if gear.type == "helical":
+        raise ValueError(f"gear mesh {gear.name!r}: a helical gear has no ring gear")
+    psi1 = math.radians(gear.spiral_angle_deg)
+    psi2 = math.radians(gear.gear_spiral_angle_deg if gear.type == "hypoid"
+                        else gear.spiral_angle_deg)
+    return np.asarray(pinion_tangential_N, float) * math.cos(psi2) / math.cos(psi1)
 
 
 class Mesh(InShaftKind):
@@ -77,16 +175,41 @@ class Mesh(InShaftKind):
     takes_load = True
 
     def read_fields(self, t) -> dict:
-        return dict(
+        """Its type, then the fields of that type (module doc); a field of another type
+        is refused by name.
+        """
+        kind = t.string("type", "helical", choices=GEAR_TYPES)
+        for key, types in _ONLY.items():
+            if key in t.raw and kind not in types:
+                t.fail(key, f"applies to {' and '.join(types)} gears, not to a {kind} one")
+        fields = dict(
+            type=kind,
             pitch_radius_m=t.number("pitch_radius_m", positive=True, kind="length_m",
                                     within=PITCH_RADIUS_M, why="gears of drive lines"),
             pressure_angle_deg=t.number("pressure_angle_deg", 20.0, kind="angle_deg",
                                         within=PRESSURE_ANGLE_DEG,
                                         why="involute gears' pressure angles"),
-            helix_angle_deg=t.number("helix_angle_deg", 0.0, kind="angle_deg",
-                                     within=HELIX_ANGLE_DEG,
-                                     why="helical gears' helix angles"),
             mesh_angle_deg=t.number("mesh_angle_deg", 0.0, kind="angle_deg"))
+        if kind == "helical":
+            fields["helix_angle_deg"] = t.number("helix_angle_deg", 0.0, kind="angle_deg",
+                                                 within=HELIX_ANGLE_DEG,
+                                                 why="helical gears' helix angles")
+            return fields
+        fields.update(
+            helix_angle_deg=None,
+            pitch_cone_angle_deg=t.number("pitch_cone_angle_deg", kind="angle_deg",
+                                          within=PITCH_CONE_ANGLE_DEG,
+                                          why="bevel pinions' pitch cones"),
+            spiral_angle_deg=t.number("spiral_angle_deg", 0.0 if kind == "bevel" else ...,
+                                      kind="angle_deg", within=SPIRAL_ANGLE_DEG,
+                                      why=f"{kind} gears' mean spiral angles"))
+        if fields["spiral_angle_deg"] > 0 or "hand" in t.raw:
+            fields["hand"] = t.string("hand", choices=HANDS)
+        if kind == "hypoid":
+            fields["gear_spiral_angle_deg"] = t.number(
+                "gear_spiral_angle_deg", kind="angle_deg", within=SPIRAL_ANGLE_DEG,
+                why="hypoid ring gears' mean spiral angles")
+        return fields
 
     def check(self, element: GearMesh, shaft: int, scene: Scene) -> None:
         """On the last shaft, alone: it takes the line's load."""
@@ -97,22 +220,34 @@ class Mesh(InShaftKind):
                              "line's load torque)")
 
     def describe(self, gear: GearMesh) -> str:
-        return (f"gear mesh {gear.name} on shaft {gear.shaft} @ {gear.offset_m:+g} m, pitch "
-                f"radius {gear.pitch_radius_m} m, pressure angle {gear.pressure_angle_deg} "
-                f"deg, helix {gear.helix_angle_deg} deg, at {gear.mesh_angle_deg} deg")
+        where = (f"on shaft {gear.shaft} @ {gear.offset_m:+g} m, pressure angle "
+                 f"{gear.pressure_angle_deg} deg, at {gear.mesh_angle_deg} deg")
+        if gear.type == "helical":
+            return (f"gear mesh {gear.name}: helical gear {where}, pitch radius "
+                    f"{gear.pitch_radius_m} m, helix {gear.helix_angle_deg} deg")
+        spiral = (f"{gear.hand}-hand spiral {gear.spiral_angle_deg} deg"
+                  if gear.spiral_angle_deg > 0 else "straight teeth")
+        ring = (f", ring gear spiral {gear.gear_spiral_angle_deg} deg"
+                if gear.type == "hypoid" else "")
+        return (f"gear mesh {gear.name}: {gear.type} pinion {where}, mean pitch radius "
+                f"{gear.pitch_radius_m} m, pitch cone {gear.pitch_cone_angle_deg} deg "
+                f"(apex downstream), {spiral}{ring}")
 
     def load(self, gear: GearMesh, torque_N_m: np.ndarray, frame: np.ndarray,
              centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The mesh force on the shaft: ``(point, force)``, the point (3,) fixed in space
-        on the pitch circle, the force (T, 3) at the load torque ``torque_N_m`` (T,) on a
-        shaft of frame rows ``r1, r2, axis`` and centre ``centre`` (m, global).
+        on the pitch circle (a bevel or hypoid pinion's mean point), the force (T, 3) at
+        the load torque ``torque_N_m`` (T,) on a shaft of frame rows ``r1, r2, axis`` and
+        centre ``centre`` (m, global). A bevel or hypoid pinion's cone apex lies
+        downstream, so its ``Fa`` (away from the apex) acts upstream.
         """
         r1, r2, axis = frame
         angle = math.radians(gear.mesh_angle_deg)
         out = math.cos(angle) * r1 + math.sin(angle) * r2  # from the axis to the mesh
         point = centre + gear.offset_m * axis + gear.pitch_radius_m * out
         ft, fr, fa = nominal_forces(torque_N_m, gear)
-        along = math.copysign(1.0, gear.helix_angle_deg) * axis
+        along = (-axis if gear.type != "helical"
+                 else math.copysign(1.0, gear.helix_angle_deg) * axis)
         force = (-ft[:, None] * np.cross(axis, out) - fr[:, None] * out
                  + fa[:, None] * along)
         return point, force
