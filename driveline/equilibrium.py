@@ -263,13 +263,15 @@ def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray
     first, last = 0, n_seg - 1  # the input torque acts upstream, the load downstream
 
     applied = np.zeros((T, n_rows))
-    applied[:, moment(first)] -= motion.input_torque[:, None] * geo.axes[0]
     takers = [(kind, e, k) for kind, e, k, _ in scene_elements(scene) if kind.takes_load]
-    if not takers:
+    ends = {k for _, _, k in takers}
+    if 0 not in ends:
+        applied[:, moment(first)] -= motion.input_torque[:, None] * geo.axes[0]
+    if len(scene.shafts) - 1 not in ends:
         applied[:, moment(last)] += motion.load_torque[:, None] * geo.axes[-1]
-    for kind, element, k in takers:  # the load as the element's forces
-        point, load = kind.load(element, motion.load_torque, frames_of(geo)[k],
-                                geo.centres[k])
+    for kind, element, k in takers:  # a torque as the element's forces
+        taken = -motion.input_torque if k == 0 else motion.load_torque
+        point, load = kind.load(element, taken, frames_of(geo)[k], geo.centres[k])
         body = segment_of(segments, k, element.offset_m)
         reference = body_references(geo, segments)[body]
         applied[:, force(body)] -= load

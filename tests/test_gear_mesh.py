@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.elements.gear_mesh import (
     KIND,
@@ -59,18 +60,50 @@ def test_the_mesh_takes_the_load_torque_and_adds_its_forces():
 
 def test_its_loads_are_carried():
     _, op = _ops()
-    from cardan_forces.driveline.determinacy import determinacy
-
     x = determinacy(op, 0).min_norm
     assert np.linalg.norm(op.A[0] @ x - op.b[0]) <= 1e-9 * np.linalg.norm(op.b[0])
 
 
 @pytest.mark.parametrize("meshes,why", [
-    ([{**MESH, "shaft": "input", "offset_m": 0.0}], "on its last shaft"),
+    ([{**MESH, "shaft": "intermediate", "offset_m": 0.0}], "on the first shaft"),
+    ([{**MESH, "shaft": "input", "offset_m": 0.0, "type": "bevel", "helix_angle_deg": None,
+       "pitch_cone_angle_deg": 20.0}], "ends the line"),
     ([MESH, {**MESH, "name": "two", "offset_m": 0.3}], "at most one gear mesh")])
-def test_a_mesh_off_the_last_shaft_or_a_second_is_refused(meshes, why):
+def test_a_mesh_off_the_ends_or_a_second_at_one_is_refused(meshes, why):
+    meshes = [{k: v for k, v in m.items() if v is not None} for m in meshes]
     with pytest.raises(SceneError, match=why):
         scene_from_dict({"extends": "paper", "gear_meshes": meshes})
+
+
+def test_a_driving_mesh_brings_the_input_torque_and_its_forces():
+    """A helical gear on the first shaft drives the line: against the same line driven by
+    a pure torque, the first body's moment about its axis is the same, and the force
+    the mesh adds is ISO 6336's at the input torque, ``Fa`` reversed with ``Ft`` (a
+    negative helix pushes the driven shaft downstream) and ``Fr`` toward the axis."""
+    drive = {**MESH, "name": "drive", "shaft": "input", "offset_m": -0.3}
+    plain = load_scene("paper")
+    meshed = scene_from_dict({"extends": "paper", "gear_meshes": [drive]})
+    ops = [build_operator(simulate(s, [0.3, 0.8])) for s in (plain, meshed)]
+    pure, geared = (op.terms["applied"][:, :6] for op in ops)  # the first body's rows
+    frame = ops[1].shaft_frames[0]
+    force = pure[:, :3] - geared[:, :3]  # b holds minus the applied load
+    torque = ops[1].scene.input_torque(ops[1].t)
+    ft, fr, fa = nominal_forces(torque, meshed.elements[0])
+    angle = math.radians(drive["mesh_angle_deg"])
+    out = math.cos(angle) * frame[0] + math.sin(angle) * frame[1]
+    assert np.allclose(force @ frame[2], fa)
+    assert np.allclose(force @ out, -fr)
+    assert np.allclose(force @ np.cross(frame[2], out), ft)
+    assert np.allclose(geared[:, 3:] @ frame[2], pure[:, 3:] @ frame[2], rtol=1e-12)
+    x = determinacy(ops[1], 0).min_norm
+    assert np.linalg.norm(ops[1].A[0] @ x - ops[1].b[0]) <= 1e-9 * np.linalg.norm(ops[1].b[0])
+
+
+def test_a_reversed_torque_keeps_the_helical_radial_force_separating():
+    gear = GearMesh("g", "s", 0.0, 0.05, 20.0, -15.0)
+    ahead, back = (nominal_forces(np.array([t]), gear) for t in (500.0, -500.0))
+    assert back[0][0] == -ahead[0][0] and back[2][0] == -ahead[2][0]
+    assert back[1][0] == ahead[1][0] > 0
 
 
 def test_models_that_apply_a_torque_refuse_it_by_name():

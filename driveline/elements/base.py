@@ -241,8 +241,9 @@ class ElementKind:
     it makes); ``locates``: it carries axial force both ways (a shaft body with two
     such has an axial split); ``slides``: its shaft slides through it axially;
     ``paper``: the paper's polar method takes it (eqs. 11-14 for bearings, 33-46 for
-    joints); ``takes_load``: it applies the line's load torque as forces of its own
-    (:meth:`load`) instead of a pure torque on the last shaft.
+    joints); ``takes_load``: it applies the line's load torque (on the last shaft) or
+    input torque (on the first) as forces of its own (:meth:`load`) instead of a pure
+    torque.
 
     A kind that offers a release names it ``release_name`` (``release_form``: how it is
     typed; ``release_rank``: the advisor tries lower ranks first; ``adds_joint``: the
@@ -311,9 +312,10 @@ class ElementKind:
 
     def load(self, element, torque_N_m: np.ndarray, frame: np.ndarray,
              centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """A ``takes_load`` kind's load on its shaft at the load torque ``torque_N_m``
-        (T,): ``(point, force)``, a point (3,) and the force (T, 3) there (N), on a shaft
-        of frame rows ``r1, r2, axis`` and centre ``centre``.
+        """A ``takes_load`` kind's forces taking the torque ``torque_N_m`` (T,) off its
+        shaft (the load torque; minus the input torque on the first shaft):
+        ``(point, force)``, a point (3,) and the force (T, 3) there (N), on a shaft of
+        frame rows ``r1, r2, axis`` and centre ``centre``.
         """
         raise NotImplementedError
 

@@ -1,9 +1,11 @@
 """The gear mesh: the line's load taken off its last shaft by a gear instead of a pure
-torque. The mating gear is held by its own bearings (outside the line), so the mesh is
-an applied load, not a contact: a force at the mesh point on the pitch circle whose
-moment about the shaft axis is the scene's load torque, with the radial and axial
-components the tooth geometry adds. Those load the shaft's bearings; they do no work
-on the 1-DOF motion (the axes are fixed), which stays the scene's.
+torque, or its input torque brought onto its first shaft by one (a transmission's
+output shaft driven through a helical gear pair). The mating gear is held by its own
+bearings (outside the line), so the mesh is an applied load, not a contact: a force at
+the mesh point on the pitch circle whose moment about the shaft axis is the scene's
+load torque (against the rotation) or input torque (with it), with the radial and
+axial components the tooth geometry adds. Those load the shaft's bearings; they do no
+work on the 1-DOF motion (the axes are fixed), which stays the scene's.
 
 ``type = "helical"`` (the default; spur for ``helix_angle_deg = 0``): the nominal loads
 from the torque ``T`` (ISO 6336-1:2019, 5.2, with the pitch diameter ``d = 2 r``):
@@ -16,6 +18,11 @@ The mesh point sits ``mesh_angle_deg`` about the shaft axis from the shaft frame
 the rotation, the radial one points to the axis, and the axial one acts along the axis,
 downstream for a positive ``helix_angle_deg``, upstream for a negative one (the sign
 stands for the hand of the helix and the sense of the load).
+
+:meth:`Mesh.load` takes the torque the mesh takes off the shaft: the load torque on the
+last shaft, minus the input torque on the first. A negative torque (a driving mesh)
+reverses ``Ft`` and, through it, ``Fa`` (the tooth's normal force reverses along the
+same helix); ``Fr`` still separates the gears (``|Ft|`` in it).
 
 ``type = "bevel"`` (spiral bevel; straight bevel for ``spiral_angle_deg = 0``) and
 ``type = "hypoid"``: the shaft is the pinion, at the end of the line with its pitch
@@ -51,8 +58,9 @@ gear's tangential force is ``Ft2 = Ft1 cos(beta_m2) / cos(beta_m1)``
 drive and coast flanks (ISO 23509 gives them apart); the limit pressure angle is not
 modelled.
 
-A line has at most one, on its last shaft. The penalty simulation and the physics
-engines apply the load as a torque: they refuse a scene with a mesh, in one line.
+A line has at most one mesh at each end: on its last shaft, of any type, and on its
+first, a helical one. The penalty simulation and the physics engines apply the torques
+as torques: they refuse a scene with a mesh, in one line.
 """
 
 from __future__ import annotations
@@ -145,7 +153,7 @@ def nominal_forces(torque_N_m, gear: GearMesh) -> tuple:
     alpha = math.radians(gear.pressure_angle_deg)
     if gear.type == "helical":
         beta = math.radians(gear.helix_angle_deg)
-        return ft, ft * math.tan(alpha) / math.cos(beta), ft * math.tan(abs(beta))
+        return ft, np.abs(ft) * math.tan(alpha) / math.cos(beta), ft * math.tan(abs(beta))
     delta, psi = math.radians(gear.pitch_cone_angle_deg), math.radians(gear.spiral_angle_deg)
     s, normal = spiral_sign(torque_N_m, gear), np.abs(ft) / math.cos(psi)
     fa = normal * (math.tan(alpha) * math.sin(delta) + s * math.sin(psi) * math.cos(delta))
@@ -165,6 +173,12 @@ def gear_tangential_force(pinion_tangential_N, gear: GearMesh):
     psi2 = math.radians(gear.gear_spiral_angle_deg if gear.type == "hypoid"
                         else gear.spiral_angle_deg)
     return np.asarray(pinion_tangential_N, float) * math.cos(psi2) / math.cos(psi1)
+
+
+def _meshes(scene: Scene) -> list[tuple[GearMesh, int]]:
+    """The scene's gear meshes with their shafts' indices."""
+    shafts = [s.name for s in scene.shafts]
+    return [(e, shafts.index(e.shaft)) for e in scene.elements if isinstance(e, GearMesh)]
 
 
 class Mesh(InShaftKind):
@@ -212,12 +226,20 @@ class Mesh(InShaftKind):
         return fields
 
     def check(self, element: GearMesh, shaft: int, scene: Scene) -> None:
-        """On the last shaft, alone: it takes the line's load."""
-        meshes = [e for e in scene.elements if isinstance(e, GearMesh)]
-        if shaft != len(scene.shafts) - 1 or len(meshes) > 1:
-            raise SceneError(f"scene {scene.source}: gear mesh {element.name!r}: a line "
-                             "has at most one gear mesh, on its last shaft (it takes the "
-                             "line's load torque)")
+        """On the last shaft (it takes the line's load) or, a helical gear, on the first
+        (it drives the line); one at each end at most.
+        """
+        last = len(scene.shafts) - 1
+        where = f"scene {scene.source}: gear mesh {element.name!r}: "
+        if shaft not in (0, last):
+            raise SceneError(where + "a gear mesh sits on the first shaft (it drives the "
+                             "line) or on the last (it takes the line's load torque)")
+        if shaft == 0 and element.type != "helical":
+            raise SceneError(where + f"a {element.type} pinion ends the line (its cone's "
+                             "apex lies downstream); only a helical gear drives it")
+        same_end = [e for e, k in _meshes(scene) if k == shaft]
+        if len(same_end) > 1:
+            raise SceneError(where + "at most one gear mesh at each end of the line")
 
     def describe(self, gear: GearMesh) -> str:
         where = (f"on shaft {gear.shaft} @ {gear.offset_m:+g} m, pressure angle "
@@ -236,8 +258,8 @@ class Mesh(InShaftKind):
     def load(self, gear: GearMesh, torque_N_m: np.ndarray, frame: np.ndarray,
              centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The mesh force on the shaft: ``(point, force)``, the point (3,) fixed in space
-        on the pitch circle (a bevel or hypoid pinion's mean point), the force (T, 3) at
-        the load torque ``torque_N_m`` (T,) on a shaft of frame rows ``r1, r2, axis`` and
+        on the pitch circle (a bevel or hypoid pinion's mean point), the force (T, 3)
+        taking the torque ``torque_N_m`` (T,) off a shaft of frame rows ``r1, r2, axis`` and
         centre ``centre`` (m, global). A bevel or hypoid pinion's cone apex lies
         downstream, so its ``Fa`` (away from the apex) acts upstream.
         """
@@ -256,8 +278,8 @@ class Mesh(InShaftKind):
         """None: the mesh is a load (:meth:`load`), not a contact."""
 
     def refusal(self, gear: GearMesh, engine: str) -> str | None:
-        return (f"gear mesh {gear.name!r}: {engine} applies the line's load as a torque, "
-                "not as mesh forces")
+        return (f"gear mesh {gear.name!r}: {engine} applies the line's torques as "
+                "torques, not as mesh forces")
 
 
 KIND = Mesh()
