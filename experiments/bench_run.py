@@ -26,10 +26,10 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP
 from cardan_forces.solvers import Residuals, available, backends_for, solve
 from cardan_forces.solvers import get as get_backend
-from cardan_forces.solvers.checks import Stacks, stack_all
 from cardan_forces.solvers.optimality import objective_value
 from cardan_forces.solvers.registry import batch_backends, solve_batch
 from cardan_forces.solvers.settings import REFERENCE_TOL
+from cardan_forces.solvers.stacking import Stacks, stack_all
 
 TIME_FLOOR_S = 1e-12
 """Least time (s) a count of instants is divided by: a run too short for the clock still
@@ -82,7 +82,7 @@ def progress(message: str) -> None:
 class Prepared:
     """One formulation built once per operator: its problems at every instant, the
     build time, and its batches (built on demand, with their build time). ``stacks``:
-    the problems' check data stacked once (:func:`~cardan_forces.solvers.record.stack_all`,
+    the problems' check data stacked once (:func:`~cardan_forces.solvers.stacking.stack_all`,
     part of the build), which every per-instant run's checks read instead of stacking
     each instant's matrices again.
     """

@@ -36,7 +36,6 @@ from cardan_forces.formulations.batch import batch_kind, build_problems, make_ba
 from cardan_forces.formulations.sets import feasibility_problem, interval_slack, range_problems
 from cardan_forces.solvers import Record, Residuals, Status, backends_for, failed_record, solve
 from cardan_forces.solvers import get as get_backend
-from cardan_forces.solvers.checks import Stacks
 from cardan_forces.solvers.ranging import HAVE_HIGHSPY, Ranges, ranges
 from cardan_forces.solvers.record import Results
 from cardan_forces.solvers.registry import (
@@ -48,6 +47,7 @@ from cardan_forces.solvers.registry import (
     solve_unchecked,
     takes,
 )
+from cardan_forces.solvers.stacking import Stacks
 
 # ---------------------------------------------------------------------------- backends
 
@@ -163,7 +163,7 @@ def solve_over_time(op: Operator, formulation: str, solver: str | None = None, *
     instants (at least one) are solved; ``references``: ``{i: (forces, optimal
     value)}`` for the records' distance and objective gap; ``stacks``:
     ``problem(i)``'s check data stacked beforehand at every instant ``i`` of ``op``
-    (:func:`~cardan_forces.solvers.checks.stack_all`), so the checks do not stack each
+    (:func:`~cardan_forces.solvers.stacking.stack_all`), so the checks do not stack each
     instant's matrices;
     ``check_passes``: times the deferred answers are checked (the records are the first
     pass's; the fastest pass's time per instant is ``History.checks_s``, a benchmark's

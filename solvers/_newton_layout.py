@@ -12,7 +12,7 @@ from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
 from ._newton_numpy import Groups, evaluate, groups_of, spread
-from .optimality import cone_layout
+from .stacking import cone_layout
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from .record import (
     judged_notes,
     statuses,
 )
-from .stacking import Stacked, conic_key, stack_conic
+from .stacking import Stacked, Stacks, checks_key, conic_key, groups, kind_key, stack_conic
 
 
 def failed_record(
@@ -264,65 +264,6 @@ def _forces(problem, outcome: Outcome, n: int) -> tuple[np.ndarray, str]:
     return x, ""
 
 
-def _groups(items, key) -> list[np.ndarray]:
-    """Indices of ``items`` grouped by ``key(item)``, groups in order of appearance."""
-    out: dict = {}
-    for k, item in enumerate(items):
-        out.setdefault(key(item), []).append(k)
-    return [np.array(v, int) for v in out.values()]
-
-
-def _checks_key(problem) -> tuple:
-    c = problem.checks
-    return np.shape(c.A), np.asarray(c.unilateral, bool).tobytes(), c.pairs, c.cones
-
-
-@dataclass(frozen=True)
-class Stacks:
-    """The data the checks of T problems of one structure read, stacked once
-    (:func:`stack_all`): the force checks' ``A`` (T, m, n) and ``b`` (T, m), and the
-    problems' conic form (:class:`~.stacking.Stacked`, ``None`` for an LCP or a
-    nonlinear system; its ``P`` (n, n) where the same at every instant). A caller that
-    checks the same problems again (a bench running several backends over one
-    formulation's instants) hands them to :func:`finalize_all` instead of having each
-    pass stack every instant's matrices.
-    """
-
-    problems: tuple
-    A: np.ndarray
-    b: np.ndarray
-    conic: Stacked | None
-
-    def holds(self, problems) -> bool:
-        """Whether these are the stacks of exactly ``problems`` (the same objects)."""
-        return len(problems) == len(self.problems) and all(
-            a is b for a, b in zip(problems, self.problems))
-
-    def take(self, rows) -> Stacks:
-        """The stacks of the problems at positions ``rows``."""
-        rows = np.asarray(rows, int)
-        return Stacks(tuple(self.problems[k] for k in rows), self.A[rows], self.b[rows],
-                      None if self.conic is None else self.conic.take(rows))
-
-
-def stack_all(problems) -> Stacks | None:
-    """:class:`Stacks` of ``problems``, or ``None`` when their checks or their conic
-    forms differ in structure (then :func:`finalize_all` groups them itself).
-    """
-    problems = list(problems)
-    if not problems or len(_groups(problems, _checks_key)) != 1:
-        return None
-    kinds = _groups(problems, _kind_key)
-    if len(kinds) != 1:
-        return None
-    first = problems[0]
-    conic = None
-    if not isinstance(first, (LCP, NLS)) and conic_key(first) is not None:
-        conic = stack_conic(problems)
-    return Stacks(tuple(problems), np.array([p.checks.A for p in problems], float),
-                  np.array([p.checks.b for p in problems], float), conic)
-
-
 def _residuals(problems, X, stacks: Stacks | None) -> dict[str, np.ndarray]:
     """``ForceChecks.residuals`` of every answer (``X``: a list of T force vectors, or
     their (T, n) array), one ``residuals_batch`` per structure (the one of ``stacks``
@@ -333,7 +274,7 @@ def _residuals(problems, X, stacks: Stacks | None) -> dict[str, np.ndarray]:
         return residuals_batch(stacks.A, stacks.b, np.asarray(X, float), c.unilateral,
                                c.pairs, c.cones)
     out = {k: np.full(len(X), np.inf) for k in Residuals.KEYS}
-    for idx in _groups(problems, _checks_key):
+    for idx in groups(problems, checks_key):
         c = problems[idx[0]].checks
         found = residuals_batch(np.array([problems[k].checks.A for k in idx]),
                                 np.array([problems[k].checks.b for k in idx]),
@@ -378,7 +319,7 @@ def _optimality_all(problems, outcomes, answered, primal, optimal_values, receiv
             st = stacks.conic if len(live) == T else stacks.conic.take(live)
             _conic(problems, outcomes, live, views, optimal_values, received, st)
         return views
-    for idx in _groups([problems[k] for k in live], _kind_key):
+    for idx in groups([problems[k] for k in live], kind_key):
         idx = [live[j] for j in idx.tolist()]
         problem = problems[idx[0]]
         if isinstance(problem, LCP):
@@ -386,12 +327,6 @@ def _optimality_all(problems, outcomes, answered, primal, optimal_values, receiv
         elif not isinstance(problem, NLS) and conic_key(problem) is not None:
             _conic(problems, outcomes, idx, views, optimal_values, received)
     return views
-
-
-def _kind_key(problem) -> tuple:
-    if isinstance(problem, (LCP, NLS)):
-        return type(problem), len(problem.checks.names)
-    return "conic", conic_key(problem)
 
 
 def _lcp(problems, outcomes, idx, views: _Views) -> None:

@@ -49,14 +49,13 @@ All functions take a batch: ``q`` (T, n), ``A`` (T, m, n), ``b`` (T, m), ``z`` (
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, fields
 
 import numpy as np
 from cardan_forces.formulations.problems import LS, QP, Conic
 
 from .conversions import convert
-from .stacking import Stacked, stacked_batch, times_P
+from .stacking import Stacked, blocks, cone_layout, cone_spans, stacked_batch, times_P
 
 ACTIVE_RTOL = 1e-7
 """A constraint counts as active when its slack is below this, relative to
@@ -65,30 +64,11 @@ ACTIVE_RTOL = 1e-7
 TINY = 1e-300
 
 
-def blocks(cones) -> list[tuple[str, float, slice]]:
-    """``(kind, parameter, rows)`` per cone block of ``cones`` in row order."""
-    out, row = [], 0
-    for kind, size in cones:
-        rows = 3 if kind == "pow" else int(size)
-        out.append((kind, size, slice(row, row + rows)))
-        row += rows
-    return out
-
-
 def inf_norm(v: np.ndarray) -> np.ndarray:
     """``||v||_inf`` along the last axis (0 for none, NaN where ``v`` has a NaN), from
     the largest and the least entry: two reductions that write no (T, n) temporary.
     """
     return np.maximum(v.max(axis=-1, initial=0.0), -v.min(axis=-1, initial=0.0))
-
-
-@functools.lru_cache(maxsize=64)
-def cone_spans(cones: tuple) -> tuple[tuple[slice, ...], tuple[slice, ...]]:
-    """The zero blocks and the nonnegative blocks of ``cones`` as row slices: a
-    violation read through them reads views, not gathered copies of the rows.
-    """
-    return tuple(tuple(rows for kind, _, rows in blocks(cones) if kind == wanted and
-                       rows.stop > rows.start) for wanted in ("zero", "nonneg"))
 
 
 def below_zero(v: np.ndarray, spans) -> np.ndarray:
@@ -99,31 +79,6 @@ def below_zero(v: np.ndarray, spans) -> np.ndarray:
     for rows in spans:
         worst = np.maximum(worst, -v[:, rows].min(axis=1))
     return worst
-
-
-@functools.lru_cache(maxsize=64)
-def cone_layout(cones: tuple) -> tuple:
-    """Row indices of the cone kinds: zero rows, nonneg rows, second-order blocks padded
-    to the longest (apex, members, mask), power blocks (k, 3) and their alphas. The one
-    reading of a cone list by index, shared by the force view and the solver view.
-    """
-    zero, nonneg, socs, pows, alphas = [], [], [], [], []
-    for kind, size, rows in blocks(cones):
-        idx = list(range(rows.start, rows.stop))
-        {"zero": zero, "nonneg": nonneg}.get(kind, []).extend(idx)
-        if kind == "soc":
-            socs.append(idx)
-        elif kind == "pow":
-            pows.append(idx)
-            alphas.append(float(size))
-    width = max((len(r) - 1 for r in socs), default=0)
-    members = np.zeros((len(socs), width), int)
-    mask = np.zeros((len(socs), width))
-    for k, r in enumerate(socs):
-        members[k, :len(r) - 1] = r[1:]
-        mask[k, :len(r) - 1] = 1.0
-    return (np.array(zero, int), np.array(nonneg, int), np.array([r[0] for r in socs], int),
-            members, mask, np.array(pows, int).reshape(-1, 3), np.array(alphas))
 
 
 def cone_violation(cones, v: np.ndarray, dual: bool = False) -> np.ndarray:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from cardan_forces.formulations.problems import Conic
 
-from .optimality import blocks
+from .stacking import blocks
 
 CLAIM_TOL = 1e-5
 """QOCO has no certificate of infeasibility or unboundedness (no homogeneous

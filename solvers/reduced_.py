@@ -30,8 +30,8 @@ from cardan_forces.formulations.problems import Conic
 
 from .batch import BatchOutcome
 from .conversions import Reduced, eliminate_equalities
-from .optimality import blocks, cone_layout
 from .record import Outcome
+from .stacking import blocks, cone_layout
 
 if TYPE_CHECKING:  # the registry imports this module to apply it
     from .registry import Backend

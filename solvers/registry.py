@@ -42,10 +42,11 @@ from cardan_forces.util.names import did_you_mean
 
 from . import plugins, reduced_, settings
 from .batch import BatchOutcome, ConicBatch, finalize_batch
-from .checks import Stacks, failed_record, finalize_all
+from .checks import failed_record, finalize_all
 from .conversions import convert, reachable
 from .plugins import InvalidBackend, blame
 from .record import Outcome, Record, Results, Status
+from .stacking import Stacks
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",
             "numpy_batched_", "moreau_", "qocogen_", "newton_", "reduced_ipm_")
@@ -386,7 +387,7 @@ class Pending:
 
 def check(pending: list[Pending], stacks: Stacks | None = None) -> Results:
     """The package-judged results of deferred solves, as :func:`solve` judges one
-    (``stacks``: their problems' data stacked beforehand, :func:`.checks.stack_all`).
+    (``stacks``: their problems' data stacked beforehand, :func:`.stacking.stack_all`).
     A registered backend's failed instants name where it comes from; an answer of one
     that the checks cannot read fails alone (:func:`_check_each`).
     """

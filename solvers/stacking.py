@@ -1,20 +1,27 @@
-"""Problems of one structure stacked over their instants, as the checks read them.
+"""The layout of the problems an answer is judged on: cone rows, and problems stacked
+over their instants.
 
-T problems of one structure (one formulation's instants) in Clarabel's standard form
-``min 1/2 z'Pz + q'z s.t. A z + s = b, s in K`` as stacked arrays (:class:`Stacked`),
-built from the problems' own data where they stack (least norms, QPs) and from their
-conic forms otherwise (:func:`stack_conic`). The rows of ``A`` are kept as blocks: rows
-the same at every instant once, rows that change as a dense stack or as a sparse
-:class:`Pattern`, a QP's bounds as the columns they bound, so the products ``A z`` and
-``A'y`` over all instants read only the numbers that are there.
+A cone list ``((kind, size), ...)`` lays out the rows of Clarabel's standard form
+``min 1/2 z'Pz + q'z s.t. A z + s = b, s in K`` block by block (:func:`blocks`,
+:func:`cone_layout`: the one reading of a cone list by row index, shared by the judge
+and by the adapters that reorder or fold rows).
+
+T problems of one structure (one formulation's instants) in that form as stacked arrays
+(:class:`Stacked`), built from the problems' own data where they stack (least norms,
+QPs) and from their conic forms otherwise (:func:`stack_conic`). The rows of ``A`` are
+kept as blocks: rows the same at every instant once, rows that change as a dense stack
+or as a sparse :class:`Pattern`, a QP's bounds as the columns they bound, so the
+products ``A z`` and ``A'y`` over all instants read only the numbers that are there.
+:class:`Stacks` adds the same problems' force checks (``A``, ``b``), stacked once
+(:func:`stack_all`) for a caller that judges the same problems more than once.
 """
-
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
-from cardan_forces.formulations.problems import LS, QP, Conic
+from cardan_forces.formulations.problems import LCP, LS, NLS, QP, Conic
 
 from .conversions import convert
 
@@ -286,3 +293,119 @@ def stack_conic(problems) -> Stacked:
     P = None if conics[0].P is None else _shared_P(conics)
     return Stacked(P, _stack(conics, "q"), _stack(conics, "b"), conics[0].cones,
                    _blocks(_stack(conics, "A")))
+
+
+def blocks(cones) -> list[tuple[str, float, slice]]:
+    """``(kind, parameter, rows)`` per cone block of ``cones`` in row order."""
+    out, row = [], 0
+    for kind, size in cones:
+        rows = 3 if kind == "pow" else int(size)
+        out.append((kind, size, slice(row, row + rows)))
+        row += rows
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def cone_spans(cones: tuple) -> tuple[tuple[slice, ...], tuple[slice, ...]]:
+    """The zero blocks and the nonnegative blocks of ``cones`` as row slices: a
+    violation read through them reads views, not gathered copies of the rows.
+    """
+    return tuple(tuple(rows for kind, _, rows in blocks(cones) if kind == wanted and
+                       rows.stop > rows.start) for wanted in ("zero", "nonneg"))
+
+
+@functools.lru_cache(maxsize=64)
+def cone_layout(cones: tuple) -> tuple:
+    """Row indices of the cone kinds: zero rows, nonneg rows, second-order blocks padded
+    to the longest (apex, members, mask), power blocks (k, 3) and their alphas. The one
+    reading of a cone list by index, shared by the force view and the solver view.
+    """
+    zero, nonneg, socs, pows, alphas = [], [], [], [], []
+    for kind, size, rows in blocks(cones):
+        idx = list(range(rows.start, rows.stop))
+        {"zero": zero, "nonneg": nonneg}.get(kind, []).extend(idx)
+        if kind == "soc":
+            socs.append(idx)
+        elif kind == "pow":
+            pows.append(idx)
+            alphas.append(float(size))
+    width = max((len(r) - 1 for r in socs), default=0)
+    members = np.zeros((len(socs), width), int)
+    mask = np.zeros((len(socs), width))
+    for k, r in enumerate(socs):
+        members[k, :len(r) - 1] = r[1:]
+        mask[k, :len(r) - 1] = 1.0
+    return (np.array(zero, int), np.array(nonneg, int), np.array([r[0] for r in socs], int),
+            members, mask, np.array(pows, int).reshape(-1, 3), np.array(alphas))
+
+
+def groups(items, key) -> list[np.ndarray]:
+    """Indices of ``items`` grouped by ``key(item)``, groups in order of appearance."""
+    out: dict = {}
+    for k, item in enumerate(items):
+        out.setdefault(key(item), []).append(k)
+    return [np.array(v, int) for v in out.values()]
+
+
+def checks_key(problem) -> tuple:
+    """What T problems' force checks must share to be stacked: the shape of ``A``, the
+    unilateral columns, the pairs and the cones.
+    """
+    c = problem.checks
+    return np.shape(c.A), np.asarray(c.unilateral, bool).tobytes(), c.pairs, c.cones
+
+
+@dataclass(frozen=True)
+class Stacks:
+    """The data the checks of T problems of one structure read, stacked once
+    (:func:`stack_all`): the force checks' ``A`` (T, m, n) and ``b`` (T, m), and the
+    problems' conic form (:class:`~.stacking.Stacked`, ``None`` for an LCP or a
+    nonlinear system; its ``P`` (n, n) where the same at every instant). A caller that
+    checks the same problems again (a bench running several backends over one
+    formulation's instants) hands them to :func:`finalize_all` instead of having each
+    pass stack every instant's matrices.
+    """
+
+    problems: tuple
+    A: np.ndarray
+    b: np.ndarray
+    conic: Stacked | None
+
+    def holds(self, problems) -> bool:
+        """Whether these are the stacks of exactly ``problems`` (the same objects)."""
+        return len(problems) == len(self.problems) and all(
+            a is b for a, b in zip(problems, self.problems))
+
+    def take(self, rows) -> Stacks:
+        """The stacks of the problems at positions ``rows``."""
+        rows = np.asarray(rows, int)
+        return Stacks(tuple(self.problems[k] for k in rows), self.A[rows], self.b[rows],
+                      None if self.conic is None else self.conic.take(rows))
+
+
+def stack_all(problems) -> Stacks | None:
+    """:class:`Stacks` of ``problems``, or ``None`` when their checks or their conic
+    forms differ in structure (then :func:`finalize_all` groups them itself).
+    """
+    problems = list(problems)
+    if not problems or len(groups(problems, checks_key)) != 1:
+        return None
+    kinds = groups(problems, kind_key)
+    if len(kinds) != 1:
+        return None
+    first = problems[0]
+    conic = None
+    if not isinstance(first, (LCP, NLS)) and conic_key(first) is not None:
+        conic = stack_conic(problems)
+    return Stacks(tuple(problems), np.array([p.checks.A for p in problems], float),
+                  np.array([p.checks.b for p in problems], float), conic)
+
+
+def kind_key(problem) -> tuple:
+    """What T problems must share for one measure of their optimality: an LCP's or a
+    nonlinear system's class and number of forces, else the conic form's
+    :func:`conic_key`.
+    """
+    if isinstance(problem, (LCP, NLS)):
+        return type(problem), len(problem.checks.names)
+    return "conic", conic_key(problem)

@@ -276,7 +276,8 @@ def test_checks_with_stacks_built_beforehand_equal_the_checks_without():
     """finalize_all with the problems' data stacked once (stack_all, taken at some rows)
     gives the records it gives stacking itself, answered or not (a NaN answer, a
     recovered multiplier); stacks of other problems are ignored, not misread."""
-    from cardan_forces.solvers.checks import finalize_all, stack_all
+    from cardan_forces.solvers.checks import finalize_all
+    from cardan_forces.solvers.stacking import stack_all
 
     rng = np.random.default_rng(5)
     for pick in (0, 1):
@@ -378,7 +379,8 @@ def test_a_map_that_offers_its_stacked_form_maps_a_run_at_once_as_one_at_a_time(
     """Forces of a run whose maps offer ``stacked`` come from one call and equal the
     per-instant map's; an answer it cannot take (none given) falls back to the
     per-instant map, which names the failure."""
-    from cardan_forces.solvers.checks import finalize_all, stack_all
+    from cardan_forces.solvers.checks import finalize_all
+    from cardan_forces.solvers.stacking import stack_all
 
     problems = [QP(checks=_checks(np.ones((1, 3)), [1.0 + k], [True] * 3), formulation="ref",
                    to_forces=_Halved(), P=np.eye(3), q=np.zeros(3), A=np.ones((1, 3)),
