@@ -139,6 +139,19 @@ gives, ``k_r tan^2 alpha``, falls under 1/130 of the radial one and the axial co
 problem degenerates. Above 60 deg a bearing carries next to no radial load (a thrust
 bearing)."""
 
+MEAN_DIAMETER_M = Range(0.002, 2.5, "m")
+"""Mean diameter ``(d + D) / 2`` of a rated bearing (ISO 281:2007's modified rating life
+takes it for the pitch diameter ``D_pw`` in the reference viscosity ``nu1``): from 2 mm, a
+miniature bearing of 1 mm bore and 3 mm outside diameter, to 2.5 m, above the largest
+catalogue rolling bearings (about 1.8 m bore, 2.2 m outside diameter)."""
+
+VISCOSITY_MM2_S = Range(1.0, 1e4, "mm^2/s")
+"""Kinematic viscosity of a bearing's lubricant at its operating temperature (mm^2/s):
+ISO 3448's grades span VG 2 to VG 3200 (2 to 3200 mm^2/s at 40 deg C); a thin grade hot
+falls towards 1, a heavy grade cold rises towards 10^4, beyond which an oil no longer
+flows into a bearing. ``nu`` enters the life only through ``kappa = nu / nu1``, taken as
+at most 4."""
+
 CROSSPIN_ASPECT = 100.0
 """Most ratio of a cross-pin's largest dimension (``hs_m``, ``rs_m``, ``rb_m``, ``ht_m``,
 ``hb_m``, ``rt_m``) to any other: the paper's Table 2 spans a factor 6, the truck cross
@@ -175,9 +188,11 @@ class BearingRating:
     type and angle.
 
     ISO 281:2007's modified rating life needs four more, all four or none: the fatigue
-    load limit ``C_u_N`` (N), the mean diameter ``mean_diameter_m`` ((d + D) / 2, m),
+    load limit ``C_u_N`` (N, below ``C0_N``: catalogues list a few per cent of it), the
+    mean diameter ``mean_diameter_m`` ((d + D) / 2, m, within :data:`MEAN_DIAMETER_M`),
     the lubricant's kinematic viscosity at operating temperature ``viscosity_mm2_s``
-    (mm^2/s) and the contamination factor ``contamination`` (``e_C``, 0 to 1).
+    (mm^2/s, within :data:`VISCOSITY_MM2_S`) and the contamination factor
+    ``contamination`` (``e_C``, above 0 and at most 1, ISO 281:2007 Table 13).
     """
 
     type: str
