@@ -29,7 +29,8 @@ from cardan_forces import cli
 
 BENCH_DATA = Path(__file__).parent / "data" / "bench.json"
 
-UNITS = (("_kg_m2", "kg m²"), ("_kg_m3", "kg/m³"), ("_m_s2", "m/s²"), ("_rad_s", "rad/s"),
+UNITS = (("_mm2_s", "mm²/s"), ("_rpm", "r/min"), ("_kg_m2", "kg m²"), ("_kg_m3", "kg/m³"),
+         ("_m_s2", "m/s²"), ("_rad_s", "rad/s"),
          ("_N_m", "N m"), ("_Pa", "Pa"), ("_hz", "Hz"), ("_deg", "deg"), ("_rad", "rad"),
          ("_kg", "kg"), ("_N", "N"), ("_s", "s"), ("_m", "m"))
 """A field's unit from the suffix of its name (SI, the package's convention)."""

@@ -125,7 +125,7 @@ class Range:
 
     def __str__(self) -> str:
         """``LEAST to MOST UNIT``, as refusals and the scene reference write it."""
-        return f"{self.least:.3g} to {self.most:.3g} {self.unit}"
+        return f"{self.least:g} to {self.most:g} {self.unit}"
 
 
 CONTACT_ANGLE_DEG = Range(5.0, 60.0, "deg")

@@ -53,7 +53,7 @@ ARTICULATION = Range(-MAX_ARTICULATION_DEG, MAX_ARTICULATION_DEG, "deg")
     ("slip_joints[]", "pitch_radius_m", SPLINE_PITCH_RADIUS_M),
 ])
 def test_a_field_read_within_a_range_shows_it(rows, where, key, allowed):
-    assert rows[(where, key)] == f"{allowed.least:.3g} to {allowed.most:.3g} {allowed.unit}"
+    assert rows[(where, key)] == f"{allowed.least:g} to {allowed.most:g} {allowed.unit}"
 
 
 def test_every_range_shown_is_one_the_loader_reads_with(gen, rows):

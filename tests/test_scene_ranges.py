@@ -85,8 +85,8 @@ def _message(scene: str, change, value) -> str:
 
 
 def _refusal(field, value, unit, least, most) -> str:
-    return (f"scene s.toml: field '{field}': {value:g} {unit} is outside {least:.3g} to "
-            f"{most:.3g} {unit}")
+    return (f"scene s.toml: field '{field}': {value:g} {unit} is outside {least:g} to "
+            f"{most:g} {unit}")
 
 
 @pytest.mark.parametrize("scene, change, field, unit, least, most", LIMITED,
