@@ -2,10 +2,18 @@
 the package can compute and over the whole rigid solution set.
 
 For each bearing whose scene gives catalogue data (:class:`~cardan_forces.driveline.
-scene.BearingRating`), at ``--instants`` instants spread over the scene's window: the
-equivalent dynamic load ``P(t)`` (:mod:`cardan_forces.driveline.bearing_life`), the duty
-cycle's mean load ``Pm`` over the revolutions of the bearing's shaft (the motion's
-speed) and ``L10`` in millions of revolutions and in hours at the window's mean speed,
+scene.BearingRating`), at ``--instants`` instants of a load history: the equivalent
+dynamic load ``P(t)`` (:mod:`cardan_forces.driveline.bearing_life`), the mean load
+``Pm`` over the revolutions of the bearing's shaft and ``L10`` in millions of
+revolutions. The history is a duty cycle's where the run has one (the scene's
+``[[duty_cycle]]``, ``--duty-cycle FILE`` or ``--speed-rpm N``): each bin's steady
+state over one input revolution, the bins combined by Palmgren-Miner, with hours at
+the spectrum's mean speed and ISO 281:2007's modified life ``L_nm`` for
+``--reliability`` (:mod:`~cardan_forces.experiments.life_duty`). Without one it is the
+scene's window, a start-up: lives in revolutions only, without hours or ``L_nm`` (each
+says why). Per bearing also its loads' ranges and the requisite minimum load
+(:data:`MINIMUM_LOAD`), checked. Lives are given
+
 
 - for each selection, each a different kind of answer (:data:`MODELS`): the members of
   the rigid set :data:`SELECTIONS` (``positive``, ``compliance``,
@@ -14,10 +22,10 @@ speed) and ``L10`` in millions of revolutions and in hours at the window's mean 
   installed and can express the scene (unless ``--no-engine``); and with ``--penalty``
   the penalty-contact simulation's average, a different model (the released line with
   its clearances) whose forces may lie outside the set (a simulation of the whole
-  window; a dynamic scene). The answer says why one is not run, and for each selection
-  and bearing whether its life lies within the set's interval (:func:`in_set`: its
-  ``Pm`` between the set's least and greatest over the same instants, to
-  :data:`IN_SET_TOL` of the bearing's load), computed, never assumed;
+  window; a dynamic scene, no duty cycle). The answer says why one is not run, and
+  for each selection and bearing whether its life lies within the set's interval
+  (:func:`in_set`: its ``Pm`` between the set's least and greatest over the same
+  instants, to :data:`IN_SET_TOL` of the bearing's load), computed, never assumed;
 - over the rigid set (:func:`load_envelope`): the least and the greatest ``P`` at each
   instant over every rigid solution, hence ``L10`` from its worst to its best. ``P``
   grows with the radial load ``Fr`` and with the axial load's magnitude ``|Fa|``, so its
@@ -37,27 +45,30 @@ no_value_reason`); a scene whose rated shafts do not turn over the window is ref
 (ISO 281 counts a life in revolutions). Where the set is open above, the worst case has
 no finite value: the answer says so and names the release the advisor proposes
 (:func:`~cardan_forces.driveline.release.advise`) that bounds it. Written into
-``--out``: ``life.csv`` (every ``P`` over time, the reason beside an empty cell),
-``life.md`` and the figure ``life.<format>`` (each bearing's life interval with each
-selection's mark); ``--json`` prints the whole answer as strict JSON instead.
+``--out``: ``life.csv`` (every ``P`` over time, by bin, the reason beside an empty
+cell), ``life.md`` and the figure ``life.<format>`` (each bearing's life interval with
+each selection's mark); ``--json`` prints the whole answer as strict JSON instead.
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
+import dataclasses
 import math
 from pathlib import Path
 
 import numpy as np
 from cardan_forces.driveline import bearing_life as iso
+from cardan_forces.driveline import duty
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.modes import counts
 from cardan_forces.driveline.release import advise, named_modes
-from cardan_forces.driveline.scene import SceneError
-from cardan_forces.experiments import files, images
+from cardan_forces.driveline.scene import LIMITS, SceneError
+from cardan_forces.experiments import files, images, life_duty
 from cardan_forces.experiments import progress as bars
 from cardan_forces.experiments.arguments import whole_number
 from cardan_forces.experiments.environment import json_text, number_text
@@ -106,6 +117,15 @@ residual (a few 1e-5 of the load on the built-in scenes)."""
 LIGHT_LOAD = 0.05
 """``P / C`` at or below which a bearing's load is light (the bearing makers' classes,
 e.g. SKF's: light ``P <= 0.05 C``, normal up to ``0.1 C``, heavy above)."""
+
+MINIMUM_LOAD = {"ball": 0.01, "roller": 0.02}
+"""The requisite minimum load as a share of ``C``: "As a general rule, minimum loads of
+0,01 C should be imposed on ball bearings and 0,02 C on roller bearings" (SKF, Rolling
+bearings, PUB BU/P1 17000 EN, 2018, "Requisite minimum load"); below it, skidding and
+smearing rather than fatigue may end the bearing's life."""
+
+RELIABILITY = 90.0
+"""The reliability (%) of a life by default: ISO 281's ``L10``, ``a1 = 1``."""
 
 OPEN = "no finite worst case: the closed loop's self-stress is free"
 """What the answer says where the set is open above along a closed loop."""
@@ -215,21 +235,18 @@ def p_ends(rating, env: dict, b: int) -> tuple[np.ndarray, np.ndarray]:
     return lo, np.where(np.isnan(env["fr_hi"][:, b]), np.nan, hi)
 
 
-def life(rating, p_values: np.ndarray, revs: np.ndarray, span_s: float,
-         keep: np.ndarray | None = None) -> dict:
-    """``Pm`` (N), ``L10`` (million revolutions) and ``L10_h`` (hours) of a load history,
-    and ``reason``: why one of them has no finite value (``None`` where all have one);
-    with ``keep``, ``Pm`` over those instants only (``L10_h`` still at the whole
-    window's mean speed).
+def life(rating, p_values: np.ndarray, revs: np.ndarray, keep: np.ndarray | None = None
+         ) -> dict:
+    """``Pm`` (N) and ``L10`` (million revolutions) of a load history over stretches of
+    ``revs`` revolutions, and ``reason``: why one of them has no finite value (``None``
+    where both have one); with ``keep``, over those instants only.
     """
     kept = slice(None) if keep is None else keep
     pm = iso.mean_load(p_values[kept], revs[kept], iso.exponent(rating))
-    l10 = iso.rating_life(rating, pm)
     reason = iso.no_value_reason(p_values[kept], revs[kept])
     if reason and revs.sum() > 0 and not revs[kept].sum() > 0:
         reason = "no value: the shaft turns at none of the instants kept"
-    return {"Pm_N": pm, "L10_Mrev": l10, "L10_h": iso.life_hours(l10, revs, span_s),
-            "reason": reason}
+    return {"Pm_N": pm, "L10_Mrev": iso.rating_life(rating, pm), "reason": reason}
 
 
 def in_set(pm: float, set_pm: tuple[float, float], scale: float) -> dict:
@@ -253,39 +270,96 @@ def in_set(pm: float, set_pm: tuple[float, float], scale: float) -> dict:
 
 
 def study(scene_spec: str, instants: int = INSTANTS, progress=None, penalty: bool = False,
-          engine: bool = True) -> dict:
+          engine: bool = True, duty_file: str | None = None, speed_rpm: float | None = None,
+          reliability: float = RELIABILITY) -> dict:
     """The whole answer of ``cardan life`` for one scene, as JSON-ready data (non-finite
-    numbers are the encoder's ``null``): the instants, each rated bearing's ``P`` over
-    time, ``Pm`` and ``L10`` per selection and over the set, the selections not run and
-    why, what each selection is (:data:`MODELS`) and whether its life lies in the set's,
-    and where the set is open, why and the release that bounds it. ``penalty`` and
+    numbers are the encoder's ``null``): each rated bearing's ``P`` at each instant,
+    ``Pm``, ``L10`` and ``L_nm`` per selection and over the set, the selections not run
+    and why, what each selection is (:data:`MODELS`) and whether its life lies in the
+    set's, and where the set is open, why and the release that bounds it.
+
+    With a duty cycle (the scene's, ``duty_file``'s or one bin at ``speed_rpm``:
+    :func:`~cardan_forces.experiments.life_duty.spectrum`) each bin is rated as a steady
+    state at ``instants`` instants over one input revolution and the bins combined
+    (:func:`_spectrum_study`), with hours at the spectrum's mean speed and ISO
+    281:2007's modified life for ``reliability`` (%); without one, the scene's window at
+    ``instants`` instants (:func:`_window_study`), in revolutions only. ``penalty`` and
     ``engine`` add the simulated selections (:mod:`~cardan_forces.experiments.
-    life_runs`) where the scene allows them. A scene none of whose rated shafts turns is
-    refused (:class:`SceneError`) before any solve.
+    life_runs`) where the scene allows them (not on a duty cycle). A scene none of
+    whose rated shafts turns is refused (:class:`SceneError`) before any solve.
     """
     scene = load_scene(scene_spec)
+    bins, source = life_duty.spectrum(scene_spec, scene, duty_file, speed_rpm)
+    if bins:
+        return _spectrum_study(scene, bins, source, instants, progress, reliability)
+    return _window_study(scene, instants, progress, penalty, engine)
+
+
+def _window_study(scene, instants: int, progress, penalty: bool, engine: bool) -> dict:
+    """:func:`study` over the scene's window: lives in revolutions, no hours (a start-up
+    is not the bearing's service) and no modified life (no operating speed).
+    """
     t = np.linspace(scene.time.start_s, scene.time.stop_s, instants)
     motion = simulate(scene, t)
     op = build_operator(motion)
     bearings = rated(op)
     _check_turning(scene, motion, op, bearings)
-    chosen = {name: solve_over_time(op, name) for name in SELECTIONS}
+    chosen = _rigid(op)
     simulated, not_run = _simulated(op, penalty, engine, progress)
     chosen.update({name: history for name, (history, _) in simulated.items()})
-    say = None if progress is None else progress
-    with bars.ticks(len(op.t), "life: intervals", "instant", say) as tick:
-        env = load_envelope(op, bearings, progress=tick)
+    env = _envelope(op, bearings, progress)
     span = float(t[-1] - t[0])
-    entries = [_bearing_entry(op, motion, contact, rating, chosen, env, b, span)
+    entries = [_bearing_entry(op, contact, rating, chosen, env, b,
+                              iso.revolutions(motion.omega[contact.shaft], op.t), span)
                for b, (contact, rating) in enumerate(bearings)]
+    for entry in entries:
+        for one in (*entry["selections"].values(), entry["interval"]):
+            _without_speed(one, isinstance(one["Pm_N"], list))
+    return {"scene": scene.name, "t_s": t, "instants": len(t), "duty_cycle": None,
+            "hours_reason": life_duty.NO_HOURS, "modified_reason": life_duty.NO_SPEED,
+            **_about(op, {name: _summary(h, name, simulated) for name, h in chosen.items()},
+                     not_run, bearings, entries, motion)}
+
+
+def _without_speed(lives: dict, ends: bool) -> None:
+    """A window's life (or the set's two ends) without hours or modified life, each
+    with its reason (:mod:`~cardan_forces.experiments.life_duty`).
+    """
+    none = [math.nan, math.nan] if ends else math.nan
+    lives.update({"L10_h": none, "hours_reason": life_duty.NO_HOURS, "L_nm_Mrev": none,
+                  "L_nm_h": none, "a_ISO": none, "modified_reason": life_duty.NO_SPEED})
+
+
+def _rigid(op: Operator) -> dict:
+    """Each rigid selection's history on ``op`` (:data:`SELECTIONS`)."""
+    return {name: solve_over_time(op, name) for name in SELECTIONS}
+
+
+def _envelope(op: Operator, bearings: list, progress) -> dict:
+    """:func:`load_envelope` with a bar (or progress lines) over the instants."""
+    with bars.ticks(len(op.t), "life: intervals", "instant", progress) as tick:
+        return load_envelope(op, bearings, progress=tick)
+
+
+def _summary(history, name: str, simulated: dict | None = None) -> dict:
+    """A selection's line of the answer: its solver, instants solved of all, what it
+    is (:data:`MODELS`) and, for a simulated one, what was run.
+    """
+    about = {"about": simulated[name][1]} if simulated and name in simulated else {}
+    return {"solver": history.solver, "solved": history.solved, "instants": len(history.t),
+            "model": MODELS[name], **about}
+
+
+def _about(op, selections: dict, not_run, bearings, entries, motion) -> dict:
+    """The parts of :func:`study`'s answer besides the scene and its instants: the
+    ``selections``' lines, those not run, the bearings' entries, and where the set is
+    open, why and the release that bounds it (at ``motion``'s instants).
+    """
     unbounded = any(e["interval"]["open"] for e in entries)
     return {
-        "scene": scene.name, "t_s": t, "directions": DIRECTIONS,
+        "directions": DIRECTIONS,
         "direction_error": 1.0 / math.cos(math.pi / DIRECTIONS) - 1.0,
-        "selections": {name: {"solver": h.solver, "solved": h.solved, "instants": len(h.t),
-                              "model": MODELS[name],
-                              **({"about": simulated[name][1]} if name in simulated else {})}
-                       for name, h in chosen.items()},
+        "selections": selections,
         "in_set_tol": IN_SET_TOL,
         "not_run": not_run,
         "unrated": [c.element for c in op.bearings() if c not in [r[0] for r in bearings]],
@@ -295,6 +369,70 @@ def study(scene_spec: str, instants: int = INSTANTS, progress=None, penalty: boo
     }
 
 
+def _spectrum_study(scene, bins: tuple, source: str, instants: int, progress,
+                    reliability: float) -> dict:
+    """:func:`study` over a duty cycle: each bin's steady state rated by the same
+    per-instant machinery as a window (the rigid selections, the set's envelope), the
+    bins combined per bearing (:func:`_spectrum_entry`).
+    """
+    rated_bins = []
+    for k, duty_bin in enumerate(bins):
+        if progress:
+            progress(f"life: bin {k + 1}/{len(bins)}, {duty_bin.torque_N_m:g} N m at "
+                     f"{duty_bin.speed_rpm:g} r/min")
+        rated_bins.append(_rate_bin(scene, duty_bin, instants, progress))
+    op, motion, _, _ = rated_bins[0]
+    opened = [m for _, m, _, entries in rated_bins
+              if any(e["interval"]["open"] for e in entries)]
+    per_bearing = zip(*(entries for *_, entries in rated_bins))
+    entries = [_in_set_over_bins(life_duty.bearing_over_bins(rating, list(of_bins), bins,
+                                                             reliability))
+               for (_, rating), of_bins in zip(rated(op), per_bearing)]
+    summary = {name: {**_summary(first, name),
+                      "solved": sum(r[2][name].solved for r in rated_bins),
+                      "instants": sum(len(r[2][name].t) for r in rated_bins)}
+               for name, first in rated_bins[0][2].items()}
+    not_run = {PENALTY: life_duty.NOT_RUN, ENGINE: life_duty.NOT_RUN}
+    return {"scene": scene.name, "instants": instants * len(bins),
+            "duty_cycle": {"source": source, "instants_per_bin": instants,
+                           "mean_speed_rpm": duty.mean_speed_rpm(bins),
+                           "reliability_percent": reliability,
+                           "a1": iso.reliability_factor(reliability),
+                           "bins": [{**dataclasses.asdict(b), "revolution_share": u,
+                                     "t_s": r[1].t}
+                                    for b, u, r in zip(bins, duty.revolution_shares(bins),
+                                                       rated_bins)]},
+                "hours_reason": None, "modified_reason": None,
+            **_about(op, summary, not_run, rated(op), entries, opened[0] if opened else motion)}
+
+
+def _in_set_over_bins(entry: dict) -> dict:
+    """A bearing's entry over a duty cycle with each selection's combined ``Pm`` checked
+    against the set's combined ends (:func:`in_set`, to the bins' greatest load scale).
+    """
+    scale = max(e["load_scale_N"] for e in entry["bins"])
+    best, worst = entry["interval"]["Pm_N"]
+    for sel in entry["selections"].values():
+        sel["in_set"] = in_set(sel["Pm_N"], (best, worst), scale)
+    return entry
+
+
+def _rate_bin(scene, duty_bin, instants: int, progress) -> tuple:
+    """One bin's steady state (:func:`~cardan_forces.experiments.life_duty.bin_scene`)
+    rated: its operator, motion, rigid selections' histories and bearings' entries.
+    """
+    variant, t = life_duty.bin_scene(scene, duty_bin, instants)
+    motion = simulate(variant, t)
+    op = build_operator(motion)
+    chosen = _rigid(op)
+    bearings = rated(op)
+    env = _envelope(op, bearings, progress)
+    period = 60.0 / duty_bin.speed_rpm
+    entries = [_bearing_entry(op, contact, rating, chosen, env, b,
+                              life_duty.revolutions(motion.omega[contact.shaft], period),
+                              period)
+               for b, (contact, rating) in enumerate(bearings)]
+    return op, motion, chosen, entries
 def _check_turning(scene, motion, op: Operator, bearings: list) -> None:
     """Refuse (:class:`SceneError`, one line) a scene none of whose rated bearings' shafts
     turns over the window: ISO 281 counts a life in revolutions, so none would have a
@@ -328,37 +466,37 @@ def _simulated(op: Operator, penalty: bool, engine: bool, progress) -> tuple[dic
     return ran, not_run
 
 
-def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
-    """One bearing's part of :func:`study`'s answer: per selection
+def _bearing_entry(op, contact, rating, chosen, env, b, revs, span) -> dict:
+    """One bearing's part of a window's or a bin's answer, its shaft turning ``revs``
+    revolutions over each instant's stretch and ``span`` seconds in all: per selection
     (:func:`_selection_entry`) and over the set ``P``, ``Pm`` and ``L10``, each life's
-    reason where it has no finite value, and whether each selection's lies in the set's.
+    reason where it has no finite value, and whether each selection's lies in the set's;
+    the loads' ranges, the greatest ``P`` over ``C`` and the minimum-load check.
     """
-    revs = iso.revolutions(motion.omega[contact.shaft], op.t)
     lo, hi = p_ends(rating, env, b)
-    selections = {name: _selection_entry(op, contact, rating, name, history, revs, span)
+    selections = {name: _selection_entry(op, contact, rating, name, history, revs)
                   for name, history in chosen.items()}
     peaks = [np.nanmax(s["P_N"]) for s in selections.values() if np.isfinite(s["P_N"]).any()]
     scale = max([*peaks, *lo[np.isfinite(lo)], *hi[np.isfinite(hi)]], default=0.0)
     for name, sel in selections.items():
         keep = np.isfinite(sel["P_N"]) if name in (PENALTY, ENGINE) else None
-        ends = [life(rating, p, revs, span, keep)["Pm_N"] for p in (lo, hi)]
+        ends = [life(rating, p, revs, keep)["Pm_N"] for p in (lo, hi)]
         sel["in_set"] = in_set(sel["Pm_N"], ends, scale)
-    worst, best = life(rating, hi, revs, span), life(rating, lo, revs, span)
+    worst, best = life(rating, hi, revs), life(rating, lo, revs)
     determinate = bool(env["radial_determinate"][:, b].all())
     return {
         "bearing": contact.element, "kind": contact.kind.removeprefix("bearing-"),
-        "rating": {"type": rating.type, "contact_angle_deg": rating.contact_angle_deg,
-                   "C_N": rating.C_N, "C0_N": rating.C0_N, "p": iso.exponent(rating),
-                   "X_Y_e": ([rating.X, rating.Y, rating.e] if rating.X is not None
-                             else "ISO 281 tables")},
+        "rating": _rating(rating),
         "revolutions": float(revs.sum()),
         "mean_speed_rpm": float(revs.sum() / span * 60.0) if span > 0 else math.nan,
+        "load_range": _load_range(env, b, selections),
         "selections": selections,
         "peak_P_over_C": float(max(peaks, default=math.nan)) / rating.C_N,
+        "load_scale_N": float(scale),
+        "minimum_load": minimum_load(rating, selections),
         "interval": {
             "P_min_N": lo, "P_max_N": hi, "Pm_N": [best["Pm_N"], worst["Pm_N"]],
             "L10_Mrev": [worst["L10_Mrev"], best["L10_Mrev"]],
-            "L10_h": [worst["L10_h"], best["L10_h"]],
             "reason": [worst["reason"], best["reason"]],
             "open": bool(np.isinf(hi).any()),
             "radial_determinate": determinate,
@@ -366,7 +504,50 @@ def _bearing_entry(op, motion, contact, rating, chosen, env, b, span) -> dict:
     }
 
 
-def _selection_entry(op, contact, rating, name, history, revs, span) -> dict:
+def _rating(rating) -> dict:
+    """A rating's catalogue data as the answer gives it (ISO 281:2007's inputs null
+    where the scene gives none).
+    """
+    return {"type": rating.type, "contact_angle_deg": rating.contact_angle_deg,
+            "C_N": rating.C_N, "C0_N": rating.C0_N, "p": iso.exponent(rating),
+            "X_Y_e": ([rating.X, rating.Y, rating.e] if rating.X is not None
+                      else "ISO 281 tables"),
+            **{k: getattr(rating, k) for k in iso.ISO_INPUTS}}
+
+
+def _load_range(env: dict, b: int, selections: dict) -> dict:
+    """The least and the greatest radial load ``Fr_N`` and axial load's magnitude
+    ``Fa_N`` (N) of bearing ``b`` over the set's ends and every selection's loads, and
+    ``reason`` where a greatest one has no finite value (the set open above).
+    """
+    fr = [env["fr_lo"][:, b], env["fr_hi"][:, b], *(s["Fr_N"] for s in selections.values())]
+    fa = [env["fa_lo"][:, b], env["fa_hi"][:, b],
+          *(np.abs(s["Fa_N"]) for s in selections.values())]
+    found = {}
+    for key, values in (("Fr_N", fr), ("Fa_N", fa)):
+        both = np.concatenate(values)
+        both = both[~np.isnan(both)]
+        found[key] = ([float(both.min()), float(both.max())] if len(both)
+                      else [math.nan, math.nan])
+    unbounded = not all(math.isfinite(v) for pair in found.values() for v in pair)
+    return {**found, "reason": "the set is open above: no finite greatest load, or a load "
+            "not solved" if unbounded else None}
+
+
+def minimum_load(rating, selections: dict) -> dict:
+    """Whether the selections' least ``P`` (over every instant) meets the catalogue's
+    requisite minimum load, ``P >= k C`` with ``k`` :data:`MINIMUM_LOAD` (ball 0.01,
+    roller 0.02): ``rule_P_over_C``, ``least_P_over_C`` (NaN where none was solved) and
+    ``below``.
+    """
+    rule = MINIMUM_LOAD["roller" if rating.roller else "ball"]
+    values = np.concatenate([s["P_N"] for s in selections.values()] or [np.zeros(0)])
+    values = values[np.isfinite(values)]
+    least = float(values.min()) / rating.C_N if len(values) else math.nan
+    return {"rule_P_over_C": rule, "least_P_over_C": least, "below": bool(least < rule)}
+
+
+def _selection_entry(op, contact, rating, name, history, revs) -> dict:
     """One selection's ``P``, the radial and axial loads ``Fr``, ``Fa`` it comes from
     (N), at how many instants ``|Fa| > e Fr`` (``P = X Fr + Y |Fa|``), ``Pm`` and
     ``L10`` at one bearing. A simulated selection's ``Pm`` is over the instants it has
@@ -379,7 +560,7 @@ def _selection_entry(op, contact, rating, name, history, revs, span) -> dict:
     with np.errstate(invalid="ignore"):
         axial = int(np.sum(np.abs(fa) > iso.factors(rating, fa)[2] * fr))
     return {"P_N": p, "Fr_N": fr, "Fa_N": fa, "axial_instants": axial,
-            **life(rating, p, revs, span, keep), "unsolved_instants": int(np.isnan(p).sum())}
+            **life(rating, p, revs, keep), "unsolved_instants": int(np.isnan(p).sum())}
 
 
 def _ends_words(determinate: bool, slides: bool, env: dict, b: int) -> str:
@@ -430,21 +611,32 @@ EMPTY = {
 
 
 def write_csv(answer: dict, path: Path) -> None:
-    """Long format: one row per bearing, instant and series (each selection's ``P``,
-    the set's least and greatest); an empty cell where undefined, with why in ``note``
-    (:data:`EMPTY`).
+    """Long format: one row per bin of the duty cycle (``window`` without one), instant,
+    bearing and series (each selection's ``P``, the set's least and greatest); an empty
+    cell where undefined, with why in ``note`` (:data:`EMPTY`).
     """
     with files.replacing(path, newline="") as f:
         w = csv.writer(f)
-        w.writerow(["t_s", "bearing", "series", "P_N", "note"])
-        for entry in answer["bearings"]:
-            series = {name: sel["P_N"] for name, sel in entry["selections"].items()}
-            series.update(set_min=entry["interval"]["P_min_N"],
-                          set_max=entry["interval"]["P_max_N"])
-            for name, values in series.items():
-                for t, p in zip(answer["t_s"], values):
-                    w.writerow([f"{t:.6g}", entry["bearing"], name,
-                                number_text(p, ".9g", ""), _empty_note(name, p)])
+        w.writerow(["bin", "t_s", "bearing", "series", "P_N", "note"])
+        for label, times, entries in _histories(answer):
+            for bearing, entry in entries:
+                series = {name: sel["P_N"] for name, sel in entry["selections"].items()}
+                series.update(set_min=entry["interval"]["P_min_N"],
+                              set_max=entry["interval"]["P_max_N"])
+                for name, values in series.items():
+                    for t, p in zip(times, values):
+                        w.writerow([label, f"{t:.6g}", bearing, name,
+                                    number_text(p, ".9g", ""), _empty_note(name, p)])
+
+
+def _histories(answer: dict) -> list[tuple]:
+    """``(bin, instants, [(bearing, its entry there)])`` of each load history rated:
+    the window's, or each bin's of a duty cycle.
+    """
+    if answer["duty_cycle"] is None:
+        return [("window", answer["t_s"], [(e["bearing"], e) for e in answer["bearings"]])]
+    return [(k + 1, b["t_s"], [(e["bearing"], e["bins"][k]) for e in answer["bearings"]])
+            for k, b in enumerate(answer["duty_cycle"]["bins"])]
 
 
 def _empty_note(series: str, p: float) -> str:
@@ -464,34 +656,35 @@ def _life_text(value: float) -> str:
     return number_text(value, ".4g", "-")
 
 
-def _cell(selection: dict) -> str:
-    """A selection's ``L10`` (h) in life.md's table, marked where it lies outside the
+def life_unit(answer: dict) -> tuple[str, str]:
+    """The key and the unit lives are shown in: hours over a duty cycle, else millions
+    of revolutions (a window gives no hours).
+    """
+    return ("h", "h") if answer["duty_cycle"] else ("Mrev", "million revolutions")
+
+
+def _cell(life_entry: dict, key: str) -> str:
+    """A selection's life ``key`` in life.md's tables, marked where it lies outside the
     set's interval.
     """
-    outside = " (outside the set)" if selection["in_set"]["inside"] is False else ""
-    return _life_text(selection["L10_h"]) + outside
+    outside = " (outside the set)" if life_entry["in_set"]["inside"] is False else ""
+    return _life_text(life_entry[key]) + outside
 
 
 def markdown(answer: dict) -> str:
-    """``life.md``: per bearing ``L10`` (h) of each selection and of the set, what each
-    selection is and whether its life lies in the set's interval, why a life has no
-    finite value, what the interval's ends are, what was not run, and the release where
-    the set is open.
+    """``life.md``: what the lives are rated over (a duty cycle's bins, or the window);
+    per bearing the loads' ranges, ``C``, ``C_u``, the speeds and ``kappa``; ``L10`` of
+    each selection and of the set, and over a duty cycle ``L_nm`` with ``a_ISO`` per
+    bin; what each selection is and whether its life lies in the set's interval, why a
+    life has no finite value, the minimum-load warnings and the light-load sentence,
+    what the interval's ends are, what was not run, and the release where the set is
+    open.
     """
-    names = list(answer["selections"])
-    lines = [f"# Bearing life (ISO 281 L10) of scene {answer['scene']}", "",
-             f"{len(answer['t_s'])} instants; `L10` in hours at each shaft's mean speed "
-             "over the window; the set's worst and best over every rigid solution.", "",
-             "| bearing | type | " + " | ".join(f"{n} L10 [h]" for n in names) +
-             " | set worst L10 [h] | set best L10 [h] | set's ends |",
-             "|---" * (len(names) + 5) + "|"]
-    for e in answer["bearings"]:
-        cells = [_cell(e["selections"][n]) for n in names]
-        worst, best = e["interval"]["L10_h"]
-        lines.append(f"| {e['bearing']} | {e['rating']['type']} | " + " | ".join(cells) +
-                     f" | {'0 (open)' if e['interval']['open'] else _life_text(worst)} | "
-                     f"{_life_text(best)} | {e['interval']['ends']} |")
-    lines += _selection_lines(answer) + _reason_lines(answer)
+    lines = [f"# Bearing life (ISO 281) of scene {answer['scene']}", "",
+             *_basis_lines(answer), "", *_load_table(answer), "", *_life_table(answer, "L10")]
+    if answer["duty_cycle"]:
+        lines += ["", *_life_table(answer, "L_nm")]
+    lines += _selection_lines(answer) + _reason_lines(answer) + _minimum_lines(answer)
     lines += _split_lines(answer) + _load_lines(answer)
     lines += ["", f"Radial directions: {answer['directions']} (greatest radial load within "
               f"{100 * answer['direction_error']:.2f} % above the true one)."]
@@ -502,6 +695,78 @@ def markdown(answer: dict) -> str:
         lines += ["", f"**{answer['open_reason']}.** The release that bounds it: "
                   f"{release['words']} ({', '.join(release['labels']) or 'none'})."]
     return "\n".join(lines) + "\n"
+
+
+def _basis_lines(answer: dict) -> list[str]:
+    """What the lives are rated over: the duty cycle's bins (a table) or the window."""
+    spectrum = answer["duty_cycle"]
+    if not spectrum:
+        return [f"{answer['instants']} instants over the scene's window; `L10` in million "
+                "revolutions of each bearing's shaft; the set's worst and best over every "
+                f"rigid solution. {answer['hours_reason'][:1].upper()}"
+                f"{answer['hours_reason'][1:]}."]
+    return [f"Duty cycle ({spectrum['source']}): {len(spectrum['bins'])} bins, each the "
+            "steady state of the quasi-static line at its torque and speed, rated at "
+            f"{spectrum['instants_per_bin']} instants over one input revolution; the bins' "
+            "lives combined by Palmgren-Miner over their shares of the revolutions; hours "
+            f"at the mean speed, {spectrum['mean_speed_rpm']:.4g} r/min at the input; "
+            f"`L_nm = a1 a_ISO L10` (ISO 281:2007) for {spectrum['reliability_percent']:g} "
+            f"% reliability (a1 = {spectrum['a1']:.3g}), `a_ISO` per bin.", "",
+            "| bin | input torque [N m] | input speed [r/min] | share of time | share of "
+            "revolutions |", "|---" * 5 + "|",
+            *(f"| {k + 1} | {b['torque_N_m']:.4g} | {b['speed_rpm']:.4g} | {b['share']:.4g} "
+              f"| {b['revolution_share']:.3g} |" for k, b in enumerate(spectrum["bins"]))]
+
+
+def _load_table(answer: dict) -> list[str]:
+    """Per bearing: type, ``C``, ``C_u``, the radial and axial loads' ranges over the
+    set and every selection, and over a duty cycle its speed and ``kappa`` per bin.
+    """
+    spectrum = bool(answer["duty_cycle"])
+    extra = " speed by bin [r/min] | kappa by bin |" if spectrum else ""
+    lines = ["| bearing | type | C [N] | C_u [N] | Fr [N] | abs(Fa) [N] |" + extra,
+             "|---" * (8 if spectrum else 6) + "|"]
+    for e in answer["bearings"]:
+        fr, fa = (" to ".join("open" if math.isinf(v) else number_text(v, ".4g")
+                              for v in e["load_range"][k]) for k in ("Fr_N", "Fa_N"))
+        row = (f"| {e['bearing']} | {e['rating']['type']} | {e['rating']['C_N']:.6g} | "
+               f"{number_text(e['rating']['C_u_N'], '.6g')} | {fr} | {fa} |")
+        if spectrum:
+            row += (f" {_by_bin(e['speed_rpm'], '.4g')} (mean {e['mean_speed_rpm']:.4g}) "
+                    f"| {_by_bin(e['kappa'])} |")
+        lines.append(row)
+    return lines
+
+
+def _by_bin(values, spec: str = ".3g") -> str:
+    """Values by bin, comma-separated (``-`` where one has no value)."""
+    return ", ".join(number_text(v, spec) for v in values)
+
+
+def _life_table(answer: dict, life_name: str) -> list[str]:
+    """``L10`` or ``L_nm`` (``life_name``) of each selection and of the set's ends, per
+    bearing, in :func:`life_unit`'s unit; ``L_nm`` with ``a_ISO`` by bin.
+    """
+    names, (unit, _) = list(answer["selections"]), life_unit(answer)
+    key = f"{life_name}_{unit}"
+    lines = ["| bearing | " + " | ".join(f"{n} {life_name} [{unit}]" for n in names) +
+             f" | set worst {life_name} [{unit}] | set best {life_name} [{unit}] |" +
+             (" set's ends |" if life_name == "L10" else ""),
+             "|---" * (len(names) + (4 if life_name == "L10" else 3)) + "|"]
+    for e in answer["bearings"]:
+        cells = [_cell(e["selections"][n], key) + _a_iso(e["selections"][n], life_name)
+                 for n in names]
+        worst, best = e["interval"][key]
+        lines.append(f"| {e['bearing']} | " + " | ".join(cells) +
+                     f" | {'0 (open)' if e['interval']['open'] else _life_text(worst)} | "
+                     f"{_life_text(best)} |" +
+                     (f" {e['interval']['ends']} |" if life_name == "L10" else ""))
+    return lines
+
+
+def _a_iso(life_entry: dict, life_name: str) -> str:
+    """``a_ISO`` by bin after an ``L_nm`` cell (nothing after an ``L10`` one)."""
+    return f" (a_ISO {_by_bin(life_entry['a_ISO'])})" if life_name == "L_nm" else ""
 
 
 def _selection_lines(answer: dict) -> list[str]:
@@ -548,7 +813,53 @@ def _reason_lines(answer: dict) -> list[str]:
         found += [("set worst", worst)] if worst and not e["interval"]["open"] else []
         found += [("set best", best)] if best else []
         lines += [f"- {e['bearing']}, {name}: {why}." for name, why in found]
+    if answer["duty_cycle"]:
+        lines += _modified_lines(answer["bearings"])
     return ["", "Lives without a finite value:", *lines] if lines else []
+
+
+def _modified_lines(entries: list[dict]) -> list[str]:
+    """Why modified lives have no finite value: each reason once, after the bearings
+    that give it.
+    """
+    found: dict[str, list[str]] = {}
+    for e in entries:
+        for why in _modified_reasons(e):
+            found.setdefault(why, []).append(e["bearing"])
+    return [f"- {', '.join(names)}, L_nm: {why}." for why, names in found.items()]
+
+
+def _modified_reasons(entry: dict) -> list[str]:
+    """A bearing's distinct reasons why a modified life has no finite value (the same
+    for every selection where its rating lacks ISO 281:2007's inputs).
+    """
+    found = [s["modified_reason"] for s in entry["selections"].values()]
+    found += entry["interval"]["modified_reason"]
+    return list(dict.fromkeys(why for why in found if why))
+
+
+def _minimum_lines(answer: dict) -> list[str]:
+    """A warning per bearing whose least ``P`` of any selection is below the requisite
+    minimum load (:data:`MINIMUM_LOAD`), naming the bins where it is.
+    """
+    lines = []
+    for e in answer["bearings"]:
+        check = e["minimum_load"]
+        if not check["below"]:
+            continue
+        where = f" in bin(s) {', '.join(map(str, check['bins']))}" if "bins" in check else ""
+        family = "roller" if check["rule_P_over_C"] == MINIMUM_LOAD["roller"] else "ball"
+        lines.append(f"- **{e['bearing']}**{where}: its least P is "
+                     f"{100 * check['least_P_over_C']:.2g} % of C, below the requisite "
+                     f"minimum load of {100 * check['rule_P_over_C']:g} % of C for {family} "
+                     "bearings.")
+    if not lines:
+        return []
+    return ["", "Minimum load not met (SKF, Rolling bearings, PUB BU/P1 17000, 2018, "
+            "\"Requisite minimum load\": \"minimum loads of 0,01 C should be imposed on "
+            "ball bearings and 0,02 C on roller bearings\"; below it skidding and smearing, "
+            "not fatigue, may end a bearing's life, so its ISO 281 life is no guide):",
+            *lines]
 
 
 def _split_lines(answer: dict) -> list[str]:
@@ -565,7 +876,7 @@ def _split_lines(answer: dict) -> list[str]:
                  "X {:g}, Y {:g}, e {:g} as the scene gives them".format(*factors))
         lines.append(f"- {e['bearing']}: P = X Fr + Y |Fa| (|Fa| > e Fr) at "
                      + ", ".join(f"{k} ({n})" for n, k in counts.items())
-                     + f" of {len(answer['t_s'])} instants; {given}.")
+                     + f" of {answer['instants']} instants; {given}.")
     return [""] + lines if lines else []
 
 
@@ -641,7 +952,8 @@ def _legend_in(answer: dict) -> float:
 
 def figures(answer: dict) -> list:
     """The figure's pages (:data:`ROWS_PER_PAGE` bearings each, one x range on all):
-    each bearing's ``L10`` (h) interval over the rigid set as a bar with a cap at each
+    each bearing's ``L10`` interval over the rigid set (in :func:`life_unit`'s unit:
+    hours over a duty cycle, else millions of revolutions) as a bar with a cap at each
     finite end, an open end as an arrow on the axis' edge pointing to the open side,
     and each selection's ``L10`` as a mark, each selection at a height of its own in
     the row so that marks at one life all show. Make them in :func:`images.styled`.
@@ -649,8 +961,9 @@ def figures(answer: dict) -> list:
     entries = answer["bearings"]
     pages = [entries[k:k + ROWS_PER_PAGE]
              for k in range(0, len(entries), ROWS_PER_PAGE)] or [[]]
-    values = [v for e in entries for v in (*e["interval"]["L10_h"],
-              *(s["L10_h"] for s in e["selections"].values())) if 0 < v < math.inf]
+    key = f"L10_{life_unit(answer)[0]}"
+    values = [v for e in entries for v in (*e["interval"][key],
+              *(s[key] for s in e["selections"].values())) if 0 < v < math.inf]
     room = 100.0 if any(e["interval"]["open"] for e in entries) else 1.0  # for the arrow
     span = (10.0 ** math.floor(math.log10(min(values, default=1.0) / room)),  # decades
             10.0 ** (math.floor(math.log10(max(values, default=1.0))) + 1))
@@ -668,14 +981,16 @@ def _page(answer: dict, entries: list, span: tuple, page: int, pages: int):
     from matplotlib.ticker import LogLocator, NullFormatter
 
     names = list(answer["selections"])
+    unit, words = life_unit(answer)
+    key = f"L10_{unit}"
     rows = max(len(entries), 1)
     height = max(FRAME_IN + ROW_IN * rows, _legend_in(answer))
     fig, ax = plt.subplots(figsize=(images.PAGE_IN[0], height))
     left, right = span
     for k, e in enumerate(entries):
-        _bar(ax, k, e, left, right)
+        _bar(ax, k, e["interval"], key, left, right)
         for c, name in enumerate(names):
-            value = e["selections"][name]["L10_h"]
+            value = e["selections"][name][key]
             if 0 < value < math.inf:
                 ax.plot([value], [k + MARK_STEP * (c - (len(names) - 1) / 2)],
                         MARKS.get(name, "x"), color=f"C{c}", ms=4.5, mfc="none", mew=1.0,
@@ -689,7 +1004,7 @@ def _page(answer: dict, entries: list, span: tuple, page: int, pages: int):
     reach = max(0.5, MARK_STEP * (len(names) - 1) / 2 + 0.18)  # the outer marks inside
     ax.set_ylim(rows - 1 + reach, -reach)  # the first bearing on top
     ax.grid(True, axis="x", which="major")
-    ax.set_xlabel("basic rating life L10 [h]")
+    ax.set_xlabel(f"basic rating life L10 [{words}]")
     ax.set_ylabel("rated bearing [shaft.bearing]")
     ax.set_title(images.typeset("L10 over the rigid set (bar) and of each selection "
                                 "(marks, one height each)"), loc="left")
@@ -713,16 +1028,17 @@ def _page(answer: dict, entries: list, span: tuple, page: int, pages: int):
     return fig
 
 
-def _bar(ax, k: int, entry: dict, left: float, right: float) -> None:
-    """Row ``k``'s interval over the rigid set: a bar from the worst life to the best,
+def _bar(ax, k: int, interval: dict, key: str, left: float, right: float) -> None:
+    """Row ``k``'s ``interval`` over the rigid set (its lives ``key``): a bar from the
+    worst life to the best,
     a cap at each finite end (one cap where the interval is a point), an arrow on the
     axis' edge where an end is open (no finite worst case: to the left; unloaded at
     best: to the right). Nothing where an end was not solved.
     """
-    worst, best = entry["interval"]["L10_h"]
+    worst, best = interval[key]
     if math.isnan(worst) or math.isnan(best):
         return
-    open_low = entry["interval"]["open"] or not worst > 0
+    open_low = interval["open"] or not worst > 0
     open_high = math.isinf(best)
     lo, hi = left if open_low else worst, right if open_high else max(best, worst)
     caps = [i for i, is_open in ((0, open_low), (1, open_high)) if not is_open]
@@ -758,29 +1074,73 @@ def write_outputs(answer: dict, out: Path, formats=("png",)) -> list[Path]:
 def add_parser(subparsers) -> None:
     """Register ``cardan life``."""
     p = subparsers.add_parser("life", help="ISO 281 bearing life of each selection and over "
-                              "the rigid solution set (CSV, Markdown, figure; --json)")
+                              "the rigid solution set, over a duty cycle (CSV, Markdown, "
+                              "figure; --json)")
     p.add_argument("scene", help="built-in name or TOML path")
     p.add_argument("--instants", type=whole_number(2, MAX_INSTANTS), default=INSTANTS,
-                   help=f"instants over the scene's window (default {INSTANTS})")
+                   help=f"instants over the scene's window, or over one input revolution "
+                        f"of each duty-cycle bin (default {INSTANTS})")
+    spectrum = p.add_mutually_exclusive_group()
+    spectrum.add_argument("--duty-cycle", dest="duty_file", metavar="FILE",
+                          help="a TOML file of [[duty_cycle]] bins (torque_N_m, speed_rpm, "
+                               "share), rated instead of the scene's")
+    spectrum.add_argument("--speed-rpm", type=_speed, metavar="N",
+                          help="one bin: the scene's mean input torque at N r/min")
+    p.add_argument("--reliability", type=_reliability, default=RELIABILITY,
+                   metavar="PERCENT", help="reliability of the modified life L_nm, ISO "
+                   f"281:2007's a1 (default {RELIABILITY:g}: a1 = 1)")
     p.add_argument("--out", type=files.folder, default="results/life",
                    help="output folder (default %(default)s)")
     p.add_argument("--format", type=format_list, default=("png",),
                    help="comma-separated image formats (default png; any of png,svg,pdf)")
     p.add_argument("--penalty", action="store_true",
                    help="also rate the penalty-contact simulation's average (a simulation "
-                        "of the released line over the window; dynamic scenes)")
+                        "of the released line over the window; dynamic scenes, no duty "
+                        "cycle)")
     p.add_argument("--no-engine", dest="engine", action="store_false",
-                   help="leave out MuJoCo's forces (run by default where installed and the "
-                        "scene is expressible)")
+                   help="leave out MuJoCo's forces (run by default where installed, the "
+                        "scene is expressible and no duty cycle is rated)")
     p.add_argument("--json", action="store_true",
                    help="print the whole answer as strict JSON on stdout (no files)")
     p.set_defaults(func=run)
 
 
+def _number(text: str) -> float:
+    """``text`` as a finite number (argparse's error otherwise)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def _speed(text: str) -> float:
+    """An argparse type: a speed (r/min) within a duty-cycle bin's limits."""
+    value = _number(text)
+    least, most = LIMITS["speed_rpm"]
+    if not least <= value <= most:
+        raise argparse.ArgumentTypeError(f"expected a speed from {least:g} to {most:g} "
+                                         f"r/min, got {text!r}")
+    return value
+
+
+def _reliability(text: str) -> float:
+    """An argparse type: a reliability (%) ISO 281:2007 gives ``a1`` for."""
+    value = _number(text)
+    refused = iso.RELIABILITY_PERCENT.refusal(value)
+    if refused:
+        raise argparse.ArgumentTypeError(f"{refused}, the reliabilities ISO 281:2007 "
+                                         "Table 12 gives a1 for")
+    return value
+
+
 def run(args) -> int:
     """The answer as JSON on stdout, or the files written (named on stderr)."""
     answer = study(args.scene, args.instants, progress=bars.line, penalty=args.penalty,
-                   engine=args.engine)
+                   engine=args.engine, duty_file=args.duty_file, speed_rpm=args.speed_rpm,
+                   reliability=args.reliability)
     if not answer["bearings"]:
         bars.line(f"life: scene {answer['scene']} rates no bearing (no catalogue data)")
     if args.json:

@@ -1,6 +1,9 @@
 """ISO 281 bearing life (``cardan life``): the standard's formulas by hand, the interval
 over the rigid set around every selection, a point where the radial loads are
-determinate, an open worst case named with the release that bounds it, strict JSON."""
+determinate, an open worst case named with the release that bounds it, strict JSON; over
+a duty cycle, Palmgren-Miner against its closed form, hours at the spectrum's mean speed
+only, ISO 281:2007's modified life per bin, the run's spectrum options refused in one
+line."""
 
 import csv
 import dataclasses
@@ -17,7 +20,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import builtin_text, load_scene
 from cardan_forces.driveline.scene import BearingRating
-from cardan_forces.experiments import images, life, life_runs
+from cardan_forces.experiments import images, life, life_duty, life_runs
 from cardan_forces.experiments.environment import json_text
 from cardan_forces.experiments.study import solve_over_time
 
@@ -62,7 +65,8 @@ def _by_hand(rating: BearingRating, fr: np.ndarray, fa: np.ndarray) -> np.ndarra
 def test_l10_is_iso_281_by_hand_on_determinate_loads(propshaft):
     """propshaft's bearing loads are determinate: the positive selection's L10 equals
     (C/Pm)^p with Pm the revolution-weighted p-mean of P, every step written here from
-    the operator's bearing loads and the motion's speeds."""
+    the operator's bearing loads and the motion's speeds. A window is a start-up: no
+    hours, and the reason says so."""
     scene = load_scene("propshaft")
     t = np.linspace(scene.time.start_s, scene.time.stop_s, INSTANTS)
     motion = simulate(scene, t)
@@ -80,11 +84,10 @@ def test_l10_is_iso_281_by_hand_on_determinate_loads(propshaft):
         power = 10 / 3 if rating.type.endswith("roller") else 3.0
         pm = (np.sum(p ** power * revs) / revs.sum()) ** (1 / power)
         l10 = (rating.C_N / pm) ** power
-        hours = l10 * 1e6 / (revs.sum() / (t[-1] - t[0])) / 3600
         entry = found[name]["selections"]["positive"]
         assert entry["P_N"] == pytest.approx(p, rel=1e-9)
         assert entry["L10_Mrev"] == pytest.approx(l10, rel=1e-9)
-        assert entry["L10_h"] == pytest.approx(hours, rel=1e-9)
+        assert math.isnan(entry["L10_h"]) and entry["hours_reason"] == life_duty.NO_HOURS
 
 
 def test_iso_tables_rows_and_switch():
@@ -130,9 +133,9 @@ def test_propshaft_radial_life_interval_is_a_point(propshaft):
         interval = entry["interval"]
         assert interval["radial_determinate"]
         assert interval["P_max_N"] == pytest.approx(interval["P_min_N"], rel=1e-9)
-        worst, best = interval["L10_h"]
+        worst, best = interval["L10_Mrev"]
         assert worst == pytest.approx(best, rel=1e-8)
-        assert entry["selections"]["compliance"]["L10_h"] == pytest.approx(worst, rel=1e-6)
+        assert entry["selections"]["compliance"]["L10_Mrev"] == pytest.approx(worst, rel=1e-6)
 
 
 def test_paper_worst_case_is_open_and_the_release_bounds_it(paper):
@@ -140,7 +143,7 @@ def test_paper_worst_case_is_open_and_the_release_bounds_it(paper):
     the advisor's release named, and on the released line every bearing's radial and
     axial load bounded."""
     assert paper["open"] and paper["open_reason"] == life.OPEN
-    assert all(e["interval"]["open"] and e["interval"]["L10_h"][0] == 0.0
+    assert all(e["interval"]["open"] and e["interval"]["L10_Mrev"][0] == 0.0
                for e in paper["bearings"])
     with images.styled():
         fig = life.figure(paper)
@@ -284,24 +287,26 @@ def test_light_loads_are_said_to_make_the_long_lives(propshaft):
 
 
 def _lives(answer: dict):
-    """Every life of an answer: ``(where, Pm, L10 Mrev, L10 h, reason)`` per bearing and
-    selection, and the set's worst and best."""
+    """Every life of an answer: ``(where, Pm, L10 Mrev, reason, L10 h, its reason)`` per
+    bearing and selection, and the set's worst and best."""
     for e in answer["bearings"]:
         for name, s in e["selections"].items():
-            yield (e["bearing"], name), s["Pm_N"], s["L10_Mrev"], s["L10_h"], s["reason"]
+            yield ((e["bearing"], name), s["Pm_N"], s["L10_Mrev"], s["reason"], s["L10_h"],
+                   s["hours_reason"] or s["reason"])
         i = e["interval"]
         for k, end in enumerate(("set worst", "set best")):
-            yield ((e["bearing"], end), i["Pm_N"][1 - k], i["L10_Mrev"][k], i["L10_h"][k],
-                   i["reason"][k])
+            yield ((e["bearing"], end), i["Pm_N"][1 - k], i["L10_Mrev"][k], i["reason"][k],
+                   i["L10_h"][k], i["hours_reason"] or i["reason"][k])
 
 
 def _has_reason_iff_not_finite(answer: dict) -> int:
-    """Every life has a reason exactly where one of its numbers is not finite; how many
-    have one."""
+    """Every life has a reason exactly where one of its numbers is not finite, and its
+    hours one where they are not; how many lives have one."""
     found = 0
-    for where, *numbers, reason in _lives(answer):
-        finite = all(math.isfinite(v) for v in numbers)
-        assert finite == (reason is None), (where, numbers, reason)
+    for where, pm, l10, reason, hours, hours_reason in _lives(answer):
+        finite = math.isfinite(pm) and math.isfinite(l10)
+        assert finite == (reason is None), (where, pm, l10, reason)
+        assert math.isfinite(hours) == (hours_reason is None), (where, hours)
         found += reason is not None
     return found
 
@@ -318,14 +323,14 @@ RATING = BearingRating(type="ball", C_N=30e3, C0_N=20e3)
 ])
 def test_each_way_a_life_has_no_value_carries_its_reason(p, revs, keep, words):
     """A still shaft, an unknown load, an unbounded one, no load, no instant kept while
-    the shaft turns: each leaves Pm, L10 or its hours without a finite value, and each
-    says why; a load history with a value has no reason."""
+    the shaft turns: each leaves Pm or L10 without a finite value, and each says why; a
+    load history with a value has no reason."""
     keep = None if keep is None else np.array(keep)
-    found = life.life(RATING, np.array(p), np.array(revs), 1.0, keep)
-    assert not all(math.isfinite(found[k]) for k in ("Pm_N", "L10_Mrev", "L10_h"))
+    found = life.life(RATING, np.array(p), np.array(revs), keep)
+    assert not all(math.isfinite(found[k]) for k in ("Pm_N", "L10_Mrev"))
     assert words in found["reason"]
-    fine = life.life(RATING, np.array([100.0, 0.0, 300.0]), np.array(revs) + 1.0, 1.0)
-    assert fine["reason"] is None and math.isfinite(fine["L10_h"])
+    fine = life.life(RATING, np.array([100.0, 0.0, 300.0]), np.array(revs) + 1.0)
+    assert fine["reason"] is None and math.isfinite(fine["L10_Mrev"])
 
 
 def test_every_life_of_an_answer_without_a_value_says_why(propshaft, paper):
@@ -358,7 +363,7 @@ def test_unsolved_and_unloaded_lives_say_why_in_json_and_report(monkeypatch):
     assert _has_reason_iff_not_finite(answer) == len(answer["bearings"])
     for entry in _strict(json_text(answer))["bearings"]:
         positive = entry["selections"]["positive"]
-        assert positive["L10_h"] is None and "not known at 1 of the 3" in positive["reason"]
+        assert positive["L10_Mrev"] is None and "not known at 1 of the 3" in positive["reason"]
     assert life.markdown(answer).count("positive: no value: P is not known at 1 of the 3") \
         == len(answer["bearings"])
     monkeypatch.undo()
@@ -456,3 +461,204 @@ def test_the_how_to_states_the_in_set_tolerance_and_the_models():
     assert f"`in_set_tol` ({life.IN_SET_TOL:g})" in text
     assert "not a member of the rigid set: its life may lie outside" in text
     assert "every member of the rigid solution set" not in text
+
+
+# ---------------------------------------------------------------- duty cycles
+
+TWO_BINS = """
+[[duty_cycle]]
+torque_N_m = 10.0
+speed_rpm = 600.0
+share = 0.25
+
+[[duty_cycle]]
+torque_N_m = 4.0
+speed_rpm = 2400.0
+share = 0.75
+"""
+"""A two-bin spectrum at the paper line's torque: a quarter of the time at 600 r/min."""
+
+TAPER_ISO = ", C_u_N = 4800.0, mean_diameter_m = 0.046, viscosity_mm2_s = 20.0, " \
+    "contamination = 0.5 }"
+"""ISO 281:2007's inputs of the axle pinion's tapered rollers (an SKF 30206's C_u and
+mean diameter; an oil of 20 mm^2/s at its running temperature, normal cleanliness)."""
+
+BALL_ISO = "C0_N = 38000.0\nC_u_N = 1600.0\nmean_diameter_m = 0.08\nviscosity_mm2_s = " \
+    "20.0\ncontamination = 0.5\n"
+"""The same for propshaft's SKF 6310 (C_u 1.6 kN, mean diameter 80 mm)."""
+
+
+def _scene_file(folder: Path, name: str, text: str) -> str:
+    path = folder / f"{name}.toml"
+    path.write_text(text)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def duty_scenes(tmp_path_factory):
+    """axle-pinion with its pinion's ISO 281:2007 inputs and TWO_BINS; propshaft with its
+    SKF 6310s' and one bin at its own torque and 600 r/min."""
+    folder = tmp_path_factory.mktemp("duty")
+    pinion = builtin_text("axle-pinion")
+    assert pinion.count("e = 0.37 }") == 2
+    propshaft = builtin_text("propshaft")
+    assert propshaft.count("C0_N = 38000.0\n") == 2
+    one = "\n[[duty_cycle]]\ntorque_N_m = 2500.0\nspeed_rpm = 600.0\nshare = 1.0\n"
+    return {"pinion": _scene_file(folder, "pinion", pinion.replace("e = 0.37 }",
+                                                                   "e = 0.37" + TAPER_ISO)
+                                  + TWO_BINS),
+            "propshaft": _scene_file(folder, "propshaft", propshaft.replace(
+                "C0_N = 38000.0\n", BALL_ISO) + one),
+            "folder": folder}
+
+
+@pytest.fixture(scope="module")
+def spectrum(duty_scenes):
+    return life.study(duty_scenes["pinion"], 3)
+
+
+def test_bins_combine_by_palmgren_miner_with_hours_at_the_mean_speed(spectrum):
+    """Each bearing's L10 = 1 / sum(u_i / L10_i) with u_i = t_i n_i / sum t_j n_j from its
+    shaft's speed in each bin, its Pm ISO 281's p-mean over the bins' revolutions, its
+    hours L10 1e6 / (60 n_m) at the time-weighted mean speed, written out here."""
+    assert spectrum["duty_cycle"]["mean_speed_rpm"] == pytest.approx(0.25 * 600 + 0.75 * 2400)
+    shares = [0.25, 0.75]
+    for e in spectrum["bearings"]:
+        speeds = e["speed_rpm"]
+        assert speeds == pytest.approx([600.0, 2400.0], rel=1e-3)  # a Cardan line's mean
+        mean = shares[0] * speeds[0] + shares[1] * speeds[1]
+        u = [shares[k] * speeds[k] / mean for k in (0, 1)]
+        assert e["revolution_shares"] == pytest.approx(u, rel=1e-12)
+        power = e["rating"]["p"]
+        for name, sel in e["selections"].items():
+            per_bin = [b["selections"][name] for b in e["bins"]]
+            l10 = 1 / (u[0] / per_bin[0]["L10_Mrev"] + u[1] / per_bin[1]["L10_Mrev"])
+            pm = (u[0] * per_bin[0]["Pm_N"] ** power + u[1] * per_bin[1]["Pm_N"] ** power
+                  ) ** (1 / power)
+            assert sel["L10_Mrev"] == pytest.approx(l10, rel=1e-10), (e["bearing"], name)
+            assert sel["Pm_N"] == pytest.approx(pm, rel=1e-12)
+            assert sel["L10_h"] == pytest.approx(l10 * 1e6 / (60 * mean), rel=1e-12)
+
+
+def test_every_rigid_selection_lies_in_the_set_per_bin_and_combined(spectrum):
+    """Per bin and over the spectrum, each rigid selection's Pm lies between the set's
+    (in_set, computed) and its L10 between the set's worst and best."""
+    assert set(spectrum["selections"]) == set(life.SELECTIONS)
+    for e in spectrum["bearings"]:
+        for where in (*e["bins"], e):
+            worst, best = where["interval"]["L10_Mrev"]
+            for name, sel in where["selections"].items():
+                assert sel["in_set"]["inside"], (e["bearing"], name)
+                assert worst * (1 - 1e-6) <= sel["L10_Mrev"] <= best * (1 + 1e-6)
+
+
+def test_modified_life_per_bin_and_combined(spectrum):
+    """a_ISO per bin from that bin's Pm and the shaft's speed (ISO 281:2007, through
+    bearing_life), L_nm = 1 / sum(u_i / L_nm,i), in hours at the mean speed; a bearing
+    whose rating lacks the inputs says so instead."""
+    rated_iso = 0
+    for e in spectrum["bearings"]:
+        rating = BearingRating(**{k: v for k, v in e["rating"].items()
+                                  if k not in ("p", "X_Y_e")},
+                               **dict(zip("XYe", e["rating"]["X_Y_e"]))
+                               if isinstance(e["rating"]["X_Y_e"], list) else {})
+        u, mean = e["revolution_shares"], e["mean_speed_rpm"]
+        for name, sel in e["selections"].items():
+            if rating.C_u_N is None:
+                assert sel["L_nm_Mrev"] is None or math.isnan(sel["L_nm_Mrev"])
+                assert "no ISO 281:2007 inputs" in sel["modified_reason"]
+                continue
+            rated_iso += 1
+            bins = [b["selections"][name] for b in e["bins"]]
+            for b, n in zip(bins, e["speed_rpm"]):
+                a_iso, kappa, _ = iso.life_modification_factor(rating, b["Pm_N"], n)
+                assert (b["a_ISO"], b["kappa"]) == pytest.approx((a_iso, kappa))
+                assert b["L_nm_Mrev"] == pytest.approx(a_iso * b["L10_Mrev"])
+            l_nm = 1 / sum(ui / b["L_nm_Mrev"] for ui, b in zip(u, bins))
+            assert sel["L_nm_Mrev"] == pytest.approx(l_nm, rel=1e-12)
+            assert sel["L_nm_h"] == pytest.approx(l_nm * 1e6 / (60 * mean), rel=1e-12)
+            assert sel["a_ISO"] == [b["a_ISO"] for b in bins]
+    assert rated_iso == 2 * len(life.SELECTIONS)
+
+
+def test_a_spectrum_s_report_warns_and_says_why(spectrum):
+    """Simulations not run (in words), the minimum-load warning naming the bearing and
+    its bins, the light-load sentence kept, strict JSON, a figure in hours."""
+    assert set(spectrum["not_run"]) == set(SIMULATED)
+    assert all("quasi-static" in why for why in spectrum["not_run"].values())
+    text = life.markdown(spectrum)
+    below = [e for e in spectrum["bearings"] if e["minimum_load"]["below"]]
+    assert below and all(e["minimum_load"]["bins"] == [1, 2] for e in below)
+    for e in below:
+        assert f"**{e['bearing']}** in bin(s) 1, 2" in text
+    assert "0,02 C on roller bearings" in text and "lightly loaded" in text
+    assert "input.far, input.near, L_nm: bins 1, 2: no ISO 281:2007 inputs" in text
+    assert _strict(json_text(spectrum))["bearings"][0]["kappa"] == [None, None]
+    with images.styled():
+        fig = life.figure(spectrum)
+    assert "[h]" in fig.axes[0].get_xlabel() and images.print_problems(fig) == []
+
+
+def test_one_bin_is_a_speed_rpm_run(duty_scenes, capsys):
+    """A scene's one bin at its own torque and 600 r/min rates as --speed-rpm 600 does,
+    to the digit; --reliability 99 scales L_nm by ISO 281:2007's a1 = 0.25."""
+    scene = duty_scenes["propshaft"]
+    runs = {}
+    for extra in ([], ["--speed-rpm", "600"], ["--speed-rpm", "600", "--reliability", "99"]):
+        assert main(["life", scene, "--instants", "3", "--json", "--quiet", *extra]) == 0
+        runs[" ".join(extra)] = _strict(capsys.readouterr().out)
+    own, speed, sure = runs.values()
+    assert own["duty_cycle"]["source"] == "the scene's [[duty_cycle]]"
+    assert speed["duty_cycle"]["source"].startswith("--speed-rpm 600")
+    assert sure["duty_cycle"]["a1"] == 0.25
+    for a, b, c in zip(own["bearings"], speed["bearings"], sure["bearings"]):
+        for name, sel in a["selections"].items():
+            for key in ("Pm_N", "L10_Mrev", "L10_h", "L_nm_Mrev"):
+                assert sel[key] == b["selections"][name][key], (a["bearing"], name, key)
+            if sel["L_nm_Mrev"] is not None:
+                assert c["selections"][name]["L_nm_Mrev"] == pytest.approx(
+                    0.25 * sel["L_nm_Mrev"], rel=1e-12)
+
+
+def test_a_window_gives_no_hours_and_says_why(propshaft):
+    """Without a duty cycle every life's hours and modified life are null, each with its
+    reason beside it."""
+    answer = _strict(json_text(propshaft))
+    assert answer["duty_cycle"] is None and answer["hours_reason"] == life_duty.NO_HOURS
+    for e in answer["bearings"]:
+        for lives in (*e["selections"].values(), e["interval"]):
+            assert lives["L10_h"] in (None, [None, None])
+            assert lives["hours_reason"] == life_duty.NO_HOURS
+            assert lives["modified_reason"] == life_duty.NO_SPEED
+
+
+@pytest.mark.parametrize("text, words", [
+    (None, "cannot be read"),
+    ("[[duty_cycle]\n", "not valid TOML"),
+    ("name = 'x'\n" + TWO_BINS, "holds name"),
+    ("", "no [[duty_cycle]] bin"),
+    (TWO_BINS.replace("share = 0.75", "share = -0.75"), "duty_cycle[1].share"),
+    (TWO_BINS.replace("share = 0.75", "share = 0.5"), "sum to 0.75"),
+    (TWO_BINS.replace("speed_rpm = 600.0", "speed = 600.0"), "unknown key"),
+])
+def test_a_bad_duty_cycle_file_is_one_line(text, words, tmp_path, capsys):
+    path = tmp_path / "duty.toml"
+    if text is not None:
+        path.write_text(text)
+    assert main(["life", "propshaft", "--duty-cycle", str(path), "--json"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and words in err and str(path) in err, err
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--duty-cycle", "x.toml", "--speed-rpm", "600"], "not allowed with argument"),
+    (["--speed-rpm", "0"], "expected a speed"),
+    (["--speed-rpm", "nan"], "expected a finite number"),
+    (["--reliability", "80"], "80 % is outside 90 to"),
+    (["--reliability", "99.99"], "Table 12"),
+    (["--reliability", "high"], "expected a finite number"),
+])
+def test_bad_spectrum_options_are_one_line(extra, words, capsys):
+    assert main(["life", "propshaft", "--json", *extra]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and words in err, err
