@@ -18,7 +18,7 @@ package's ``solve`` — conversion, the solver, the checks — split in every ro
 - **Two accuracy views on the same solves** (:mod:`.qpbench_harness`): the QPs of those
   instants (least norms as QPs) through every qpsolvers backend at qpbenchmark's four
   settings, each solve scored by *solver optimality* (qpbenchmark's absolute measures
-  and success rule, :mod:`cardan_forces.solvers.qp_measures`) and by *force accuracy*
+  measures, :mod:`cardan_forces.solvers.judge`, and success rule) and by *force accuracy*
   (the package's physics), with the failing rule named. ``--harness qpbenchmark`` also
   exports them as a test set and runs qpbenchmark itself, its success and runtime
   tables beside the package's.

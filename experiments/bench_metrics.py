@@ -3,9 +3,9 @@ fronts, Dolan-Moré performance profiles, shifted geometric means, overhead: the
 measurements the bench reports (what a developer's check wants of them is
 :mod:`.bench_targets`).
 
-The ladder's accuracy is the package's own view (:mod:`cardan_forces.solvers.
-optimality`, relative measures; not qpbenchmark's, which are absolute and live in
-:mod:`cardan_forces.solvers.qp_measures`): a row succeeds at level ``eps`` when it has
+The ladder's accuracy is the package's own view (relative measures,
+:mod:`cardan_forces.solvers.judge`; not qpbenchmark's absolute ones, which the judge
+also gives): a row succeeds at level ``eps`` when it has
 an answer and every measure it has — primal (the worst force residual relative to
 ``||b||``), dual residual relative to the stationarity terms, duality (or objective)
 gap relative to the objective, and the distance to the reference only where the
@@ -24,10 +24,12 @@ import math
 
 import numpy as np
 from cardan_forces.solvers import Status
-from cardan_forces.solvers.qp_measures import SHIFT_S
 from cardan_forces.solvers.settings import SETTINGS
 
 from .bench_run import MEASURES, SPLIT, TIME_FLOOR_S
+
+SHIFT_S = 10.0
+"""qpbenchmark's shift of the shifted geometric mean of runtimes (``sh = 10``)."""
 
 CLOCKS = {"solver": "solve_s", "end_to_end": "time_s"}
 """The two times of a row: the solver's own call, and the package's whole ``solve``;

@@ -26,7 +26,7 @@ from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.formulations.problems import LCP, LS, NLS, QP
 from cardan_forces.solvers import Residuals, available, backends_for, solve
 from cardan_forces.solvers import get as get_backend
-from cardan_forces.solvers.optimality import objective_value
+from cardan_forces.solvers.judge import objective_value
 from cardan_forces.solvers.registry import batch_backends, solve_batch
 from cardan_forces.solvers.settings import REFERENCE_TOL
 from cardan_forces.solvers.stacking import Stacks, stack_all

@@ -4,10 +4,10 @@
 qpbenchmark's four settings (:mod:`cardan_forces.solvers.settings`) and scores
 every solve twice:
 
-- **solver optimality** (:mod:`cardan_forces.solvers.qp_measures`): qpbenchmark's
+- **solver optimality** (:mod:`cardan_forces.solvers.judge`): qpbenchmark's
   absolute primal residual, dual residual and duality gap of the QP the solver
   received, with the solver's own ``found`` and multipliers; success as qpbenchmark's
-  (found, and all three strictly below the setting's tolerance);
+  (found, and all three strictly below the setting's tolerance, :func:`succeeds`);
 - **force accuracy** (the package's physics, ``ForceChecks.residuals``): equilibrium
   ``||Ax - b|| / ||b||``, pulling unilateral forces, end-face complementarity and cones,
   each relative to ``||b||``, and the distance to a reference answer where the optimum
@@ -16,7 +16,7 @@ every solve twice:
 A QP solve here is qpbenchmark's own call (``qpsolvers.solve_problem`` on the problem
 with the setting's options, timed around that call alone, sparse conversion outside
 the timer), so its ``runtime_s`` is what qpbenchmark records; the force view is then the
-package's :func:`~cardan_forces.solvers.record.finalize` of that same answer.
+package's :func:`~cardan_forces.solvers.judge.finalize` of that same answer.
 :func:`run_qpbenchmark` runs qpbenchmark itself (its ``run`` and ``Results``) on the
 exported test set, for its success and runtime tables.
 """
@@ -35,21 +35,46 @@ from pathlib import Path
 
 import numpy as np
 from cardan_forces.formulations.problems import Conic
-from cardan_forces.solvers import get
-from cardan_forces.solvers import qp_measures as qm
-from cardan_forces.solvers.checks import finalize
+from cardan_forces.solvers import get, judge
 from cardan_forces.solvers.conversions import convert
-from cardan_forces.solvers.optimality import unique_optimum
 from cardan_forces.solvers.qpsolvers_ import conic_duals
 from cardan_forces.solvers.record import ACCEPT, Outcome, Residuals, Status
 from cardan_forces.solvers.registry import has_profile, profile, qpbenchmark_options, with_warnings
-from cardan_forces.solvers.settings import SETTINGS
+from cardan_forces.solvers.settings import SETTINGS, Setting
 
 from . import progress
+from .bench_metrics import SHIFT_S, shifted_geometric_mean
 from .export import as_qp, class_name
 
 FORCE_LEVEL = ACCEPT
 """Largest relative force residual of a force-accurate answer (the package's ``ACCEPT``)."""
+
+
+def succeeds(found, primal, dual, gap, setting: Setting):
+    """The success rule of qpbenchmark, elementwise: the solver reported a solution and the
+    primal residual, dual residual and duality gap are each strictly below the
+    setting's tolerance (a NaN measure fails).
+    """
+    tol = setting.tolerance
+    return (np.asarray(found, bool) & (np.asarray(primal) < tol) & (np.asarray(dual) < tol)
+            & (np.asarray(gap) < tol))
+
+
+def failed_rule(found: bool, measures: dict[str, float], setting: Setting) -> str:
+    """Which part of :func:`succeeds` a run fails (``""``: none): ``"not found"`` or the
+    measures at or above the tolerance, joined by ``+``.
+    """
+    if not found:
+        return "not found"
+    return "+".join(k for k in judge.MEASURES if not measures[k] < setting.tolerance)
+
+
+def runtime_for_mean(found, runtime_s, setting: Setting):
+    """The time-limit rule of qpbenchmark, elementwise: a run the solver reports as not found
+    counts as the setting's time limit in the shifted geometric mean (a found run counts
+    its time, whatever its accuracy).
+    """
+    return np.where(np.asarray(found, bool), np.asarray(runtime_s, float), setting.time_limit_s)
 
 
 def qpsolvers_problem(qp, solver: str):
@@ -91,10 +116,10 @@ def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
         runtime = time.perf_counter() - start
     message = with_warnings(message, caught)
     found = bool(sol.found)
-    measured = qm.qp_residuals(qp, found, sol.x, sol.y, sol.z, sol.z_box)
+    measured = judge.qp_residuals(qp, found, sol.x, sol.y, sol.z, sol.z_box)
     duals = conic_duals(qp, sol) if sol.x is not None else None
     status = "solved" if found else ("inaccurate" if sol.x is not None else "failed")
-    record = finalize(problem, backend, Outcome(status, sol.x, message=message,
+    record = judge.finalize(problem, backend, Outcome(status, sol.x, message=message,
                                                 solve_s=runtime, y=duals), reference=reference)
     solver_s = runtime if sol.solve_time is None else float(sol.solve_time)
     return _row(problem, backend, setting, found, measured, record, runtime, solver_s, began)
@@ -103,7 +128,7 @@ def solve_both(problem, backend: str, setting: str, reference=None) -> dict:
 def solve_conic_both(problem, backend: str, setting: str, reference=None) -> dict:
     """One solve of a conic ``problem`` by backend ``backend`` (Clarabel's own API) at
     qpbenchmark setting ``setting``: solver optimality is the conic analogue (absolute
-    KKT residuals of the standard form, :func:`~cardan_forces.solvers.qp_measures.
+    KKT residuals of the standard form, :func:`~cardan_forces.solvers.judge.
     solver_optimality`), ``found`` the solver's own ``Solved``; one row.
     """
     began = time.perf_counter()
@@ -113,9 +138,9 @@ def solve_conic_both(problem, backend: str, setting: str, reference=None) -> dic
     except Exception as exc:  # a failing solver is a solve not found
         outcome = Outcome("failed", None, message=f"{type(exc).__name__}: {exc}")
     found = outcome.status == "solved"
-    measured = (qm.solver_optimality(received, outcome.z, outcome.y) if found
-                else dict.fromkeys(qm.MEASURES, math.inf))
-    record = finalize(problem, backend, outcome, reference=reference)
+    measured = (judge.solver_optimality(received, outcome.z, outcome.y) if found
+                else dict.fromkeys(judge.MEASURES, math.inf))
+    record = judge.finalize(problem, backend, outcome, reference=reference)
     return _row(problem, backend, setting, found, measured, record,
                 outcome.setup_s + outcome.solve_s, outcome.solve_s, began)
 
@@ -126,14 +151,14 @@ def _row(problem, backend, setting, found, measured, record, runtime, solver_s,
     record's message (the solver's notes and warnings).
     """
     force = {k: float(record.residuals[k]) for k in Residuals.KEYS}
-    if record.residuals.reference is not None and unique_optimum(problem):
+    if record.residuals.reference is not None and judge.unique_optimum(problem):
         force["distance"] = float(record.residuals.reference)
     chosen = SETTINGS[setting]
     return {
         "formulation": problem.formulation, "solver": backend, "setting": setting,
-        "found": found, **measured, "solver_ok": bool(qm.succeeds(found, *measured.values(),
+        "found": found, **measured, "solver_ok": bool(succeeds(found, *measured.values(),
                                                                   chosen)),
-        "solver_rule": qm.failed_rule(found, measured, chosen), **force,
+        "solver_rule": failed_rule(found, measured, chosen), **force,
         "force_ok": record.status.has_answer
                     and all(v <= FORCE_LEVEL for v in force.values()),
         "force_rule": force_rule(record.status, force),
@@ -199,7 +224,7 @@ def package_tables(rows: list[dict]) -> list[dict]:
     for solver, setting in keys:
         mine = [r for r in rows if (r["solver"], r["setting"]) == (solver, setting)]
         chosen = SETTINGS[setting]
-        times = qm.runtime_for_mean([r["found"] for r in mine], [r["runtime_s"] for r in mine],
+        times = runtime_for_mean([r["found"] for r in mine], [r["runtime_s"] for r in mine],
                                     chosen)
         out.append({
             "solver": solver, "setting": setting, "problems": len(mine),
@@ -207,7 +232,7 @@ def package_tables(rows: list[dict]) -> list[dict]:
             "solver_failures": _count(r["solver_rule"] for r in mine),
             "force_success": 100.0 * np.mean([r["force_ok"] for r in mine]),
             "force_failures": _count(r["force_rule"] for r in mine),
-            "runtime_sgm_s": qm.shifted_geometric_mean(times),
+            "runtime_sgm_s": shifted_geometric_mean(times),
         })
     return out
 
@@ -267,7 +292,7 @@ def run_qpbenchmark(path: Path, solvers, results: Path) -> list[dict]:
     success = found.build_success_rate_df({k: t.primal for k, t in tol.items()},
                                           {k: t.dual for k, t in tol.items()},
                                           {k: t.gap for k, t in tol.items()})
-    runtime = found.build_shgeom_df("runtime", qm.SHIFT_S,
+    runtime = found.build_shgeom_df("runtime", SHIFT_S,
                                     {k: t.runtime for k, t in tol.items()})
     return [{"solver": f"qpsolvers-{solver}", "setting": setting,
              "success": float(success.at[solver, setting]),

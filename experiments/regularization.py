@@ -37,7 +37,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.formulations import SELECTION, where
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.solvers import newton_
-from cardan_forces.solvers.batch import finalize_batch
+from cardan_forces.solvers.judge import finalize_batch
 from cardan_forces.solvers.registry import solve_batch
 
 from . import files, images

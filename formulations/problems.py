@@ -194,7 +194,7 @@ class Scaled:
     end-face pairs ``(a, b)`` carried as one signed force in column ``a``, with
     ``F_a = max(z_a, 0)``, ``F_b = max(-z_a, 0)`` (the conic compliance's pairs).
     Called on one point; :meth:`stacked` maps the points of a run's instants at once
-    (the check pass's hook, ``solvers.record``), one product instead of a call each.
+    (the judge's hook, ``solvers.judge``), one product instead of a call each.
     """
 
     scale: float

@@ -13,7 +13,7 @@ adds a backend of one's own (or an entry point in the group ``cardan_forces.solv
 validated when registered (:class:`InvalidBackend` names the field it refuses).
 """
 
-from .checks import failed_record
+from .judge import failed_record
 from .plugins import InvalidBackend
 from .record import ACCEPT, Optimality, Outcome, Record, Residuals, Status
 from .registry import (

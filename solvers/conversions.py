@@ -1,7 +1,9 @@
 """Exact reformulations that let a backend solve a problem class it does not take directly.
 
 The chain is LS -> QP -> Conic and LP -> Conic; each step keeps ``checks``,
-``formulation`` and ``to_forces``, so the record is judged on the original forces.
+``formulation`` and ``to_forces``, so the record is judged on the original forces. A
+QP's multipliers in qpsolvers' convention map to its conic form's rows by
+:func:`qp_duals`.
 
 The reduced form (:func:`eliminate_equalities`) is a reformulation for speed: a conic
 problem without its equality rows, solved in the null space of those rows; its answers
@@ -32,6 +34,21 @@ def lp_as_conic(lp: LP) -> Conic:
 
 NEXT_STEP = {LS: (QP, LS.as_qp), QP: (Conic, QP.as_conic), LP: (Conic, lp_as_conic)}
 """One conversion step per problem class that has one: (target class, function)."""
+
+
+def qp_duals(qp, y, z, z_box) -> np.ndarray:
+    """Multipliers ``y, z, z_box`` (qpsolvers', ``P x + q + A'y + G'z + z_box = 0``) of
+    ``qp`` (a package ``QP``) as the multipliers of ``qp.as_conic()``'s rows: ``(y, z,
+    -z_box^- on finite lb, z_box^+ on finite ub)`` (``v^- = min(v, 0)``, ``v^+ =
+    max(v, 0)``), which give the same stationarity and gap terms.
+    """
+    parts = [np.asarray(v, float) for v, rows in ((y, qp.A), (z, qp.G)) if rows is not None]
+    for bound, part in ((qp.lb, np.minimum), (qp.ub, np.maximum)):
+        if bound is not None:
+            keep = np.isfinite(bound)
+            sign = -1.0 if part is np.minimum else 1.0
+            parts.append(sign * part(np.asarray(z_box, float), 0.0)[keep])
+    return np.concatenate(parts) if parts else np.zeros(0)
 
 
 def reachable(cls: type, accepts: tuple[type, ...]) -> bool:

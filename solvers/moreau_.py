@@ -30,8 +30,7 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
 from . import settings
-from .batch import BatchOutcome
-from .record import Status
+from .record import BatchOutcome, Status
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"moreau": "moreau", "moreau-warm": "moreau",

@@ -87,8 +87,7 @@ from ._newton_numpy import (
     newton_numpy,
 )
 from ._newton_state import Contacts, Params
-from .batch import BatchOutcome
-from .record import Outcome
+from .record import BatchOutcome, Outcome
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"newton": None, "newton-batched": None,

@@ -41,9 +41,8 @@ from cardan_forces.formulations.batch import LeastNormBatch
 from cardan_forces.formulations.problems import LastMade
 
 from ._batched_state import Layout, Params
-from .batch import BatchOutcome
 from .lcp_methods import lemke
-from .record import Status
+from .record import BatchOutcome, Status
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"numpy-batched": None}

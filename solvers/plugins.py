@@ -19,8 +19,7 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LCP, LP, LS, NLS, QP, Conic
 
-from .batch import BatchOutcome
-from .record import Outcome, Status
+from .record import BatchOutcome, Outcome, Status
 
 PROBLEMS = (LS, QP, LP, Conic, LCP, NLS)
 """The problem classes a backend may accept (``cardan_forces.formulations.problems``)."""

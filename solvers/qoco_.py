@@ -22,9 +22,8 @@ from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
 from . import settings
-from .batch import BatchOutcome
 from .qoco_form import CLAIM_TOL, csc_ones, layout, supports
-from .record import Outcome, Status
+from .record import BatchOutcome, Outcome, Status
 from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"qoco": "qoco", "qoco-batched": "qoco", "qoco-reduced": "qoco",

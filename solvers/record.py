@@ -1,12 +1,12 @@
-"""The solution record: what every solver call returns, judged by the package (DESIGN §3).
+"""The solution record: what an adapter hands back and what a judged run holds (DESIGN §3).
 
-An adapter reports an :class:`Outcome` in the solver's own variable ``z``; the check
-pass (:mod:`.checks`) maps it to forces, measures its residuals and optimality and
-decides the final :class:`Status` by the one status rule here (:func:`judge`). The
-solver's word is not taken: an answer is ``solved`` exactly where the package's own
-measures of it, primal residual, dual residual and gap, are all within :data:`ACCEPT`
-(only the primal residual for a root finding, which has no multipliers), else
-``inaccurate``; a success with NaN or inf output becomes ``failed``.
+Data only. An adapter reports an :class:`Outcome` (a batched backend a
+:class:`BatchOutcome`) in the solver's own variable ``z``; the judge (:mod:`.judge`)
+maps it to forces, measures it and decides its :class:`Status`. What a status means:
+``solved`` exactly where the package's own measures of the answer, primal residual,
+dual residual and gap, are all within :data:`ACCEPT` (only the primal residual for a
+root finding, which has no multipliers), else ``inaccurate``; a success with NaN or inf
+output is ``failed``.
 
 A run's results are columns, :class:`Results` (one array or tuple per field, one entry
 per instant); a per-instant :class:`Record` is made from them on demand.
@@ -73,14 +73,10 @@ class Status(str, enum.Enum):
         return format(self.value, spec)
 
 
-_AS_SOLVED = np.array(Status.SOLVED, object)
-_AS_INACCURATE = np.array(Status.INACCURATE, object)
-"""Two members as 0-d object arrays, for numpy: ``np.where`` then puts the members
-themselves in its result (a bare member, a ``str``, it would turn into a string)."""
-
 ACCEPT = 1e-6
 """Largest relative measure of a solved record: each residual (equilibrium, sign,
-complementarity, cone), the dual residual and the gap (:mod:`.optimality`)."""
+complementarity, cone), the dual residual and the gap (:mod:`.judge` measures them,
+its status rule compares them with this level)."""
 
 
 class _Measures(Mapping):
@@ -142,7 +138,7 @@ class Residuals(_Measures):
 
 @dataclass(frozen=True, eq=False)
 class Optimality(_Measures):
-    """Optimality of an answer (:mod:`~.optimality`): ``primal`` (the worst residual),
+    """Optimality of an answer (:mod:`~.judge`): ``primal`` (the worst residual),
     ``dual`` (stationarity and dual-cone violation), ``gap`` (duality gap, or objective
     gap to a given optimal value) and ``distance`` (to the reference, only where the
     optimum is unique). A measure the record has none of is ``None`` and absent from the
@@ -163,14 +159,6 @@ class Optimality(_Measures):
             return False
         return np.all([np.asarray(v) <= level for v in present], axis=0)
 
-    def optimal(self) -> bool | np.ndarray:
-        """Primal, dual and gap all within :data:`ACCEPT` (``False`` if one is absent or
-        NaN): the optimality conditions of the module :mod:`.optimality` hold.
-        """
-        if self.primal is None or self.dual is None or self.gap is None:
-            return False
-        return np.all([np.asarray(v, float) <= ACCEPT for v in (self.primal, self.dual,
-                                                                  self.gap)], axis=0)
 
 
 @dataclass(frozen=True)
@@ -195,6 +183,28 @@ class Outcome:
 
 
 @dataclass(frozen=True)
+class BatchOutcome:
+    """What a batched backend hands back, per instant (T rows).
+
+    ``z`` is the solver's variable (the forces in N for a
+    :class:`~cardan_forces.formulations.batch.LeastNormBatch`);
+    ``y`` the multipliers in the batch's conic rows (Clarabel's sign convention; for
+    a least-norm batch the rows ``A x = b`` then ``-x_j <= 0`` for the signed
+    columns), ``None`` if the solver gives none; ``stages`` seconds per stage of the
+    whole batch; ``messages`` one per instant (or empty).
+    """
+
+    status: np.ndarray
+    z: np.ndarray
+    y: np.ndarray | None
+    iterations: np.ndarray
+    setup_s: float
+    solve_s: float
+    stages: dict[str, float] = field(default_factory=dict)
+    messages: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
 class Record:
     """One solver's answer to one problem, with residuals measured by the package.
 
@@ -208,11 +218,11 @@ class Record:
     ``w``) or ``"none"``; ``gap_kind`` whether ``gap`` is the duality gap or the
     objective gap to a given optimal value. ``checks_s`` is the time of these checks.
 
-    Two views of the same answer: ``optimality`` is the package's (relative to the
-    data, :mod:`.optimality`), ``solver_optimality`` the solver's (absolute primal,
-    dual residual and duality gap of the problem the backend received, with the
-    solver's own multipliers, :mod:`.qp_measures`; ``None`` where the solver gave no
-    multipliers or the problem has no conic form). ``solver_status`` is the status the
+    Two views of the same answer, both measured by :mod:`.judge`: ``optimality`` is the
+    package's (relative to the data), ``solver_optimality`` the solver's (absolute
+    primal, dual residual and duality gap of the problem the backend received, with the
+    solver's own multipliers; ``None`` where the solver gave no multipliers or the
+    problem has no conic form). ``solver_status`` is the status the
     adapter reported, before the package judged it. Times (s): ``solve_s`` the solver's
     own, ``setup_s`` conversion and setup, ``checks_s`` the checks, ``wall_s`` the
     package's whole call (end to end; 0 for a record not made by ``solve``).
@@ -437,53 +447,8 @@ def _present(columns: _Measures, k: int, keep=()) -> dict[str, float]:
     return {name: value for name, value in found.items() if value == value or name in keep}
 
 
-
 def _json_float(value: float) -> float | str:
     value = float(value)
     return value if math.isfinite(value) else str(value)
 
 
-def judge(status, optimality: Optimality, duals):
-    """The package's status rule, elementwise: the one place a record is made ``solved``
-    (every path, per instant or batched, decides by it).
-
-    An answer (the solver's ``solved`` or ``inaccurate``) is ``solved`` exactly where
-    its primal residual, dual residual and gap are all within :data:`ACCEPT`
-    (:meth:`Optimality.optimal`), whatever the solver said: feasibility alone does not
-    make an answer the optimum, and a stalled solver's iterate may be one. Where the
-    record has no multipliers (``duals`` ``"none"``: a root finding, whose only measure
-    is its residual), a reported ``solved`` stays so while its primal residual is
-    within :data:`ACCEPT` and nothing can confirm a reported ``inaccurate``. Every other
-    answer is ``inaccurate``; a status without an answer is kept. ``duals``: where the
-    multipliers came from, one source for all or one per instant.
-    """
-    status = np.asarray(status, object)
-    reported = status == _AS_SOLVED
-    answered = reported | (status == _AS_INACCURATE)
-    primal = np.asarray(optimality.primal if optimality.primal is not None else np.inf,
-                        float)
-    optimal = np.where(np.asarray(duals, object) != "none", optimality.optimal(),
-                       reported & (primal <= ACCEPT))
-    return np.where(answered, np.where(optimal, _AS_SOLVED, _AS_INACCURATE), status)
-
-
-def judged_notes(reported, status, residuals, optimality: Optimality) -> dict[int, str]:
-    """Why :func:`judge` changed the statuses it changed, ``{instant: note}``: a reported
-    ``inaccurate`` confirmed, or what keeps an answer from ``solved``: its worst
-    residual where that is above :data:`ACCEPT`, else its dual residual or its gap, the
-    first above it (``residuals``: each of :attr:`Residuals.KEYS` as a (T,) array).
-    """
-    status = np.asarray(status, object)
-    changed = np.flatnonzero(status != np.asarray(reported, object)).tolist()
-    return {k: "confirmed by the package's primal, dual and gap measures"
-            if status[k] is Status.SOLVED else _above(k, residuals, optimality)
-            for k in changed}
-
-
-def _above(k: int, residuals, optimality: Optimality) -> str:
-    key = max(Residuals.KEYS, key=lambda name: residuals[name][k])
-    if not residuals[key][k] <= ACCEPT:
-        return f"{key} residual {residuals[key][k]:.1e} > {ACCEPT:.0e}"
-    measured = {"dual residual": float(optimality.dual[k]), "gap": float(optimality.gap[k])}
-    name = next((n for n, v in measured.items() if not v <= ACCEPT), "gap")
-    return f"{name} {measured[name]:.1e} > {ACCEPT:.0e}"

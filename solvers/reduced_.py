@@ -28,9 +28,8 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
-from .batch import BatchOutcome
 from .conversions import Reduced, eliminate_equalities
-from .record import Outcome
+from .record import BatchOutcome, Outcome
 from .stacking import blocks, cone_layout
 
 if TYPE_CHECKING:  # the registry imports this module to apply it

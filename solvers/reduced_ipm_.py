@@ -40,9 +40,8 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
 from . import reduced_ipm, settings
-from .batch import BatchOutcome
 from .conversions import RANK_RTOL, eliminate_equalities
-from .record import Status
+from .record import BatchOutcome, Status
 from .reduced_ import fold
 from .registry import Backend, solve_unchecked
 

@@ -37,15 +37,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from cardan_forces.formulations.batch import ConicBatch
 
 from cardan_forces.util.names import did_you_mean
 
 from . import plugins, reduced_, settings
-from .batch import BatchOutcome, ConicBatch, finalize_batch
-from .checks import failed_record, finalize_all
 from .conversions import convert, reachable
+from .judge import failed_record, finalize_all, finalize_batch
 from .plugins import InvalidBackend, blame
-from .record import Outcome, Record, Results, Status
+from .record import BatchOutcome, Outcome, Record, Results, Status
 from .stacking import Stacks
 
 ADAPTERS = ("numpy_kkt_", "scipy_", "qpsolvers_", "cvxpy_", "clarabel_", "qoco_", "lcp_",

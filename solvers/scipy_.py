@@ -24,7 +24,7 @@ from cardan_forces.formulations.problems import LP, LS, NLS, QP
 from cardan_forces.util.rank import numerical_rank
 
 from . import settings
-from .qp_measures import qp_duals
+from .conversions import qp_duals
 from .record import Outcome, Status
 from .registry import Backend
 

@@ -117,8 +117,8 @@ def tikhonov_weight(tol: float | None) -> float:
 class Setting:
     """One of qpbenchmark's solver settings: the absolute tolerance it asks of the
     solver (``None``: the solver's defaults), the tolerance it judges primal, dual and
-    gap by (strictly below, :func:`~.qp_measures.succeeds`), and the time limit (s)
-    given to solvers that take one and counted for a run the solver reports as not found.
+    gap by (strictly below: qpbenchmark's success rule), and the time limit (s) given
+    to solvers that take one and counted for a run the solver reports as not found.
     """
 
     name: str

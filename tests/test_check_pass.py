@@ -10,7 +10,7 @@ import pytest
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.formulations import batch as fbatch
-from cardan_forces.solvers.checks import finalize, finalize_all
+from cardan_forces.solvers.judge import finalize, finalize_all
 from cardan_forces.solvers.record import Outcome, Results
 from cardan_forces.solvers.registry import solve_unchecked
 from cardan_forces.solvers.stacking import stack_all

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from cardan_forces.experiments import export, qpbench_harness
 from cardan_forces.formulations.problems import Conic
-from cardan_forces.solvers import qp_measures, settings, solve
+from cardan_forces.solvers import judge, settings, solve
 from cardan_forces.solvers.conversions import convert
 
 
@@ -42,7 +42,7 @@ def test_conic_file_in_its_documented_form_holds_the_optimum(exported):
             record = solve(problems[name], "clarabel", tol=1e-10)
             z = np.asarray(record.z, float)
             slack = (b - A @ z)[None]
-            assert qp_measures.cone_violation(cones, slack)[0] <= 1e-8 * max(1, np.abs(b).max())
+            assert judge.cone_violation(cones, slack)[0] <= 1e-8 * max(1, np.abs(b).max())
             original = convert(problems[name], (Conic,))
             assert 0.5 * z @ P @ z + q @ z == pytest.approx(
                 0.5 * z @ np.asarray(original.P if original.P is not None else P) @ z

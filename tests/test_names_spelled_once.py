@@ -34,7 +34,7 @@ ALLOWED = {
                                                     "the determinacy's JSON",
     (Path("solvers/lcp_.py"), "lcp"): "the solver family of the LCP backends",
     (Path("solvers/numpy_batched_.py"), "lcp"): "the batched least norm's LCP stage",
-    (Path("solvers/checks.py"), "lcp"): "the kind of dual an LCP problem's record holds",
+    (Path("solvers/judge.py"), "lcp"): "the kind of dual an LCP problem's record holds",
     **{(Path("experiments/export.py"), n): "export's default set, keyed by name"
        for n in ("min_norm", "positive", "compliance")},
 }

@@ -143,7 +143,7 @@ import numpy as np
 from cardan_forces.formulations.batch import LeastNormBatch
 from cardan_forces.formulations.problems import LS
 from cardan_forces.solvers import Backend, Outcome
-from cardan_forces.solvers.batch import BatchOutcome
+from cardan_forces.solvers.record import BatchOutcome
 
 print("a plugin that talks while it loads")
 

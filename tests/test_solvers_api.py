@@ -315,7 +315,7 @@ def test_a_non_finite_answer_fails_but_keeps_the_solvers_word():
     whose ``solver_status`` is still what the adapter said (the status before the
     package judged it), with the reason in the message.
     """
-    from cardan_forces.solvers.checks import finalize
+    from cardan_forces.solvers.judge import finalize
 
     problem = REFS["ls_min_norm"].problem
     z = np.full(len(problem.checks.names), np.nan)

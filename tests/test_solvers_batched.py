@@ -10,8 +10,8 @@ from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.problems import Conic
 from cardan_forces.solvers import available, solve
 from cardan_forces.solvers import numpy_batched_ as nb
+from cardan_forces.solvers.judge import objective_value
 from cardan_forces.solvers.lcp_methods import lemke
-from cardan_forces.solvers.optimality import objective_value
 from cardan_forces.solvers.registry import UnsupportedProblem, batch_backends, solve_batch
 
 pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
@@ -233,7 +233,7 @@ def test_a_batched_record_is_the_per_instant_record_of_the_same_answer(op):
     a moreau batch on its own gives the same record as the batch's."""
     if "moreau" not in available():
         pytest.skip("moreau not installed")
-    from cardan_forces.solvers.checks import finalize
+    from cardan_forces.solvers.judge import finalize
     from cardan_forces.solvers.record import Outcome
 
     instants = np.arange(0, 41, 10)

@@ -9,9 +9,8 @@ import numpy as np
 import pytest
 from cardan_forces.formulations.problems import LCP, LP, LS, QP, Conic, ForceChecks
 from cardan_forces.solvers import ACCEPT, Backend, Optimality, available, registry, solve
-from cardan_forces.solvers.checks import finalize
-from cardan_forces.solvers.optimality import measures, recover, unique_optimum
-from cardan_forces.solvers.record import Outcome, judge
+from cardan_forces.solvers.judge import finalize, judged_status, measures, recover, unique_optimum
+from cardan_forces.solvers.record import Outcome
 from cardan_forces.solvers.reference_problems import references
 
 
@@ -122,31 +121,31 @@ def test_min_max_like_problem_solved_by_clarabel_is_optimal_without_a_distance()
 def test_the_rule_asks_primal_dual_and_gap_of_every_answer_whatever_the_solver_said():
     good = Optimality(primal=1e-12, dual=1e-10, gap=1e-9)
     kept = ["failed", "infeasible", "unbounded"]
-    assert list(judge(kept, good, "solver")) == kept  # no answer: nothing to judge
+    assert list(judged_status(kept, good, "solver")) == kept  # no answer: nothing to judge
     for reported in ("solved", "inaccurate"):
-        assert judge(reported, good, "solver") == "solved"
+        assert judged_status(reported, good, "solver") == "solved"
         for key in ("primal", "dual", "gap"):
             for value, expected in ((0.5 * ACCEPT, "solved"), (2.0 * ACCEPT, "inaccurate"),
                                     (np.nan, "inaccurate"), (np.inf, "inaccurate")):
                 measured = Optimality(**{**good, key: value})
-                assert judge(reported, measured, "recovered") == expected
+                assert judged_status(reported, measured, "recovered") == expected
             absent = Optimality(**{k: v for k, v in good.items() if k != key})
-            assert judge(reported, absent, "solver") == "inaccurate"  # a measure it lacks
+            assert judged_status(reported, absent, "solver") == "inaccurate"  # a measure it lacks
     batch = Optimality(**{k: np.array([v, 10 * ACCEPT, v]) for k, v in good.items()})
-    assert list(judge(np.array(["inaccurate", "solved", "failed"], object), batch,
+    assert list(judged_status(np.array(["inaccurate", "solved", "failed"], object), batch,
                       "solver")) == ["solved", "inaccurate", "failed"]
 
 
 def test_without_multipliers_the_primal_residual_decides_and_nothing_is_confirmed():
     """A root finding has no dual: its reported solved stands on its residual alone, and
     its reported inaccurate cannot be confirmed."""
-    assert judge("solved", Optimality(primal=0.5 * ACCEPT), "none") == "solved"
-    assert judge("solved", Optimality(primal=2.0 * ACCEPT), "none") == "inaccurate"
-    assert judge("inaccurate", Optimality(primal=0.0), "none") == "inaccurate"
+    assert judged_status("solved", Optimality(primal=0.5 * ACCEPT), "none") == "solved"
+    assert judged_status("solved", Optimality(primal=2.0 * ACCEPT), "none") == "inaccurate"
+    assert judged_status("inaccurate", Optimality(primal=0.0), "none") == "inaccurate"
     per_instant = np.array(["solver", "none"], object)
     found = Optimality(primal=np.zeros(2), dual=np.array([1.0, np.nan]),
                        gap=np.array([1.0, np.nan]))
-    assert list(judge(np.array(["solved"] * 2, object), found, per_instant)) == \
+    assert list(judged_status(np.array(["solved"] * 2, object), found, per_instant)) == \
         ["inaccurate", "solved"]
 
 
@@ -213,7 +212,8 @@ def test_the_batched_path_follows_the_same_rule():
     """Three instants of a constructed batch: confirmed, not confirmed, reported solved;
     each batched record equals the per-instant record of the same outcome."""
     from cardan_forces.formulations.batch import conic_batch
-    from cardan_forces.solvers.batch import BatchOutcome, finalize_batch
+    from cardan_forces.solvers.judge import finalize_batch
+    from cardan_forces.solvers.record import BatchOutcome
 
     conic = _projection().as_conic()
     batch = conic_batch([conic] * 3, [0, 1, 2])
@@ -247,7 +247,7 @@ def test_checks_of_many_instants_at_once_equal_each_instant_alone():
     """finalize_all stacks problems per structure (bounds as rows never written out);
     every record must equal the one finalize gives for its instant alone, for QPs with
     bounds, a second-order cone, answers without multipliers (recovered) or with NaN."""
-    from cardan_forces.solvers.checks import finalize_all
+    from cardan_forces.solvers.judge import finalize_all
 
     rng = np.random.default_rng(3)
     problems, outcomes, refs = [], [], []
@@ -276,7 +276,7 @@ def test_checks_with_stacks_built_beforehand_equal_the_checks_without():
     """finalize_all with the problems' data stacked once (stack_all, taken at some rows)
     gives the records it gives stacking itself, answered or not (a NaN answer, a
     recovered multiplier); stacks of other problems are ignored, not misread."""
-    from cardan_forces.solvers.checks import finalize_all
+    from cardan_forces.solvers.judge import finalize_all
     from cardan_forces.solvers.stacking import stack_all
 
     rng = np.random.default_rng(5)
@@ -348,14 +348,14 @@ def test_rows_shared_by_every_instant_are_kept_once_and_give_each_instants_produ
     assert np.allclose(some.Az(z[[3, 1]]), stacked.Az(z)[[3, 1]], rtol=0, atol=1e-14)
 
 def test_every_record_carries_the_solver_view_of_the_problem_it_received():
-    """The record's solver optimality is qp_measures.solver_optimality of the received
+    """The record's solver optimality is judge.solver_optimality of the received
     problem with the solver's multipliers (absolute), beside the package's relative
     measures; the adapter's own status is kept."""
-    from cardan_forces.solvers import qp_measures
+    from cardan_forces.solvers import judge
 
     problem = _variants(1)[0]
     record = solve(problem, "clarabel")
-    expected = qp_measures.solver_optimality(problem.as_conic(), record.z, record.y)
+    expected = judge.solver_optimality(problem.as_conic(), record.z, record.y)
     assert record.solver_status == "solved"
     assert dict(record.solver_optimality) == pytest.approx(expected, rel=1e-12, abs=1e-300)
     assert record.wall_s >= record.solve_s + record.checks_s
@@ -379,7 +379,7 @@ def test_a_map_that_offers_its_stacked_form_maps_a_run_at_once_as_one_at_a_time(
     """Forces of a run whose maps offer ``stacked`` come from one call and equal the
     per-instant map's; an answer it cannot take (none given) falls back to the
     per-instant map, which names the failure."""
-    from cardan_forces.solvers.checks import finalize_all
+    from cardan_forces.solvers.judge import finalize_all
     from cardan_forces.solvers.stacking import stack_all
 
     problems = [QP(checks=_checks(np.ones((1, 3)), [1.0 + k], [True] * 3), formulation="ref",
@@ -404,7 +404,7 @@ def test_one_cone_violation_for_the_slack_and_the_multipliers():
     """K and K* by one formula: a zero row counts in K and is free in K*; a power cone's
     point on the boundary of K (``|w| = u^a x^(1-a)``) or of K* (``|w| = (u/a)^a
     (x/(1-a))^(1-a)``) is inside, and ``w`` beyond it by ``d`` is outside by ``d``."""
-    from cardan_forces.solvers.optimality import cone_violation
+    from cardan_forces.solvers.judge import cone_violation
 
     a, u, x, d = 0.3, 2.0, 5.0, 0.25
     cones = (("zero", 1), ("pow", a))
@@ -489,7 +489,8 @@ def test_batched_paths_judge_a_feasible_answer_that_is_not_optimal_as_each_insta
     """A conic batch (QP and cone) and a least-norm batch, the optimum beside a
     feasible, stationary, non-complementary answer: solved and not, as finalize says."""
     from cardan_forces.formulations.batch import CheckBatch, LeastNormBatch, conic_batch
-    from cardan_forces.solvers.batch import BatchOutcome, finalize_batch
+    from cardan_forces.solvers.judge import finalize_batch
+    from cardan_forces.solvers.record import BatchOutcome
 
     def outcome(z, y):
         return BatchOutcome(status=np.array(["solved"] * 2, object), z=np.array(z, float),

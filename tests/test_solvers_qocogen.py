@@ -17,7 +17,7 @@ from cardan_forces.driveline.loading import load_scene
 from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.problems import Conic, ForceChecks
 from cardan_forces.solvers import ACCEPT, available, solve
-from cardan_forces.solvers.optimality import objective_value
+from cardan_forces.solvers.judge import objective_value
 from cardan_forces.solvers.registry import solve_batch
 
 SOLVER = "qocogen-reduced"

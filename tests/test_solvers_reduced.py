@@ -19,7 +19,7 @@ from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.problems import Conic, ForceChecks
 from cardan_forces.solvers import ACCEPT, available, solve
 from cardan_forces.solvers.conversions import eliminate_equalities
-from cardan_forces.solvers.optimality import measures, objective_value
+from cardan_forces.solvers.judge import measures, objective_value
 from cardan_forces.solvers.registry import solve_batch
 
 FORMULATIONS = ("socp_face", "min_max", "compliance_hertz", "positive")

@@ -11,7 +11,7 @@ from cardan_forces.formulations import batch as fbatch
 from cardan_forces.formulations.convex import NotApplicable
 from cardan_forces.solvers import reduced_ipm
 from cardan_forces.solvers import reduced_ipm_ as adapter
-from cardan_forces.solvers.optimality import objective_value
+from cardan_forces.solvers.judge import objective_value
 from cardan_forces.solvers.registry import batch_backends, solve, solve_batch
 
 FORMULATIONS = ("min_max", "socp_face")
