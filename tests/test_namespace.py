@@ -160,3 +160,34 @@ def test_the_cycle_check_sees_relative_and_lazy_imports(tmp_path):
                "cardan_forces.p.c": path, "cardan_forces.p": path}
     assert _imports("cardan_forces.p.a", path, modules) == {"cardan_forces.p.b",
                                                            "cardan_forces.p.c"}
+
+
+SOLVERS = "cardan_forces.solvers"
+JUDGE_READS = {"record", "stacking", "conversions"}
+"""The solvers' modules the judge may import: the records it fills, the layout of the
+stacked problems it reads, and the conversion to the conic form it measures on."""
+
+
+def _within_solvers(module: str, modules: dict) -> set[str]:
+    """The solvers' modules (short names) that ``solvers.<module>`` imports."""
+    name = f"{SOLVERS}.{module}"
+    return {target.rpartition(".")[2] for target in _imports(name, modules[name], modules)
+            if target.startswith(SOLVERS + ".")}
+
+
+def test_one_solve_walks_down_registry_adapter_judge_data():
+    """Within the solvers layer a solve goes down: the registry dispatches to an adapter
+    (``<name>_``), the judge measures the answer, the record holds it. So the judge
+    imports no adapter, neither the registry nor its plugins, only the data it reads
+    (:data:`JUDGE_READS`); the record (plain data) and the stacked layout import
+    neither the judge nor the registry (lazy imports included)."""
+    modules = _modules()
+    adapters = {name.rpartition(".")[2] for name in modules
+                if name.startswith(SOLVERS + ".") and name.endswith("_")}
+    assert {"clarabel_", "scipy_", "numpy_batched_"} <= adapters
+    judge = _within_solvers("judge", modules)
+    assert not judge & (adapters | {"registry", "plugins"}), judge
+    assert judge <= JUDGE_READS, judge - JUDGE_READS
+    assert _within_solvers("record", modules) == set()
+    assert not _within_solvers("stacking", modules) & (adapters | {"registry", "judge"})
+    assert "judge" in _within_solvers("registry", modules)
