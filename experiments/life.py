@@ -57,12 +57,13 @@ import csv
 import dataclasses
 import math
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from cardan_forces.driveline import bearing_life as iso
 from cardan_forces.driveline import duty
 from cardan_forces.driveline.determinacy import DETERMINATE_TOL, determinacy
-from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.dynamics import Motion, simulate
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
 from cardan_forces.driveline.modes import counts
@@ -369,11 +370,20 @@ def _about(op, selections: dict, not_run, bearings, entries, motion) -> dict:
     }
 
 
+class RatedBin(NamedTuple):
+    """One duty-cycle bin rated (:func:`_rate_bin`)."""
+
+    op: Operator
+    motion: Motion
+    chosen: dict
+    entries: list
+
+
 def _spectrum_study(scene, bins: tuple, source: str, instants: int, progress,
                     reliability: float) -> dict:
     """:func:`study` over a duty cycle: each bin's steady state rated by the same
-    per-instant machinery as a window (the rigid selections, the set's envelope), the
-    bins combined per bearing (:func:`_spectrum_entry`).
+    per-instant machinery as a window (:func:`_rate_bin`), the bins combined per
+    bearing (:func:`~cardan_forces.experiments.life_duty.bearing_over_bins`).
     """
     rated_bins = []
     for k, duty_bin in enumerate(bins):
@@ -381,29 +391,37 @@ def _spectrum_study(scene, bins: tuple, source: str, instants: int, progress,
             progress(f"life: bin {k + 1}/{len(bins)}, {duty_bin.torque_N_m:g} N m at "
                      f"{duty_bin.speed_rpm:g} r/min")
         rated_bins.append(_rate_bin(scene, duty_bin, instants, progress))
-    op, motion, _, _ = rated_bins[0]
-    opened = [m for _, m, _, entries in rated_bins
-              if any(e["interval"]["open"] for e in entries)]
-    per_bearing = zip(*(entries for *_, entries in rated_bins))
+    first = rated_bins[0]
+    per_bearing = zip(*(r.entries for r in rated_bins))
     entries = [_in_set_over_bins(life_duty.bearing_over_bins(rating, list(of_bins), bins,
                                                              reliability))
-               for (_, rating), of_bins in zip(rated(op), per_bearing)]
-    summary = {name: {**_summary(first, name),
-                      "solved": sum(r[2][name].solved for r in rated_bins),
-                      "instants": sum(len(r[2][name].t) for r in rated_bins)}
-               for name, first in rated_bins[0][2].items()}
+               for (_, rating), of_bins in zip(rated(first.op), per_bearing)]
+    opened = [r.motion for r in rated_bins if any(e["interval"]["open"] for e in r.entries)]
     not_run = {PENALTY: life_duty.NOT_RUN, ENGINE: life_duty.NOT_RUN}
     return {"scene": scene.name, "instants": instants * len(bins),
-            "duty_cycle": {"source": source, "instants_per_bin": instants,
-                           "mean_speed_rpm": duty.mean_speed_rpm(bins),
-                           "reliability_percent": reliability,
-                           "a1": iso.reliability_factor(reliability),
-                           "bins": [{**dataclasses.asdict(b), "revolution_share": u,
-                                     "t_s": r[1].t}
-                                    for b, u, r in zip(bins, duty.revolution_shares(bins),
-                                                       rated_bins)]},
-                "hours_reason": None, "modified_reason": None,
-            **_about(op, summary, not_run, rated(op), entries, opened[0] if opened else motion)}
+            "duty_cycle": _spectrum_words(bins, source, rated_bins, reliability),
+            "hours_reason": None, "modified_reason": None,
+            **_about(first.op, _bins_summary(rated_bins), not_run, rated(first.op), entries,
+                     (opened or [first.motion])[0])}
+
+
+def _spectrum_words(bins: tuple, source: str, rated_bins: list, reliability: float) -> dict:
+    """The answer's ``duty_cycle``: where the bins come from, each with its share of the
+    revolutions and its instants (s), the mean speed, the reliability and its ``a1``.
+    """
+    return {"source": source, "instants_per_bin": len(rated_bins[0].op.t),
+            "mean_speed_rpm": duty.mean_speed_rpm(bins), "reliability_percent": reliability,
+            "a1": iso.reliability_factor(reliability),
+            "bins": [{**dataclasses.asdict(b), "revolution_share": u, "t_s": r.motion.t}
+                     for b, u, r in zip(bins, duty.revolution_shares(bins), rated_bins)]}
+
+
+def _bins_summary(rated_bins: list) -> dict:
+    """Each rigid selection's line of the answer over every bin's instants."""
+    return {name: {**_summary(history, name),
+                   "solved": sum(r.chosen[name].solved for r in rated_bins),
+                   "instants": sum(len(r.chosen[name].t) for r in rated_bins)}
+            for name, history in rated_bins[0].chosen.items()}
 
 
 def _in_set_over_bins(entry: dict) -> dict:
@@ -417,7 +435,7 @@ def _in_set_over_bins(entry: dict) -> dict:
     return entry
 
 
-def _rate_bin(scene, duty_bin, instants: int, progress) -> tuple:
+def _rate_bin(scene, duty_bin, instants: int, progress) -> RatedBin:
     """One bin's steady state (:func:`~cardan_forces.experiments.life_duty.bin_scene`)
     rated: its operator, motion, rigid selections' histories and bearings' entries.
     """
@@ -432,7 +450,9 @@ def _rate_bin(scene, duty_bin, instants: int, progress) -> tuple:
                               life_duty.revolutions(motion.omega[contact.shaft], period),
                               period)
                for b, (contact, rating) in enumerate(bearings)]
-    return op, motion, chosen, entries
+    return RatedBin(op, motion, chosen, entries)
+
+
 def _check_turning(scene, motion, op: Operator, bearings: list) -> None:
     """Refuse (:class:`SceneError`, one line) a scene none of whose rated bearings' shafts
     turns over the window: ISO 281 counts a life in revolutions, so none would have a
