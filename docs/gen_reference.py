@@ -378,7 +378,7 @@ def backends_markdown() -> str:
 # ---------------------------------------------------------------------- determinacy
 
 SCENES = ("paper", "paper-slip", "propshaft", "propshaft-disc", "halfshaft", "double-cardan",
-          "axle-pinion")
+          "axle-pinion", "light-truck", "transfer-output")
 """The built-in scenes the determinacy table compares; the others (``paper-fig15``,
 ``paper-fig15-axial``, ``paper-penalty``) are ``paper`` under another gravity or with its
 joints released, of ``paper``'s rigid structure."""

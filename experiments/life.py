@@ -596,21 +596,35 @@ def _ends_words(determinate: bool, slides: bool, env: dict, b: int) -> str:
 
 
 def _open_reason(motion, op) -> str:
-    """Why the set is open, from the named modes at the first instant."""
-    kinds = counts(named_modes(motion, 0, op))
+    """Why the set is open, from the named modes at the first instant: a closed loop's
+    self-stress, a free axial split between locating bearings, or a bearing pair's
+    preload (the one free mode that no release removes: the pair is the design).
+    """
+    modes = named_modes(motion, 0, op)
+    kinds = counts(modes)
     if kinds.get("closed loop"):
         return OPEN
-    return "no finite worst case: the axial split between locating bearings is free"
+    if kinds.get("axial split"):
+        return "no finite worst case: the axial split between locating bearings is free"
+    pair = next(m for m in modes if m.kind == "bearing pair")
+    return f"no finite worst case: a bearing pair's preload is free, {pair.description}"
 
 
 def _release(motion) -> dict:
     """The release the advisor proposes at the middle instant (labels and words), or
-    why there is none.
+    why there is none: where every free mode is one complementarity settles (a bearing
+    pair, end-face pairs), the pair's preload is what bounds the worst case, a value
+    the design states, not a constraint to release.
     """
     try:
         advice = advise(motion, len(motion.t) // 2)
     except SceneError as err:
         return {"labels": [], "words": f"none found: {err}"}
+    if not advice.releases:
+        return {"labels": [], "words": (
+            "none: every free mode is one complementarity settles (without preload one "
+            "bearing of a pair carries the axial load, the set's best end); the pair's "
+            "stated preload bounds the worst case")}
     return {"labels": [r.label for r in advice.releases],
             "words": "; ".join(r.words for r in advice.releases)}
 
@@ -712,8 +726,9 @@ def markdown(answer: dict) -> str:
         lines.append(f"- no catalogue data (no life): {', '.join(answer['unrated'])}")
     if answer["open"]:
         release = answer["release"]
+        labels = f" ({', '.join(release['labels'])})" if release["labels"] else ""
         lines += ["", f"**{answer['open_reason']}.** The release that bounds it: "
-                  f"{release['words']} ({', '.join(release['labels']) or 'none'})."]
+                  f"{release['words']}{labels}."]
     return "\n".join(lines) + "\n"
 
 
@@ -901,9 +916,9 @@ def _split_lines(answer: dict) -> list[str]:
 
 
 def _load_lines(answer: dict) -> list[str]:
-    """The greatest ``P`` of any selection against its bearing's ``C``, and where every
-    bearing's is below :data:`LIGHT_LOAD`, that the lives are long because the loads
-    are light.
+    """The greatest ``P`` of any selection against its bearing's ``C``, and for the
+    bearings whose greatest ``P`` is at most :data:`LIGHT_LOAD` of ``C`` (every one, or
+    those named), that their lives are long because their loads are light.
     """
     ratios = {e["bearing"]: e["peak_P_over_C"] for e in answer["bearings"]
               if math.isfinite(e["peak_P_over_C"])}
@@ -912,10 +927,15 @@ def _load_lines(answer: dict) -> list[str]:
     top = max(ratios, key=ratios.get)
     line = (f"Loads against the ratings: the greatest P of any selection is "
             f"{100 * ratios[top]:.2g} % of C ({top}).")
-    if ratios[top] <= LIGHT_LOAD:
+    light = [name for name, ratio in ratios.items() if ratio <= LIGHT_LOAD]
+    if len(light) == len(ratios):
         line += (f" Every bearing is lightly loaded (P <= {LIGHT_LOAD:g} C): ISO 281's "
                  "L10 = (C/P)^p makes these lives long because the scene's loads are "
                  "light, not because of the bearings.")
+    elif light:
+        line += (f" Lightly loaded (P <= {LIGHT_LOAD:g} C): {', '.join(light)}; ISO 281's "
+                 "L10 = (C/P)^p makes their lives long because their loads are light, "
+                 "not because of the bearings.")
     return ["", line]
 
 
