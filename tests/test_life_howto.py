@@ -73,3 +73,34 @@ def test_the_engine_spectrum_example_is_what_the_helper_gives():
     assert "efficiency=0.96)" in PAGE
     assert f"sum t_i n_i = {duty.mean_speed_rpm(bins):.0f} r/min" in PAGE
     assert f"first gear {100 * duty.revolution_shares(bins)[0]:.1f} %" in PAGE
+
+
+@pytest.fixture(scope="module")
+def real():
+    return {scene: life.study(scene, engine=False) for scene in ("light-truck",
+                                                                 "transfer-output")}
+
+
+def _g(value: float) -> str:
+    """Two digits as the page prints them (``1.5e3``)."""
+    return f"{value:.2g}".replace("e+0", "e")
+
+
+def _bearing(answer, name):
+    return next(e for e in answer["bearings"] if e["bearing"] == name)
+
+
+def test_the_real_loads_section_states_today_s_lives(real):
+    """light-truck's head and tail bearings and transfer-output's locating bearing, to
+    the two digits printed; the head's greatest P over C and its a_ISO's ends."""
+    head = _bearing(real["light-truck"], "pinion.head")
+    sel = head["selections"]["positive"]
+    stated = f"an `L10` of {_g(sel['L10_h'])} hours and an `L_nm` of {_g(sel['L_nm_h'])} hours"
+    assert stated in PAGE
+    assert f"is {100 * head['peak_P_over_C']:.0f} % of `C`" in PAGE
+    a_iso = sel["a_ISO"]
+    assert f"`a_ISO` runs from {a_iso[0]:.2g} in first gear to {a_iso[-1]:.2g} in sixth" in PAGE
+    tail = _bearing(real["light-truck"], "pinion.tail")["selections"]["positive"]
+    assert f"The tail bearing lives {_g(tail['L10_h'])} hours" in PAGE
+    rear = _bearing(real["transfer-output"], "gearbox.rear")["selections"]["positive"]
+    assert f"an `L10` of {_g(rear['L10_h'])} hours (`L_nm` {_g(rear['L_nm_h'])} hours)" in PAGE
