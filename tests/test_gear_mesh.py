@@ -19,6 +19,8 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene, scene_from_dict
 from cardan_forces.driveline.scene import SceneError
 
+LBF, INCH = 4.4482216152605, 0.0254  # N, m
+
 MESH = {"name": "out", "shaft": "output", "offset_m": 0.45, "pitch_radius_m": 0.05,
         "pressure_angle_deg": 20.0, "helix_angle_deg": -15.0, "mesh_angle_deg": 30.0}
 
@@ -31,6 +33,20 @@ def test_nominal_forces_are_iso_6336s():
     assert ft[0] == pytest.approx(2000 * 500 / 100)
     assert fr[0] == pytest.approx(1e4 * math.tan(math.radians(20)) / math.cos(math.radians(15)))
     assert fa[0] == pytest.approx(1e4 * math.tan(math.radians(15)))
+
+
+def test_helical_forces_against_shigleys_example_13_7():
+    """Budynas & Nisbett, *Shigley's Mechanical Engineering Design*, 9th ed., Example
+    13-7: an 18-tooth helical pinion, normal pressure angle 20 deg, helix angle 30 deg,
+    normal diametral pitch 12 teeth/in (pitch diameter 1.732 in), 1 hp at 1800 rev/min:
+    ``W_t = 40.4 lbf``, ``W_r = W_t tan(phi_t) = 17.0 lbf`` with ``tan(phi_t) =
+    tan(phi_n) / cos(psi)``, ``W_a = W_t tan(psi) = 23.3 lbf``."""
+    radius = 1.732 / 2 * INCH
+    gear = GearMesh("g", "s", 0.0, radius, 20.0, 30.0)
+    ft, fr, fa = nominal_forces(np.array([40.4 * LBF * radius]), gear)
+    assert ft[0] / LBF == pytest.approx(40.4)
+    assert fr[0] / LBF == pytest.approx(17.0, abs=0.05)
+    assert fa[0] / LBF == pytest.approx(23.3, abs=0.05)
 
 
 def _ops():
@@ -114,7 +130,6 @@ def test_models_that_apply_a_torque_refuse_it_by_name():
 
 # ------------------------------------------------------------------ bevel and hypoid
 
-LBF, INCH = 4.4482216152605, 0.0254  # N, m
 
 
 def bevel(delta, psi=0.0, hand=None, alpha=20.0, r=0.03, kind="bevel", psi_gear=None,
