@@ -22,8 +22,8 @@ import numpy as np
 from cardan_forces.formulations.problems import Conic
 
 from . import settings
+from .backend import Backend
 from .record import Outcome, Status
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"clarabel": None, "clarabel-reduced": None}
 

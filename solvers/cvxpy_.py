@@ -19,8 +19,8 @@ import numpy as np
 from cardan_forces.formulations.problems import LP, LS, QP, Conic
 
 from . import settings
+from .backend import Backend
 from .record import Outcome, Status
-from .registry import Backend
 
 SOLVERS: dict[str, tuple[str, str, str | None]] = {
     "cvxpy-clarabel": ("CLARABEL", "clarabel", None),

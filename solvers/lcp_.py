@@ -11,9 +11,9 @@ import numpy as np
 from cardan_forces.formulations.problems import LCP
 
 from . import settings
+from .backend import Backend
 from .lcp_methods import fb_newton, lemke, pgs
 from .record import Outcome
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = dict.fromkeys(("lcp-lemke", "lcp-pgs", "lcp-fb-newton"))
 

@@ -30,8 +30,8 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
 from . import settings
+from .backend import Backend
 from .record import BatchOutcome, Status
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"moreau": "moreau", "moreau-warm": "moreau",
                                  "moreau-reduced": "moreau", "moreau-warm-reduced": "moreau"}

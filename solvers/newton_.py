@@ -87,8 +87,8 @@ from ._newton_numpy import (
     newton_numpy,
 )
 from ._newton_state import Contacts, Params
+from .backend import Backend
 from .record import BatchOutcome, Outcome
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"newton": None, "newton-batched": None,
                                  "newton-batched-warm": None}

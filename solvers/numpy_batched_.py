@@ -41,9 +41,9 @@ from cardan_forces.formulations.batch import LeastNormBatch
 from cardan_forces.formulations.problems import LastMade
 
 from ._batched_state import Layout, Params
+from .backend import Backend
 from .lcp_methods import lemke
 from .record import BatchOutcome, Status
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"numpy-batched": None}
 

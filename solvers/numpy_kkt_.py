@@ -15,8 +15,8 @@ import time
 import numpy as np
 from cardan_forces.formulations.problems import LS
 
+from .backend import Backend
 from .record import Outcome, Status
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"numpy-kkt": None}
 

@@ -40,7 +40,7 @@ class InvalidBackend(TypeError, ValueError):
 
 def validate(backend) -> None:
     """Raise :class:`InvalidBackend` listing every field of ``backend`` (a
-    :class:`~.registry.Backend`) that is not what the registry relies on.
+    :class:`~.backend.Backend`) that is not what the registry relies on.
     """
     faults = [*_identity_faults(backend), *_class_faults(backend), *_callable_faults(backend),
               *_setting_faults(backend)]

@@ -22,9 +22,9 @@ from cardan_forces.formulations.batch import ConicBatch
 from cardan_forces.formulations.problems import Conic
 
 from . import settings
+from .backend import Backend
 from .qoco_form import CLAIM_TOL, csc_ones, layout, supports
 from .record import BatchOutcome, Outcome, Status
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = {"qoco": "qoco", "qoco-batched": "qoco", "qoco-reduced": "qoco",
                                  "qoco-batched-reduced": "qoco"}

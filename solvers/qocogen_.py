@@ -43,9 +43,9 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
 from . import qoco_form, settings
+from .backend import Backend, dist_version
 from .qoco_form import CLAIM_TOL, csc_ones, layout
 from .record import BatchOutcome, Status
-from .registry import Backend, dist_version
 
 EXTRAS: dict[str, str | None] = {"qocogen-reduced": "qocogen"}
 

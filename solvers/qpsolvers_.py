@@ -14,9 +14,9 @@ import numpy as np
 from cardan_forces.formulations.problems import QP
 
 from . import settings
+from .backend import Backend
 from .ranging import HAVE_HIGHSPY, without_banner
 from .record import Outcome, Status
-from .registry import Backend
 
 DISTRIBUTIONS: dict[str, str] = {
     "clarabel": "clarabel", "daqp": "daqp", "ecos": "ecos", "highs": "highspy", "osqp": "osqp",

@@ -33,7 +33,7 @@ from .record import BatchOutcome, Outcome
 from .stacking import blocks, cone_layout
 
 if TYPE_CHECKING:  # the registry imports this module to apply it
-    from .registry import Backend
+    from .backend import Backend
 
 
 def _defaults(backend: Backend, cones, options: dict) -> dict:

@@ -40,10 +40,11 @@ import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
 
 from . import reduced_ipm, settings
+from .backend import Backend
 from .conversions import RANK_RTOL, eliminate_equalities
 from .record import BatchOutcome, Status
 from .reduced_ import fold
-from .registry import Backend, solve_unchecked
+from .registry import solve_unchecked
 
 EXTRAS: dict[str, str | None] = {"reduced-ipm": None}
 

@@ -24,9 +24,9 @@ from cardan_forces.formulations.problems import LP, LS, NLS, QP
 from cardan_forces.util.rank import numerical_rank
 
 from . import settings
+from .backend import Backend
 from .conversions import qp_duals
 from .record import Outcome, Status
-from .registry import Backend
 
 EXTRAS: dict[str, str | None] = dict.fromkeys(
     ("scipy-lsq_linear", "scipy-highs", "scipy-fsolve", "scipy-root-lm")

@@ -177,10 +177,12 @@ def _within_solvers(module: str, modules: dict) -> set[str]:
 
 def test_one_solve_walks_down_registry_adapter_judge_data():
     """Within the solvers layer a solve goes down: the registry dispatches to an adapter
-    (``<name>_``), the judge measures the answer, the record holds it. So the judge
-    imports no adapter, neither the registry nor its plugins, only the data it reads
-    (:data:`JUDGE_READS`); the record (plain data) and the stacked layout import
-    neither the judge nor the registry (lazy imports included)."""
+    (``<name>_``, which declares itself through ``backend``), the judge measures the
+    answer, the record holds it. So the judge imports no adapter, neither the registry
+    nor its plugins, only the data it reads (:data:`JUDGE_READS`); the record (plain
+    data), the stacked layout and the backend's declaration import neither the judge
+    nor the registry (lazy imports included), and no adapter but :data:`FALLS_BACK`
+    imports the registry."""
     modules = _modules()
     adapters = {name.rpartition(".")[2] for name in modules
                 if name.startswith(SOLVERS + ".") and name.endswith("_")}
@@ -191,3 +193,13 @@ def test_one_solve_walks_down_registry_adapter_judge_data():
     assert _within_solvers("record", modules) == set()
     assert not _within_solvers("stacking", modules) & (adapters | {"registry", "judge"})
     assert "judge" in _within_solvers("registry", modules)
+    assert not _within_solvers("backend", modules) & (adapters | {"registry", "judge"})
+    declaring = {a for a in adapters if "registry" in _within_solvers(a, modules)}
+    assert declaring == FALLS_BACK, declaring
+
+
+FALLS_BACK = {"reduced_ipm_"}
+"""The adapters that import the registry: an adapter declares itself through
+:mod:`~cardan_forces.solvers.backend` (below the registry); only the reduced-space
+interior point calls the registry back, to solve an instant it gives up on with its
+fallback backend."""
