@@ -15,7 +15,7 @@ sample's operator is built again), so it moves the determinate loads too.
 
 Answer: each load's (every contact's force magnitude and every rated bearing's ISO 281
 ``P``) 5th, 50th and 95th percentiles over the samples at each instant, per formulation;
-each rated bearing's ``L10`` distribution (:mod:`cardan_forces.experiments.life`); how
+each rated bearing's ``L10`` distribution (:mod:`cardan_forces.experiments.life_study`); how
 many sampled force components fell outside the nominal line's rigid interval (none can
 without an articulation tolerance). Samples are seeded one by one
 (``default_rng([seed, index])``), so any subset gives the same draws in any order.
@@ -53,8 +53,8 @@ from cardan_forces.experiments import tolerance_store as store
 from cardan_forces.experiments.arguments import UsageError, whole_number
 from cardan_forces.experiments.environment import json_text, number_text
 from cardan_forces.experiments.images import format_list
-from cardan_forces.experiments.life import loads as bearing_loads
-from cardan_forces.experiments.life import rated
+from cardan_forces.experiments.life_study import loads as bearing_loads
+from cardan_forces.experiments.life_study import rated
 from cardan_forces.experiments.study import interval_history, solve_over_time
 from cardan_forces.experiments.sweep_exec import NO_WORKERS_S, close, connect, dask
 from cardan_forces.experiments.sweep_point import scene_digest

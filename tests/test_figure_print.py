@@ -24,7 +24,8 @@ from cardan_forces.driveline.loading import load_scene  # noqa: E402
 from cardan_forces.experiments import (  # noqa: E402
     engine,
     images,
-    life,
+    life_report,
+    life_study,
     regularization,
     report,
     secondary,
@@ -178,7 +179,7 @@ def test_cardan_secondary_s_figure_keeps_the_rules_of_print(tmp_path):
 def life_answers():
     """``cardan life``'s answers at five instants: paper and axle-pinion (open worst
     cases, the selections' lives alike on paper), propshaft (every interval a point)."""
-    return {name: life.study(name, 5) for name in ("paper", "propshaft", "axle-pinion")}
+    return {name: life_study.study(name, 5) for name in ("paper", "propshaft", "axle-pinion")}
 
 
 def _open_arrows(fig, label: str, side: str) -> list:
@@ -209,7 +210,7 @@ def test_cardan_life_s_figures_keep_the_rules_of_print(life_answers, tmp_path):
     for name, answer in life_answers.items():
         with pytest.MonkeyPatch.context() as patch:
             kept = _kept_pages(patch)
-            life.write_outputs(answer, tmp_path / name)
+            life_report.write_outputs(answer, tmp_path / name)
         (stem, fig), = kept
         assert stem == "life"
         _check(fig)
@@ -229,11 +230,11 @@ def test_cardan_life_draws_an_open_worst_case_as_an_arrow(life_answers):
     answer = life_answers["paper"]
     assert all(e["interval"]["open"] for e in answer["bearings"])
     with images.styled():
-        fig = life.figure(answer)
-    arrows = _open_arrows(fig, life.OPEN_WORST_LABEL, "left")
+        fig = life_report.figure(answer)
+    arrows = _open_arrows(fig, life_report.OPEN_WORST_LABEL, "left")
     assert len(arrows) == len(answer["bearings"])
     left = fig.axes[0].get_xlim()[0]
-    bars = [line for line in fig.axes[0].lines if line.get_label() == life.SET_BAR_LABEL]
+    bars = [line for line in fig.axes[0].lines if line.get_label() == life_report.SET_BAR_LABEL]
     assert len(bars) == len(answer["bearings"])
     for bar in bars:
         x = np.asarray(bar.get_xdata(), float)
@@ -242,8 +243,8 @@ def test_cardan_life_draws_an_open_worst_case_as_an_arrow(life_answers):
     plt.close(fig)
     closed = life_answers["propshaft"]
     with images.styled():
-        fig = life.figure(closed)
-    assert _open_arrows(fig, life.OPEN_WORST_LABEL, "left") == []
+        fig = life_report.figure(closed)
+    assert _open_arrows(fig, life_report.OPEN_WORST_LABEL, "left") == []
     plt.close(fig)
 
 
@@ -253,8 +254,8 @@ def test_cardan_life_s_figure_of_many_bearings_takes_pages(life_answers, tmp_pat
     answer["bearings"] = [dict(e, bearing=f"{e['bearing']}{k}")
                           for k in range(8) for e in answer["bearings"]]
     with images.styled():
-        figs = life.figures(answer)
-    assert len(figs) == -(-len(answer["bearings"]) // life.ROWS_PER_PAGE) > 1
+        figs = life_report.figures(answer)
+    assert len(figs) == -(-len(answer["bearings"]) // life_report.ROWS_PER_PAGE) > 1
     for fig in figs:
         _check(fig)
     paths = images.save_pages(figs, tmp_path / "life", ("png",))

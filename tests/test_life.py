@@ -20,7 +20,7 @@ from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import builtin_text, load_scene
 from cardan_forces.driveline.scene import BearingRating
-from cardan_forces.experiments import images, life, life_duty, life_runs
+from cardan_forces.experiments import images, life_duty, life_report, life_runs, life_study
 from cardan_forces.experiments.environment import json_text
 from cardan_forces.experiments.study import solve_over_time
 
@@ -32,12 +32,12 @@ SIMULATED = (life_runs.PENALTY, life_runs.ENGINE)
 
 @pytest.fixture(scope="module")
 def propshaft():
-    return life.study("propshaft", INSTANTS)
+    return life_study.study("propshaft", INSTANTS)
 
 
 @pytest.fixture(scope="module")
 def paper():
-    return life.study("paper", INSTANTS)
+    return life_study.study("paper", INSTANTS)
 
 
 def _strict(text: str):
@@ -142,11 +142,11 @@ def test_paper_worst_case_is_open_and_the_release_bounds_it(paper):
     """paper's closed loop leaves the in-plane loads open above: no finite worst case,
     the advisor's release named, and on the released line every bearing's radial and
     axial load bounded."""
-    assert paper["open"] and paper["open_reason"] == life.OPEN
+    assert paper["open"] and paper["open_reason"] == life_study.OPEN
     assert all(e["interval"]["open"] and e["interval"]["L10_Mrev"][0] == 0.0
                for e in paper["bearings"])
     with images.styled():
-        fig = life.figure(paper)
+        fig = life_report.figure(paper)
     assert images.print_problems(fig) == []  # the print rules, the open ends labelled
     labels = paper["release"]["labels"]
     assert any(label.startswith("slip:") for label in labels)
@@ -157,7 +157,7 @@ def test_paper_worst_case_is_open_and_the_release_bounds_it(paper):
     advice = advise(motion, 1)
     assert [r.label for r in advice.releases] == labels
     released = advice.operator
-    for entry in life.envelope_at(released, 1, life.rated(released)):
+    for entry in life_study.envelope_at(released, 1, life_study.rated(released)):
         assert math.isfinite(entry["fr"][1]) and math.isfinite(entry["fa"][1])
 
 
@@ -210,9 +210,10 @@ def test_penalty_average_carries_the_determinate_radial_loads():
     history, words = life_runs.penalty_history(op)
     assert history is not None, words
     for i in range(1, len(op.t)):
-        for (contact, _), entry in zip(life.rated(op), life.envelope_at(op, i, life.rated(op))):
+        for (contact, _), entry in zip(life_study.rated(op),
+                                       life_study.envelope_at(op, i, life_study.rated(op))):
             assert entry["radial_determinate"]
-            fr = life.loads(op, contact, history.forces[i:i + 1])[0][0]
+            fr = life_study.loads(op, contact, history.forces[i:i + 1])[0][0]
             assert fr == pytest.approx(entry["fr"][0], rel=0.03), (contact.element, i)
 
 
@@ -226,8 +227,9 @@ def test_mujoco_carries_the_determinate_radial_loads():
     assert history is not None, words
     assert np.isnan(history.forces[0]).all() and history.solved == len(op.t) - 1
     for i in range(1, len(op.t)):
-        for (contact, _), entry in zip(life.rated(op), life.envelope_at(op, i, life.rated(op))):
-            fr = life.loads(op, contact, history.forces[i:i + 1])[0][0]
+        for (contact, _), entry in zip(life_study.rated(op),
+                                       life_study.envelope_at(op, i, life_study.rated(op))):
+            fr = life_study.loads(op, contact, history.forces[i:i + 1])[0][0]
             assert fr == pytest.approx(entry["fr"][0], rel=1e-3), (contact.element, i)
 
 
@@ -236,12 +238,12 @@ def test_a_simulation_that_cannot_run_says_why(capsys):
     assert main(["life", "propshaft", "--instants", "3", "--penalty", "--json",
                  "--quiet"]) == 0
     answer = _strict(capsys.readouterr().out)
-    assert set(answer["selections"]) == set(life.SELECTIONS)
+    assert set(answer["selections"]) == set(life_study.SELECTIONS)
     assert "'inertia' effect" in answer["not_run"]["penalty"]
     assert answer["not_run"]["mujoco"].startswith("not run: ")
     assert main(["life", "paper-slip", "--instants", "3", "--no-engine", "--json",
                  "--quiet"]) == 0
-    assert _strict(capsys.readouterr().out)["not_run"]["mujoco"] == life.NOT_ASKED["mujoco"]
+    assert _strict(capsys.readouterr().out)["not_run"]["mujoco"] == life_study.NOT_ASKED["mujoco"]
 
 
 def test_axle_pinion_tapered_pair_by_its_catalogue_factors():
@@ -249,7 +251,7 @@ def test_axle_pinion_tapered_pair_by_its_catalogue_factors():
     |Fa| where |Fa| > e Fr, else Fr, with Fr and Fa the operator's bearing loads; one
     of the pair takes the axial load (the O pair pushes one way each), and its L10 is
     (C / Pm)^(10/3)."""
-    answer = life.study("axle-pinion", 3, engine=False)
+    answer = life_study.study("axle-pinion", 3, engine=False)
     scene = load_scene("axle-pinion")
     t = np.linspace(scene.time.start_s, scene.time.stop_s, 3)
     op = build_operator(simulate(scene, t))
@@ -278,11 +280,11 @@ def test_light_loads_are_said_to_make_the_long_lives(propshaft):
     for entry in propshaft["bearings"]:
         peak = max(np.nanmax(s["P_N"]) for s in entry["selections"].values())
         assert entry["peak_P_over_C"] == pytest.approx(peak / entry["rating"]["C_N"])
-    assert max(e["peak_P_over_C"] for e in propshaft["bearings"]) <= life.LIGHT_LOAD
-    assert "lightly loaded" in life.markdown(propshaft)
+    assert max(e["peak_P_over_C"] for e in propshaft["bearings"]) <= life_report.LIGHT_LOAD
+    assert "lightly loaded" in life_report.markdown(propshaft)
     heavy = {**propshaft, "bearings": [{**e, "peak_P_over_C": 0.2}
                                        for e in propshaft["bearings"]]}
-    text = life.markdown(heavy)
+    text = life_report.markdown(heavy)
     assert "is 20 % of C" in text and "lightly loaded" not in text
 
 
@@ -326,10 +328,10 @@ def test_each_way_a_life_has_no_value_carries_its_reason(p, revs, keep, words):
     the shaft turns: each leaves Pm or L10 without a finite value, and each says why; a
     load history with a value has no reason."""
     keep = None if keep is None else np.array(keep)
-    found = life.life(RATING, np.array(p), np.array(revs), keep)
+    found = life_study.life(RATING, np.array(p), np.array(revs), keep)
     assert not all(math.isfinite(found[k]) for k in ("Pm_N", "L10_Mrev"))
     assert words in found["reason"]
-    fine = life.life(RATING, np.array([100.0, 0.0, 300.0]), np.array(revs) + 1.0)
+    fine = life_study.life(RATING, np.array([100.0, 0.0, 300.0]), np.array(revs) + 1.0)
     assert fine["reason"] is None and math.isfinite(fine["L10_Mrev"])
 
 
@@ -342,14 +344,14 @@ def test_every_life_of_an_answer_without_a_value_says_why(propshaft, paper):
 
 def _altered(monkeypatch, name: str, change):
     """study's rigid selection ``name`` with its forces passed through ``change``."""
-    solve = life.solve_over_time
+    solve = life_study.solve_over_time
 
     def altered(op, formulation, *args, **kwargs):
         history = solve(op, formulation, *args, **kwargs)
         if formulation != name:
             return history
         return dataclasses.replace(history, forces=change(history.forces.copy()))
-    monkeypatch.setattr(life, "solve_over_time", altered)
+    monkeypatch.setattr(life_study, "solve_over_time", altered)
 
 
 def test_unsolved_and_unloaded_lives_say_why_in_json_and_report(monkeypatch):
@@ -359,18 +361,18 @@ def test_unsolved_and_unloaded_lives_say_why_in_json_and_report(monkeypatch):
         forces[1] = np.nan
         return forces
     _altered(monkeypatch, "positive", unsolved)
-    answer = life.study("propshaft", 3, engine=False)
+    answer = life_study.study("propshaft", 3, engine=False)
     assert _has_reason_iff_not_finite(answer) == len(answer["bearings"])
     for entry in _strict(json_text(answer))["bearings"]:
         positive = entry["selections"]["positive"]
         assert positive["L10_Mrev"] is None and "not known at 1 of the 3" in positive["reason"]
-    assert life.markdown(answer).count("positive: no value: P is not known at 1 of the 3") \
+    assert life_report.markdown(answer).count("positive: no value: P is not known at 1 of the 3") \
         == len(answer["bearings"])
     monkeypatch.undo()
     _altered(monkeypatch, "compliance", lambda forces: 0.0 * forces)
-    answer = life.study("propshaft", 3, engine=False)
+    answer = life_study.study("propshaft", 3, engine=False)
     assert _has_reason_iff_not_finite(answer) == len(answer["bearings"])
-    assert "compliance: unbounded: the bearing carries no load" in life.markdown(answer)
+    assert "compliance: unbounded: the bearing carries no load" in life_report.markdown(answer)
 
 
 def test_a_scene_whose_shafts_do_not_turn_is_refused(tmp_path, capsys):
@@ -403,16 +405,16 @@ def test_whether_a_life_lies_in_the_set_is_computed(monkeypatch, factor, inside)
     forces: loads 3 % off it put the life outside, by 3 % of Pm and on the right side;
     1e-6 off, within the tolerance, inside. The report says which, and what the
     penalty selection is (a different model), never that it is a member of the set."""
-    monkeypatch.setattr(life, "penalty_history", _stand_in(factor))
-    answer = life.study("propshaft", 3, penalty=True, engine=False)
+    monkeypatch.setattr(life_study, "penalty_history", _stand_in(factor))
+    answer = life_study.study("propshaft", 3, penalty=True, engine=False)
     for entry in answer["bearings"]:
         check = entry["selections"]["penalty"]["in_set"]
         assert check["inside"] is inside, (entry["bearing"], check)
         assert check["Pm_beyond"] == pytest.approx(0.0 if inside else factor - 1, rel=1e-6)
-        assert all(entry["selections"][n]["in_set"]["inside"] for n in life.SELECTIONS)
-    text = life.markdown(answer)
+        assert all(entry["selections"][n]["in_set"]["inside"] for n in life_study.SELECTIONS)
+    text = life_report.markdown(answer)
     penalty_line = next(line for line in text.splitlines() if line.startswith("- penalty:"))
-    assert life.MODELS["penalty"] in penalty_line and "member" not in penalty_line
+    assert life_study.MODELS["penalty"] in penalty_line and "member" not in penalty_line
     assert ("Inside at every bearing" in penalty_line) is inside
     assert text.count("(outside the set)") == (0 if inside else len(answer["bearings"]))
 
@@ -421,22 +423,22 @@ def test_in_set_tolerance_sides_and_missing_values():
     """Within IN_SET_TOL of the load scale is inside; beyond it, the signed share of the
     nearer end; an open greatest end holds any Pm above the least; a side without a
     value is not compared, and says so."""
-    tol = life.IN_SET_TOL
-    assert life.in_set(100.0 + 0.5 * tol * 1000, (90.0, 100.0), 1000.0)["inside"]
-    above = life.in_set(100.0 + 2 * tol * 1000, (90.0, 100.0), 1000.0)
+    tol = life_study.IN_SET_TOL
+    assert life_study.in_set(100.0 + 0.5 * tol * 1000, (90.0, 100.0), 1000.0)["inside"]
+    above = life_study.in_set(100.0 + 2 * tol * 1000, (90.0, 100.0), 1000.0)
     assert above["inside"] is False and above["Pm_beyond"] == pytest.approx(2 * tol * 10)
-    below = life.in_set(81.0, (90.0, 100.0), 1000.0)
+    below = life_study.in_set(81.0, (90.0, 100.0), 1000.0)
     assert below["inside"] is False and below["Pm_beyond"] == pytest.approx(-0.1)
-    assert life.in_set(1e9, (90.0, math.inf), 1000.0)["inside"]
+    assert life_study.in_set(1e9, (90.0, math.inf), 1000.0)["inside"]
     for pm, ends in ((math.nan, (90.0, 100.0)), (95.0, (math.nan, 100.0))):
-        missing = life.in_set(pm, ends, 1000.0)
+        missing = life_study.in_set(pm, ends, 1000.0)
         assert missing["inside"] is None and missing["why"].startswith("not compared")
 
 
 def test_every_empty_csv_cell_says_why(paper, tmp_path):
     """life.csv: a note exactly where P is empty (paper's open greatest P)."""
     path = tmp_path / "life.csv"
-    life.write_csv(paper, path)
+    life_report.write_csv(paper, path)
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
     assert any(r["P_N"] == "" for r in rows)
@@ -458,7 +460,7 @@ def test_the_how_to_states_the_in_set_tolerance_and_the_models():
     """docs/how-to/life.md gives the tolerance the answer uses, and says the penalty
     average is a different model that may lie outside the set."""
     text = " ".join((Path(__file__).parents[1] / "docs/how-to/life.md").read_text().split())
-    assert f"`in_set_tol` ({life.IN_SET_TOL:g})" in text
+    assert f"`in_set_tol` ({life_study.IN_SET_TOL:g})" in text
     assert "not a member of the rigid set: its life may lie outside" in text
     assert "every member of the rigid solution set" not in text
 
@@ -514,7 +516,7 @@ def duty_scenes(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def spectrum(duty_scenes):
-    return life.study(duty_scenes["pinion"], 3)
+    return life_study.study(duty_scenes["pinion"], 3)
 
 
 def test_bins_combine_by_palmgren_miner_with_hours_at_the_mean_speed(spectrum):
@@ -543,7 +545,7 @@ def test_bins_combine_by_palmgren_miner_with_hours_at_the_mean_speed(spectrum):
 def test_every_rigid_selection_lies_in_the_set_per_bin_and_combined(spectrum):
     """Per bin and over the spectrum, each rigid selection's Pm lies between the set's
     (in_set, computed) and its L10 between the set's worst and best."""
-    assert set(spectrum["selections"]) == set(life.SELECTIONS)
+    assert set(spectrum["selections"]) == set(life_study.SELECTIONS)
     for e in spectrum["bearings"]:
         for where in (*e["bins"], e):
             worst, best = where["interval"]["L10_Mrev"]
@@ -578,7 +580,7 @@ def test_modified_life_per_bin_and_combined(spectrum):
             assert sel["L_nm_Mrev"] == pytest.approx(l_nm, rel=1e-12)
             assert sel["L_nm_h"] == pytest.approx(l_nm * 1e6 / (60 * mean), rel=1e-12)
             assert sel["a_ISO"] == [b["a_ISO"] for b in bins]
-    assert rated_iso == 2 * len(life.SELECTIONS)
+    assert rated_iso == 2 * len(life_study.SELECTIONS)
 
 
 def test_a_spectrum_s_report_warns_and_says_why(spectrum):
@@ -586,7 +588,7 @@ def test_a_spectrum_s_report_warns_and_says_why(spectrum):
     its bins, the light-load sentence kept, strict JSON, a figure in hours."""
     assert set(spectrum["not_run"]) == set(SIMULATED)
     assert all("quasi-static" in why for why in spectrum["not_run"].values())
-    text = life.markdown(spectrum)
+    text = life_report.markdown(spectrum)
     below = [e for e in spectrum["bearings"] if e["minimum_load"]["below"]]
     assert below and all(e["minimum_load"]["bins"] == [1, 2] for e in below)
     for e in below:
@@ -595,7 +597,7 @@ def test_a_spectrum_s_report_warns_and_says_why(spectrum):
     assert "input.far, input.near, L_nm: bins 1, 2: no ISO 281:2007 inputs" in text
     assert _strict(json_text(spectrum))["bearings"][0]["kappa"] == [None, None]
     with images.styled():
-        fig = life.figure(spectrum)
+        fig = life_report.figure(spectrum)
     assert "[h]" in fig.axes[0].get_xlabel() and images.print_problems(fig) == []
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cardan_forces.driveline import duty
-from cardan_forces.experiments import life
+from cardan_forces.experiments import life_report, life_study
 
 pytestmark = pytest.mark.slow  # a docs check: four life studies
 
@@ -19,7 +19,7 @@ SCENES = ("paper", "propshaft", "axle-pinion")
 
 @pytest.fixture(scope="module")
 def answers():
-    return {scene: life.study(scene) for scene in SCENES}
+    return {scene: life_study.study(scene) for scene in SCENES}
 
 
 def _lives(answers, key):
@@ -35,7 +35,7 @@ def test_the_greatest_load_share_the_page_states_is_today_s(answers):
     stated = _stated(r"no bearing's greatest `P` passes ([\d.]+) %")
     peak = max(e["peak_P_over_C"] for a in answers.values() for e in a["bearings"])
     assert f"{100 * peak:.1f}" == f"{stated:.1f}"
-    assert peak <= life.LIGHT_LOAD and "`P <= 0.05 C`" in PAGE
+    assert peak <= life_report.LIGHT_LOAD and "`P <= 0.05 C`" in PAGE
 
 
 def test_the_lives_and_loads_the_page_states_hold(answers):
@@ -58,7 +58,7 @@ def test_the_hours_at_a_speed_the_page_states_hold():
                       r"propshaft's bearings last ([\d.e+]+) hours and more, and every one "
                       r"of them is below its minimum load", PAGE)
     assert found and found[1] == found[2]
-    answer = life.study("propshaft", speed_rpm=float(found[1]))
+    answer = life_study.study("propshaft", speed_rpm=float(found[1]))
     least = min(s["L10_h"] for e in answer["bearings"] for s in e["selections"].values())
     assert float(found[3]) <= least < 10 * float(found[3])
     assert all(e["minimum_load"]["below"] for e in answer["bearings"])
@@ -77,7 +77,7 @@ def test_the_engine_spectrum_example_is_what_the_helper_gives():
 
 @pytest.fixture(scope="module")
 def real():
-    return {scene: life.study(scene, engine=False) for scene in ("light-truck",
+    return {scene: life_study.study(scene, engine=False) for scene in ("light-truck",
                                                                  "transfer-output")}
 
 

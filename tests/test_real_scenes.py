@@ -13,8 +13,8 @@ from cardan_forces.driveline.duty import from_engine
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene
-from cardan_forces.experiments import life
-from cardan_forces.experiments.life import loads, rated
+from cardan_forces.experiments import life_report, life_study
+from cardan_forces.experiments.life_study import loads, rated
 from cardan_forces.experiments.study import solve_over_time
 
 # the engine, gears and shares light-truck.toml's comment states
@@ -68,8 +68,8 @@ def test_the_pinion_pairs_worst_case_is_open_by_its_preload_with_no_release():
     preload is free, which no release removes (the design states it)."""
     motion = simulate(load_scene("light-truck"), [0.0, 0.05])
     op = build_operator(motion)
-    assert "bearing pair's preload is free" in life._open_reason(motion, op)
-    release = life._release(motion)
+    assert "bearing pair's preload is free" in life_study._open_reason(motion, op)
+    release = life_study._release(motion)
     assert release["labels"] == [] and "preload bounds the worst case" in release["words"]
 
 
@@ -81,14 +81,14 @@ def test_loaded_bearings_live_hundreds_to_a_million_hours(scene, loaded):
     """Over the duty cycle every selection's L10 and L_nm of a loaded bearing lie between
     1e2 and 1e6 hours (a catalogue calculation's range for such loads), the others are
     named lightly loaded, and each selection lies in the rigid set's interval."""
-    answer = life.study(scene, instants=9, engine=False)
+    answer = life_study.study(scene, instants=9, engine=False)
     for entry in answer["bearings"]:
         for name, sel in entry["selections"].items():
             assert sel["in_set"]["inside"], (entry["bearing"], name)
             if entry["bearing"] in loaded:
                 assert 1e2 <= sel["L10_h"] <= 1e6 and 1e2 <= sel["L_nm_h"] <= 1e6
             else:
-                assert entry["peak_P_over_C"] <= life.LIGHT_LOAD
-    words = life.markdown(answer)
+                assert entry["peak_P_over_C"] <= life_report.LIGHT_LOAD
+    words = life_report.markdown(answer)
     assert "Lightly loaded (P <= 0.05 C): " in words
     assert "bearing pair's preload is free" in words
