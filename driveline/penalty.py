@@ -76,7 +76,10 @@ the step size and the cost.
 Cross-pins: always the scene's ``[crosspin]`` mass and inertia about (e1, e2, e3) (a
 free body needs mass), whether or not the scene lists ``crosspin_inertia``. Gravity
 when the scene has it; the input torque about the input shaft's current axis, the load
-torque against the output shaft's. The simulation is dynamic whatever the effects.
+torque against the output shaft's, or, at an end whose shaft holds a gear mesh, the
+mesh force at the mesh point instead (:meth:`~.penalty_model.Model._line_loads`: fixed
+in space, its moment taken about the body's current centre). The simulation is
+dynamic whatever the effects.
 
 **State and integrator.** Per body: centre displacement from its rest position, a
 quaternion (body to global, renormalized where used), centre velocity, angular

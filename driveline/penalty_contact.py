@@ -52,11 +52,15 @@ class ModelArrays(NamedTuple):
     clearance, m), stiffness, exponent, ``c_max`` of the contact law (eqs. 75-78; a
     spring's or twist's ``K`` and ``c``). Loads: ``gravity`` (3,) (m/s^2),
     ``input_torque`` and ``load_torque`` (4,): mean, amplitude, frequency, phase of the
-    torque about the first shaft's axis and against the last's (N m); ``n_shafts`` the
-    shaft segments; ``d_max`` the depth of full damping (m).
+    line's input and load torques ``h`` (N m, :func:`~.harmonic.harmonic`); per end of
+    the line (row 0 the input, row 1 the load) the body its torque acts on,
+    ``load_bodies`` (2,) int, and how, ``loads`` (2, 10): ``spin``, then a point ``p``
+    (3, m, global, fixed in space), ``lin`` (3) and ``abs`` (3) (N per N m, global): a
+    pure torque ``h spin`` (N m) about the body's current axis and a force ``F = h lin
+    + |h| abs`` (N) at ``p`` (a gear mesh's, :meth:`~.elements.base.ElementKind.load`;
+    zero where the torque acts as a torque); ``d_max`` the depth of full damping (m).
     """
 
-    n_shafts: int
     mass: np.ndarray
     inertia: np.ndarray
     rest_centre: np.ndarray
@@ -66,6 +70,8 @@ class ModelArrays(NamedTuple):
     gravity: np.ndarray
     input_torque: np.ndarray
     load_torque: np.ndarray
+    load_bodies: np.ndarray
+    loads: np.ndarray
     d_max: float
 
 
@@ -388,17 +394,26 @@ def _contacts_into(y, rest_centre, topology, geometry, laws, d_max, state):
 
 
 @kernel(inline="always")
-def _bodies(t, y, rot, force, moment, n_shafts, mass, inertia, gravity, input_torque,
-            load_torque, dy, jw, dw):
+def _bodies(t, y, centre, rot, force, moment, mass, inertia, gravity, input_torque,
+            load_torque, load_bodies, loads, dy, jw, dw):
     """Newton-Euler equations of every body into ``dy``, given the net contact force and
-    moment; the torques added here (``moment`` is changed); the model's arrays as
-    :class:`ModelArrays` names them; ``jw``, ``dw``: (3,) scratch.
+    moment; the line's torques added here (``force`` and ``moment`` are changed: the
+    :class:`ModelArrays` ``loads``, each end's force at its fixed point ``p`` taken
+    about the body's current ``centre``); the model's arrays as :class:`ModelArrays`
+    names them; ``jw``, ``dw``: (3,) scratch.
     """
     nb = mass.shape[0]
-    torque_in, torque_load = harmonic(input_torque, t), harmonic(load_torque, t)
-    for i in range(3):  # a shaft's axis is its body frame's second column
-        moment[0, i] += torque_in * rot[0, i, 1]
-        moment[n_shafts - 1, i] -= torque_load * rot[n_shafts - 1, i, 1]
+    for e in range(2):  # the input end, then the load end
+        k = load_bodies[e]
+        h = harmonic(input_torque, t) if e == 0 else harmonic(load_torque, t)
+        for i in range(3):  # a shaft's axis is its body frame's second column
+            jw[i] = h * loads[e, 4 + i] + abs(h) * loads[e, 7 + i]  # the force F
+            force[k, i] += jw[i]
+            moment[k, i] += h * loads[e, 0] * rot[k, i, 1]
+        for i in range(3):  # (p - centre) x F
+            a, b = (i + 1) % 3, (i + 2) % 3
+            moment[k, i] += ((loads[e, 1 + a] - centre[k, a]) * jw[b]
+                             - (loads[e, 1 + b] - centre[k, b]) * jw[a])
     for k in range(nb):  # element by element: no views of rows in the loop
         q, w = 3 * nb + 4 * k, 10 * nb + 3 * k
         w0, w1, w2 = y[w], y[w + 1], y[w + 2]
@@ -447,6 +462,6 @@ def _rhs_into(t, y, model, state, dy):
     _frames(y, model.rest_centre, frames)
     _contacts(frames, model.topology, model.geometry, model.laws, model.d_max, state.depth,
               state.push, state.on_a, force, moment, local)
-    _bodies(t, y, frames.rot, force, moment, model.n_shafts, model.mass, model.inertia,
-            model.gravity, model.input_torque, model.load_torque, dy, local.spare,
-            local.spare_b)
+    _bodies(t, y, frames.centre, frames.rot, force, moment, model.mass, model.inertia,
+            model.gravity, model.input_torque, model.load_torque, model.load_bodies,
+            model.loads, dy, local.spare, local.spare_b)

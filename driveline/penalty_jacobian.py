@@ -172,8 +172,9 @@ def _jacobian_into(t, y, model, jac, linked, state, own):
                 if kb < nb:
                     jac[7 * nb + 3 * kb + i, col] -= rows[0, i, k] / mass[kb]
                     dmoment[kb, i, col] += rows[2, i, k]
-    _body_rates(t, y, model.n_shafts, model.inertia, model.input_torque, model.load_torque,
-                rot, drot, moment, dmoment, jac, linked)
+    _body_rates(t, y, model.inertia, model.input_torque, model.load_torque,
+                model.load_bodies, model.loads, frames.centre, rot, drot, moment, dmoment,
+                jac, linked)
 
 
 @kernel(inline="always")
@@ -391,27 +392,33 @@ def _cross_into(a0, a1, a2, b0, b1, b2, dloc, col):
 
 
 @kernel(inline="always")
-def _body_rates(t, y, n_shafts, inertias, input_torque, load_torque, rot, drot, moment,
-                dmoment, jac, linked):
+def _body_rates(t, y, inertias, input_torque, load_torque, load_bodies, loads, centre, rot,
+                drot, moment, dmoment, jac, linked):
     """The rows of ``x' = v``, ``q' = q (0, w) / 2`` and ``w' = J^-1 (R^T M - w x J w)``
-    (with the torques' rates added to ``dmoment``); ``moment``: the net contact moments;
-    ``dmoment`` is zero outside the columns of the ``linked`` bodies (:func:`_linked`);
-    the model's arrays as :class:`~.penalty_contact.ModelArrays` names them.
+    (with the line's torques and their rates added to ``dmoment``: a pure torque's
+    through the body's rotation, a mesh force's moment ``(p - centre) x F`` through its
+    centre); ``moment``: the net contact moments; ``dmoment`` is zero outside the
+    columns of the ``linked`` bodies (:func:`_linked`); the model's arrays as
+    :class:`~.penalty_contact.ModelArrays` names them.
     """
     nb = inertias.shape[0]
-    torque_in, torque_load = harmonic(input_torque, t), harmonic(load_torque, t)
     total = moment[:nb].copy()
-    for i in range(3):
-        total[0, i] += torque_in * rot[0, i, 1]
-        total[n_shafts - 1, i] -= torque_load * rot[n_shafts - 1, i, 1]
+    for e in range(2):  # the input end, then the load end (as penalty_contact._bodies)
+        k = load_bodies[e]
+        h = harmonic(input_torque, t) if e == 0 else harmonic(load_torque, t)
+        spin = h * loads[e, 0]
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            fa = h * loads[e, 4 + a] + abs(h) * loads[e, 7 + a]
+            fb = h * loads[e, 4 + b] + abs(h) * loads[e, 7 + b]
+            total[k, i] += (spin * rot[k, i, 1] + (loads[e, 1 + a] - centre[k, a]) * fb
+                            - (loads[e, 1 + b] - centre[k, b]) * fa)
+            dmoment[k, i, 3 * k + a] -= fb
+            dmoment[k, i, 3 * k + b] += fa
+            for kq in range(4):
+                dmoment[k, i, 3 * nb + 4 * k + kq] += spin * drot[k, kq, i, 1]
     for k in range(nb):
         u, q, v, w = 3 * k, 3 * nb + 4 * k, 7 * nb + 3 * k, 10 * nb + 3 * k
-        for kq in range(4):
-            for i in range(3):
-                if k == 0:
-                    dmoment[k, i, q + kq] += torque_in * drot[k, kq, i, 1]
-                if k == n_shafts - 1:
-                    dmoment[k, i, q + kq] -= torque_load * drot[k, kq, i, 1]
         inertia = inertias[k]
         wk, qk = y[w:w + 3], y[q:q + 4]
         for i in range(3):

@@ -23,6 +23,9 @@ from scipy.spatial.transform import Rotation
 from . import penalty_kernels as kernels
 from .dynamics import simulate
 from .elements import shaft_segments
+from .elements.base import segment_of
+from .elements.bodies import frames_of
+from .elements.registry import scene_elements
 from .equilibrium import body_references, build_operator
 from .harmonic import harmonic_law
 from .penalty_contact import RADIAL, SPRING, TWIST
@@ -151,6 +154,7 @@ class Model:
         self.rest_centre = body_references(motion.geometry, segments)
         self.gravity = np.array(scene.gravity_m_s2) if scene.has("gravity") else np.zeros(3)
         self.start_frames = self._start_frames()
+        self.load_bodies, self.loads = self._line_loads()
         rows, self.parts = contact_rows(self, damping_length_unit_m)
         c = self.c = _Contacts(*(np.array(column) for column in zip(*rows)))
         self.d_max = scene.contact.damping_full_depth_m
@@ -180,6 +184,53 @@ class Model:
                    for j in range(len(self.scene.joints))]
         return np.array(frames)
 
+    def _line_loads(self) -> tuple[np.ndarray, np.ndarray]:
+        """Where and how the line's input and load torques act (:class:`ModelArrays`'
+        ``load_bodies`` and ``loads``): as pure torques about the first body's axis and
+        against the last's, or, at an end whose shaft holds a ``takes_load`` element (a
+        gear mesh), as that element's force (:meth:`~.elements.base.ElementKind.load`)
+        on the body holding it, as in the rigid model's load terms. The mesh point and
+        the force's directions are the rigid model's at rest, fixed in space: the mating
+        gear is held by its own bearings, and the shafts' axes move by micrometres and
+        microradians here. The force is ``F(T) = T lin + |T| abs``, the kind's loads
+        being proportional to the torque's size with a part that turns with its sign
+        (the tangential and a helix's axial force) and one that does not (the separating
+        force): ``lin`` and ``abs`` from ``F(1)`` and ``F(-1)``. ``T`` is the torque
+        the mesh takes off its shaft, the load torque on the last shaft and minus the
+        input torque on the first (``sign``).
+        """
+        scene, geo = self.scene, self.motion.geometry
+        last = len(scene.shafts) - 1
+        bodies = np.array([0, self.n_shafts - 1], np.int64)
+        loads = np.zeros((2, 10))
+        loads[:, 0] = 1.0, -1.0  # torques: the input's with the rotation, the load's against
+        for kind, element, k, _ in scene_elements(scene):
+            if not kind.takes_load or k not in (0, last):
+                continue
+            end, sign = (0, -1.0) if k == 0 else (1, 1.0)
+            point, force = kind.load(element, np.array([1.0, -1.0]), frames_of(geo)[k],
+                                     geo.centres[k])
+            bodies[end] = segment_of(self.segments, k, element.offset_m)
+            loads[end] = (0.0, *point, *(sign * (force[0] - force[1]) / 2),
+                          *((force[0] + force[1]) / 2))
+        return bodies, loads
+
+    def line_loads(self, t: float, centre: np.ndarray, rot: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """The line's torques at ``t`` (s) as forces (bodies, 3, k) and moments about the
+        bodies' current centres (bodies, 3, k), global (N, N m), from the bodies'
+        centres (bodies, 3, k) and rotations (bodies, 3, 3, k) (:meth:`_line_loads`).
+        """
+        force, moment = np.zeros(centre.shape, centre.dtype), np.zeros(centre.shape,
+                                                                          centre.dtype)
+        torques = self.scene.input_torque(t), self.scene.load_torque(t)
+        for body, load, h in zip(self.load_bodies, self.loads, torques):
+            f = h * load[4:7] + abs(h) * load[7:10]
+            force[body] += f[:, None]
+            moment[body] += (h * load[0] * rot[body, :, 1]
+                             + _cross(load[1:4, None] - centre[body], f[:, None]))
+        return force, moment
+
     def local(self, body: int, point: np.ndarray | None = None,
               vector: np.ndarray | None = None) -> np.ndarray:
         """A global point or vector at the start in ``body``'s coordinates (the ground,
@@ -200,7 +251,7 @@ class Model:
             return np.ascontiguousarray(np.column_stack(columns), dtype=float)
 
         return kernels.ModelArrays(
-            n_shafts=int(self.n_shafts), mass=np.array(self.mass, float),
+            mass=np.array(self.mass, float),
             inertia=floats(self.inertia), rest_centre=floats(self.rest_centre),
             topology=np.ascontiguousarray(np.column_stack([c.a, c.b, c.radial]), np.int64),
             geometry=floats(c.s, c.e, c.j, c.u),
@@ -208,6 +259,8 @@ class Model:
             gravity=np.array(self.gravity, float),
             input_torque=np.array(harmonic_law(scene.input_torque), float),
             load_torque=np.array(harmonic_law(scene.load_torque), float),
+            load_bodies=np.ascontiguousarray(self.load_bodies, np.int64),
+            loads=np.ascontiguousarray(self.loads, float),
             d_max=float(self.d_max))
 
     def _contact_map(self) -> tuple[sparse.csr_matrix, np.ndarray]:
@@ -359,14 +412,13 @@ class Model:
         """
         self.n_calls += 1
         bodies = self.bodies(y)
-        _, q, v, w, rot, _ = bodies
-        nb, ns, k = self.n_bodies, self.n_shafts, y.shape[1]
+        u, q, v, w, rot, _ = bodies
+        nb, k = self.n_bodies, y.shape[1]
         _, _, f, arms, couple = self.contacts(bodies)
-        force = self.gather_force @ f
+        applied, turning = self.line_loads(t, self.rest_centre[:, :, None] + u, rot)
+        force = self.gather_force @ f + applied.transpose(1, 0, 2)
         moment = (self.gather_moment @ _cross(arms, np.concatenate([f, f], axis=1))
-                  + self.gather_force @ couple)
-        moment[:, 0] += self.scene.input_torque(t) * rot[0, :, 1]
-        moment[:, ns - 1] -= self.scene.load_torque(t) * rot[ns - 1, :, 1]
+                  + self.gather_force @ couple + turning.transpose(1, 0, 2))
         torque = (rot * moment.transpose(1, 0, 2)[:, :, None]).sum(axis=1)
         inertia = self.inertia[:, :, None]
         dw = (torque - _cross(w, inertia * w, axis=1)) / inertia

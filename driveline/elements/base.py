@@ -315,7 +315,9 @@ class ElementKind:
         """A ``takes_load`` kind's forces taking the torque ``torque_N_m`` (T,) off its
         shaft (the load torque; minus the input torque on the first shaft):
         ``(point, force)``, a point (3,) and the force (T, 3) there (N), on a shaft of
-        frame rows ``r1, r2, axis`` and centre ``centre``.
+        frame rows ``r1, r2, axis`` and centre ``centre``. The force is ``T lin + |T|
+        abs`` for two vectors fixed by the geometry (the penalty model reads them from
+        ``T = +-1``, :meth:`~..penalty_model.Model._line_loads`).
         """
         raise NotImplementedError
 
