@@ -30,7 +30,11 @@ hold these laws); those of the built-in kinds:
   bending by two radial contacts without clearance a pitch radius either side of the
   joint, torque by two teeth at the pitch radius; no axial contact; linear, as stiff as
   a bearing (:mod:`.elements.slip`);
-- **disc coupling** (:mod:`.elements.disc_coupling`): a bushing (:meth:`ContactRows.bushing`).
+- **disc coupling** (:mod:`.elements.disc_coupling`): a bushing (:meth:`ContactRows.bushing`);
+- **constant-velocity joint** (:mod:`.elements.cv`): a bushing between two shafts that
+  turn about different axes, homokinetic in twist and free in bending: three pairs of
+  springs at its centre (:meth:`ContactRows.spring`) and one twist about the bisector
+  (:meth:`ContactRows.twist`), bilateral and linear.
 
 **Bushing.** A linear six-way spring-damper between a link's two bodies at a point,
 bilateral (it pulls as it pushes, with no clearance and no step): along each axis
@@ -268,8 +272,11 @@ class ContactRows:
     ``scene``, ``op``: the model's; :meth:`law` the eqs. 75-78 parameters of a
     stiffness (:meth:`hertz` of a joint's Hertz contacts); :meth:`add` one contact of a
     link between its two bodies (the ground for ``other`` None), :meth:`bushing` a
-    six-way spring-damper; :meth:`centre` a body's rest centre. ``parts[k]``: the
-    contacts of link ``k``.
+    six-way spring-damper, :meth:`spring` and :meth:`twist` one bilateral row of a
+    coupling between bodies that turn about different axes (a CV joint's);
+    :meth:`centre` a body's rest centre. ``parts[k]``: the contacts of link ``k``;
+    ``flipped[c]``: contact ``c``'s body ``a`` is its link's other body (its force on
+    the link's body is the opposite of its force on ``a``).
     """
 
     def __init__(self, model: _Model, damping_length_unit_m: float):
@@ -277,6 +284,7 @@ class ContactRows:
         self.unit = damping_length_unit_m
         self.rows: list[tuple] = []
         self.parts: list[list[int]] = []
+        self.flipped: list[bool] = []
 
     def law(self, stiffness: float, exponent: float = 1.0) -> tuple[float, float, float]:
         """``(K, n, c_max)``: ``c_max`` the scene's fraction of ``K`` read in the
@@ -323,26 +331,57 @@ class ContactRows:
             self._row(a, b, on(a, x_k), on(a, x_j), on(b, x_j), on(b, x_k), 0.0,
                       kernels.TWIST, self.law(k))
 
+    def spring(self, link, point, axis, axis_other, law, flip: bool = False) -> None:
+        """A bilateral linear spring (``SPRING``) of ``link`` at ``point`` (global, at the
+        start, a point of both bodies): its deflection the offset of the link's body's
+        point from the other's along ``axis_other`` (fixed in the other body), its force
+        on the body along ``-axis`` (fixed in the body), ``law`` as :meth:`law`'s. With
+        ``flip`` the roles swap: the deflection is the other's point's offset along
+        ``axis`` (fixed in the body), the force on the other along ``-axis_other``.
+        """
+        model, (a, b) = self.model, self._bodies(link)
+        e, u = np.asarray(axis, float), np.asarray(axis_other, float)
+        if flip:
+            a, b, e, u = b, a, u, e
+        self._row(a, b, model.local(a, point), model.local(a, vector=e),
+                  model.local(b, point), model.local(b, vector=u), 0.0, kernels.SPRING, law,
+                  flip)
+
+    def twist(self, link, axes, axes_other, law) -> None:
+        """A bilateral torsion spring (``TWIST``) of ``link``: ``theta = (x1.y2 -
+        x2.y1) / 2`` (rad) with ``axes = (x1, x2)`` fixed in the link's body and
+        ``axes_other = (y1, y2)`` in the other (global, at the start), a pure couple
+        along ``d theta`` per rotation of the body (:class:`~.penalty_model._Contacts`),
+        ``law`` as :meth:`law`'s.
+        """
+        model, (a, b) = self.model, self._bodies(link)
+        (x1, x2), (y1, y2) = np.asarray(axes, float), np.asarray(axes_other, float)
+        self._row(a, b, model.local(a, vector=x2), model.local(a, vector=x1),
+                  model.local(b, vector=y1), model.local(b, vector=y2), 0.0, kernels.TWIST,
+                  law)
+
     def _bodies(self, link) -> tuple[int, int]:
         """``link``'s body and its other (the ground, ``n_bodies``, for None)."""
         return link.body, self.model.n_bodies if link.other is None else link.other
 
-    def _row(self, a, b, s, e, j, u, offset, kind, law) -> None:
+    def _row(self, a, b, s, e, j, u, offset, kind, law, flip: bool = False) -> None:
         self.rows.append((a, b, s, e, j, u, offset, kind, *law))
         self.parts[-1].append(len(self.rows) - 1)
+        self.flipped.append(flip)
 
 
 def _contact_rows(model: _Model, damping_length_unit_m: float):
     """The penalty contacts of every link of the operator, each added by the link's kind
     (its module says which contacts and which law: bearings linear with the bearing
     clearance, a Cardan joint's trunnions and end faces Hertz, eqs. 76-77, a slip
-    joint's spline linear); returned with, per link, the indices of its contacts.
+    joint's spline linear); returned with, per link, the indices of its contacts, and
+    which contacts are flipped (:class:`ContactRows`).
     """
     rows = ContactRows(model, damping_length_unit_m)
     for link in model.operator.contacts:
         rows.parts.append([])
         link.element_kind.penalty(link, rows)
-    return rows.rows, rows.parts
+    return rows.rows, rows.parts, np.array(rows.flipped, bool)
 
 
 class _Model(Model):

@@ -134,8 +134,10 @@ class Model:
 
     The contacts are built from the equilibrium operator's links at the start by
     ``contact_rows(model, damping_length_unit_m)`` (:func:`.penalty._contact_rows`: each
-    link's kind adds its own), so every element the operator takes, this model takes;
-    the forces it reports are the operator's columns (:meth:`link_values`).
+    link's kind adds its own; with each link's contacts, ``parts``, and the contacts
+    whose body ``a`` is the link's other body, ``flipped``), so every element the
+    operator takes, this model takes; the forces it reports are the operator's columns
+    (:meth:`link_values`).
     """
 
     def __init__(self, scene: Scene, damping_length_unit_m: float, contact_rows):
@@ -155,7 +157,7 @@ class Model:
         self.gravity = np.array(scene.gravity_m_s2) if scene.has("gravity") else np.zeros(3)
         self.start_frames = self._start_frames()
         self.load_bodies, self.loads = self._line_loads()
-        rows, self.parts = contact_rows(self, damping_length_unit_m)
+        rows, self.parts, self.flipped = contact_rows(self, damping_length_unit_m)
         c = self.c = _Contacts(*(np.array(column) for column in zip(*rows)))
         self.d_max = scene.contact.damping_full_depth_m
         self.contact_map, self.contact_bias = self._contact_map()
@@ -172,7 +174,7 @@ class Model:
     def _start_frames(self) -> np.ndarray:
         """(bodies, 3, 3): each body's frame at the start (body to global). Shaft bodies:
         columns (n1, axis, n3) turned by the shaft's angle, so a shaft's axis is its
-        second body axis; cross-pins: (e1, e2, e3).
+        second body axis; cross-pins (of the joints that have one): (e1, e2, e3).
         """
         geo, kin = self.motion.geometry, self.motion.kin
         frames = []
@@ -181,7 +183,7 @@ class Model:
             rest = np.column_stack([np.cross(a, geo.plane_normal), a, geo.plane_normal])
             frames.append(Rotation.from_rotvec(kin.phi[g.shaft, 0] * a).as_matrix() @ rest)
         frames += [np.column_stack([kin.e1[j, 0], kin.e2[j, 0], kin.e3[j, 0]])
-                   for j in range(len(self.scene.joints))]
+                   for j in np.flatnonzero(kin.pinned)]
         return np.array(frames)
 
     def _line_loads(self) -> tuple[np.ndarray, np.ndarray]:
@@ -314,7 +316,7 @@ class Model:
         """
         m, nb = self.motion, self.n_bodies
         rates = [m.omega[g.shaft, 0] * m.geometry.axes[g.shaft] for g in self.segments]
-        rates += list(m.pin_omega[:, 0])
+        rates += list(m.pin_omega[np.flatnonzero(m.kin.pinned), 0])
         return np.concatenate([
             np.zeros(3 * nb),
             Rotation.from_matrix(self.start_frames).as_quat()[:, [3, 0, 1, 2]].ravel(),
@@ -383,15 +385,19 @@ class Model:
         (turning with the cross-pin for a link in the pin's frame, fixed otherwise, as
         the operator's columns).
         """
-        op, k = self.operator, force.shape[-1]
+        op, k, m = self.operator, force.shape[-1], len(self.c.a)
+        # on the link's body: a flipped contact's opposite force, at the point from b's centre
+        sign = np.where(self.flipped, -1.0, 1.0)[:, None]
+        on_body, turning = force * sign, couple * sign
+        at = np.where(self.flipped[:, None], arms[:, m:], arms[:, :m])
         out = np.empty((len(op.names), k))
         for link, rows in zip(op.contacts, self.parts):
             body = link.body
-            net = force[:, rows].sum(axis=1)
+            net = on_body[:, rows].sum(axis=1)
             point = self.local(body, op.points[0, link.columns[0]])
             lever = np.einsum("ijk,j->ik", rot[body], point)
-            moment = (_cross(arms[:, rows] - lever[:, None], force[:, rows]).sum(axis=1)
-                      + couple[:, rows].sum(axis=1))
+            moment = (_cross(at[:, rows] - lever[:, None], on_body[:, rows]).sum(axis=1)
+                      + turning[:, rows].sum(axis=1))
             for c in link.columns:
                 direction = op.directions[0, c]
                 if link.frame == "pin":

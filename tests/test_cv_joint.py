@@ -1,19 +1,23 @@
 """The constant-velocity joint kind: homokinetic kinematics at any angle, its moment
 about the bisector against the closed form of a CV joint's secondary couple, its compiled
-form held to the NumPy reference, its checks and the models that refuse it."""
+form held to the NumPy reference, its checks, the models that refuse it and its penalty
+model (a bushing homokinetic in twist, free in bending)."""
 
 import dataclasses
 
 import numpy as np
 import pytest
-from cardan_forces.driveline import dynamics
+from cardan_forces.driveline import dynamics, penalty
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
 from cardan_forces.driveline.elements.cv import KIND, bisector
+from cardan_forces.driveline.elements.registry import refusals
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.kinematics import kinematics, rest_geometry
 from cardan_forces.driveline.loading import load_scene, scene_from_dict
 from cardan_forces.driveline.scene import SceneError
+from scipy.spatial.transform import Rotation
 
 TORQUE = 1000.0
 
@@ -85,3 +89,147 @@ def test_a_cardan_field_on_a_cv_joint_is_named():
 def test_models_without_a_homokinetic_constraint_refuse_it_by_name():
     joint = load_scene("halfshaft").joints[0]
     assert "constant-velocity joint 'inboard'" in KIND.refusal(joint, "the engine")
+
+
+# ------------------------------------------------------------------ penalty model
+
+
+def _released(name="halfshaft"):
+    return scene_from_dict({"extends": name, "name": f"{name}-released",
+                            "effects": ["gravity", "inertia", "penalty_dynamics"]})
+
+
+@pytest.fixture(scope="module")
+def penalty_model():
+    return penalty._Model(_released(), penalty.DAMPING_LENGTH_UNIT_M)
+
+
+def _moved(model, body, point, turn, shift=(0.0, 0.0, 0.0)):
+    """The start state at rest with ``body`` turned by the rotation vector ``turn``
+    (rad, global) about ``point`` and shifted by ``shift`` (m)."""
+    nb = model.n_bodies
+    y = model.initial_state()
+    y[7 * nb:] = 0.0
+    rotation, centre = Rotation.from_rotvec(turn), model.rest_centre[body]
+    y[3 * body:3 * body + 3] = point + rotation.apply(centre - point) - centre + shift
+    q = y[3 * nb + 4 * body:3 * nb + 4 * body + 4]
+    turned = rotation * Rotation.from_quat(q[[1, 2, 3, 0]])
+    y[3 * nb + 4 * body:3 * nb + 4 * body + 4] = turned.as_quat()[[3, 0, 1, 2]]
+    return y
+
+
+def _joint_columns(model, link, y):
+    forces, _, _ = penalty._sample(model, y[None])
+    return np.array([forces[model.operator.names[c]][0] for c in link.columns])
+
+
+def _cv_links(model):
+    return [link for link in model.operator.contacts if link.kind == "cv-joint"]
+
+
+def test_the_penalty_simulation_takes_it_and_the_engines_refuse_it():
+    scene = _released()
+    assert refusals(scene, PENALTY_SIMULATION) == []
+    assert any("constant-velocity joint 'inboard'" in why
+               for why in refusals(scene, "the engine"))
+
+
+def test_its_penalty_rows_stay_unloaded_while_the_shafts_turn_homokinetically(
+        penalty_model):
+    """Both shafts turned about their own axes by the same angle (any angle: the
+    homokinetic motion, the driven shaft the driving one's mirror in the bisecting
+    plane): every spring and twist row of both joints reads zero to round-off."""
+    model = penalty_model
+    geo, nb = model.motion.geometry, model.n_bodies
+    rows = np.flatnonzero(model.c.radial >= penalty.kernels.SPRING)
+    for angle in (0.3, 1.7, 4.0):
+        y = model.initial_state()
+        for body, segment in enumerate(model.segments):
+            turn = Rotation.from_rotvec(angle * geo.axes[segment.shaft])
+            q = y[3 * nb + 4 * body:3 * nb + 4 * body + 4]
+            y[3 * nb + 4 * body:3 * nb + 4 * body + 4] = (
+                turn * Rotation.from_quat(q[[1, 2, 3, 0]])).as_quat()[[3, 0, 1, 2]]
+        d, _, _, _, _ = model.contacts(model.bodies(y[:, None]))
+        assert np.abs(d[rows]).max() < 1e-14
+
+
+def test_its_penalty_law_is_stiff_in_twist_and_translation_and_free_in_bending(
+        penalty_model):
+    """The driven shaft turned about the joint centre by 0.1 mrad about the bisector: the
+    moment column is ``-k (1 m)^2 psi`` (N m: the rigid law's stiffness, the twist
+    row's ``theta = cos(beta/2) sin(psi)``-ish to second order); bent by 1 mrad about
+    either axis normal to it: no force and no moment beyond second order; shifted by
+    1 um normal to the shafts' plane: ``-k d``, within it: ``-k cos(beta) d`` (the
+    symmetric stiffness ``k (Q + Q^T) / 2``)."""
+    model = penalty_model
+    k = model.scene.contact.bearing_stiffness_N_m
+    for link in _cv_links(model):
+        geo = model.motion.geometry
+        a_in, a_out = geo.axes[link.shaft], geo.axes[link.shaft + 1]
+        b = bisector(a_in, a_out)
+        n = np.cross(a_in, a_out) / np.linalg.norm(np.cross(a_in, a_out))
+        centre = model.operator.points[0, link.columns[0]]
+        psi = 1e-4
+        twisted = _joint_columns(model, link, _moved(model, link.body, centre, psi * b))
+        assert twisted[3] == pytest.approx(-k * psi, rel=1e-6)
+        assert np.abs(twisted[:3]).max() < 1e-6 * k * psi
+        for axis in (n, np.cross(b, n)):
+            bent = _joint_columns(model, link, _moved(model, link.body, centre, 1e-3 * axis))
+            assert np.abs(bent).max() < 1e-6 * k * 1e-3
+        cos_beta = float(a_in @ a_out)
+        frame = model.operator.shaft_frames[link.shaft]
+        for direction, stiffness in ((n, k), (np.cross(n, a_in), k * cos_beta)):
+            shifted = _joint_columns(model, link, _moved(model, link.body, centre,
+                                                         np.zeros(3), 1e-6 * direction))
+            force = shifted[:3] @ frame  # the columns are along the driving shaft's frame
+            assert force == pytest.approx(-stiffness * 1e-6 * direction, abs=1e-9 * k * 1e-6)
+
+
+@pytest.mark.compiled
+@pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
+@pytest.mark.parametrize("seed", range(2))
+def test_compiled_cv_rows_equal_the_numpy_model(penalty_model, seed):
+    """Right-hand side and Jacobian of the compiled kernels against the NumPy model's at
+    seeded states where every row is deflected and moving, to the bushing test's
+    tolerances."""
+    model = penalty_model
+    rng = np.random.default_rng(seed)
+    nb = model.n_bodies
+    y = model.initial_state()
+    y[:3 * nb] += 2e-6 * rng.standard_normal(3 * nb)
+    y[3 * nb:7 * nb] *= 1.0 + 1e-4 * rng.standard_normal(4 * nb)
+    y[7 * nb:] += 1e-3 * rng.standard_normal(6 * nb)
+    t = 0.01 * seed
+    compiled, reference = model.rhs_compiled(t, y), model.rhs(t, y[:, None])[:, 0]
+    for rows in np.split(np.arange(13 * nb), [3 * nb, 7 * nb, 10 * nb]):
+        assert np.abs(compiled - reference)[rows].max() <= 1e-11 * np.abs(reference[rows]).max()
+    _, step = model.tolerances(1e-8)
+    exact, jac = model.jacobian(t, y, step), model.jacobian_compiled(t, y)
+    scale = np.maximum(np.abs(exact).max(axis=1)[:, None], np.abs(exact).max(axis=0)[None, :])
+    assert np.all(np.abs(jac - exact) <= 1e-9 * scale)
+
+
+@pytest.mark.compiled
+@pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
+def test_compiled_run_on_the_halfshaft_averages_to_the_rigid_set():
+    """The compiled BDF itself (no fallback) runs the released ``halfshaft`` 0.1 s from
+    rest; its forces satisfy the rigid equilibrium (``||A x - b||`` under 1 % of ``||A||
+    ||x||``) and over the second half every load the rigid model determines (the CV
+    joints' forces and moments among them) equals its value on average within 2 % of
+    the largest (the hub's rows, ~2.1 kN)."""
+    scene = _released()
+    t = np.arange(0.0, 0.1 + 1e-9, 0.005)
+    result = penalty.simulate_penalty(scene, t, method=penalty.COMPILED)
+    assert result.success, result.message
+    op = build_operator(simulate(scene, t))
+    x = np.array([result.forces[n] for n in op.names]).T
+    late = np.flatnonzero(t >= 0.05)
+    residual = np.linalg.norm(np.einsum("tij,tj->ti", op.A, x) - op.b, axis=1)
+    scale = np.linalg.norm(op.A, axis=(1, 2)) * np.linalg.norm(x, axis=1)
+    assert np.median(residual[late] / scale[late]) < 0.01
+    sets = [determinacy(op, i) for i in late]
+    determinate = np.logical_and.reduce([d.determinate for d in sets])
+    assert all(determinate[op.index(f"{j}.moment")] for j in ("inboard", "outboard"))
+    rigid = np.array([d.min_norm for d in sets])[:, determinate].mean(axis=0)
+    gap = np.abs(x[late][:, determinate].mean(axis=0) - rigid)
+    assert gap.max() < 0.02 * np.abs(rigid).max()

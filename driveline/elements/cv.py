@@ -19,8 +19,33 @@ Kinematics: the driven angle equals the driving one (its rest reference carried 
 the articulation as a Cardan joint's driven yoke), so the ratio is 1 and its derivative
 0 whatever the angle. Contact laws (an assumption: the scenes give no joint stiffness):
 as stiff as a bearing, ``k`` for the forces and ``k (1 m)^2`` for the moment. The
-penalty simulation and the physics engines have no homokinetic constraint: they refuse
-a scene that holds one, in one line.
+physics engines have no homokinetic constraint: they refuse a scene that holds one, in
+one line.
+
+Penalty model (:meth:`CV.penalty`): a bushing at the joint centre, stiff in the three
+translations (the centre is common to both shafts), stiff in the one relative rotation
+the rigid joint stops and free in the two it allows. Homokinetic means the driven shaft
+is the mirror image of the driving one in the bisecting plane (Seherr-Thoss, Schmelz,
+Aucktor, op. cit., on the homokinetic condition: the balls, held by the cage, stay in
+the plane that bisects the shafts' angle): with ``M = I - 2 b b^T`` that mirror, the
+shafts' rotations since the start satisfy ``R_out = M R_in M`` (a mirror turns a
+rotation about ``a_in`` into one about ``-M a_in = a_out`` by the same angle). So a
+torsion spring ``theta = (M x1 . y2 - M x2 . y1) / 2``, ``x1, x2`` normal to ``a_in``
+and fixed in the driving shaft, their mirrors ``M x1, M x2`` fixed in the driven one
+(a ``TWIST`` row), stays at ``theta = 0`` while the two turn homokinetically at any
+angle; its rate is ``g . (w_out - w_in)`` with ``g = cos(beta/2) b`` (normal to
+``b``, bending, it does not feel to first order), so its stiffness ``k (1 m)^2 /
+cos^2(beta/2)`` gives the rigid law's ``k (1 m)^2`` about the bisector. The shafts'
+frames are turned by ``Q`` (the rotation by ``beta`` about ``a_in x a_out``) relative
+to each other while they turn, ``R_out = Q R_in Q^T``, so no spring fixed in both can
+stay aligned: three springs with their driven side turned by ``Q`` (force ``-k/2 Q
+p`` on the driven shaft, ``p`` the driven centre's offset from the driving one), and
+three the other way round (``-k/2 Q^T p``) make the symmetric, hence conservative,
+stiffness ``k (Q + Q^T) / 2``: ``k`` normal to the shafts' plane, ``k cos(beta)``
+within it (at least 0.64 ``k`` up to 50 deg), the joint's law's ``k`` as the scenes'
+bearing stiffness. Damping: the scene's fraction of each stiffness, as a bushing's.
+The relations hold for the articulation at the start; the penalty model's axes move by
+microradians about it.
 """
 
 from __future__ import annotations
@@ -30,7 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Range, table_keys
-from .base import Column, Law, Layout, Link
+from .base import PENALTY_SIMULATION, Column, Law, Layout, Link
 from .joint import JointKind, JointStep, rotate_perp
 
 LENGTH_M = 1.0
@@ -57,6 +82,24 @@ def bisector(a_in: np.ndarray, a_out: np.ndarray) -> np.ndarray:
     """The unit bisector of two shaft axes: the axis of the joint's constraint moment."""
     b = a_in + a_out
     return b / np.linalg.norm(b)
+
+
+def reflection(normal: np.ndarray) -> np.ndarray:
+    """(3, 3): the mirror in the plane of unit normal ``normal``, ``I - 2 n n^T``; in the
+    bisecting plane (``normal`` the bisector) it takes the driving shaft onto the driven
+    one (module doc).
+    """
+    return np.eye(3) - 2.0 * np.outer(normal, normal)
+
+
+def bend(a_in: np.ndarray, a_out: np.ndarray) -> np.ndarray:
+    """(3, 3): the rotation ``Q`` by the articulation angle about ``a_in x a_out`` that
+    takes ``a_in`` to ``a_out`` (the identity for aligned shafts), Rodrigues' formula.
+    """
+    axis, cos = np.cross(a_in, a_out), float(np.dot(a_in, a_out))
+    cross = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]],
+                      [-axis[1], axis[0], 0.0]])
+    return np.eye(3) + cross + cross @ cross / (1.0 + cos)
 
 
 class CV(JointKind):
@@ -116,7 +159,28 @@ class CV(JointKind):
         k, c = scene.contact.bearing_stiffness_N_m, link.columns
         return [Law(c[:3], k, 0.0), Law(c[3:], k * LENGTH_M ** 2, 0.0)]
 
+    def penalty(self, link: Link, rows) -> None:
+        """A bushing homokinetic in twist and free in bending (module doc): at the
+        joint centre, between the driven shaft's body and the driving shaft's, three
+        springs that share the centre, each half flipped, and one twist spring about the
+        bisector.
+        """
+        op, k = rows.op, rows.scene.contact.bearing_stiffness_N_m
+        centre = op.points[0, link.columns[0]]
+        a_in, a_out = op.shaft_frames[link.shaft][2], op.shaft_frames[link.shaft + 1][2]
+        turn, mirror = bend(a_in, a_out), reflection(bisector(a_in, a_out))
+        half = rows.law(0.5 * k)
+        for z in np.eye(3):
+            rows.spring(link, centre, turn @ z, z, half)
+            rows.spring(link, centre, turn @ z, z, half, flip=True)
+        r1, r2, _ = op.shaft_frames[link.shaft]
+        cos_half = float(np.dot(a_in, bisector(a_in, a_out)))
+        rows.twist(link, (mirror @ r1, mirror @ r2), (r1, r2),
+                   rows.law(k * LENGTH_M ** 2 / cos_half ** 2))
+
     def refusal(self, joint: CVJoint, engine: str) -> str | None:
+        if engine == PENALTY_SIMULATION:
+            return None
         return (f"constant-velocity joint {joint.name!r}: {engine} has no homokinetic "
                 "constraint to model it with")
 
