@@ -34,7 +34,9 @@ hold these laws); those of the built-in kinds:
 - **constant-velocity joint** (:mod:`.elements.cv`): a bushing between two shafts that
   turn about different axes, homokinetic in twist and free in bending: three pairs of
   springs at its centre (:meth:`ContactRows.spring`) and one twist about the bisector
-  (:meth:`ContactRows.twist`), bilateral and linear.
+  (:meth:`ContactRows.twist`), bilateral and linear;
+- **centring ball** (:mod:`.elements.centring`): the ball's centre held on the bore's
+  axis, both ways, free along it (:meth:`ContactRows.line`), bilateral and linear.
 
 **Bushing.** A linear six-way spring-damper between a link's two bodies at a point,
 bilateral (it pulls as it pushes, with no clearance and no step): along each axis
@@ -346,6 +348,18 @@ class ContactRows:
         self._row(a, b, model.local(a, point), model.local(a, vector=e),
                   model.local(b, point), model.local(b, vector=u), 0.0, kernels.SPRING, law,
                   flip)
+
+    def line(self, link, point, axis, law) -> None:
+        """A point held on a line (``LINE``) of ``link``, both ways: the other body's
+        point at ``point`` (global, at the start) on the link's body's line through
+        ``point`` along the unit ``axis`` (fixed in the body), free along it (a flipped
+        row: its ``a`` is the other body). ``law`` as :meth:`law`'s.
+        """
+        model, (line, other) = self.model, self._bodies(link)
+        u = np.asarray(axis, float)
+        self._row(other, line, model.local(other, point), model.local(other, vector=u),
+                  model.local(line, point), model.local(line, vector=u), 0.0, kernels.LINE,
+                  law, True)
 
     def twist(self, link, axes, axes_other, law) -> None:
         """A bilateral torsion spring (``TWIST``) of ``link``: ``theta = (x1.y2 -

@@ -33,10 +33,11 @@ kernel = partial(njit, cache=True, depends=KERNEL_FILES)
 """The penalty modules' ``njit``: cached, and compiled again when any of
 :data:`KERNEL_FILES` changes."""
 
-FACE, RADIAL, SPRING, TWIST = 0, 1, 2, 3
+FACE, RADIAL, SPRING, TWIST, LINE = 0, 1, 2, 3, 4
 """A contact's kind (the third column of :attr:`ModelArrays.topology`): a unilateral
 end face or radial contact (eqs. 75-78), a bilateral linear spring along a face's axis,
-a bilateral linear torsion spring (:class:`~.penalty_model._Contacts` defines each)."""
+a bilateral linear torsion spring, a bilateral linear point-on-line spring
+(:class:`~.penalty_model._Contacts` defines each)."""
 
 
 class ModelArrays(NamedTuple):
@@ -46,7 +47,8 @@ class ModelArrays(NamedTuple):
     Per body (``nb``: shaft segments first, then cross-pins): ``mass`` (kg), principal
     ``inertia`` (nb, 3) (kg m^2, body axes), ``rest_centre`` (nb, 3) (m, global). Per
     contact, one row each: ``topology`` (m, 3) int: body ``a``, body ``b`` (the ground:
-    ``nb``), its kind (:data:`FACE`, :data:`RADIAL`, :data:`SPRING`, :data:`TWIST`);
+    ``nb``), its kind (:data:`FACE`, :data:`RADIAL`, :data:`SPRING`, :data:`TWIST`,
+    :data:`LINE`);
     ``geometry`` (m, 12): ``s``, ``e`` (point and axis on ``a``), ``j``, ``u`` (on
     ``b``), body coordinates (m; a twist's four axes); ``laws`` (m, 4): offset (the
     clearance, m), stiffness, exponent, ``c_max`` of the contact law (eqs. 75-78; a
@@ -175,6 +177,23 @@ def _twist(ea, ub, sa, jb, omega, ka, kb, law, g):
         g[i] = 0.5 * (ea[j] * ub[k] - ea[k] * ub[j] - sa[j] * jb[k] + sa[k] * jb[j])
         rate += g[i] * (omega[ka, i] - omega[kb, i])
     return theta, law[1] * theta + law[3] * rate
+
+
+@kernel(inline="always")
+def _line(p, ub, rel, law, force):
+    """A :data:`LINE` contact: the offset ``r = p - (p.ub) ub`` of ``a``'s point from
+    ``b``'s line (``ub`` unit), its force on ``a`` ``-(K r + c (rel - (rel.ub) ub))``
+    into ``force``; returns ``|r|`` (m) and the force's size (N).
+    """
+    along = p[0] * ub[0] + p[1] * ub[1] + p[2] * ub[2]
+    slide = rel[0] * ub[0] + rel[1] * ub[1] + rel[2] * ub[2]
+    depth, size = 0.0 * along, 0.0 * along
+    for i in range(3):
+        r = p[i] - along * ub[i]
+        force[i] = -(law[1] * r + law[3] * (rel[i] - slide * ub[i]))
+        depth += r * r
+        size += force[i] * force[i]
+    return np.sqrt(depth), np.sqrt(size)
 
 
 @kernel(inline="always")
@@ -330,14 +349,18 @@ def _contacts(frames, topology, geometry, laws, d_max, depth, push, on_a, force,
                 moment[ka, i] -= push[c] * normal[i]
                 moment[kb, i] += push[c] * normal[i]
             continue
-        depth[c] = _depth(p, ea, ub, radial, laws[c, 0], normal)
-        if depth[c].real <= 0.0 and not spring:  # out of touch: no force (eq. 75)
-            push[c] = 0.0
-            for i in range(3):
-                on_a[c, i] = 0.0
-            continue
-        _relative(vel, rate, omega, ka, kb, geometry, c, p, rel)
-        push[c] = _pressed(depth[c], ea, rel, radial, spring, laws[c], d_max, normal)
+        if kind == LINE:
+            _relative(vel, rate, omega, ka, kb, geometry, c, p, rel)
+            depth[c], push[c] = _line(p, ub, rel, laws[c], normal)
+        else:
+            depth[c] = _depth(p, ea, ub, radial, laws[c, 0], normal)
+            if depth[c].real <= 0.0 and not spring:  # out of touch: no force (eq. 75)
+                push[c] = 0.0
+                for i in range(3):
+                    on_a[c, i] = 0.0
+                continue
+            _relative(vel, rate, omega, ka, kb, geometry, c, p, rel)
+            push[c] = _pressed(depth[c], ea, rel, radial, spring, laws[c], d_max, normal)
         for i in range(3):
             on_a[c, i] = normal[i]  # now the force on a
             force[ka, i] += normal[i]

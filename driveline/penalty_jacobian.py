@@ -20,11 +20,13 @@ import numpy as np
 
 from .harmonic import harmonic
 from .penalty_contact import (
+    LINE,
     RADIAL,
     SPRING,
     TWIST,
     Local,
     _contacts_into,
+    _line,
     _local,
     _push,
     _twist,
@@ -155,6 +157,11 @@ def _jacobian_into(t, y, model, jac, linked, state, own):
         if kind == TWIST:
             _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work, dloc, cols)
             _twist_rows(y, nb, ka, kb, laws[c], frames, drot, work, dloc, width, rows)
+        elif kind == LINE:
+            _line(work.p, work.ub, work.rel, laws[c], work.normal)
+            _line_rates(work.p, work.ub, work.rel, laws[c], grad)
+            _local_rates(y, nb, ka, kb, geometry[c], frames, drot, work, dloc, cols)
+            _contact_rows(grad, dloc, work, width, rows)
         else:
             depth, push = _push(work.p, work.ea, work.ub, work.rel, radial, spring, laws[c],
                                 d_max, work.normal)
@@ -260,6 +267,26 @@ def _twist_rows(y, nb, ka, kb, law, frames, drot, work, dloc, width, rows):
             dforce[i, col] = 0.0
             dmom_a[i, col] = -(dh * g[i] + h * dg[i])
             dmom_b[i, col] = dh * g[i] + h * dg[i]
+
+
+@kernel(inline="always")
+def _line_rates(p, ub, rel, law, grad):
+    """``d(force on a)/d(p, ea, ub, rel)`` of a :data:`~.penalty_contact.LINE` into
+    ``grad`` (3, 12), by hand from ``F = -K (p - (p.u) u) - c (rel - (rel.u) u)``:
+    ``-K (I - u u^T)`` in ``p``, ``K ((p.u) I + u p^T) + c ((rel.u) I + u rel^T)`` in
+    ``u``, ``-c (I - u u^T)`` in ``rel``, none in ``ea``.
+    """
+    stiffness, damping = law[1], law[3]
+    along = p[0] * ub[0] + p[1] * ub[1] + p[2] * ub[2]
+    slide = rel[0] * ub[0] + rel[1] * ub[1] + rel[2] * ub[2]
+    for i in range(3):
+        for j in range(3):
+            eye = 1.0 if i == j else 0.0
+            grad[i, j] = -stiffness * (eye - ub[i] * ub[j])
+            grad[i, 3 + j] = 0.0
+            grad[i, 6 + j] = (stiffness * (along * eye + ub[i] * p[j])
+                              + damping * (slide * eye + ub[i] * rel[j]))
+            grad[i, 9 + j] = -damping * (eye - ub[i] * ub[j])
 
 
 @kernel(inline="always")

@@ -56,10 +56,19 @@ from .penalty_bdf import (
     advance,
     start,
 )
-from .penalty_contact import FACE, RADIAL, SPRING, TWIST, ModelArrays, contact_forces, rhs
+from .penalty_contact import (
+    FACE,
+    LINE,
+    RADIAL,
+    SPRING,
+    TWIST,
+    ModelArrays,
+    contact_forces,
+    rhs,
+)
 from .penalty_jacobian import jacobian
 
-__all__ = ["COMPLEX_STEP", "FACE", "FINISHED", "HAVE_NUMBA", "MESSAGES", "ModelArrays",
+__all__ = ["COMPLEX_STEP", "FACE", "FINISHED", "HAVE_NUMBA", "LINE", "MESSAGES", "ModelArrays",
            "NOT_FINITE", "RADIAL", "RUNNING", "SPRING", "STEP_TOO_SMALL", "TWIST", "Run",
            "advance", "contact_forces", "jacobian", "rhs", "start"]
 

@@ -28,7 +28,7 @@ from .elements.bodies import frames_of
 from .elements.registry import scene_elements
 from .equilibrium import body_references, build_operator
 from .harmonic import harmonic_law
-from .penalty_contact import RADIAL, SPRING, TWIST
+from .penalty_contact import LINE, RADIAL, SPRING, TWIST
 from .scene import Scene
 
 _TAU_S = 1e-3
@@ -113,6 +113,11 @@ class _Contacts:
     a pure couple ``-(K theta + c_max theta') g`` on ``a`` and its opposite on ``b``,
     ``g = (e x u - s x j) / 2`` (``d theta`` per rotation of ``a``, so the couple
     derives from ``K theta^2 / 2``) and ``theta' = g . (omega_a - omega_b)``.
+    ``LINE``: ``a``'s point ``s`` held on ``b``'s line through ``j`` along the unit
+    ``u`` (``e`` unused), both ways and linear: ``r = w - (w.u) u`` its offset from the
+    line (``w`` the points' offset), ``d = |r|``, the force on ``a`` ``-(K r + c_max
+    (v - (v.u) u))`` (``v`` the points' relative velocity), ``f`` its size: free
+    along the line.
     """
 
     a: np.ndarray
@@ -374,6 +379,13 @@ class Model:
         d, f = np.where(twist, theta, d), np.where(twist, moment, f)
         force = np.where(twist, 0.0, -f * np.where(radial, normal, e))
         couple = np.where(twist, -moment * g, 0.0)
+        # LINE: a's point held on b's line through J along u (= axis, unit), both ways
+        line = kind == LINE
+        held = offset - (offset * axis).sum(0) * axis
+        pull = -(stiffness * held + c_max * (relative - (relative * axis).sum(0) * axis))
+        force = np.where(line, pull, force)
+        d = np.where(line, np.sqrt((held * held).sum(0)), d)
+        f = np.where(line, np.sqrt((pull * pull).sum(0)), f)
         return d, f, force, np.concatenate([arm, offset + arm_j], axis=1), couple
 
     def link_values(self, force: np.ndarray, arms: np.ndarray, couple: np.ndarray,

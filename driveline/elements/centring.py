@@ -14,8 +14,14 @@ secondary couples are shared between the crosses and the ball, a redundancy the 
 set exposes; its release ``unball:<centre yoke>`` takes the ball out. Contact law (an
 assumption): as stiff as a bearing, without gap.
 
-The penalty simulation and the physics engines have no contact between non-adjacent
-shafts in their models of a scene: they refuse one, in one line.
+Penalty model (:meth:`Centring.penalty`): the ball's centre, a point of the driving
+shaft, held on the bore's axis, a line of the driven shaft, by a linear spring-damper
+both ways normal to the line (a ``LINE`` row: ``-(k r + c r')``, ``r`` the centre's
+offset from the axis, ``c`` the scene's damping fraction of ``k``), free along it: the
+rigid link's two columns and its one freedom, at any spin of either shaft, the bore's
+axis being the one line of the driven shaft that its spin leaves in place. ``k`` is the
+rigid law's, the bearing stiffness. The physics engines have no contact between
+non-adjacent shafts in their models of a scene: they refuse one, in one line.
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Scene, SceneError
-from .base import Column, Law, Layout, Link, Release
+from .base import PENALTY_SIMULATION, Column, Law, Layout, Link, Release
 from .inshaft import InShaftKind
 
 
@@ -116,7 +122,18 @@ class Centring(InShaftKind):
         elements[:] = [e for e in elements if not (isinstance(e, CentringDevice)
                                                    and e.shaft == release.shaft)]
 
+    def penalty(self, link: Link, rows) -> None:
+        """The ball's centre, on the driving shaft, held on the bore's axis, on the
+        driven shaft, both ways and free along it (a ``LINE`` row), as stiff as a
+        bearing (module doc).
+        """
+        rows.line(link, rows.op.points[0, link.columns[0]],
+                  rows.op.shaft_frames[link.shaft][2],
+                  rows.law(rows.scene.contact.bearing_stiffness_N_m))
+
     def refusal(self, device: CentringDevice, engine: str) -> str | None:
+        if engine == PENALTY_SIMULATION:
+            return None
         return (f"centring device {device.name!r}: {engine} has no contact between shafts "
                 "that are not adjacent")
 
