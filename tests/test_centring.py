@@ -15,6 +15,7 @@ from cardan_forces.driveline.kinematics import kinematics, rest_geometry
 from cardan_forces.driveline.loading import load_scene, scene_from_dict
 from cardan_forces.driveline.release import released_scene
 from cardan_forces.driveline.scene import SceneError
+from penalty_checks import assert_compiled_equals_numpy, balanced_run, seeded_state
 from scipy.spatial.transform import Rotation
 
 
@@ -132,37 +133,14 @@ def test_compiled_line_row_equals_the_numpy_model(penalty_model, seed):
     seeded states where the ball is off the bore's axis and moving, to the bushing
     test's tolerances."""
     model = penalty_model
-    rng = np.random.default_rng(seed)
-    nb = model.n_bodies
-    y = model.initial_state()
-    y[:3 * nb] += 2e-6 * rng.standard_normal(3 * nb)
-    y[3 * nb:7 * nb] *= 1.0 + 1e-4 * rng.standard_normal(4 * nb)
-    y[7 * nb:] += 1e-3 * rng.standard_normal(6 * nb)
+    y = seeded_state(model, seed)
     t = 0.01 * seed
-    compiled, reference = model.rhs_compiled(t, y), model.rhs(t, y[:, None])[:, 0]
-    for rows in np.split(np.arange(13 * nb), [3 * nb, 7 * nb, 10 * nb]):
-        assert np.abs(compiled - reference)[rows].max() <= 1e-11 * np.abs(reference[rows]).max()
-    _, step = model.tolerances(1e-8)
-    exact, jac = model.jacobian(t, y, step), model.jacobian_compiled(t, y)
-    scale = np.maximum(np.abs(exact).max(axis=1)[:, None], np.abs(exact).max(axis=0)[None, :])
-    assert np.all(np.abs(jac - exact) <= 1e-9 * scale)
+    assert_compiled_equals_numpy(model, t, y)
     depth, push, _, _, _, _ = penalty.kernels.contact_forces(y, model.arrays)
     d, f, _, _, _ = model.contacts(model.bodies(y[:, None]))
     row = model.c.radial == penalty.kernels.LINE
     assert depth[row] == pytest.approx(d[row, 0], rel=1e-12)
     assert push[row] == pytest.approx(f[row, 0], rel=1e-12)
-
-
-def _balanced(scene, t, late):
-    """A compiled run of ``scene`` sampled at ``t``: its forces and the median over
-    ``late`` of ``||A x - b||`` over ``||A|| ||x||`` (the rigid equilibrium's residual)."""
-    result = penalty.simulate_penalty(scene, t, method=penalty.COMPILED)
-    assert result.success, result.message
-    op = build_operator(simulate(scene, t))
-    x = np.array([result.forces[n] for n in op.names]).T
-    residual = np.linalg.norm(np.einsum("tij,tj->ti", op.A, x) - op.b, axis=1)
-    scale = np.linalg.norm(op.A, axis=(1, 2)) * np.linalg.norm(x, axis=1)
-    return op, x, np.median(residual[late] / scale[late])
 
 
 @pytest.mark.compiled
@@ -171,7 +149,7 @@ def test_compiled_integrator_finishes_on_the_double_cardan_line():
     """The compiled BDF itself (no fallback) runs the released ``double-cardan`` 0.05 s
     from rest (its rattle starting), the ball pushing."""
     t = np.arange(0.0, 0.05 + 1e-9, 0.005)
-    op, x, _ = _balanced(_released(), t, t >= 0.0)
+    op, x, _ = balanced_run(_released(), t, t >= 0.0)
     ball = [op.names.index(f"ball.{c}") for c in ("r1", "r2")]
     assert np.abs(x[-1, ball]).max() > 100.0
 
@@ -192,8 +170,8 @@ def test_the_ball_takes_load_within_the_rigid_set_and_leaves_the_crosses_alone()
     late = t >= 0.8 - 0.2 * np.pi
     with_ball = _released()
     without = released_scene(with_ball, [KIND.releases(with_ball)[0]])
-    op, x, residual = _balanced(with_ball, t, late)
-    op_free, x_free, residual_free = _balanced(without, t, late)
+    op, x, residual = balanced_run(with_ball, t, late)
+    op_free, x_free, residual_free = balanced_run(without, t, late)
     assert residual < 0.025 and residual_free < 0.025
     r2 = op.names.index("ball.r2")
     rigid = np.mean([determinacy(op, i).min_norm[r2] for i in np.flatnonzero(late)])

@@ -17,6 +17,7 @@ from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.kinematics import kinematics, rest_geometry
 from cardan_forces.driveline.loading import load_scene, scene_from_dict
 from cardan_forces.driveline.scene import SceneError
+from penalty_checks import assert_compiled_equals_numpy, balanced_run, seeded_state
 from scipy.spatial.transform import Rotation
 
 TORQUE = 1000.0
@@ -193,20 +194,9 @@ def test_compiled_cv_rows_equal_the_numpy_model(penalty_model, seed):
     seeded states where every row is deflected and moving, to the bushing test's
     tolerances."""
     model = penalty_model
-    rng = np.random.default_rng(seed)
-    nb = model.n_bodies
-    y = model.initial_state()
-    y[:3 * nb] += 2e-6 * rng.standard_normal(3 * nb)
-    y[3 * nb:7 * nb] *= 1.0 + 1e-4 * rng.standard_normal(4 * nb)
-    y[7 * nb:] += 1e-3 * rng.standard_normal(6 * nb)
+    y = seeded_state(model, seed)
     t = 0.01 * seed
-    compiled, reference = model.rhs_compiled(t, y), model.rhs(t, y[:, None])[:, 0]
-    for rows in np.split(np.arange(13 * nb), [3 * nb, 7 * nb, 10 * nb]):
-        assert np.abs(compiled - reference)[rows].max() <= 1e-11 * np.abs(reference[rows]).max()
-    _, step = model.tolerances(1e-8)
-    exact, jac = model.jacobian(t, y, step), model.jacobian_compiled(t, y)
-    scale = np.maximum(np.abs(exact).max(axis=1)[:, None], np.abs(exact).max(axis=0)[None, :])
-    assert np.all(np.abs(jac - exact) <= 1e-9 * scale)
+    assert_compiled_equals_numpy(model, t, y)
 
 
 @pytest.mark.compiled
@@ -219,14 +209,9 @@ def test_compiled_run_on_the_halfshaft_averages_to_the_rigid_set():
     the largest (the hub's rows, ~2.1 kN)."""
     scene = _released()
     t = np.arange(0.0, 0.1 + 1e-9, 0.005)
-    result = penalty.simulate_penalty(scene, t, method=penalty.COMPILED)
-    assert result.success, result.message
-    op = build_operator(simulate(scene, t))
-    x = np.array([result.forces[n] for n in op.names]).T
     late = np.flatnonzero(t >= 0.05)
-    residual = np.linalg.norm(np.einsum("tij,tj->ti", op.A, x) - op.b, axis=1)
-    scale = np.linalg.norm(op.A, axis=(1, 2)) * np.linalg.norm(x, axis=1)
-    assert np.median(residual[late] / scale[late]) < 0.01
+    op, x, residual = balanced_run(scene, t, late)
+    assert residual < 0.01
     sets = [determinacy(op, i) for i in late]
     determinate = np.logical_and.reduce([d.determinate for d in sets])
     assert all(determinate[op.index(f"{j}.moment")] for j in ("inboard", "outboard"))

@@ -6,12 +6,11 @@ import numpy as np
 import pytest
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.determinacy import determinacy
-from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
 from cardan_forces.driveline.elements.disc_coupling import STIFFNESS
 from cardan_forces.driveline.elements.registry import refusals
-from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import scene_from_dict
+from penalty_checks import assert_compiled_equals_numpy, balanced_run, seeded_state
 from scipy.spatial.transform import Rotation
 
 pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
@@ -108,20 +107,9 @@ def test_compiled_bushing_equals_the_numpy_model(model, seed):
     between positions of metres lose digits in both), the bushing's six deflections
     and forces to 1e-12.
     """
-    rng = np.random.default_rng(seed)
-    nb = model.n_bodies
-    y = model.initial_state()
-    y[:3 * nb] += 2e-6 * rng.standard_normal(3 * nb)
-    y[3 * nb:7 * nb] *= 1.0 + 1e-4 * rng.standard_normal(4 * nb)
-    y[7 * nb:] += 1e-3 * rng.standard_normal(6 * nb)
+    y = seeded_state(model, seed)
     t = 0.01 * seed
-    compiled, reference = model.rhs_compiled(t, y), model.rhs(t, y[:, None])[:, 0]
-    for rows in np.split(np.arange(13 * nb), [3 * nb, 7 * nb, 10 * nb]):
-        assert np.abs(compiled - reference)[rows].max() <= 1e-11 * np.abs(reference[rows]).max()
-    _, step = model.tolerances(1e-8)
-    exact, jac = model.jacobian(t, y, step), model.jacobian_compiled(t, y)
-    scale = np.maximum(np.abs(exact).max(axis=1)[:, None], np.abs(exact).max(axis=0)[None, :])
-    assert np.all(np.abs(jac - exact) <= 1e-9 * scale)
+    assert_compiled_equals_numpy(model, t, y)
     depth, push, _, _, _, _ = penalty.kernels.contact_forces(y, model.arrays)
     d, f, _, _, _ = model.contacts(model.bodies(y[:, None]))
     rows = model.c.radial >= penalty.kernels.SPRING
@@ -140,14 +128,9 @@ def test_compiled_integrator_finishes_on_the_disc_line(scene):
     rigid model's geometry.
     """
     t = np.arange(0.0, 0.1 + 1e-9, 0.005)
-    result = penalty.simulate_penalty(scene, t, method=penalty.COMPILED)
-    assert result.success, result.message
-    op = build_operator(simulate(scene, t))
-    x = np.array([result.forces[n] for n in op.names]).T
     late = np.flatnonzero(t >= 0.05)
-    residual = np.linalg.norm(np.einsum("tij,tj->ti", op.A, x) - op.b, axis=1)
-    scale = np.linalg.norm(op.A, axis=(1, 2)) * np.linalg.norm(x, axis=1)
-    assert np.median(residual[late] / scale[late]) < 0.01
+    op, x, residual = balanced_run(scene, t, late)
+    assert residual < 0.01
     torque = op.names.index("disc.torque")
     rigid = np.mean([determinacy(op, i).min_norm[torque] for i in late])
     assert x[late, torque].mean() == pytest.approx(rigid, rel=0.01)

@@ -7,13 +7,12 @@ import numpy as np
 import pytest
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.determinacy import determinacy
-from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
 from cardan_forces.driveline.elements.bodies import frames_of
 from cardan_forces.driveline.elements.gear_mesh import KIND
 from cardan_forces.driveline.elements.registry import refusals
-from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import scene_from_dict
+from penalty_checks import assert_compiled_equals_numpy, balanced_run, seeded_state
 
 pytestmark = pytest.mark.compiled  # also run for a generic CPU by .ci/run
 
@@ -95,20 +94,9 @@ def test_compiled_mesh_loads_equal_the_numpy_model(model, seed):
     seeded states off rest (the mesh force's moment about the body's moved centre, and
     its rate, included), to the tolerances of the bushing's test.
     """
-    rng = np.random.default_rng(seed)
-    nb = model.n_bodies
-    y = model.initial_state()
-    y[:3 * nb] += 2e-6 * rng.standard_normal(3 * nb)
-    y[3 * nb:7 * nb] *= 1.0 + 1e-4 * rng.standard_normal(4 * nb)
-    y[7 * nb:] += 1e-3 * rng.standard_normal(6 * nb)
+    y = seeded_state(model, seed)
     t = 0.01 + 0.02 * seed
-    compiled, reference = model.rhs_compiled(t, y), model.rhs(t, y[:, None])[:, 0]
-    for rows in np.split(np.arange(13 * nb), [3 * nb, 7 * nb, 10 * nb]):
-        assert np.abs(compiled - reference)[rows].max() <= 1e-11 * np.abs(reference[rows]).max()
-    _, step = model.tolerances(1e-8)
-    exact, jac = model.jacobian(t, y, step), model.jacobian_compiled(t, y)
-    scale = np.maximum(np.abs(exact).max(axis=1)[:, None], np.abs(exact).max(axis=0)[None, :])
-    assert np.all(np.abs(jac - exact) <= 1e-9 * scale)
+    assert_compiled_equals_numpy(model, t, y)
 
 
 @pytest.mark.skipif(not penalty.kernels.HAVE_NUMBA, reason="numba not installed")
@@ -122,14 +110,9 @@ def test_compiled_run_with_meshes_averages_to_the_rigid_bearing_loads(scene):
     are left out, as in ``paper-slip``'s test.
     """
     t = np.arange(0.0, 0.2 + 1e-9, 0.005)
-    result = penalty.simulate_penalty(scene, t, method=penalty.COMPILED)
-    assert result.success, result.message
-    op = build_operator(simulate(scene, t))
-    x = np.array([result.forces[n] for n in op.names]).T
     late = np.flatnonzero(t >= 0.1)
-    residual = np.linalg.norm(np.einsum("tij,tj->ti", op.A, x) - op.b, axis=1)
-    scale = np.linalg.norm(op.A, axis=(1, 2)) * np.linalg.norm(x, axis=1)
-    assert np.median(residual[late] / scale[late]) < 0.01
+    op, x, residual = balanced_run(scene, t, late)
+    assert residual < 0.01
     sets = [determinacy(op, i) for i in late]
     bearings = np.isin(np.arange(len(op.names)),
                        [c for link in op.bearings() for c in link.columns])
