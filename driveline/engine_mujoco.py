@@ -4,7 +4,7 @@ constraint forces read back into the operator's named forces (optional extra ``m
 **Model** (MJCF generated from the scene, :func:`build_mjcf`). The line is one kinematic
 tree in chain order: the first shaft body floats (a free joint), each next body hangs
 on the one before by the joint the kind of the element between them gives
-(:meth:`~.elements.base.ElementKind.mjcf_joint`): a cross-pin on its driving yoke by a
+(:meth:`~.elements.base.EngineJoint.mjcf_joint`): a cross-pin on its driving yoke by a
 hinge about ``e1``, the next shaft on the pin by a hinge about ``e2``, a slip joint's
 downstream segment on its upstream one by a slide along the axis (frictionless).
 Masses and inertias are the scene's (a shaft's transverse moments ``J1``, ``J3`` along

@@ -35,9 +35,9 @@ import numpy as np
 
 from .dynamics import Motion, _pin_inertia_global
 from .elements import Segment, segment_of, shaft_segments
-from .elements.base import Body, Layout, Link
+from .elements.base import Body, FormulationExtras, Layout, Link, Loads
 from .elements.bodies import frames_of
-from .elements.registry import KINDS, LINK_KINDS, scene_elements
+from .elements.registry import LINK_KINDS, PAIRED, scene_elements
 from .elements.slip import SlipFriction
 from .scene import Scene
 
@@ -79,7 +79,7 @@ class Operator:
     the pushes (>= 0: end faces, ...); ``pairs`` the index pairs of opposite pushes of
     which only one touches (the two end faces of one trunnion pair, complementary in
     the paper, eqs. 39, 46; each kind says which,
-    :meth:`~.elements.base.ElementKind.pairs`). ``bodies`` and
+    :meth:`~.elements.base.Paired.pairs`). ``bodies`` and
     ``contacts`` are the structure (what each row block and column is);
     ``pin_frames[j, t]`` the rows ``e1, e2, e3`` of cross-pin ``j``; ``shaft_frames[k]``
     the rows ``r1, r2, axis`` of shaft ``k``; ``slip_friction`` the bounded axial forces.
@@ -231,7 +231,7 @@ def build_operator(motion: Motion) -> Operator:
             A[:, 6 * target + 3: 6 * target + 6, c] = sign * np.cross(point - refs[target],
                                                                        direction)
     names = tuple(c.name for c in cols)
-    pairs = tuple(pair for kind in KINDS
+    pairs = tuple(pair for kind in PAIRED
                   for pair in kind.pairs([c for c in links if c.kind in kind.link_kinds]))
     rows = tuple(f"{body.name}.{kind}.{axis}" for body in bodies
                  for kind in ("force", "moment") for axis in AXES)
@@ -248,7 +248,8 @@ def build_operator(motion: Motion) -> Operator:
 
 def _slip_friction(scene: Scene, links: list[Link]) -> tuple[SlipFriction, ...]:
     """The friction bounds of the links that have one (a slip joint with friction)."""
-    return tuple(f for c in links if (f := c.element_kind.friction(c, scene)) is not None)
+    return tuple(f for c in links if isinstance(c.element_kind, FormulationExtras)
+                 and (f := c.element_kind.friction(c, scene)) is not None)
 
 
 def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray]:
@@ -263,7 +264,8 @@ def _load_terms(motion: Motion, segments: list[Segment]) -> dict[str, np.ndarray
     first, last = 0, n_seg - 1  # the input torque acts upstream, the load downstream
 
     applied = np.zeros((T, n_rows))
-    takers = [(kind, e, k) for kind, e, k, _ in scene_elements(scene) if kind.takes_load]
+    takers = [(kind, e, k) for kind, e, k, _ in scene_elements(scene)
+              if isinstance(kind, Loads)]
     ends = {k for _, _, k in takers}
     if 0 not in ends:
         applied[:, moment(first)] -= motion.input_torque[:, None] * geo.axes[0]

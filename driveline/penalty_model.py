@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation
 from . import penalty_kernels as kernels
 from .dynamics import simulate
 from .elements import shaft_segments
-from .elements.base import segment_of
+from .elements.base import Loads, segment_of
 from .elements.bodies import frames_of
 from .elements.registry import scene_elements
 from .equilibrium import body_references, build_operator
@@ -194,8 +194,8 @@ class Model:
     def _line_loads(self) -> tuple[np.ndarray, np.ndarray]:
         """Where and how the line's input and load torques act (:class:`ModelArrays`'
         ``load_bodies`` and ``loads``): as pure torques about the first body's axis and
-        against the last's, or, at an end whose shaft holds a ``takes_load`` element (a
-        gear mesh), as that element's force (:meth:`~.elements.base.ElementKind.load`)
+        against the last's, or, at an end whose shaft holds an element of a ``Loads``
+        kind (a gear mesh), as that element's force (:meth:`~.elements.base.Loads.load`)
         on the body holding it, as in the rigid model's load terms. The mesh point and
         the force's directions are the rigid model's at rest, fixed in space: the mating
         gear is held by its own bearings, and the shafts' axes move by micrometres and
@@ -212,7 +212,7 @@ class Model:
         loads = np.zeros((2, 10))
         loads[:, 0] = 1.0, -1.0  # torques: the input's with the rotation, the load's against
         for kind, element, k, _ in scene_elements(scene):
-            if not kind.takes_load or k not in (0, last):
+            if not isinstance(kind, Loads) or k not in (0, last):
                 continue
             end, sign = (0, -1.0) if k == 0 else (1, 1.0)
             point, force = kind.load(element, np.array([1.0, -1.0]), frames_of(geo)[k],

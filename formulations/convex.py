@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from cardan_forces.driveline.determinacy import determinacy
-from cardan_forces.driveline.elements.base import Law
+from cardan_forces.driveline.elements.base import FormulationExtras, Law
 from cardan_forces.driveline.equilibrium import Operator
 
 from cardan_forces.util.rank import numerical_rank
@@ -290,7 +290,7 @@ def socp_face(op: Operator, i: int, name: str = "") -> Conic:
     a pair would buy moment capacity that the axial clearance does not allow (only one
     face of a pair can touch), so the face idle in the least-norm answer is held at 0.
     """
-    extra = [(members, _cone(spec)) for c in op.contacts
+    extra = [(members, _cone(spec)) for c in _extended_contacts(op)
              for members, spec in c.element_kind.rim_moments(op, i, c)]
     if not extra:
         raise NotApplicable(f"formulation {name!r} adds moments to end faces; scene "
@@ -321,9 +321,16 @@ def friction(op: Operator, i: int, name: str = "") -> Conic:
                             "'friction'")
     mu = scene.contact.friction_coefficient
     frameless = determinacy(op, i).min_norm
-    extra = [(members, _cone(spec)) for c in op.contacts
+    extra = [(members, _cone(spec)) for c in _extended_contacts(op)
              for members, spec in c.element_kind.friction_forces(op, i, c, frameless, mu)]
     return _extended(op, i, extra, name, idle=_idle_faces(op, frameless))
+
+
+def _extended_contacts(op: Operator) -> list:
+    """The contacts whose kind adds formulations' unknowns
+    (:class:`~cardan_forces.driveline.elements.base.FormulationExtras`), in column order.
+    """
+    return [c for c in op.contacts if isinstance(c.element_kind, FormulationExtras)]
 
 
 def _cone(spec: dict):

@@ -2,13 +2,26 @@
 covers its own columns exactly, so a kind that forgets a component (or claims another
 kind's) fails here, whichever kind it is."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.dynamics import simulate
-from cardan_forces.driveline.elements.registry import KINDS, LINK_KINDS
+from cardan_forces.driveline.elements.base import (
+    RELEASES,
+    ElementKind,
+    EngineJoint,
+    FormulationExtras,
+    Loads,
+    Paired,
+    Releasable,
+)
+from cardan_forces.driveline.elements.registry import KINDS, LINK_KINDS, PAIRED, refusals
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import builtin_names, load_scene
+
+EVERY_KIND = Path(__file__).resolve().parent / "data" / "every_kind.toml"
 
 
 def test_every_link_kind_belongs_to_one_kind():
@@ -42,3 +55,60 @@ def test_each_link_has_penalty_contacts_on_its_own_bodies(name):
         other = model.n_bodies if link.other is None else link.other
         assert rows, link.name
         assert set(model.c.a[rows]) == {link.body} and set(model.c.b[rows]) == {other}
+
+
+CORE = ("holds", "add_links")
+"""The core every kind writes; :data:`PER_LINK` every kind that makes links."""
+PER_LINK = ("laws", "penalty", "words")
+CAPABILITIES = (Paired, Releasable, Loads, EngineJoint, FormulationExtras)
+
+
+def _written(kind, name: str) -> bool:
+    """Whether ``kind``'s class writes ``name`` (not the core's or a capability's default)."""
+    owner = next(c for c in type(kind).__mro__ if name in vars(c))
+    return owner not in (ElementKind, *CAPABILITIES)
+
+
+@pytest.mark.parametrize("kind", KINDS, ids=lambda k: k.name)
+def test_each_kind_writes_the_core_and_its_capabilities_required_methods(kind):
+    """The core's required methods, the per-link ones where it makes links, and in each
+    capability it mixes in the methods that capability requires."""
+    assert kind.name
+    for name in CORE + (PER_LINK if kind.link_kinds else ()):
+        assert _written(kind, name), name
+    required = {Paired: ("pairs", "pair_mode"), Loads: ("load",),
+                Releasable: ("releases", "parse_release", "release_label", "release_words",
+                             "apply_release"),
+                EngineJoint: ("mjcf_joint",), FormulationExtras: ()}
+    for capability, names in required.items():
+        if isinstance(kind, capability):
+            assert all(_written(kind, n) for n in names), capability.__name__
+    if isinstance(kind, Releasable):
+        assert kind.release_name and kind.release_form and isinstance(kind.release_rank, int)
+
+
+def test_the_registry_lists_the_capable_kinds():
+    assert list(RELEASES.values()) == sorted(
+        (k for k in KINDS if isinstance(k, Releasable)), key=lambda k: k.release_rank)
+    assert PAIRED == tuple(k for k in KINDS if isinstance(k, Paired))
+
+
+@pytest.mark.parametrize("name", [*builtin_names(), str(EVERY_KIND)])
+def test_a_kind_that_joins_bodies_without_an_engine_joint_refuses_the_engines(name):
+    """The engines build their tree from :class:`EngineJoint` kinds only: a link between
+    two bodies of any other kind is refused before any work."""
+    scene = load_scene(name)
+    op = build_operator(simulate(scene, [0.3]))
+    refused = {line.split("'")[1] for line in refusals(scene, "the engine")}
+    for link in op.contacts:
+        if link.other is not None and not isinstance(link.element_kind, EngineJoint):
+            assert link.element in refused, link.name
+
+
+def test_the_how_to_names_every_capability_and_its_methods():
+    page = (Path(__file__).resolve().parents[1] / "docs/how-to/element.md").read_text()
+    for capability in CAPABILITIES:
+        assert f"| `{capability.__name__}` |" in page, capability.__name__
+        for name, member in vars(capability).items():
+            if callable(member) and not name.startswith("_"):
+                assert f"| `{name}(" in page, name

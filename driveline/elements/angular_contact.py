@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import CONTACT_ANGLE_DEG, Bearing, Scene, SceneError
-from .base import Law, Link, PairMode
+from .base import Law, Link, Paired, PairMode
 from .bearing import BearingKind
 
 SIDES = {"upstream": -1.0, "downstream": 1.0}
@@ -69,7 +69,7 @@ class AngularContactBearing(Bearing):
     pushes: str = "downstream"
 
 
-class AngularContact(BearingKind):
+class AngularContact(BearingKind, Paired):
     """The angular-contact bearing kind (module doc)."""
 
     name = "angular-contact"

@@ -1,30 +1,32 @@
-"""What every element kind is: the protocol :class:`ElementKind`, and the records the
-equilibrium operator is made of (bodies, links, columns).
+"""What every element kind is: the required core :class:`ElementKind`, the optional
+capabilities a kind mixes in where it has them, and the records the equilibrium
+operator is made of (bodies, links, columns).
 
 The model is Drake's SAP constraints (``multibody/contact_solvers/sap/
-sap_constraint.h``): each kind of constraint is one class in its own file that owns
-its constraint function, Jacobian, cost and projection. Here a kind (a locating
-bearing, a Cardan joint, ...) owns, for its elements of a scene:
+sap_constraint.h``): each kind of constraint is one class in its own file, and all of
+them share one small interface (its constraint function, Jacobian, cost and
+projection). Here a kind (a locating bearing, a Cardan joint, ...) owns, for its
+elements of a scene:
 
-- its scene fields and their checks (:meth:`ElementKind.check`; bearing kinds read
-  their table, :class:`~.bearing.BearingKind`);
-- the translations it stops (:meth:`ElementKind.holds`, the line's sliding check);
-- its bodies and its columns of ``A`` with their names (:meth:`ElementKind.add_links`),
-  hence its rows of the equilibrium operator, and the unilateral pairs that
-  complementarity resolves (:meth:`ElementKind.pairs`);
-- its contact laws: the compliance energy's (:meth:`ElementKind.laws`) and the
-  penalty model's (:meth:`ElementKind.penalty`);
-- its MJCF, its releases, its labels (:meth:`ElementKind.words`).
+- the core, which every kind writes (:class:`ElementKind`): its ``name`` and the
+  ``link_kinds`` of its contacts, the translations it stops
+  (:meth:`ElementKind.holds`), its bodies and columns of ``A``
+  (:meth:`ElementKind.add_links`) and, per link, its compliance laws
+  (:meth:`ElementKind.laws`), penalty contacts (:meth:`ElementKind.penalty`) and words
+  (:meth:`ElementKind.words`); reading its scene table belongs to the base that says
+  where its elements sit (:class:`~.bearing.BearingKind`,
+  :class:`~.inshaft.InShaftKind`, :class:`~.joint.JointKind`);
+- the capabilities, each a class a kind mixes in only where it has it and the
+  callers ask for with ``isinstance``: :class:`Paired` (opposite unilateral columns
+  that complementarity resolves), :class:`Releasable` (a release the advisor
+  offers), :class:`Loads` (the line's end torque applied as its own forces),
+  :class:`EngineJoint` (the joint a physics engine's tree hangs a body on) and
+  :class:`FormulationExtras` (extra unknowns or bounds of some formulations).
 
-What every kind must say (its links, laws, penalty contacts) raises
-``NotImplementedError`` in the base; the rest has a default that means "this kind adds
-nothing here" (no pairs, no release, no extra unknowns), so a kind writes only what it
-has. A kind that joins two bodies gives MuJoCo's joint between them
-(:meth:`ElementKind.mjcf_joint`), one that makes a body gives it
-(:meth:`ElementKind.mjcf_body`), a bearing kind its constraint to the ground
-(:meth:`~.bearing.BearingKind.mjcf`). The modules that build and read operators
-iterate over the links and ask their kind (:attr:`Link.element_kind`); none of them
-names a kind.
+A bearing kind's constraint to the ground in MJCF belongs to every bearing
+(:meth:`~.bearing.BearingKind.mjcf`), so it is part of that base, not a capability.
+The modules that build and read operators iterate over the links and ask their kind
+(:attr:`Link.element_kind`); none of them names a kind.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ LINK_KINDS: dict[str, ElementKind] = {}
 """The kind of each :attr:`Link.kind`, filled by :mod:`.registry` as it registers the
 kinds (this module is below them)."""
 
-RELEASES: dict[str, ElementKind] = {}
+RELEASES: dict[str, Releasable] = {}
 """The kinds that offer a release, by its name (:attr:`Release.kind`), in the advisor's
 order; filled by :mod:`.registry`."""
 
@@ -200,7 +202,7 @@ class Law:
 @dataclass(frozen=True)
 class Release:
     """One release, a design change that removes a redundancy: ``kind`` names it (the
-    :attr:`ElementKind.release_name` of the kind that offers it), ``shaft`` and
+    :attr:`Releasable.release_name` of the kind that offers it), ``shaft`` and
     ``bearing`` where it applies (:mod:`..release`).
     """
 
@@ -209,7 +211,7 @@ class Release:
     bearing: str = ""
 
     @property
-    def offered_by(self) -> ElementKind:
+    def offered_by(self) -> Releasable:
         return RELEASES[self.kind]
 
     @property
@@ -235,64 +237,58 @@ class PairMode:
 
 
 class ElementKind:
-    """An element kind of a drive line (module doc); subclasses override what they have.
+    """The core every element kind writes (module doc); a kind adds the capabilities it
+    has by mixing in their classes.
 
-    ``link_kinds``: the :attr:`Link.kind` values its links take (one per kind of contact
-    it makes); ``locates``: it carries axial force both ways (a shaft body with two
-    such has an axial split); ``slides``: its shaft slides through it axially;
-    ``paper``: the paper's polar method takes it (eqs. 11-14 for bearings, 33-46 for
-    joints); ``takes_load``: it applies the line's load torque (on the last shaft) or
-    input torque (on the first) as forces of its own (:meth:`load`) instead of a pure
-    torque.
+    ``name``: the kind's name in a scene (a bearing's or a joint's ``kind``, an in-shaft
+    kind's name); ``link_kinds``: the :attr:`Link.kind` values its links take, one per
+    kind of contact it makes (none for a kind that makes no contact, a load).
 
-    A kind that offers a release names it ``release_name`` (``release_form``: how it is
-    typed; ``release_rank``: the advisor tries lower ranks first; ``adds_joint``: the
-    release adds an element, a dearer design change than changing one).
+    Three flags are read of every bearing or contact, so each kind has them; ``False``
+    is the plain answer, not a missing one: ``locates``: it carries axial force both
+    ways (a shaft body with two such has an axial split); ``slides``: its shaft slides
+    through it axially; ``paper``: the paper's polar method takes it (eqs. 11-14 for
+    bearings, 33-46 for joints).
+
+    The methods that raise ``NotImplementedError`` here are the required core:
+    :meth:`holds` and :meth:`add_links` of every kind, and :meth:`laws`,
+    :meth:`penalty`, :meth:`words` of every kind that makes links (they are asked per
+    link, so a kind without ``link_kinds`` is never asked). :meth:`check` and
+    :meth:`refusal` have defaults because their absence is the same answer as an empty
+    one: nothing to check beyond the element's own fields, every model takes it.
     """
 
+    name: str = ""
     link_kinds: tuple[str, ...] = ()
     locates: bool = False
     slides: bool = False
     paper: bool = False
-    release_name: str = ""
-    release_form: str = ""
-    release_rank: int = 0
-    adds_joint: bool = False
-    takes_load: bool = False
 
     def check(self, element, shaft: int, scene: Scene) -> None:
         """Raise :class:`~.scene.SceneError` where ``element`` cannot be used in
-        ``scene`` (beyond its own fields).
+        ``scene`` (beyond its own fields); nothing to check by default.
         """
+
+    def refusal(self, element, engine: str) -> str | None:
+        """Why ``engine`` (:data:`PENALTY_SIMULATION`, a physics engine; named in the
+        message) cannot model ``element``, None where it can (the default: every model
+        takes it).
+        """
+        return None
 
     def holds(self, element, shaft: int, segments: list, frames: np.ndarray) -> list:
         """The rigid translations it stops: ``(body, matrix, other)`` rows, ``matrix``
         (3, 3) the directions stopped on ``body`` relative to ``other`` (None: ground);
-        ``frames``: per shaft the rows ``r1, r2, axis``.
+        ``frames``: per shaft the rows ``r1, r2, axis``. Required: the line's sliding
+        check rests on it, and a silent empty answer would pass a line that slides.
         """
-        return []
+        raise NotImplementedError
 
     def add_links(self, element, shaft: int, index: int, layout: Layout) -> None:
         """Add its bodies, links and columns to ``layout`` (``shaft``: the scene index
         of its shaft, the upstream one for a joint; ``index``: its own in its list).
         """
         raise NotImplementedError
-
-    def pairs(self, links: list[Link]) -> list[tuple[int, int]]:
-        """Pairs of opposite unilateral columns among its ``links``: only one of each
-        pushes (complementarity).
-        """
-        return []
-
-    def pair_mode(self, link: Link, other: Link) -> PairMode:
-        """The null-space mode of one of its pairs (both pushing equally)."""
-        raise NotImplementedError
-
-    def friction(self, link: Link, scene: Scene):
-        """Its bounded friction force (a slip joint's
-        :class:`~.slip.SlipFriction`), None without one.
-        """
-        return None
 
     def laws(self, link: Link, scene: Scene) -> list[Law]:
         """Its contact forces (column groups) with their compliance laws, in column
@@ -308,57 +304,99 @@ class ElementKind:
 
     def words(self, link: Link) -> str:
         """What the contact is, in words (figure titles, reports)."""
-        return link.kind
+        raise NotImplementedError
 
-    def load(self, element, torque_N_m: np.ndarray, frame: np.ndarray,
-             centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """A ``takes_load`` kind's forces taking the torque ``torque_N_m`` (T,) off its
-        shaft (the load torque; minus the input torque on the first shaft):
-        ``(point, force)``, a point (3,) and the force (T, 3) there (N), on a shaft of
-        frame rows ``r1, r2, axis`` and centre ``centre``. The force is ``T lin + |T|
-        abs`` for two vectors fixed by the geometry (the penalty model reads them from
-        ``T = +-1``, :meth:`~..penalty_model.Model._line_loads`).
+
+class Paired:
+    """Capability: some of its links' unilateral columns come in opposite pairs of which
+    only one pushes (complementarity resolves them; a Cardan joint's end faces, facing
+    angular-contact bearings). Both methods are written.
+    """
+
+    def pairs(self, links: list[Link]) -> list[tuple[int, int]]:
+        """Pairs of opposite unilateral columns among its ``links``: only one of each
+        pushes (complementarity).
         """
         raise NotImplementedError
 
-    def refusal(self, element, engine: str) -> str | None:
-        """Why ``engine`` (:data:`PENALTY_SIMULATION`, a physics engine; named in the
-        message) cannot model ``element``, None where it can.
-        """
-        return None
+    def pair_mode(self, link: Link, other: Link) -> PairMode:
+        """The null-space mode of one of its pairs (both pushing equally)."""
+        raise NotImplementedError
 
-    # ------------------------------------------------------------ releases
+
+class Releasable:
+    """Capability: it offers a release, a design change that removes a redundancy
+    (:mod:`..release`). ``release_name`` names it (:attr:`Release.kind`),
+    ``release_form`` is how it is typed (``<prefix>:<target>``), ``release_rank`` orders
+    the advisor's tries (lower first), ``adds_joint``: the release adds an element, a
+    dearer design change than changing one. Every method is written.
+    """
+
+    release_name: str
+    release_form: str
+    release_rank: int
+    adds_joint: bool = False
 
     def releases(self, scene: Scene) -> list[Release]:
         """The single releases it offers on ``scene``, in the advisor's order."""
-        return []
+        raise NotImplementedError
 
     def parse_release(self, target: str, scene: Scene) -> Release | None:
         """Its release from the text after ``<prefix>:``, None if ``target`` names none."""
-        return None
+        raise NotImplementedError
 
     def release_label(self, release: Release) -> str:
+        """The release as typed on the command line."""
         raise NotImplementedError
 
     def release_words(self, release: Release) -> str:
+        """The release in words (reports, ``sets --release``)."""
         raise NotImplementedError
 
     def apply_release(self, release: Release, shafts: list, elements: list) -> None:
         """Apply ``release`` to a scene's ``shafts`` and ``elements`` (lists, in place)."""
         raise NotImplementedError
 
-    # ------------------------------------------------------------ MuJoCo's tree
+
+class Loads:
+    """Capability: it applies the line's load torque (on the last shaft) or input torque
+    (on the first) as forces of its own (a gear mesh) instead of a pure torque; the
+    equilibrium operator and the penalty model apply :meth:`load` at its end.
+    """
+
+    def load(self, element, torque_N_m: np.ndarray, frame: np.ndarray,
+             centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Its forces taking the torque ``torque_N_m`` (T,) off its shaft (the load
+        torque; minus the input torque on the first shaft): ``(point, force)``, a point
+        (3,) and the force (T, 3) there (N), on a shaft of frame rows ``r1, r2, axis``
+        and centre ``centre``. The force is ``T lin + |T| abs`` for two vectors fixed
+        by the geometry (the penalty model reads them from ``T = +-1``,
+        :meth:`~..penalty_model.Model._line_loads`).
+        """
+        raise NotImplementedError
+
+
+class EngineJoint:
+    """Capability: a physics engine (MuJoCo, Drake) hangs one of its links' two bodies
+    on the other by a joint of its kinematic tree (a Cardan joint's hinges, a slip
+    joint's slide); a kind without it that joins two bodies refuses the engines
+    (:meth:`ElementKind.refusal`). :meth:`mjcf_joint` is written; :meth:`mjcf_speed`
+    defaults to a joint that starts still and :meth:`mjcf_body` is written only by a
+    kind that makes a body (a cross-pin).
+    """
 
     def mjcf_joint(self, link: Link, child: int, start) -> tuple[str, np.ndarray, np.ndarray]:
         """The engine joint by which body ``child`` (one of ``link``'s two) hangs on the
-        other in MuJoCo's kinematic tree: its type (``hinge``, ``slide``), global axis and
-        point at the scene's start (``start``: the engine's :class:`~..engine_mujoco.Start`).
-        Only kinds that join two bodies have one.
+        other in MuJoCo's kinematic tree: its type (``hinge``, ``slide``), global axis
+        and point at the scene's start (``start``: the engine's
+        :class:`~..engine_mujoco.Start`).
         """
         raise NotImplementedError
 
     def mjcf_speed(self, link: Link, child: int, axis: np.ndarray, start) -> float:
-        """That joint's speed in the scene's initial state (rad/s or m/s)."""
+        """That joint's speed in the scene's initial state (rad/s or m/s); 0 here: the
+        two bodies start at one speed (a slide).
+        """
         return 0.0
 
     def mjcf_body(self, body: int, start) -> tuple:
@@ -368,7 +406,19 @@ class ElementKind:
         """
         raise NotImplementedError
 
-    # ------------------------------------------------------------ formulations
+
+class FormulationExtras:
+    """Capability: some formulations add unknowns or bounds for its links beyond the
+    operator's columns. A kind writes the ones it has; the others keep their empty
+    answer, which is exactly what a link without such terms adds (nothing), so the
+    formulations ask every kind that mixes this in.
+    """
+
+    def friction(self, link: Link, scene: Scene):
+        """Its bounded friction force (a slip joint's
+        :class:`~.slip.SlipFriction`), None without one.
+        """
+        return None
 
     def rim_moments(self, op, i: int, link: Link) -> list:
         """Extra unknowns of ``socp_face`` (moments an end face carries), none here."""

@@ -25,7 +25,6 @@ class BearingKind(ElementKind):
     fields).
     """
 
-    name = ""
     record: type[Bearing] = Bearing
 
     @property

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..contact import hertz_stiffness
 from ..scene import CROSSPIN_ASPECT, MAX_ARTICULATION_DEG, Joint, Range, Scene, table_keys
-from .base import Body, Column, Law, Layout, Link, PairMode
+from .base import Body, Column, EngineJoint, FormulationExtras, Law, Layout, Link, Paired, PairMode
 from .joint import JointKind, JointStep, rotate_perp
 
 RADIAL, FACE = "trunnion-radial", "end-face"
@@ -74,7 +74,7 @@ def _check_proportions(t, joint: Joint) -> None:
                    "scale)")
 
 
-class Cardan(JointKind):
+class Cardan(JointKind, Paired, EngineJoint, FormulationExtras):
     """The Cardan joint kind (module doc)."""
 
     name, record = "cardan", Joint

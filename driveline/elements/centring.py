@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Scene, SceneError
-from .base import PENALTY_SIMULATION, Column, Law, Layout, Link, Release
+from .base import PENALTY_SIMULATION, Column, Law, Layout, Link, Releasable, Release
 from .inshaft import InShaftKind
 
 
@@ -55,7 +55,7 @@ def meeting_point(start, a_in, end, a_out) -> np.ndarray:
     return 0.5 * (start + s * a_in + end + u * a_out)
 
 
-class Centring(InShaftKind):
+class Centring(InShaftKind, Releasable):
     """The centring device kind (module doc)."""
 
     name, table, record, noun = "centring", "centring_devices", CentringDevice, \

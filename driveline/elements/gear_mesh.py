@@ -73,7 +73,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Range, Scene, SceneError
-from .base import PENALTY_SIMULATION
+from .base import PENALTY_SIMULATION, Loads
 from .inshaft import InShaftKind
 
 PRESSURE_ANGLE_DEG = Range(10.0, 35.0, "deg")
@@ -184,12 +184,11 @@ def _meshes(scene: Scene) -> list[tuple[GearMesh, int]]:
     return [(e, shafts.index(e.shaft)) for e in scene.elements if isinstance(e, GearMesh)]
 
 
-class Mesh(InShaftKind):
+class Mesh(InShaftKind, Loads):
     """The gear mesh kind (module doc)."""
 
     name, table, record, noun = "gear", "gear_meshes", GearMesh, "gear mesh"
     cuts = False
-    takes_load = True
 
     def read_fields(self, t) -> dict:
         """Its type, then the fields of that type (module doc); a field of another type
@@ -276,6 +275,10 @@ class Mesh(InShaftKind):
         force = (-ft[:, None] * np.cross(axis, out) - fr[:, None] * out
                  + fa[:, None] * along)
         return point, force
+
+    def holds(self, gear: GearMesh, shaft, segments, frames) -> list:
+        """None: the mesh is a load (:meth:`load`), not a contact; it stops nothing."""
+        return []
 
     def add_links(self, gear: GearMesh, shaft: int, index: int, layout) -> None:
         """None: the mesh is a load (:meth:`load`), not a contact."""

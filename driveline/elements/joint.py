@@ -50,7 +50,6 @@ class JointKind(ElementKind):
     its shafts turn at one speed at any angle.
     """
 
-    name = ""
     record: type = object
     pinned = False
     homokinetic = False

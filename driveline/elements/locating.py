@@ -11,12 +11,12 @@ import dataclasses
 
 import numpy as np
 
-from .base import Release
+from .base import Releasable, Release
 from .bearing import BearingKind
 from .floating import KIND as FLOATING
 
 
-class Locating(BearingKind):
+class Locating(BearingKind, Releasable):
     """The locating bearing kind (module doc)."""
 
     name = "locating"

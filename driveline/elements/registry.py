@@ -6,7 +6,9 @@ a bearing kind's on their shafts (``[[shafts.bearings]]``, by their ``kind``), a
 in-shaft kind's in the scene's one list :attr:`~..scene.Scene.elements` (read from the
 kind's own array of tables), a joint kind's between the shafts (``[[joints]]``, by their
 ``kind``). :func:`scene_elements` walks them in the operator's column order; nothing
-here or in the loader names a kind.
+here or in the loader names a kind. What a kind can do beyond the core follows from
+the capabilities it mixes in (:mod:`.base`): :data:`~.base.RELEASES` holds the
+:class:`~.base.Releasable` ones, :data:`PAIRED` the :class:`~.base.Paired` ones.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from __future__ import annotations
 from importlib import import_module
 
 from ..scene import Scene
-from .base import LINK_KINDS, RELEASES, ElementKind
+from .base import LINK_KINDS, RELEASES, ElementKind, Paired, Releasable
 from .bearing import BearingKind
 from .inshaft import InShaftKind
 from .joint import JointKind
@@ -40,8 +42,11 @@ JOINT_KINDS: dict[str, JointKind] = {k.name: k for k in KINDS if isinstance(k, J
 
 LINK_KINDS.update({name: k for k in KINDS for name in k.link_kinds})
 
-RELEASES.update({k.release_name: k for k in sorted(KINDS, key=lambda k: k.release_rank)
-                 if k.release_name})
+RELEASES.update({k.release_name: k for k in sorted(
+    (k for k in KINDS if isinstance(k, Releasable)), key=lambda k: k.release_rank)})
+
+PAIRED: tuple[Paired, ...] = tuple(k for k in KINDS if isinstance(k, Paired))
+"""The kinds whose links hold complementarity pairs, in :data:`MODULES`' order."""
 
 _BY_RECORD = {k.record: k for k in IN_SHAFT_KINDS}
 

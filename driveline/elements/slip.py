@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import SPLINE_PITCH_RADIUS_M, Scene
-from .base import Column, Law, Layout, Link, Release
+from .base import Column, EngineJoint, FormulationExtras, Law, Layout, Link, Releasable, Release
 from .inshaft import InShaftKind, sides
 
 SLIP_LENGTH_M = 1.0
@@ -83,7 +83,7 @@ class SlipFriction:
     ratio_per_m: float
 
 
-class Slip(InShaftKind):
+class Slip(InShaftKind, Releasable, EngineJoint, FormulationExtras):
     """The slip joint kind (module doc)."""
 
     name, table, record, noun = "slip", "slip_joints", SlipJoint, "slip joint"
