@@ -59,7 +59,7 @@ class ModelArrays(NamedTuple):
     ``load_bodies`` (2,) int, and how, ``loads`` (2, 10): ``spin``, then a point ``p``
     (3, m, global, fixed in space), ``lin`` (3) and ``abs`` (3) (N per N m, global): a
     pure torque ``h spin`` (N m) about the body's current axis and a force ``F = h lin
-    + |h| abs`` (N) at ``p`` (a gear mesh's, :meth:`~.elements.base.ElementKind.load`;
+    + |h| abs`` (N) at ``p`` (a gear mesh's, :meth:`~.elements.base.Loads.load`;
     zero where the torque acts as a torque); ``d_max`` the depth of full damping (m).
     """
 
