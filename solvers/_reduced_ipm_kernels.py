@@ -20,14 +20,17 @@ partial pivoting of the ``(k + m)``-square system (43-64 rows): on ``paper``'s
 Near the optimum ``W^-2`` spans many decades and (4) alone leaves the first row's
 residual ``a - P dx - G'dz`` (the dual residual's step) at the rounding of
 ``||G_W' G_W|| ||dx||``, which on ``min_max`` stalled the dual residual near 1e-7
-(module docstring of :mod:`.reduced_ipm`): without refinement 29 % of ``paper``'s
-``min_max`` instants ended short of ``tol``, with one step 5 %, two 0.5 %, three none.
-Iterative refinement on the scaled system corrects it (:func:`_reduced_solve`, at
-most :data:`REFINE` steps): the residual of both rows, computed from ``P``, ``G_W``
-and ``dz_W`` (``G_W' dz_W = G' dz``), solved again by the same factor. (4)'s matrix
-``P + G'W^-2 G`` is the Schur complement of ``-W^2`` in (3): a factor that is not
-positive definite or not finite ends the instant as the reference's singular ``K``
-does (a NaN step: :data:`.reduced_ipm.STALLED`). The exit codes are the reference's;
+(module docstring of :mod:`.reduced_ipm`). Iterative refinement on the scaled system
+corrects it (:func:`_reduced_solve`, at most :data:`REFINE` steps): the residual of
+both rows, computed from ``P``, ``G_W`` and ``dz_W`` (``G_W' dz_W = G' dz``), solved
+again by the same factor. Only the corrector's direction is refined: the predictor's
+sets only the centring and the second-order term, and refining it changed no exit
+code on ``paper``'s ``min_max`` and ``socp_face``. Without refinement 29 % of
+``paper``'s ``min_max`` instants ended short of ``tol``; with at most one step 4 %,
+two 0.5 %, three 0.1 %, four none. (4)'s matrix ``P + G'W^-2 G`` is the Schur
+complement of ``-W^2`` in (3): a factor that is not positive definite or not finite
+ends the instant as the reference's singular ``K`` does (a NaN step:
+:data:`.reduced_ipm.STALLED`). The exit codes are the reference's;
 on ``socp_face`` the answers are the reference's to 1e-13, on ``min_max`` the optimal
 values to 1e-10 while the answers move along its flat tie-break direction as far as
 the gap allows (the tests hold both).
@@ -381,13 +384,11 @@ def _factor(P, Gw, L):
     positive or not finite.
     """
     m, k = Gw.shape
-    for i in range(k):
-        for j in range(i + 1):
-            L[i, j] = P[i, j]
-    for r in range(m):  # row by row: independent sums, each in row order
-        for i in range(k):
+    L[:, :] = P
+    for r in range(m):  # row by row: independent sums, each in row order (all of the
+        for i in range(k):  # square: full rows vectorize, a triangle's do not)
             g = Gw[r, i]
-            for j in range(i + 1):
+            for j in range(k):
                 L[i, j] += g * Gw[r, j]
     for j in range(k):
         pivot = L[j, j]
@@ -422,21 +423,20 @@ def _cholesky_solve(L, v):
 
 
 @kernel
-def _reduced_solve(P, Gw, L, a, c, dx, dzw, params, e, f):
+def _reduced_solve(P, Gw, L, a, c, dx, dzw, refine, refine_rtol, e, f):
     """``dx``, ``dz_W`` of ``P dx + Gw' dz_W = a``, ``Gw dx - dz_W = c`` by (4) with
     ``L`` its factor, refined (module docstring) while the residual of the two rows
     (their correction's right-hand sides: ``f = c - Gw dx + dz_W`` and ``a - P dx -
-    Gw' dz_W + Gw' f``) is above ``refine_rtol (1 + max(||a||, ||c||))`` (inf-norms)
-    and falls at least by half, at most ``refine`` times. ``e`` (k,) and ``f`` (m,)
-    scratch.
+    Gw' dz_W + Gw' f``) is above ``refine_rtol (1 + ||a||_inf)``, at most ``refine``
+    times. ``e`` (k,) and ``f`` (m,) scratch.
     """
     m, k = Gw.shape
     dx[:] = a
     _add_transposed(Gw, c, dx)
     _cholesky_solve(L, dx)
     _row_product(Gw, dx, c, dzw)
-    bound = params.refine_rtol * (1.0 + _inf(a))
-    for _ in range(params.refine):
+    bound = refine_rtol * (1.0 + _inf(a))
+    for _ in range(refine):
         for r in range(m):  # f - dz_W = c - Gw dx
             total = c[r]
             for i in range(k):
@@ -485,10 +485,11 @@ def _row_product(Gw, x, c, out):
 
 
 @kernel
-def _newton(P, G, cones, S, u, dx, dzw, dsw, params):
+def _newton(P, G, cones, S, u, dx, dzw, dsw, refine, refine_rtol):
     """The Newton direction (3) for the scaled right-hand side ``u``: ``dx``, ``W dz``,
     ``W^-1 ds`` (:func:`.reduced_ipm._newton`, with the same choice of ``ds`` on a row
-    or block far from its bound: ``W^-1 (-r_z - G dx)`` where ``W`` is above 1).
+    or block far from its bound: ``W^-1 (-r_z - G dx)`` where ``W`` is above 1), with
+    ``refine`` and ``refine_rtol`` as :func:`_reduced_solve` takes them.
     """
     m, k = G.shape
     c, t = S.c, S.t1
@@ -497,7 +498,7 @@ def _newton(P, G, cones, S, u, dx, dzw, dsw, params):
         c[r] = -c[r] - u[r]
     for i in range(k):
         S.a[i] = -S.rx[i]
-    _reduced_solve(P, S.Gw, S.L, S.a, c, dx, dzw, params, S.ex, S.t2)
+    _reduced_solve(P, S.Gw, S.L, S.a, c, dx, dzw, refine, refine_rtol, S.ex, S.t2)
     for r in range(m):  # t = -r_z - G dx
         total = -S.rz[r]
         for i in range(k):
@@ -526,7 +527,7 @@ def _step(P, G, cones, s, z, gap, degree, params, S):
     lam, u = S.lam, S.u
     for r in range(m):
         u[r] = -lam[r]
-    _newton(P, G, cones, S, u, S.dx, S.dzw_a, S.dsw_a, params)
+    _newton(P, G, cones, S, u, S.dx, S.dzw_a, S.dsw_a, 0, params.refine_rtol)
     alpha_a = min(1.0, min(_max_step(cones, lam, S.dsw_a), _max_step(cones, lam, S.dzw_a)))
     sigma = min(max(1.0 - alpha_a, 0.0), 1.0) ** 3
     _jordan(cones, lam, lam, S.t1)
@@ -537,7 +538,7 @@ def _step(P, G, cones, s, z, gap, degree, params, S):
     _jordan_solve(cones, lam, S.t1, u)
     for r in range(m):
         u[r] = -u[r]
-    _newton(P, G, cones, S, u, S.dx, S.dzw, S.dsw, params)
+    _newton(P, G, cones, S, u, S.dx, S.dzw, S.dsw, params.refine, params.refine_rtol)
     alpha = min(1.0, params.step_fraction * min(_max_step(cones, lam, S.dsw),
                                                 _max_step(cones, lam, S.dzw)))
     _apply(cones, S.d, S.eta, S.w, S.dsw, S.ds, False)
