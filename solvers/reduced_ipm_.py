@@ -29,7 +29,7 @@ The interior point runs compiled where numba is installed
 (:mod:`._reduced_ipm_kernels`, runs of instants on numba's threads; ``compiled``
 forces one form), else as its NumPy reference. ``warm`` (compiled only) starts each
 instant from the one before it: on ``paper`` it cuts the iterations of ``min_max``
-from 11.7 to 6.4 per instant and of ``socp_face`` from 7.1 to 5.5, but an answer then
+from 11.7 to 6.3 per instant and of ``socp_face`` from 7.1 to 5.5, but an answer then
 depends on the instants before it in its run, so the backend starts cold unless asked.
 ``stages``: ``reduce`` (elimination and folding), ``ipm``, ``lift`` and ``fallback``.
 """
