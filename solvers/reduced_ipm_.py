@@ -62,17 +62,19 @@ def supports(batch: ConicBatch) -> bool:
     return "zero" in kinds and "soc" in kinds and kinds <= {"zero", "nonneg", "soc"}
 
 
-def _groups(batch: ConicBatch) -> list[np.ndarray]:
-    """The instants reduced together: all of them, unless their equality rows change
-    rank (then one group per rank, found from each instant's singular values).
+def _groups(batch: ConicBatch) -> list[np.ndarray | slice]:
+    """The instants reduced together: all of them (a slice: the batch's arrays are then
+    read in place, not copied), unless their equality rows change rank (then one group
+    per rank, found from each instant's singular values).
     """
-    T = len(batch.instants)
     if batch.null_space is not None:
-        return [np.arange(T)]
+        return [slice(None)]
     eq = np.array([k for kind, size in batch.cones if kind == "zero"
                    for k in range(int(size))])
     s = np.linalg.svd(batch.A[:, eq], compute_uv=False)
     ranks = np.sum(s > RANK_RTOL * s[:, :1], axis=1)
+    if len(np.unique(ranks)) == 1:
+        return [slice(None)]
     return [np.flatnonzero(ranks == r) for r in np.unique(ranks)]
 
 
@@ -110,8 +112,9 @@ def solve_reduced(P, q, G, h, cones, tol: float = reduced_ipm.TOL,
     return reduced_ipm.Answer(x, z, s, iterations, code)
 
 
-def reduced_problem(batch: ConicBatch, rows: np.ndarray):
-    """The instants ``rows`` of the batch as problems (1) of :mod:`.reduced_ipm`:
+def reduced_problem(batch: ConicBatch, rows: np.ndarray | slice):
+    """The instants ``rows`` (indices or a slice) of the batch as problems (1) of
+    :mod:`.reduced_ipm`:
     ``(red, plan, (P, q, G, h, cones))``, ``red`` the elimination
     (:class:`~.conversions.Reduced`), ``plan`` the folding (``None`` where nothing folds).
     """
@@ -124,7 +127,7 @@ def reduced_problem(batch: ConicBatch, rows: np.ndarray):
     return red, plan, (red.P, red.q, G, h, cones)
 
 
-def _solve_group(batch: ConicBatch, rows: np.ndarray, tol: float, max_iter: int,
+def _solve_group(batch: ConicBatch, rows: np.ndarray | slice, tol: float, max_iter: int,
                  compiled: bool | None, warm: bool):
     """One group's reduction, interior point and lift: ``(z, y, answer, seconds)``."""
     clock = time.perf_counter()
