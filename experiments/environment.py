@@ -37,13 +37,14 @@ def machine() -> str:
 
 def threads() -> str:
     """The threads a timed run uses: one BLAS/OpenMP thread per process (the commands
-    set it), and numba's for the ``newton`` family's batches.
+    set it), and numba's for the batches of the ``newton`` family and of
+    ``reduced-ipm``.
     """
     try:
         import numba
     except ImportError:
         return "one BLAS/OpenMP thread; numba not installed"
-    return (f"one BLAS/OpenMP thread; the newton family's batches on "
+    return (f"one BLAS/OpenMP thread; the newton family's and reduced-ipm's batches on "
             f"{numba.get_num_threads()} numba threads")
 
 

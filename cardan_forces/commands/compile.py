@@ -79,6 +79,17 @@ def _newton() -> None:
     solve(batch.build_problems(_operator(), SELECTION, [0])[0], "newton")
 
 
+def _reduced_ipm() -> None:
+    """Two instants of ``paper``'s ``socp_face`` as one batch of the reduced-space
+    interior point, as the bench solves them.
+    """
+    from cardan_forces.formulations import batch
+    from cardan_forces.solvers.registry import solve_batch
+
+    problems = batch.build_problems(_operator(), "socp_face", [0, 1])
+    solve_batch(batch.conic_batch(problems, [0, 1]), "reduced-ipm")
+
+
 FAMILIES = (
     Family("the penalty simulation's kernels (a few minutes on a small machine)",
            ("driveline.harmonic", "driveline.penalty_bdf", "driveline.penalty_contact",
@@ -88,6 +99,8 @@ FAMILIES = (
     Family("the batched least-norm kernels", ("solvers._batched_kernels",), _batched),
     Family("the newton family's kernels (about a minute)",
            ("solvers._newton_kernels", "solvers._newton_linalg"), _newton),
+    Family("the reduced interior point's kernels", ("solvers._reduced_ipm_kernels",),
+           _reduced_ipm),
 )
 """Every compiled kernel family of the package, in the order ``cardan compile`` runs
 them."""
