@@ -80,13 +80,16 @@ def _newton() -> None:
 
 
 def _reduced_ipm() -> None:
-    """Two instants of ``paper``'s ``socp_face`` as one batch of the reduced-space
-    interior point, as the bench solves them.
+    """Two instants of ``paper``'s first physical cone program as one batch of the
+    reduced-space interior point, as the bench solves them (every cone program calls
+    the one compiled entry with the same types).
     """
-    from cardan_forces.formulations import batch
+    from cardan_forces.formulations import batch, where
+    from cardan_forces.formulations.problems import Conic
     from cardan_forces.solvers.registry import solve_batch
 
-    problems = batch.build_problems(_operator(), "socp_face", [0, 1])
+    conic = where(problem=(Conic,), physical=True)[0]
+    problems = batch.build_problems(_operator(), conic, [0, 1])
     solve_batch(batch.conic_batch(problems, [0, 1]), "reduced-ipm")
 
 
