@@ -136,6 +136,7 @@ def test_pareto_front_keeps_the_points_nothing_beats():
     assert front == {"a", "b"}
 
 
+@pytest.mark.slow
 def test_quick_run_writes_csvs_report_and_json(tmp_path, monkeypatch, capsys):
     real = bench_run.solve
 

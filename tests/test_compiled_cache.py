@@ -46,6 +46,7 @@ def _run(folder, cache):
     return float(value), int(hits) > 0
 
 
+@pytest.mark.slow
 def test_a_kernel_is_compiled_again_when_a_file_it_depends_on_changes(tmp_path):
     """A cached kernel that inlines a function of another file: loaded from the cache
     while nothing changes, compiled again (with the new function) once that file is
@@ -80,6 +81,7 @@ print(value, ratio.stats.cache_hits.get(ratio.signatures[0], 0))
 '''
 
 
+@pytest.mark.slow
 def test_a_kernel_compiled_with_other_options_is_not_loaded_from_the_cache(tmp_path):
     """numba's own key leaves the error model out: the same source, cached under
     Python's model (raising on a division by zero), is not loaded for NumPy's (inf),

@@ -64,6 +64,7 @@ def test_test_set_yields_the_packages_qps(exported):
                 np.testing.assert_array_equal(getattr(p, key), ours)
 
 
+@pytest.mark.slow
 def test_qpbenchmark_runs_the_export_unchanged(exported, tmp_path):
     """``qpbenchmark FILE run`` on the exported module: one result per problem."""
     pytest.importorskip("qpbenchmark")

@@ -50,6 +50,7 @@ def _run_kernel(folder, cache):
     return done.returncode, done.stdout, done.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix, corrupt", [  # one index and one data file by default
     (".nbi", lambda text: b"\x80\x04garbage" + text[:7]),  # an unpickling error
     pytest.param(".nbi", lambda text: b"\x80\x04\x95" + b"\xff" * 8 + text[11:],

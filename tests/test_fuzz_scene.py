@@ -14,6 +14,7 @@ import dataclasses
 import json
 import math
 
+import pytest
 from cardan_forces.driveline.loading import builtin_text, load_scene
 from cardan_forces.driveline.scene import MAX_INSTANTS, Scene, SceneError
 from hypothesis import given, settings
@@ -123,6 +124,7 @@ def _load(tmp_path_factory, data: bytes | str):
     _assert_valid(scene)
 
 
+@pytest.mark.slow
 @settings(max_examples=400)
 @given(mutations=st.lists(st.tuples(st.sampled_from(PATHS), ODD), min_size=1, max_size=4))
 def test_mutated_values_load_or_raise_scene_error(tmp_path_factory, mutations):
@@ -143,6 +145,7 @@ def _at(raw, path):
     return raw
 
 
+@pytest.mark.slow
 @settings(max_examples=300)
 @given(data=st.data())
 def test_scaled_numbers_load_or_raise_scene_error(tmp_path_factory, data):
@@ -154,6 +157,7 @@ def test_scaled_numbers_load_or_raise_scene_error(tmp_path_factory, data):
     _load(tmp_path_factory, _file(raw))
 
 
+@pytest.mark.slow
 @settings(max_examples=300)
 @given(splices=st.lists(st.tuples(st.integers(0, len(PAPER_TEXT.encode())),
                                   st.binary(min_size=1, max_size=8)), min_size=1, max_size=3))

@@ -162,6 +162,7 @@ every bearing locating. SciPy's HiGHS presolve called an infeasible point the op
 of its feasibility LP, and ``sets --json`` showed determinate components with null ends."""
 
 
+@pytest.mark.slow
 @settings(max_examples=6, derandomize=True, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(lines(most_shafts=4))

@@ -126,6 +126,7 @@ def test_answers_do_not_depend_on_the_order(min_max):
     assert np.array_equal(forward.z, backward.z[::-1])
 
 
+@pytest.mark.slow
 def test_line_search_takes_the_bisections_steps(min_max, tmp_path, monkeypatch):
     """The closed-form line search rounds the step to the cones' boundary down to the
     bisection's grid, so the solver takes QOCO's own steps: its answers are those of the

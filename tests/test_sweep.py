@@ -193,6 +193,7 @@ def test_point_scene_sets_every_joint_and_the_amplitude():
     assert study.methods == (("min_norm", "numpy-kkt"),)
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_the_workers_at_once_and_keeps_the_csv_whole(tmp_path):
     """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) once the first
     point's row is in the CSV: the queued points are dropped and the point in flight is
@@ -336,6 +337,7 @@ def _alive(pid: int) -> bool:
         return False
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_a_killed_sweep_leaves_no_worker_running(tmp_path):
     """SIGKILL to the sweep (no cleanup runs) while its two workers compute: the
