@@ -181,6 +181,7 @@ def test_secondary_writes_csv_and_png(tmp_path):
     assert text[0] == "case,bearing_load,angle_deg,force_N,source" and len(text) > 100
 
 
+@pytest.mark.slow
 def test_report_on_the_propshaft(tmp_path):
     from cardan_forces.experiments.report import run_report
 

@@ -160,6 +160,7 @@ def test_repro_runs_the_engine_by_default_where_it_is_installed():
     assert "engine" in repro.default_methods()
 
 
+@pytest.mark.slow
 def test_report_with_the_engine_overlays_members_of_the_rigid_set(tmp_path, capsys):
     """``cardan report --engine`` on ``paper`` over its first 0.1 s (3 instants): the
     engine's column is empty before the settling and after it every value lies in its

@@ -91,6 +91,7 @@ def repro_figures(tmp_path_factory):
         plt.close(fig)
 
 
+@pytest.mark.slow
 def test_repro_s_figures_fit_a_page_and_keep_the_rules_of_print(repro_figures):
     assert {"fig11", "fig12", "fig13", "fig14"} <= set(repro_figures)
     assert any(stem.startswith("fig15_") for stem in repro_figures)
@@ -137,6 +138,7 @@ def test_report_pages_keep_the_rules_of_print(paper_report):
         plt.close(fig)
 
 
+@pytest.mark.slow
 def test_report_pages_with_the_engine_draw_nothing_in_its_settling(paper_report):
     """MuJoCo's open circles on every panel, none within the engine's settling; the
     rules of print on the first page (the overlay is alike on every page)."""
@@ -155,6 +157,7 @@ def test_report_pages_with_the_engine_draw_nothing_in_its_settling(paper_report)
         plt.close(fig)
 
 
+@pytest.mark.slow
 def test_cardan_engine_s_figure_keeps_the_rules_of_print(tmp_path):
     pytest.importorskip("mujoco")
     result = engine.study("paper", stop_s=0.15, instants=3)
@@ -204,6 +207,7 @@ def _open_arrows(fig, label: str, side: str) -> list:
     return found
 
 
+@pytest.mark.slow
 def test_cardan_life_s_figures_keep_the_rules_of_print(life_answers, tmp_path):
     """Every selection's mark shows (on paper they lie at one life), at a height of
     its own in the bearing's row; the y axis names the bearings, not a unit."""

@@ -51,6 +51,7 @@ def _numbers(value):
     return [value] if isinstance(value, (int, float)) and not isinstance(value, bool) else []
 
 
+@pytest.mark.slow
 def test_solver_banners_go_to_stderr():
     """HiGHS (highspy) prints a banner on file descriptor 1: in a separate process, so
     that nothing but the real descriptors is involved."""

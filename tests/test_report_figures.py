@@ -150,6 +150,7 @@ def test_set_words(lo, hi, det, words):
     assert report.set_words(np.array(lo), np.array(hi), np.array(det)) == words
 
 
+@pytest.mark.slow
 def test_report_writes_every_format_asked_a_page_each_and_one_pdf(tmp_path, capsys):
     """A report of many panels on pages (paper's five): a PNG and an SVG per page, one
     PDF of them all, and ``report.md`` naming them."""

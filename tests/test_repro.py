@@ -97,6 +97,7 @@ def test_fig15_names_the_scene_whose_verdicts_both_agree():
     assert lines[-1].endswith("none of the scenes drawn")
 
 
+@pytest.mark.slow
 def test_both_fig15_scenes_by_default_in_every_format_asked(tmp_path):
     report = repro.run_repro(figs=(15,), out=tmp_path, quick=True, methods=("positive",),
                              formats=("png", "svg", "pdf"), progress=lambda s: None)
