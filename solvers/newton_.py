@@ -58,6 +58,7 @@ any other backend's. The method runs compiled where numba is installed (extra
 from __future__ import annotations
 
 import functools
+import importlib
 import time
 from concurrent.futures import ThreadPoolExecutor
 
@@ -66,6 +67,8 @@ from cardan_forces.formulations import FORMULATIONS
 from cardan_forces.formulations.batch import ConicBatch, LeastNormBatch
 from cardan_forces.formulations.problems import LCP, Conic, LastMade
 from threadpoolctl import ThreadpoolController
+
+from cardan_forces.util.compiled import compiled_form
 
 from . import settings
 from ._newton_layout import answer, numbers, parse_batch, parse_conic
@@ -100,20 +103,12 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
     force one path; ``True`` without numba is an ``ImportError``); a batch is solved in
     runs of :data:`RUN` instants, on numba's threads where compiled (:func:`_runs`).
     """
-    use = compiled
-    if use is None or use:
-        try:
-            from ._newton_kernels import newton as kernel
-        except ImportError:
-            if use:
-                raise
-            use = False
-        else:
-            use = True
+    kernels = compiled_form(lambda: importlib.import_module(f"{__package__}._newton_kernels"),
+                            compiled)
     T, m, nv = E.shape
     d0 = np.zeros((T, nv)) if d0 is None else np.ascontiguousarray(d0, float)
     start = np.zeros(T, np.bool_) if start is None else np.asarray(start, np.bool_)
-    if not use:
+    if kernels is None:
         return _runs(lambda r: newton_numpy(E[r], e[r], groups, k[r], g[r], d0[r], start[r],
                                             chain, tol, max_iter, soften), T, 1)
     contacts = Contacts(groups.members, groups.mask, groups.signed, groups.n)
@@ -121,7 +116,7 @@ def solve_duals(E, e, groups: Groups, k, g, d0=None, start=None, chain=False, to
                     int(LS_MAX), STALL, int(EXTRAPOLATION), int(WARM_ITER))
     Et, span = np.ascontiguousarray(np.swapaxes(E, 1, 2), float), spans(E)
     e, k, g = (np.ascontiguousarray(a, float) for a in (e, k, g))
-    return _runs(lambda r: kernel(Et[r], span, e[r], contacts, k[r], g[r], d0[r], start[r],
+    return _runs(lambda r: kernels.newton(Et[r], span, e[r], contacts, k[r], g[r], d0[r], start[r],
                                   bool(chain), params), T, _threads())
 
 

@@ -36,10 +36,13 @@ depends on the instants before it in its run, so the backend starts cold unless 
 
 from __future__ import annotations
 
+import importlib
 import time
 
 import numpy as np
 from cardan_forces.formulations.batch import ConicBatch
+
+from cardan_forces.util.compiled import compiled_form
 
 from . import reduced_ipm, settings
 from .backend import Backend
@@ -86,17 +89,9 @@ def solve_reduced(P, q, G, h, cones, tol: float = reduced_ipm.TOL,
     without numba is an ``ImportError``). ``warm`` (compiled only) starts each instant
     from the one before it within runs of :data:`._reduced_ipm_kernels.RUN` instants.
     """
-    use = compiled
-    if use is None or use:
-        try:
-            from . import _reduced_ipm_kernels as kernels
-        except ImportError:
-            if use:
-                raise
-            use = False
-        else:
-            use = True
-    if not use:
+    kernels = compiled_form(lambda: importlib.import_module(f"{__package__}._reduced_ipm_kernels"),
+                            compiled)
+    if kernels is None:
         if warm:
             raise ValueError("the NumPy reference takes no warm start")
         return reduced_ipm.solve(P, q, G, h, cones, tol=tol, max_iter=max_iter)

@@ -106,6 +106,21 @@ except ImportError:
         """Leave a function as it is where numba is not installed."""
         return args[0] if args and callable(args[0]) else (lambda f: f)
 
+def compiled_form(load, compiled: bool | None):
+    """The compiled kernels ``load()`` imports, or ``None`` for the NumPy reference:
+    ``compiled=None`` takes them where numba is installed, ``True`` insists (an
+    ``ImportError`` without numba), ``False`` refuses them.
+    """
+    if compiled is False:
+        return None
+    try:
+        return load()
+    except ImportError:
+        if compiled:
+            raise
+        return None
+
+
 _WARNED: list[str] = []
 """The cache files already reported as unreadable in this process (one warning)."""
 
@@ -149,4 +164,4 @@ def _discard(cache, exc: Exception) -> None:
     _WARNED.append(str(index))
 
 
-__all__ = ["HAVE_NUMBA", "njit"]
+__all__ = ["HAVE_NUMBA", "compiled_form", "njit"]
