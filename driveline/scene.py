@@ -428,6 +428,18 @@ class Scene:
         """
         return _VALIDATE[0](dataclasses.replace(self, **changes))
 
+    def in_motion(self) -> Scene:
+        """The scene as the dynamic models take it (a physics engine, the penalty
+        simulation's measurements): the scene itself where it calls for ``inertia``;
+        a quasi-static one with the ``inertia`` effect added (its shafts' masses and
+        inertias, the same torques and speed), its description saying so.
+        """
+        if self.has("inertia"):
+            return self
+        return self.with_changes(
+            effects=self.effects | {"inertia"},
+            description=f"{self.description}; with inertia (the scene is quasi-static)")
+
 
 _VALIDATE: list[Callable[[Scene], Scene]] = []
 """The validator of :meth:`Scene.with_changes`: :func:`.loading.revalidate`, registered

@@ -243,3 +243,15 @@ def test_misspelled_optional_top_level_key_is_named():
     with pytest.raises(SceneError) as err:
         scene_from_dict({"extends": "paper", "gravty_m_s2": [0.0, 0.0, -9.8]}, "s.toml")
     assert "unknown key 'gravty_m_s2' in the scene; did you mean 'gravity_m_s2'?" in str(err.value)
+
+
+def test_in_motion_adds_inertia_to_a_quasi_static_scene_only():
+    """A quasi-static scene gains the ``inertia`` effect and says so; a dynamic one is
+    returned as it is."""
+    quasi = load_scene("propshaft")
+    moving = quasi.in_motion()
+    assert moving.has("inertia") and not quasi.has("inertia")
+    assert moving.effects - quasi.effects == {"inertia"}
+    assert moving.shafts == quasi.shafts and "quasi-static" in moving.description
+    paper = load_scene("paper")
+    assert paper.in_motion() is paper
