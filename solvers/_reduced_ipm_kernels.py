@@ -746,3 +746,124 @@ def solve(P, q, G, h, cones, params, warm):
                                                   x, s, z)
             iterations[t] += spent
     return x_out, z_out, s_out, iterations, code
+
+
+# The reduction (1) of a formulation's problems and the lift of their answers.
+
+@njit(cache=True, parallel=True)
+def reduce(P, q, A, b, N, eq, rows, member, sign, partner):
+    """The reduced and folded problems (1) of the full ones (the compiled form of
+    :func:`~.conversions.eliminate_equalities` with a formulation's basis, then
+    :meth:`~.reduced_.Folded.rows`), one instant after the other on numba's threads.
+
+    ``P`` (1 or T, n, n) the full objective's matrix, ``q`` (T, n), ``A`` (T, M, n),
+    ``b`` (T, M); ``N`` (T, n, k) an orthonormal basis of the null space of the
+    equality rows ``eq`` (r,), which are mutually orthogonal (``Conic.null_space``);
+    ``rows`` (m,) the full rows of (1)'s rows, the first ``f = len(member)`` of them
+    apexes of two-row cones folded with their ``member`` rows and ``sign``: (1)'s row
+    ``i < f`` is ``rows[i] - sign[i] member[i]``. Returns ``(P, q, G, h)`` of (1),
+    ``z0`` (T, n) the least-norm solution of the equality rows, ``norm`` (T, r) their
+    norms (which :func:`lift` takes) and ``same`` (T, f): whether each folded member
+    row equals ``sign`` times its ``partner`` row at each instant, to the bit (where
+    one does not, the fold does not hold and the caller reduces again without it).
+    """
+    T, _, n = A.shape
+    k, m, f, r = N.shape[2], len(rows), len(member), len(eq)
+    P_out, q_out = np.zeros((T, k, k)), np.zeros((T, k))
+    G, h = np.zeros((T, m, k)), np.zeros((T, m))
+    z0, norm, same = np.zeros((T, n)), np.zeros((T, r)), np.zeros((T, f), np.bool_)
+    for t in numba.prange(T):
+        At, Nt, Pt, z = A[t], N[t], P[0] if P.shape[0] == 1 else P[t], z0[t]
+        for j in range(r):  # z0 = sum of the rows over their norms, times b over them
+            row, total = At[eq[j]], 0.0
+            for i in range(n):
+                total += row[i] * row[i]
+            norm[t, j] = np.sqrt(total)
+            w = b[t, eq[j]] / norm[t, j] / norm[t, j]
+            for i in range(n):
+                z[i] += row[i] * w
+        PN, g = np.zeros((n, k)), q[t].copy()  # P N and P z0 + q, over P's nonzeros
+        for i in range(n):
+            for c in range(n):
+                p = Pt[i, c]
+                if p != 0.0:
+                    g[i] += p * z[c]
+                    for a in range(k):
+                        PN[i, a] += p * Nt[c, a]
+        for i in range(n):
+            for a in range(k):
+                q_out[t, a] += Nt[i, a] * g[i]
+                for c in range(k):
+                    P_out[t, a, c] += Nt[i, a] * PN[i, c]
+        for j in range(m):
+            rhs = b[t, rows[j]] - _row_times(At[rows[j]], 1.0, Nt, z, G[t, j])
+            if j < f:
+                same[t, j] = b[t, member[j]] == sign[j] * b[t, partner[j]]
+                for i in range(n):
+                    same[t, j] &= At[member[j], i] == sign[j] * At[partner[j], i]
+                rhs -= sign[j] * (b[t, member[j]]
+                                  - _row_times(At[member[j]], -sign[j], Nt, z, G[t, j]))
+            h[t, j] = rhs
+    return P_out, q_out, G, h, z0, norm, same
+
+
+@njit(cache=True, parallel=True)
+def lift(P, q, A, N, z0, norm, eq, rows, member, sign, x, u):
+    """The full problems' answers ``z`` (T, n) and multipliers ``y`` (T, M) from (1)'s
+    answers ``x`` (T, k) and multipliers ``u`` (T, m), of the problems :func:`reduce`
+    made (the same arguments; the compiled form of :meth:`~.reduced_.Folded.duals`
+    then :meth:`~.conversions.Reduced.lift`): ``z = z0 + N x``; a folded row's ``u``
+    is its apex's and ``-sign u`` its member's; the equality rows' multipliers by least
+    squares on stationarity ``P z + q + A_eq' l + A_in' y_in = 0``, which the rows'
+    orthogonality makes ``l = A_eq g / norm^2`` with ``g = -(P z + q + A_in' y_in)``.
+    """
+    T, M, n = A.shape
+    k, m, f = N.shape[2], len(rows), len(member)
+    z, y = np.zeros((T, n)), np.zeros((T, M))
+    for t in numba.prange(T):
+        At, Nt, Pt, zt, yt = A[t], N[t], P[0] if P.shape[0] == 1 else P[t], z[t], y[t]
+        for i in range(n):
+            total = z0[t, i]
+            for a in range(k):
+                total += Nt[i, a] * x[t, a]
+            zt[i] = total
+        for j in range(m):
+            yt[rows[j]] = u[t, j]
+        for j in range(f):
+            yt[member[j]] = -sign[j] * u[t, j]
+        g = -q[t]
+        for i in range(n):
+            for c in range(n):
+                if Pt[i, c] != 0.0:
+                    g[i] -= Pt[i, c] * zt[c]
+        _subtract_rows(At, yt, rows, member, g)
+        for j in range(len(eq)):
+            total = 0.0
+            for i in range(n):
+                total += At[eq[j], i] * g[i]
+            yt[eq[j]] = total / norm[t, j] / norm[t, j]
+    return z, y
+
+
+@kernel
+def _row_times(row, scale, N, z, out):
+    """``out += scale row N``; returns ``row z``. Over the row's nonzeros: a cone row
+    of the built-in formulations has one or two of its 37-52 (a bound on a force).
+    """
+    total = 0.0
+    for i in range(len(row)):
+        if row[i] != 0.0:
+            total += row[i] * z[i]
+            v = scale * row[i]
+            for a in range(len(out)):
+                out[a] += v * N[i, a]
+    return total
+
+
+@kernel
+def _subtract_rows(A, y, rows, member, g):
+    """``g -= A_in' y_in`` over the rows ``rows`` and ``member`` (the cone rows)."""
+    for part in (rows, member):
+        for r in part:
+            for i in range(A.shape[1]):
+                g[i] -= A[r, i] * y[r]

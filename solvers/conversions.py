@@ -168,7 +168,7 @@ def _triangular(R: np.ndarray, v: np.ndarray, transposed: bool = False) -> np.nd
     return w
 
 
-def _zero_rows(cones) -> tuple[np.ndarray, np.ndarray, tuple]:
+def zero_rows(cones) -> tuple[np.ndarray, np.ndarray, tuple]:
     """Row indices of the zero-cone blocks, of the others, and the others' cones."""
     eq, rest, kept, row = [], [], [], 0
     for kind, size in cones:
@@ -228,7 +228,7 @@ def eliminate_equalities(P, q, A, b, cones, null_space=None) -> Reduced:
     P = np.zeros((n, n)) if P is None else np.asarray(P, float)
     d = _diagonal(P)
     P = np.broadcast_to(P, (T, n, n)) if d is None else np.broadcast_to(d, (T, n))
-    eq, rest, kept = _zero_rows(cones)
+    eq, rest, kept = zero_rows(cones)
     A_in, A_eq, b_eq = _part(A, rest), _part(A, eq), _part(b, eq)
     if null_space is not None and np.shape(null_space) == (T, n, n - len(eq)):
         z0, N, factors = _given_null_space(A_eq, b_eq, null_space)

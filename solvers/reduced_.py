@@ -127,26 +127,43 @@ def _matches(members: bytes, bounds: bytes, width: int):
     return out
 
 
-def fold(A: np.ndarray, b: np.ndarray, cones) -> Folded | None:
-    """The :class:`Folded` plan of the cone rows ``A`` (T, m, n), ``b`` (T, m) under
-    ``cones`` (no zero cone), or None where no two-row cone folds. A cone's member row
-    is matched to a nonnegative row at the first instant and confirmed at every other
-    instant, to the bit.
+def matched(A0: np.ndarray, b0: np.ndarray, cones) -> tuple[np.ndarray, np.ndarray,
+                                                               np.ndarray]:
+    """The two-row cones of ``cones`` (no zero cone) whose member row, at one instant
+    (its cone rows ``A0`` (m, n), ``b0`` (m,)), equals a nonnegative row or its negative,
+    to the bit: ``(apex, partner, sign)``, the cones' apex rows, the nonnegative rows
+    they match and the signs (empty where none does).
     """
     nonneg, apexes = _candidates(cones)
     if not len(nonneg) or not len(apexes):
-        return None
-    first = np.concatenate([A[0], b[0][:, None]], axis=1)
+        return apexes[:0], nonneg[:0], np.zeros(0)
+    first = np.concatenate([A0, b0[:, None]], axis=1)
     found, partner, sign = _matches(first[apexes + 1].tobytes(), first[nonneg].tobytes(),
                                     first.shape[1])
-    apexes, partner = apexes[found], nonneg[partner]
-    if len(A) > 1:
+    return apexes[found], nonneg[partner], sign
+
+
+def plan(cones, apex: np.ndarray, sign: np.ndarray) -> Folded | None:
+    """The :class:`Folded` of ``cones`` with the two-row cones at ``apex`` folded with
+    ``sign`` (None where none is).
+    """
+    if not len(apex):
+        return None
+    return _plan(cones, tuple(np.asarray(apex).tolist()), tuple(np.asarray(sign).tolist()))
+
+
+def fold(A: np.ndarray, b: np.ndarray, cones) -> Folded | None:
+    """The :class:`Folded` plan of the cone rows ``A`` (T, m, n), ``b`` (T, m) under
+    ``cones`` (no zero cone), or None where no two-row cone folds. A cone's member row
+    is matched to a nonnegative row at the first instant (:func:`matched`) and confirmed
+    at every other instant, to the bit.
+    """
+    apexes, partner, sign = matched(A[0], b[0], cones)
+    if len(A) > 1 and len(apexes):
         confirmed = (np.all(A[:, apexes + 1] == sign[:, None] * A[:, partner], axis=(0, 2))
                      & np.all(b[:, apexes + 1] == sign * b[:, partner], axis=0))
         apexes, sign = apexes[confirmed], sign[confirmed]
-    if not len(apexes):
-        return None
-    return _plan(cones, tuple(apexes.tolist()), tuple(sign.tolist()))
+    return plan(cones, apexes, sign)
 
 
 def _reduce(P, q, A, b, cones, null_space):

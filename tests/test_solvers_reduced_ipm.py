@@ -109,7 +109,7 @@ def test_compiled_form_agrees_with_the_reference(op, formulation):
     """
     pytest.importorskip("numba")
     batch = _batch(op, formulation, np.arange(41))
-    P, q, G, h, cones = adapter.reduced_problem(batch, np.arange(41))[2]
+    P, q, G, h, cones = adapter.reduced_problem(batch, np.arange(41))[1]
     ref = reduced_ipm.solve(P, q, G, h, cones)
     out = adapter.solve_reduced(P, q, G, h, cones, compiled=True)
     np.testing.assert_array_equal(out.code, ref.code)
@@ -126,11 +126,52 @@ def test_compiled_form_agrees_with_the_reference(op, formulation):
     assert result.within(LEVEL).all()
 
 
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_compiled_reduction_and_lift_agree_with_the_reference(op, formulation):
+    """The compiled reduction and lift give the reference's problems (1), cones and
+    lifted answers and multipliers to rounding, on ``paper``'s first 41 instants.
+    """
+    pytest.importorskip("numba")
+    batch = _batch(op, formulation, np.arange(41))
+    _same_reduction(batch)
+
+
+def _same_reduction(batch):
+    """The compiled and the reference reduction of ``batch`` agree (problems, cones,
+    the lift of one answer of each instant) to rounding.
+    """
+    lift, problem = adapter.reduced_problem(batch, slice(None), compiled=True)
+    ref_lift, ref = adapter.reduced_problem(batch, slice(None), compiled=False)
+    assert problem[4] == ref[4]
+    for a, b in zip(problem[:4], ref[:4]):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+    answer = adapter.solve_reduced(*ref, compiled=False)
+    for a, b in zip(lift(answer.x, answer.z), ref_lift(answer.x, answer.z)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
+
+
+def test_compiled_reduction_folds_only_what_holds_at_every_instant(op):
+    """A two-row cone whose member row matches its nonnegative row at the first instant
+    but not at a later one is not folded, by both forms.
+    """
+    pytest.importorskip("numba")
+    batch = _batch(op, "min_max", np.arange(0, 41, 10))
+    P, q, G, h, cones = adapter.reduced_problem(batch, slice(None), compiled=False)[1]
+    starts = np.cumsum([0, *(size for _, size in batch.cones)])
+    member = 1 + next(start for start, (kind, size) in zip(starts, batch.cones)
+                      if (kind, size) == ("soc", 2))  # min_max's two-row cones all fold
+    b = batch.b.copy()
+    b[2, member] += 1.0
+    changed = dataclasses.replace(batch, b=b)
+    _same_reduction(changed)
+    assert adapter.reduced_problem(changed, slice(None), compiled=True)[1][4] != cones
+
+
 @pytest.mark.parametrize("warm", [False, True])
 def test_compiled_answers_do_not_depend_on_the_thread_count(op, warm):
     numba = pytest.importorskip("numba")
     batch = _batch(op, "min_max", np.arange(41))
-    problem = adapter.reduced_problem(batch, np.arange(41))[2]
+    problem = adapter.reduced_problem(batch, np.arange(41))[1]
     was = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
