@@ -60,9 +60,10 @@ import numpy as np
 
 from . import engine_mujoco
 from .elements import shaft_segments
-from .engine_mujoco import EngineRun, EngineUnsupported, Start, reference_points
+from .elements.base import DRAKE
+from .engine_mujoco import EngineRun, EngineUnsupported, Governor, reference_points, start_of
 from .equilibrium import Operator
-from .kinematics import kinematics, rest_geometry
+from .kinematics import rest_geometry
 
 MUJOCO_ONLY = {"option": ("timestep", "integrator", "tolerance", "iterations"),
                "connect": ("solref", "solimp")}
@@ -118,10 +119,7 @@ def drake_version() -> str:
 
 def check_expressible(op: Operator) -> None:
     """Raise :class:`EngineUnsupported` naming what Drake cannot express (module doc)."""
-    try:
-        engine_mujoco.check_expressible(op.scene)
-    except EngineUnsupported as err:
-        raise EngineUnsupported(str(err).replace("MuJoCo", "Drake")) from None
+    engine_mujoco.check_expressible(op.scene, DRAKE)
     root = ET.fromstring(engine_mujoco.build_mjcf(op))
     added = [b.get("name") for b in root.find("worldbody").findall("body")[1:]]
     if added:
@@ -248,10 +246,8 @@ def _initial_state(op: Operator, model: _Model) -> None:
     each tree joint at the speed its kind gives.
     """
     drake = _pydrake()
-    geo = rest_geometry(op.scene)
-    start = Start(op.scene, geo, kinematics(geo, op.scene.initial_angle_rad), op.bodies,
-                  reference_points(op), op.scene.initial_speed_rad_s)
-    spin = drake.SpatialVelocity(w=start.speed * geo.axes[0], v=np.zeros(3))
+    start = start_of(op)
+    spin = drake.SpatialVelocity(w=start.speed * start.geo.axes[0], v=np.zeros(3))
     model.plant.SetFreeBodySpatialVelocity(model.context, model.first, spin)
     for child, _, links in _tree(op):
         link = links[0]
@@ -264,12 +260,14 @@ def _initial_state(op: Operator, model: _Model) -> None:
         model.plant.SetVelocities(model.context, v)
 
 
-def _torques(op: Operator, model: _Model, now: float) -> None:
-    """Fix the plant's applied spatial forces to the scene's torques at time ``now``."""
+def _torques(op: Operator, model: _Model, now: float, governed: float = 0.0) -> None:
+    """Fix the plant's applied spatial forces to the scene's torques at time ``now``,
+    and a governor's torque ``governed`` (N m) on the first shaft.
+    """
     drake = _pydrake()
     axes = model.axes
     forces = []
-    for body, torque in ((model.first, op.scene.input_torque(now) * axes[0]),
+    for body, torque in ((model.first, (op.scene.input_torque(now) + governed) * axes[0]),
                          (model.last, -op.scene.load_torque(now) * axes[-1])):
         applied = drake.ExternallyAppliedSpatialForce()
         applied.body_index = body.index()
@@ -324,10 +322,12 @@ def _angle(op: Operator, model: _Model) -> tuple[float, float]:
             float(speed.rotational() @ axis))
 
 
-def run(op: Operator, stepping: Stepping = Stepping()) -> EngineRun:
+def run(op: Operator, stepping: Stepping = Stepping(),
+        governor: Governor | None = None) -> EngineRun:
     """Simulate the operator's scene in Drake from its initial state and read the
     forces at the operator's instants (module doc); an :class:`EngineRun` whose
-    ``softness`` is the run's :class:`Stepping`.
+    ``softness`` is the run's :class:`Stepping`; the input speed held by ``governor``
+    where one is given.
     """
     check_expressible(op)
     model = _build(op, stepping)
@@ -347,20 +347,28 @@ def run(op: Operator, stepping: Stepping = Stepping()) -> EngineRun:
     simulator.Initialize()
     prev, _ = _angle(op, model)
     turns = round((scene.initial_angle_rad - prev) / (2 * np.pi))
-    began = _time.perf_counter()
+    began, held = _time.perf_counter(), 0.0
+
+    def governed() -> float:  # the governor's torque on the engine's input motion
+        if governor is None:
+            return 0.0
+        return governor.torque(scene.time.start_s + step * dt, prev + 2 * np.pi * turns,
+                               _angle(op, model)[1])
+
     for i, target in enumerate(targets):
         while step < target:
-            _torques(op, model, scene.time.start_s + (step + 0.5) * dt)
+            _torques(op, model, scene.time.start_s + (step + 0.5) * dt, governed())
             simulator.AdvanceTo(scene.time.start_s + (step + 1) * dt)
             step += 1
             now, _ = _angle(op, model)  # counted every step: a turn is many steps
             turns += round((prev - now) / (2 * np.pi))
             prev = now
-        _torques(op, model, float(op.t[i]))
+        held = max(held, abs(governed()))
+        _torques(op, model, float(op.t[i]), governed())
         forces[i], misfit[i] = _read(op, model, i)
         q[i], qd[i] = prev + 2 * np.pi * turns, _angle(op, model)[1]
     return EngineRun(op.t, forces, op.names, q, qd, misfit, stepping, dt, step,
-                     _time.perf_counter() - began)
+                     _time.perf_counter() - began, held)
 
 
 POSE_STEP_RAD = 0.2

@@ -4,9 +4,14 @@ constraint forces read back into the operator's named forces (optional extra ``m
 **Model** (MJCF generated from the scene, :func:`build_mjcf`). The line is one kinematic
 tree in chain order: the first shaft body floats (a free joint), each next body hangs
 on the one before by the joint the kind of the element between them gives
-(:meth:`~.elements.base.EngineJoint.mjcf_joint`): a cross-pin on its driving yoke by a
+(:meth:`~.elements.base.EngineJoint.mjcf_steps`): a cross-pin on its driving yoke by a
 hinge about ``e1``, the next shaft on the pin by a hinge about ``e2``, a slip joint's
-downstream segment on its upstream one by a slide along the axis (frictionless).
+downstream segment on its upstream one by a slide along the axis (frictionless); a kind
+that needs several joints (a CV joint's three coupled hinges, a disc coupling's six
+sprung ones) gets a nearly massless engine body between two of them
+(:data:`ENGINE_BODY_KG`). A link between bodies that are not tree neighbours (a
+centring ball) is closed outside the tree (:class:`~.elements.base.EngineLoop`): a
+carrier hung on one body, held by a ``connect`` to the other.
 Masses and inertias are the scene's (a shaft's transverse moments ``J1``, ``J3`` along
 ``r1``, ``r2``; a segment takes its length share of all three, as the operator does of
 the axial one). Every bearing is an equality constraint to the
@@ -18,7 +23,8 @@ bearings close the loop, so the model is redundant exactly as the rigid one is: 
 axial splits and, without a slip joint, the loop's self-stress. A hinge has no end-face
 split: the end-face pairs of the rigid model are resolved as the package resolves them,
 by complementarity on their net axial force. The input torque and the load torque act on
-the first and last shaft bodies, gravity as in the scene.
+the first and last shaft bodies, or as the forces of the element that takes them (a gear
+mesh, :class:`~.elements.base.Loads`, at its point), gravity as in the scene.
 
 **Forward simulation, not inverse dynamics.** MuJoCo's constraint forces come from its
 soft-constraint model: each row's force is ``-(J qacc - a_ref) / R`` with ``a_ref``
@@ -36,7 +42,8 @@ package's is reported beside them (:attr:`EngineRun.q`).
 :class:`EngineUnsupported`): a slip joint with friction (a joint's ``frictionloss`` is
 a constant, not ``mu |T| / r``), the ``friction`` effect (Coulomb cones in the joints),
 and a scene without the ``inertia`` effect (a quasi-static analysis: the engine always
-integrates dynamics). Effects that the rigid operator does not model either
+integrates dynamics; :meth:`~.scene.Scene.in_motion` gives its dynamic counterpart).
+Effects that the rigid operator does not model either
 (``clearance``, ``compliance``, ``penalty_dynamics``) are ignored, as there.
 
 Why one module this long: the MJCF's bodies and equality rows (:func:`build_mjcf`) and
@@ -51,9 +58,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .elements import shaft_segments
+from .elements import segment_of, shaft_segments
+from .elements.base import MUJOCO, EngineLoop, EngineStep, Loads
 from .elements.base import mjcf_numbers as _vec
-from .elements.registry import refusals
+from .elements.bodies import frames_of
+from .elements.registry import refusals, scene_elements
 from .equilibrium import Link, Operator, body_references
 from .kinematics import kinematics, rest_geometry
 from .scene import Scene
@@ -102,6 +111,34 @@ class Softness:
 
 
 @dataclass(frozen=True)
+class Governor:
+    """A governor on the input torque that holds the input shaft on the steady motion
+    ``angle + speed (t - start_s)`` (rad): ``inertia (2 e' / tau + e / tau^2)`` (N m)
+    added to the scene's, ``e`` the engine's lag behind that motion, ``inertia`` the
+    line's reduced inertia (kg m^2, eq. 5's ``I(q)`` at the start), ``tau`` =
+    ``time_s`` (critically damped: no steady lag against a steady loss). It holds a
+    quasi-static scene taken in motion (:meth:`~.scene.Scene.in_motion`) at its steady
+    speed: with balanced torques and a small inertia, the energy the engine's soft
+    constraints dissipate would otherwise drift its speed (double-cardan's 10 rad/s
+    reversed within 0.4 s), and its forces would be read at other angles than the rigid
+    set's.
+    """
+
+    angle: float
+    speed: float
+    start_s: float
+    inertia: float
+    time_s: float = 0.005
+
+    def torque(self, t: float, q: float, qd: float) -> float:
+        """The governor's torque (N m) at time ``t`` (s), input angle ``q`` (rad,
+        unwrapped) and speed ``qd`` (rad/s).
+        """
+        lag = self.angle + self.speed * (t - self.start_s) - q
+        return self.inertia * (2.0 * (self.speed - qd) / self.time_s + lag / self.time_s ** 2)
+
+
+@dataclass(frozen=True)
 class EngineRun:
     """The engine's forces at the operator's instants, in its column order (N, N m).
 
@@ -109,7 +146,8 @@ class EngineRun:
     motion; ``mapping_residual``: per instant, the largest part of an engine wrench
     that the operator's columns of that element cannot carry (N, N m; a floating
     bearing's carrier inertia, a slide's axial force); ``steps`` and ``wall_s`` the
-    integration's cost.
+    integration's cost; ``governed_N_m``: the largest governor torque at the instants
+    read (0 without a :class:`Governor`).
     """
 
     t: np.ndarray
@@ -122,6 +160,7 @@ class EngineRun:
     timestep_s: float
     steps: int
     wall_s: float
+    governed_N_m: float = 0.0
 
 
 def _mujoco():
@@ -138,9 +177,11 @@ def mujoco_version() -> str:
     return _mujoco().__version__
 
 
-def check_expressible(scene: Scene) -> None:
-    """Raise :class:`EngineUnsupported` naming every element the engine cannot express."""
-    problems = refusals(scene, "the engine")
+def check_expressible(scene: Scene, engine: str = MUJOCO) -> None:
+    """Raise :class:`EngineUnsupported` naming every element ``engine`` (MuJoCo, or Drake
+    which reads this module's MJCF) cannot express.
+    """
+    problems = refusals(scene, engine)
     if scene.has("friction"):
         problems.append("effect 'friction' (Coulomb cones in the joints) has no engine "
                         "counterpart on a hinge")
@@ -148,26 +189,41 @@ def check_expressible(scene: Scene) -> None:
         problems.append("no 'inertia' effect: the scene is quasi-static, the engine "
                         "integrates dynamics")
     if problems:
-        raise EngineUnsupported(f"scene {scene.name}: MuJoCo cannot express: "
+        raise EngineUnsupported(f"scene {scene.name}: {engine} cannot express: "
                                 + "; ".join(problems))
+
+
+ENGINE_BODY_KG = 1e-6
+"""Mass (kg; inertia ``ENGINE_BODY_KG`` x 1e-6 kg m^2 each way) of an engine body between
+two joints of one link (:meth:`~.elements.base.EngineJoint.mjcf_steps`) or of a loop's
+carrier: MuJoCo needs a positive one; its weight, 1e-5 N, is far below the loads."""
+
+
+COUPLING_STEPS, COUPLING_IMPEDANCE = 2, 0.9999
+"""A coupling of a kind's joints (a CV joint's homokinetic one) is as hard as MuJoCo's
+step allows: time constant two steps (its least), impedance ``0.9999``. It carries the
+line's torque between spinning bodies of small polar inertia, so the bearings' softness
+would let it stretch (about 9 rad under halfshaft's 1000 N m, a driven shaft turned
+away from its driving one); so hard, it stretches about 1 mrad, and a joint's kinematics
+stays as exact as the tree's hinges keep a Cardan joint's."""
 
 
 @dataclass(frozen=True)
 class _Body:
-    """One engine body: the operator's body index, its global pose at the start, its
-    joint (``free``, ``hinge`` or ``slide``) with the joint's global axis, mass and
-    global inertia tensor about its centre of mass ``pos``; ``link``: the contact whose
-    kind made the joint (None for the free first body).
+    """One engine body: the operator's body index (None for an engine body between two
+    joints of a link), its MJCF name, its global pose at the start, mass and global
+    inertia tensor about its centre of mass ``pos``; ``step``: the joint it hangs on
+    its parent by (None for the free first body) and ``link`` the contact whose kind
+    made it.
     """
 
-    index: int
+    index: int | None
+    name: str
     pos: np.ndarray
     rot: np.ndarray
-    joint: str
-    axis: np.ndarray
-    joint_pos: np.ndarray
     mass: float
     inertia: np.ndarray
+    step: EngineStep | None = None
     link: Link | None = None
 
 
@@ -187,7 +243,8 @@ def reference_points(op: Operator) -> np.ndarray:
 class Start:
     """The line at the scene's start, as the kinds place their MuJoCo joints and bodies:
     the scene, its rest geometry, the kinematics at the initial angle, the operator's
-    bodies and their moment references ``refs``, the initial ``speed`` (rad/s).
+    bodies and their moment references ``refs``, the initial ``speed`` (rad/s), per
+    shaft the rows ``r1, r2, axis`` of its frame at rest (``frames``).
     """
 
     scene: Scene
@@ -196,27 +253,34 @@ class Start:
     bodies: tuple
     refs: np.ndarray
     speed: float
+    frames: np.ndarray
 
 
-def _start(op: Operator) -> Start:
+def start_of(op: Operator) -> Start:
+    """The operator's line at the scene's start (:class:`Start`)."""
     scene = op.scene
     geo = rest_geometry(scene)
     return Start(scene, geo, kinematics(geo, scene.initial_angle_rad), op.bodies,
-                 reference_points(op), scene.initial_speed_rad_s)
+                 reference_points(op), scene.initial_speed_rad_s, frames_of(geo))
+
+
+def _loops(op: Operator) -> list[Link]:
+    """The links the engine closes outside its tree (:class:`~.elements.base.EngineLoop`)."""
+    return [c for c in op.contacts if isinstance(c.element_kind, EngineLoop)]
 
 
 def _chain(op: Operator) -> list[_Body]:
     """The engine bodies in tree order (each the child of the one before it): a walk
     along the line from its first shaft body (which floats) through the links between
-    bodies, each link's kind giving the joint by which the next body hangs on the last
-    (and the body itself where the kind made it, a cross-pin).
+    bodies, each link's kind giving the joints by which the next body hangs on the last
+    (an engine body between two of them; the body itself where the kind made it, a
+    cross-pin).
     """
-    start = _start(op)
-    joins = [c for c in op.contacts if c.other is not None]
-    chain = [_shaft_body(op, start, 0, "free", start.geo.axes[0], start.refs[0], None)]
-    seen = {0}
+    start = start_of(op)
+    joins = [c for c in op.contacts if c.other is not None and c not in _loops(op)]
+    chain = [_shaft_body(op, start, 0, None, None)]
+    here, seen = 0, {0}
     while True:
-        here = chain[-1].index
         link = next((c for c in joins if here in (c.body, c.other)
                      and {c.body, c.other} - seen), None)
         if link is None:
@@ -224,15 +288,20 @@ def _chain(op: Operator) -> list[_Body]:
         child = link.other if link.body == here else link.body
         seen.add(child)
         kind = link.element_kind
-        joint, axis, at = kind.mjcf_joint(link, child, start)
+        steps = kind.mjcf_steps(link, child, start)
+        for k, step in enumerate(steps[:-1]):
+            chain.append(_Body(None, f"{link.name}.{k}", step.point, chain[-1].rot,
+                               ENGINE_BODY_KG, ENGINE_BODY_KG * 1e-6 * np.eye(3), step, link))
         if op.bodies[child].shaft is not None:
-            chain.append(_shaft_body(op, start, child, joint, axis, at, link))
+            chain.append(_shaft_body(op, start, child, steps[-1], link))
         else:
             pos, rot, mass, inertia = kind.mjcf_body(child, start)
-            chain.append(_Body(child, pos, rot, joint, axis, at, mass, inertia, link))
+            chain.append(_Body(child, op.bodies[child].name, pos, rot, mass, inertia,
+                               steps[-1], link))
+        here = child
 
 
-def _shaft_body(op: Operator, start: Start, g: int, joint: str, axis, at, link) -> _Body:
+def _shaft_body(op: Operator, start: Start, g: int, step, link) -> _Body:
     """Shaft body ``g`` (a shaft or a segment): the shaft's mass and principal moments
     by its length share, turned to the initial angle.
     """
@@ -242,8 +311,8 @@ def _shaft_body(op: Operator, start: Start, g: int, joint: str, axis, at, link) 
     j_axes = np.array(shaft.inertia_kg_m2)[[0, 2, 1]] * seg.fraction
     rot = _rotation(start.geo.axes[k], start.kin.phi[k, 0])
     inertia = rot @ np.einsum("i,ia,ib->ab", j_axes, frame, frame) @ rot.T
-    return _Body(g, start.refs[g], rot, joint, axis, at, seg.fraction * shaft.mass_kg,
-                 inertia, link)
+    return _Body(g, op.bodies[g].name, start.refs[g], rot, seg.fraction * shaft.mass_kg,
+                 inertia, step, link)
 
 
 def _quat(rot: np.ndarray) -> np.ndarray:
@@ -252,7 +321,19 @@ def _quat(rot: np.ndarray) -> np.ndarray:
     return quat
 
 
-def _body_xml(body: _Body, name: str, parent: _Body | None) -> str:
+def _joint_xml(name: str, step: EngineStep | None, pos, rot) -> str:
+    """A body's joint in its own frame (``pos``, ``rot``: the body's global pose):
+    named as the body, with its spring-damper where it has one.
+    """
+    if step is None:
+        return "<freejoint/>"
+    spring = (f' stiffness="{step.stiffness:.17g}" damping="{step.damping:.17g}"'
+              if step.stiffness or step.damping else "")
+    return (f'<joint name="{name}" type="{step.type}" pos="{_vec(rot.T @ (step.point - pos))}"'
+            f' axis="{_vec(rot.T @ step.axis)}"{spring}/>')
+
+
+def _body_xml(body: _Body, parent: _Body | None) -> str:
     """A body's opening tag, joint and inertia, relative to its parent's frame."""
     p_rot = np.eye(3) if parent is None else parent.rot
     p_pos = np.zeros(3) if parent is None else parent.pos
@@ -260,11 +341,24 @@ def _body_xml(body: _Body, name: str, parent: _Body | None) -> str:
     rot = p_rot.T @ body.rot
     inertia = body.rot.T @ body.inertia @ body.rot
     full = inertia[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
-    joint = ("<freejoint/>" if body.joint == "free" else
-             f'<joint type="{body.joint}" pos="{_vec(body.rot.T @ (body.joint_pos - body.pos))}"'
-             f' axis="{_vec(body.rot.T @ body.axis)}"/>')
-    return (f'<body name="{name}" pos="{_vec(pos)}" quat="{_vec(_quat(rot))}">{joint}'
+    return (f'<body name="{body.name}" pos="{_vec(pos)}" quat="{_vec(_quat(rot))}">'
+            f'{_joint_xml(body.name, body.step, body.pos, body.rot)}'
             f'<inertial pos="0 0 0" mass="{body.mass:.17g}" fullinertia="{_vec(full)}"/>')
+
+
+def _carrier(link: Link, start: Start, host: _Body, names: dict) -> tuple[str, str]:
+    """A loop's carrier body (nested in its host) and its ``connect`` equality, named
+    as the link (:class:`~.elements.base.EngineLoop`): the carrier at the loop's point,
+    held there by the link's other body.
+    """
+    _, step = link.element_kind.mjcf_loop(link, start)
+    name = f"carrier.{link.name}"
+    other = link.other if host.index == link.body else link.body
+    carrier = _Body(None, name, step.point, host.rot, ENGINE_BODY_KG,
+                    ENGINE_BODY_KG * 1e-6 * np.eye(3), step, link)
+    return (_body_xml(carrier, host) + "</body>",
+            f'<connect name="{link.name}" body1="{name}" body2="{names[other]}" '
+            'anchor="0 0 0"')
 
 
 def _bearings(op: Operator):
@@ -279,22 +373,38 @@ def _bearings(op: Operator):
 
 def build_mjcf(op: Operator, softness: Softness = Softness()) -> str:
     """The MJCF model of the operator's scene (module doc): bodies named as the
-    operator's bodies, each bearing an equality named as its contact.
+    operator's bodies, each bearing and loop an equality named as its contact, then the
+    couplings of the kinds' joints.
     """
-    scene, chain = op.scene, _chain(op)
-    names = [op.bodies[b.index].name for b in chain]
-    tree = "".join(_body_xml(b, n, chain[i - 1] if i else None)
-                   for i, (b, n) in enumerate(zip(chain, names))) + "</body>" * len(chain)
-    carriers, equalities = [], []
+    scene, chain, start = op.scene, _chain(op), start_of(op)
+    names = {b.index: b.name for b in chain if b.index is not None}
+    shaft_of = {b.index: scene.shafts[op.bodies[b.index].shaft].name for b in chain
+                if b.index is not None and op.bodies[b.index].shaft is not None}
+
+    def soft(body: int) -> str:
+        return (f'solref="{softness.solref(shaft_of.get(body, ""))}" '
+                f'solimp="{softness.solimp}"')
+
+    carriers, equalities, hosted = [], [], {}
     for link, (point, axis) in _bearings(op):
-        shaft = scene.shafts[link.shaft].name
         body = next(b for b in chain if b.index == link.body)
-        soft = f'solref="{softness.solref(shaft)}" solimp="{softness.solimp}"'
         carrier, equality = link.element_kind.mjcf(
-            link, names[chain.index(body)], body.rot.T @ (point - body.pos), point, axis,
-            body.mass, soft)
+            link, body.name, body.rot.T @ (point - body.pos), point, axis, body.mass,
+            soft(link.body))
         carriers.append(carrier)
         equalities.append(equality)
+    for link in _loops(op):
+        host, _ = link.element_kind.mjcf_loop(link, start)
+        xml, connect = _carrier(link, start, next(b for b in chain if b.index == host), names)
+        hosted[host] = hosted.get(host, "") + xml
+        equalities.append(f"{connect} {soft(host)}/>")
+    hard = (f'solref="{COUPLING_STEPS * _timestep(op, softness):.9g} 1" '
+            f'solimp="{COUPLING_IMPEDANCE} {COUPLING_IMPEDANCE} {softness.width_m:.9g}"')
+    for link in {b.link.name: b.link for b in chain if b.link is not None}.values():
+        joints = [b.name for b in chain if b.link is link]
+        equalities.append(link.element_kind.mjcf_couplings(link, joints, hard))
+    tree = "".join(_body_xml(b, chain[i - 1] if i else None) + hosted.get(b.index, "")
+                   for i, b in enumerate(chain)) + "</body>" * len(chain)
     gravity = scene.gravity_m_s2 if scene.has("gravity") else (0.0, 0.0, 0.0)
     return (f'<mujoco model="{scene.name}"><compiler angle="radian"/>'
             f'<option timestep="{_timestep(op, softness):.17g}" integrator="RK4" '
@@ -311,35 +421,62 @@ def _timestep(op: Operator, softness: Softness) -> float:
     return step / max(1, int(np.ceil(step / softness.timestep_s - 1e-9)))
 
 
-def _initial_velocity(model, data, op: Operator, chain: list[_Body]) -> None:
+SPRING_STEP = 0.5
+"""Largest ``omega dt`` of a sprung joint (``omega = sqrt(k / m)``, ``m`` its effective
+inertia at the start, ``1 / dof_invweight0``): RK4 is stable to 2.8; at 0.5 a period
+takes 12 steps."""
+
+
+def _sprung_joints(model, dt: float) -> float:
+    """Fit the engine to its sprung joints (a disc coupling's, :class:`EngineStep`'s
+    stiffness and damping) and return its step (s): ``dt`` divided until every joint has
+    ``omega dt <= SPRING_STEP``; each damper capped at ``m / dt``, the most RK4
+    integrates at that step (the scene's damping fraction of a stiff disc, 1e-2 s, is
+    far more: the cap still leaves a damping ratio ``1 / (2 omega dt) >= 1``).
+    """
+    mass = 1.0 / model.dof_invweight0[model.jnt_dofadr]
+    omega = np.sqrt(model.jnt_stiffness / mass)
+    dt /= max(1, int(np.ceil(float(np.max(omega, initial=0.0)) * dt / SPRING_STEP)))
+    dofs = model.jnt_dofadr[model.jnt_stiffness > 0]
+    model.dof_damping[dofs] = np.minimum(model.dof_damping[dofs],
+                                         1.0 / (model.dof_invweight0[dofs] * dt))
+    return dt
+
+
+def _initial_velocity(mj, model, data, op: Operator, chain: list[_Body]) -> None:
     """Joint speeds of the scene's initial state: the first shaft turning at the initial
     speed, every other joint at the speed its kind gives (a hinge at its kinematic rate,
-    a slide still); a body without a joint has no speed of its own to set.
+    a slide still); a loop's carrier starts still on its host.
     """
-    start = _start(op)
-    for pos, body in enumerate(chain):
-        if model.body_jntnum[pos + 1] == 0:
-            continue  # welded to the body it hangs on: it has no speed of its own
-        dof = model.jnt_dofadr[model.body_jntadr[pos + 1]]
-        if body.link is None:
+    start = start_of(op)
+    for body in chain:
+        b_id = mj.mj_name2id(model, mj.mjtObj.mjOBJ_BODY, body.name)
+        dof = model.jnt_dofadr[model.body_jntadr[b_id]]
+        if body.step is None:
             data.qvel[dof + 3: dof + 6] = body.rot.T @ (start.speed * start.geo.axes[0])
         else:
-            data.qvel[dof] = body.link.element_kind.mjcf_speed(body.link, body.index,
-                                                               body.axis, start)
+            data.qvel[dof] = body.step.speed
 
 
-def _groups(op: Operator, chain: list[_Body]):
-    """What to read for each part of the operator's columns: ``("bearing", link, eq)``
-    per bearing (equality ``eq``), ``("tree", links, body, other)`` per pair of tree
-    neighbours joined by a cross-pin side or a slip joint.
+def _groups(mj, model, op: Operator, chain: list[_Body]):
+    """What to read for each part of the operator's columns: ``("equality", link, eq)``
+    per bearing and loop (equality ``eq``, on the link's body, a loop's through its
+    carrier), ``("tree", links, body, child, sign)`` per pair of operator bodies the
+    tree joins (a cross-pin side, a slip joint, a CV joint, ...): the engine body
+    ``child`` of the two, whose parent's pull is the wrench on ``body`` times ``sign``.
     """
-    out = [("bearing", link, e) for e, (link, _) in enumerate(_bearings(op))]
+    eq = {n: mj.mj_name2id(model, mj.mjtObj.mjOBJ_EQUALITY, n)
+          for n in [link.name for link, _ in _bearings(op)] + [c.name for c in _loops(op)]}
+    out = [("equality", link, eq[link.name]) for link, _ in _bearings(op)]
+    out += [("equality", link, eq[link.name]) for link in _loops(op)]
     pairs: dict[tuple[int, int | None], list] = {}
-    for link in (c for c in op.contacts if c.other is not None):
+    for link in (c for c in op.contacts if c.other is not None and c not in _loops(op)):
         pairs.setdefault((link.body, link.other), []).append(link)
-    position = {b.index: p for p, b in enumerate(chain)}
+    position = {b.index: p for p, b in enumerate(chain) if b.index is not None}
     for (body, other), links in pairs.items():
-        out.append(("tree", links, position[body], position[other]))
+        child = chain[max(position[body], position[other])]
+        b_id = mj.mj_name2id(model, mj.mjtObj.mjOBJ_BODY, child.name)
+        out.append(("tree", links, body, b_id, 1.0 if child.index == body else -1.0))
     return out
 
 
@@ -348,13 +485,13 @@ def _wrench(force, moment_at, point, ref) -> np.ndarray:
     return np.concatenate([force, moment_at + np.cross(point - ref, force)])
 
 
-def _read(mj, model, data, op: Operator, i: int, chain, groups, refs):
+def _read(mj, model, data, op: Operator, i: int, groups, refs):
     """The operator's forces (n,) from the engine's state, and the largest misfit."""
     mj.mj_rnePostConstraint(model, data)
     x = np.zeros(len(op.names))
     misfit = 0.0
     for group in groups:
-        if group[0] == "bearing":
+        if group[0] == "equality":
             _, link, e = group
             rows = np.flatnonzero((data.efc_type[:data.nefc] == 0) & (data.efc_id[:data.nefc] == e))
             body = link.body
@@ -363,11 +500,9 @@ def _read(mj, model, data, op: Operator, i: int, chain, groups, refs):
             w = _wrench(data.efc_force[rows], np.zeros(3), point, refs[body])
             links = [link]
         else:
-            _, links, p_body, p_other = group
-            body = chain[p_body].index
-            child, sign = (p_body, 1.0) if p_other == p_body - 1 else (p_other, -1.0)
-            c = data.subtree_com[model.body_rootid[child + 1]]
-            raw = sign * data.cfrc_int[child + 1]
+            _, links, body, b_id, sign = group
+            c = data.subtree_com[model.body_rootid[b_id]]
+            raw = sign * data.cfrc_int[b_id]
             w = _wrench(raw[3:], raw[:3], c, refs[body])
         cols = [c for link in links for c in link.columns]
         block = op.A[i, 6 * body: 6 * body + 6][:, cols]
@@ -380,9 +515,43 @@ def _read(mj, model, data, op: Operator, i: int, chain, groups, refs):
     return x, misfit
 
 
-def run(op: Operator, softness: Softness = Softness()) -> EngineRun:
+def _torques(mj, model, op: Operator, chain: list[_Body]):
+    """``apply(data, now, governed)``: add the line's input and load torques at time
+    ``now`` (s) to ``data.xfrc_applied``: as torques on the first and last shaft bodies,
+    or as the forces of the element that takes one (:class:`~.elements.base.Loads`, at
+    its point), as the equilibrium operator applies them; and a governor's torque
+    ``governed`` (N m) on the first.
+    """
+    scene = op.scene
+    geo, segments = rest_geometry(scene), shaft_segments(scene)
+    ids = {b.index: mj.mj_name2id(model, mj.mjtObj.mjOBJ_BODY, b.name)
+           for b in chain if b.index is not None}
+    first, last = ids[0], ids[len(segments) - 1]
+    takers = [(kind, e, k, ids[segment_of(segments, k, e.offset_m)])
+              for kind, e, k, _ in scene_elements(scene) if isinstance(kind, Loads)]
+    ends = {k for _, _, k, _ in takers}
+    frames = frames_of(geo)
+
+    def apply(data, now: float, governed: float = 0.0) -> None:
+        data.xfrc_applied[first, 3:] += governed * geo.axes[0]
+        if 0 not in ends:
+            data.xfrc_applied[first, 3:] += scene.input_torque(now) * geo.axes[0]
+        if len(scene.shafts) - 1 not in ends:
+            data.xfrc_applied[last, 3:] -= scene.load_torque(now) * geo.axes[-1]
+        for kind, element, k, b_id in takers:
+            taken = -scene.input_torque(now) if k == 0 else scene.load_torque(now)
+            point, load = kind.load(element, np.array([taken]), frames[k], geo.centres[k])
+            data.xfrc_applied[b_id, :3] += load[0]
+            data.xfrc_applied[b_id, 3:] += np.cross(point - data.xipos[b_id], load[0])
+
+    return apply
+
+
+def run(op: Operator, softness: Softness = Softness(),
+        governor: Governor | None = None) -> EngineRun:
     """Simulate the operator's scene in MuJoCo from its initial state and read the
-    forces at the operator's instants (module doc).
+    forces at the operator's instants (module doc), its input speed held by
+    ``governor`` where one is given.
     """
     check_expressible(op.scene)
     mj = _mujoco()
@@ -390,45 +559,50 @@ def run(op: Operator, softness: Softness = Softness()) -> EngineRun:
     model = mj.MjModel.from_xml_string(build_mjcf(op, softness))
     data = mj.MjData(model)
     chain = _chain(op)
-    _initial_velocity(model, data, op, chain)
-    groups, refs = _groups(op, chain), reference_points(op)
-    axes = rest_geometry(scene).axes
-    n_seg = len(shaft_segments(scene))
-    last = 1 + max(p for p, b in enumerate(chain) if b.index < n_seg)
-    dt = model.opt.timestep
+    _initial_velocity(mj, model, data, op, chain)
+    mj.mj_forward(model, data)  # poses and speeds of the start, read before the first step
+    groups, refs = _groups(mj, model, op, chain), reference_points(op)
+    apply = _torques(mj, model, op, chain)
+    model.opt.timestep = dt = _sprung_joints(model, model.opt.timestep)
     targets = np.rint((op.t - scene.time.start_s) / dt).astype(int)
     if np.any(np.diff(targets) < 0) or targets[0] < 0:
         raise EngineUnsupported("the engine reads instants in time order from the start")
     n, forces = len(op.t), np.zeros((len(op.t), len(op.names)))
     q, qd, misfit = np.zeros(n), np.zeros(n), np.zeros(n)
-    frame = op.shaft_frames[0]
+    frame, axis = op.shaft_frames[0], rest_geometry(scene).axes[0]
+    first = mj.mj_name2id(model, mj.mjtObj.mjOBJ_BODY, chain[0].name)
     step, start = 0, _time.perf_counter()
 
-    def torques(half: float) -> None:  # mid-step torques over a step: 2nd order in dt
-        now = scene.time.start_s + (step + half) * dt
-        data.xfrc_applied[1, 3:] = scene.input_torque(now) * axes[0]
-        data.xfrc_applied[last, 3:] -= scene.load_torque(now) * axes[-1]
-
     def angle() -> float:  # the first shaft's angle about its axis, in (-pi, pi]
-        turned = data.xmat[1].reshape(3, 3) @ frame[0]
+        turned = data.xmat[first].reshape(3, 3) @ frame[0]
         return float(np.arctan2(turned @ frame[1], turned @ frame[0]))
+
+    def governed() -> float:  # the governor's torque on the engine's input motion
+        if governor is None:
+            return 0.0
+        speed = (data.xmat[first].reshape(3, 3) @ data.qvel[3:6]) @ axis
+        return governor.torque(scene.time.start_s + step * dt, prev + 2 * np.pi * turns,
+                               float(speed))
+
+    held = 0.0
 
     prev = angle()
     turns = round((scene.initial_angle_rad - prev) / (2 * np.pi))
     for i, target in enumerate(targets):
         while step < target:
             data.xfrc_applied[:] = 0.0
-            torques(0.5)
+            apply(data, scene.time.start_s + (step + 0.5) * dt, governed())  # mid-step
             mj.mj_step(model, data)
             step += 1
             now = angle()  # counted every step: a turn is many steps
             turns += round((prev - now) / (2 * np.pi))
             prev = now
         data.xfrc_applied[:] = 0.0
-        torques(0.0)
+        held = max(held, abs(governed()))
+        apply(data, scene.time.start_s + step * dt, governed())
         mj.mj_forward(model, data)
-        forces[i], misfit[i] = _read(mj, model, data, op, i, chain, groups, refs)
+        forces[i], misfit[i] = _read(mj, model, data, op, i, groups, refs)
         q[i] = prev + 2 * np.pi * turns
-        qd[i] = (data.xmat[1].reshape(3, 3) @ data.qvel[3:6]) @ axes[0]
+        qd[i] = (data.xmat[first].reshape(3, 3) @ data.qvel[3:6]) @ axis
     return EngineRun(op.t, forces, op.names, q, qd, misfit, softness, dt, step,
-                     _time.perf_counter() - start)
+                     _time.perf_counter() - start, held)

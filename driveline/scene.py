@@ -438,8 +438,12 @@ class Scene:
             return self
         return self.with_changes(
             effects=self.effects | {"inertia"},
-            description=f"{self.description}; with inertia (the scene is quasi-static)")
+            description=self.description + IN_MOTION)
 
+
+IN_MOTION = "; with inertia (the scene is quasi-static)"
+"""What :meth:`Scene.in_motion` adds to a quasi-static scene's description (reports
+read it to say so)."""
 
 _VALIDATE: list[Callable[[Scene], Scene]] = []
 """The validator of :meth:`Scene.with_changes`: :func:`.loading.revalidate`, registered

@@ -44,11 +44,12 @@ from pathlib import Path
 import numpy as np
 from cardan_forces.driveline import engine_drake, engine_mujoco
 from cardan_forces.driveline.determinacy import determinacy
-from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.dynamics import reduced_inertia, simulate
 from cardan_forces.driveline.engine_drake import Stepping
-from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Softness
+from cardan_forces.driveline.engine_mujoco import EngineRun, EngineUnsupported, Governor, Softness
 from cardan_forces.driveline.equilibrium import Operator, build_operator
 from cardan_forces.driveline.loading import load_scene
+from cardan_forces.driveline.scene import IN_MOTION
 from cardan_forces.experiments import engine_member, files
 from cardan_forces.experiments.engine_loads import ENGINES, engine_of, load_of, load_rows
 from cardan_forces.experiments.environment import number_text
@@ -279,9 +280,12 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
           settings=SETTINGS, engines=("mujoco",), drake_settings=DRAKE_SETTINGS) -> EngineStudy:
     """Run the ``engines`` on scene ``spec`` up to ``stop_s`` (default its stop) under
     each of their settings and compare at ``instants`` evenly spaced instants; an
-    engine that cannot run the scene is left out (:func:`usable`).
+    engine that cannot run the scene is left out (:func:`usable`). A quasi-static scene
+    is taken in motion (:meth:`~cardan_forces.driveline.scene.Scene.in_motion`: its
+    inertia added, for the engines and the rigid set alike, its description saying so).
     """
-    scene = load_scene(spec)
+    given = load_scene(spec)
+    scene = given.in_motion()
     usable(engines, scene)
     t = scene.time.instants()
     if stop_s is not None:
@@ -290,35 +294,42 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
             raise NotApplicable(f"--stop {stop_s}: the scene's grid starts at "
                                 f"{scene.time.start_s} s with step {scene.time.step_s} s; "
                                 "give at least two of its instants")
-    return study_operator(build_operator(simulate(scene, t)), instants, settings, engines,
-                          drake_settings)
+    motion = simulate(scene, t)
+    governor = None if given is scene else Governor(
+        scene.initial_angle_rad, scene.initial_speed_rad_s, scene.time.start_s,
+        float(reduced_inertia(scene, motion.kin)[0][0]))
+    return study_operator(build_operator(motion), instants, settings, engines,
+                          drake_settings, governor)
 
 
 def study_operator(op, instants: int = 6, settings=SETTINGS, engines=("mujoco",),
-                   drake_settings=DRAKE_SETTINGS) -> EngineStudy:
+                   drake_settings=DRAKE_SETTINGS, governor=None) -> EngineStudy:
     """:func:`study` on an operator already built: :func:`engine_runs`, compared at
     ``instants`` evenly spaced instants.
     """
     ok, skipped = usable(engines, op.scene, op)
     sampled = np.unique(np.linspace(0, len(op.t) - 1, instants).round().astype(int))
-    return compare(op, engine_runs(op, settings, ok, drake_settings), sampled, skipped)
+    return compare(op, engine_runs(op, settings, ok, drake_settings, governor), sampled,
+                   skipped)
 
 
 def engine_runs(op, settings=SETTINGS, engines=("mujoco",),
-                drake_settings=DRAKE_SETTINGS) -> dict[str, EngineRun]:
+                drake_settings=DRAKE_SETTINGS, governor=None) -> dict[str, EngineRun]:
     """The ``engines`` on the operator's scene by setting label: MuJoCo under every
     setting whose ``scaled`` shafts the scene has, Drake under every step that divides
-    the scene's (:class:`NotApplicable` where one cannot run).
+    the scene's (:class:`NotApplicable` where one cannot run); their input speed held
+    by ``governor`` (:class:`~cardan_forces.driveline.engine_mujoco.Governor`) where
+    one is given.
     """
     shafts = {s.name for s in op.scene.shafts}
     step = op.scene.time.step_s
     runs = {}
     try:
         if "mujoco" in engines:
-            runs.update({s.label: engine_mujoco.run(op, s) for s in settings
+            runs.update({s.label: engine_mujoco.run(op, s, governor) for s in settings
                          if all(name in shafts for name, _ in s.scaled)})
         if "drake" in engines:
-            runs.update({s.label: engine_drake.run(op, s) for s in drake_settings
+            runs.update({s.label: engine_drake.run(op, s, governor) for s in drake_settings
                          if abs(step / s.time_step_s - round(step / s.time_step_s)) < 1e-6})
     except EngineUnsupported as err:
         raise NotApplicable(str(err)) from None
@@ -453,9 +464,18 @@ def report_lines(result: EngineStudy, versions: str) -> list[str]:
              "`driveline/engine_mujoco.py`: inverse dynamics on the package's exact "
              "motion gives no constraint force in a soft-constraint engine); every bearing "
              "a constraint to the ground (MuJoCo's `connect`, Drake's ball constraint to a "
-             "seat welded to the ground), the joints hinges; forces read at the scene's "
-             f"instants. Compared at {len(result.sampled)} instants, {len(settled)} of them "
-             "after the engines' settling (10 time constants), which the statistics use."]
+             "seat welded to the ground), the joints in the engine's kinematic tree; forces "
+             f"read at the scene's instants. Compared at {len(result.sampled)} instants, "
+             f"{len(settled)} of them after the engines' settling (10 time constants), which "
+             "the statistics use."]
+    if op.scene.description.endswith(IN_MOTION):
+        held = max(run.governed_N_m for run in result.runs.values())
+        lines += ["", "The scene is quasi-static: it is taken in motion, its inertia added "
+                  "for the engines and the rigid set alike (the engines integrate dynamics), "
+                  "and the engines' input shaft held on the scene's steady motion by a "
+                  "governor on the "
+                  f"input torque (`Governor`): at most {_g(held)} N m at the instants "
+                  "read."]
     lines += [f"Not run: {name}: {why}" for name, why in result.skipped.items()]
     lines += ["", *cost_lines(result), "", *agreement_lines(result), "",
               *prediction_lines(result), "", *_sensitivity_lines(result)]

@@ -60,9 +60,9 @@ def compliances_mujoco(op, softness) -> dict[str, float]:
     model = mujoco.MjModel.from_xml_string(engine_mujoco.build_mjcf(op, softness))
     scale = dict(softness.scaled)
     out = {}
-    for e in range(model.neq):
-        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_EQUALITY, e)
-        link = next(c for c in op.bearings() if c.name == name)
+    for link in op.bearings():
+        name = link.name
+        e = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_EQUALITY, name)
         a_hat = sum(model.body_invweight0[b, 0] for b in (model.eq_obj1id[e],
                                                           model.eq_obj2id[e]))
         out[name] = scale.get(op.scene.shafts[link.shaft].name, 1.0) ** 2 * float(a_hat)

@@ -9,9 +9,12 @@ import pytest
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.dynamics import simulate
 from cardan_forces.driveline.elements.base import (
+    DRAKE,
+    MUJOCO,
     RELEASES,
     ElementKind,
     EngineJoint,
+    EngineLoop,
     FormulationExtras,
     Loads,
     Paired,
@@ -60,7 +63,7 @@ def test_each_link_has_penalty_contacts_on_its_own_bodies(name):
 CORE = ("holds", "add_links")
 """The core every kind writes; :data:`PER_LINK` every kind that makes links."""
 PER_LINK = ("laws", "penalty", "words")
-CAPABILITIES = (Paired, Releasable, Loads, EngineJoint, FormulationExtras)
+CAPABILITIES = (Paired, Releasable, Loads, EngineJoint, EngineLoop, FormulationExtras)
 
 
 def _written(kind, name: str) -> bool:
@@ -79,10 +82,12 @@ def test_each_kind_writes_the_core_and_its_capabilities_required_methods(kind):
     required = {Paired: ("pairs", "pair_mode"), Loads: ("load",),
                 Releasable: ("releases", "parse_release", "release_label", "release_words",
                              "apply_release"),
-                EngineJoint: ("mjcf_joint",), FormulationExtras: ()}
+                EngineLoop: ("mjcf_loop",), FormulationExtras: ()}
     for capability, names in required.items():
         if isinstance(kind, capability):
             assert all(_written(kind, n) for n in names), capability.__name__
+    if isinstance(kind, EngineJoint):  # one joint, or a chain of them
+        assert _written(kind, "mjcf_joint") or _written(kind, "mjcf_steps"), kind.name
     if isinstance(kind, Releasable):
         assert kind.release_name and kind.release_form and isinstance(kind.release_rank, int)
 
@@ -95,14 +100,17 @@ def test_the_registry_lists_the_capable_kinds():
 
 @pytest.mark.parametrize("name", [*builtin_names(), str(EVERY_KIND)])
 def test_a_kind_that_joins_bodies_without_an_engine_joint_refuses_the_engines(name):
-    """The engines build their tree from :class:`EngineJoint` kinds only: a link between
-    two bodies of any other kind is refused before any work."""
+    """The engines build their tree from :class:`EngineJoint` kinds and close
+    :class:`EngineLoop` ones outside it: a link between two bodies of any other kind is
+    refused before any work."""
     scene = load_scene(name)
     op = build_operator(simulate(scene, [0.3]))
-    refused = {line.split("'")[1] for line in refusals(scene, "the engine")}
-    for link in op.contacts:
-        if link.other is not None and not isinstance(link.element_kind, EngineJoint):
-            assert link.element in refused, link.name
+    for engine in (MUJOCO, DRAKE):
+        refused = {line.split("'")[1] for line in refusals(scene, engine)}
+        for link in op.contacts:
+            if link.other is not None and not isinstance(link.element_kind,
+                                                         (EngineJoint, EngineLoop)):
+                assert link.element in refused, link.name
 
 
 def test_the_how_to_names_every_capability_and_its_methods():

@@ -113,9 +113,9 @@ def test_a_floating_bearing_s_carrier_is_refused_by_name():
         ed.check_expressible(op)
 
 
-def test_a_quasi_static_scene_is_refused_in_drake_s_name():
-    with pytest.raises(NotApplicable, match="Drake cannot express.*'inertia'"):
-        engine.study("propshaft", engines=("drake",))
+def test_a_kind_drake_is_not_handed_is_refused_in_drake_s_name():
+    with pytest.raises(NotApplicable, match="Drake cannot express.*constant-velocity"):
+        engine.study("halfshaft", engines=("drake",))
 
 
 def test_missing_drake_says_how_to_install(monkeypatch):

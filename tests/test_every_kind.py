@@ -53,12 +53,11 @@ COMMANDS = {
     "tolerances": ["tolerances", SCENE, "--samples", "4", "--instants", "3", "--out", "{out}"],
     "sweep": ["sweep", SCENE, "--quick", "--out", "{out}"],
     "export": ["export", SCENE, "--instants", "2", "--out", "{out}"],
+    "engine": ["engine", SCENE, "--instants", "5", "--out", "{out}"],
 }
 """Every command that takes a scene with its quickest run (``scene`` is the loader's)."""
 
-REFUSING = {"engine": (["engine", SCENE, "--instants", "5", "--out", "{out}"],
-                       "disc coupling 'disc'"),
-            "secondary": (["secondary", SCENE, "--out", "{out}"], "three shafts")}
+REFUSING = {"secondary": (["secondary", SCENE, "--out", "{out}"], "three shafts")}
 """Commands that cannot take the scene, and what their one line names."""
 
 

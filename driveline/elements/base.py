@@ -20,7 +20,8 @@ elements of a scene:
   callers ask for with ``isinstance``: :class:`Paired` (opposite unilateral columns
   that complementarity resolves), :class:`Releasable` (a release the advisor
   offers), :class:`Loads` (the line's end torque applied as its own forces),
-  :class:`EngineJoint` (the joint a physics engine's tree hangs a body on) and
+  :class:`EngineJoint` (the joints a physics engine's tree hangs a body on),
+  :class:`EngineLoop` (a link an engine closes outside its tree) and
   :class:`FormulationExtras` (extra unknowns or bounds of some formulations).
 
 A bearing kind's constraint to the ground in MJCF belongs to every bearing
@@ -54,6 +55,10 @@ order; filled by :mod:`.registry`."""
 PENALTY_SIMULATION = "the penalty-contact simulation"
 """The ``engine`` the penalty simulation asks :meth:`ElementKind.refusal` as: a kind
 that it models and a physics engine does not refuses every other ``engine``."""
+
+MUJOCO, DRAKE = "MuJoCo", "Drake"
+"""The physics engines as they ask :meth:`ElementKind.refusal` (Drake reads the MJCF
+MuJoCo's model is written in, so a kind it refuses is one whose MJCF it does not read)."""
 
 
 @dataclass(frozen=True)
@@ -376,13 +381,31 @@ class Loads:
         raise NotImplementedError
 
 
+@dataclass(frozen=True)
+class EngineStep:
+    """One joint of a physics engine's kinematic tree: its ``type`` (``hinge``,
+    ``slide``), global ``axis`` and ``point`` (m) at the scene's start, its ``speed`` in
+    the scene's initial state (rad/s or m/s) and a passive spring-damper on it
+    (``stiffness`` N m/rad or N/m, ``damping`` N m s/rad or N s/m; 0: none).
+    """
+
+    type: str
+    axis: np.ndarray
+    point: np.ndarray
+    speed: float = 0.0
+    stiffness: float = 0.0
+    damping: float = 0.0
+
+
 class EngineJoint:
     """Capability: a physics engine (MuJoCo, Drake) hangs one of its links' two bodies
-    on the other by a joint of its kinematic tree (a Cardan joint's hinges, a slip
-    joint's slide); a kind without it that joins two bodies refuses the engines
-    (:meth:`ElementKind.refusal`). :meth:`mjcf_joint` is written; :meth:`mjcf_speed`
-    defaults to a joint that starts still and :meth:`mjcf_body` is written only by a
-    kind that makes a body (a cross-pin).
+    on the other by joints of its kinematic tree (a Cardan joint's hinges, a slip
+    joint's slide, a CV joint's three hinges, a disc coupling's six sprung joints); a
+    kind without it that joins two bodies refuses the engines
+    (:meth:`ElementKind.refusal`). A kind writes :meth:`mjcf_joint` (one joint;
+    :meth:`mjcf_speed` defaults to one that starts still) or :meth:`mjcf_steps` (a
+    chain); :meth:`mjcf_body` only a kind that makes a body (a cross-pin) and
+    :meth:`mjcf_couplings` one whose joints are coupled.
     """
 
     def mjcf_joint(self, link: Link, child: int, start) -> tuple[str, np.ndarray, np.ndarray]:
@@ -399,10 +422,39 @@ class EngineJoint:
         """
         return 0.0
 
+    def mjcf_steps(self, link: Link, child: int, start) -> list[EngineStep]:
+        """The joints by which body ``child`` hangs on the other, in order from it: the
+        engine puts a nearly massless body of its own between two of them. One here,
+        :meth:`mjcf_joint` at :meth:`mjcf_speed`.
+        """
+        joint, axis, point = self.mjcf_joint(link, child, start)
+        return [EngineStep(joint, axis, point, self.mjcf_speed(link, child, axis, start))]
+
+    def mjcf_couplings(self, link: Link, joints: list[str], soft: str) -> str:
+        """MJCF ``<equality>`` elements among its joints (named ``joints``, in the
+        order of :meth:`mjcf_steps`), softness attributes ``soft``; none here.
+        """
+        return ""
+
     def mjcf_body(self, body: int, start) -> tuple:
         """``(pos, rot, mass, inertia)`` at the start of a body this kind made (a
         cross-pin): its centre (m), rotation (3, 3), mass (kg) and global inertia tensor
         (kg m^2) about its centre.
+        """
+        raise NotImplementedError
+
+
+class EngineLoop:
+    """Capability: a physics engine closes its links outside the kinematic tree (a
+    centring ball between shafts that are not adjacent): a nearly massless carrier hangs
+    on one of the link's bodies by a joint (the freedom the link leaves), and a
+    ``connect`` equality, named as the link, holds a point of the other body on it. The
+    engine reads the link's force from that equality.
+    """
+
+    def mjcf_loop(self, link: Link, start) -> tuple[int, EngineStep]:
+        """``(host, step)``: the operator body the carrier hangs on and its joint there;
+        the carrier sits at ``step.point``, which the other body of ``link`` holds.
         """
         raise NotImplementedError
 

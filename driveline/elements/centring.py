@@ -20,8 +20,11 @@ both ways normal to the line (a ``LINE`` row: ``-(k r + c r')``, ``r`` the centr
 offset from the axis, ``c`` the scene's damping fraction of ``k``), free along it: the
 rigid link's two columns and its one freedom, at any spin of either shaft, the bore's
 axis being the one line of the driven shaft that its spin leaves in place. ``k`` is the
-rigid law's, the bearing stiffness. The physics engines have no contact between
-non-adjacent shafts in their models of a scene: they refuse one, in one line.
+rigid law's, the bearing stiffness. MuJoCo closes it outside its kinematic tree
+(:meth:`Centring.mjcf_loop`): a carrier hung on the driven shaft's first body by a slide
+along the bore's axis, held at the ball's centre by a ``connect`` to the driving
+shaft's last body; the connect's force, normal to the bore, is the link's. Drake is not
+handed the carrier: it refuses the device, in one line.
 """
 
 from __future__ import annotations
@@ -31,7 +34,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Scene, SceneError
-from .base import PENALTY_SIMULATION, Column, Law, Layout, Link, Releasable, Release
+from .base import (
+    MUJOCO,
+    PENALTY_SIMULATION,
+    Column,
+    EngineLoop,
+    EngineStep,
+    Law,
+    Layout,
+    Link,
+    Releasable,
+    Release,
+)
 from .inshaft import InShaftKind
 
 
@@ -55,7 +69,7 @@ def meeting_point(start, a_in, end, a_out) -> np.ndarray:
     return 0.5 * (start + s * a_in + end + u * a_out)
 
 
-class Centring(InShaftKind, Releasable):
+class Centring(InShaftKind, Releasable, EngineLoop):
     """The centring device kind (module doc)."""
 
     name, table, record, noun = "centring", "centring_devices", CentringDevice, \
@@ -131,11 +145,20 @@ class Centring(InShaftKind, Releasable):
                   rows.op.shaft_frames[link.shaft][2],
                   rows.law(rows.scene.contact.bearing_stiffness_N_m))
 
+    def mjcf_loop(self, link: Link, start) -> tuple[int, EngineStep]:
+        """The carrier on the driven shaft's first body, sliding along its axis from the
+        ball's centre (module doc).
+        """
+        geo, k = start.geo, link.shaft
+        point = meeting_point(geo.joint_centres[k - 2], geo.axes[k - 2],
+                              geo.joint_centres[k - 1], geo.axes[k])
+        return link.body, EngineStep("slide", geo.axes[k], point)
+
     def refusal(self, device: CentringDevice, engine: str) -> str | None:
-        if engine == PENALTY_SIMULATION:
+        if engine in (PENALTY_SIMULATION, MUJOCO):
             return None
-        return (f"centring device {device.name!r}: {engine} has no contact between shafts "
-                "that are not adjacent")
+        return (f"centring device {device.name!r}: {engine} is not handed its carrier "
+                "between shafts that are not adjacent")
 
     def words(self, link: Link) -> str:
         return "centring ball"

@@ -18,9 +18,18 @@ The cage and balls are massless (no body).
 Kinematics: the driven angle equals the driving one (its rest reference carried over
 the articulation as a Cardan joint's driven yoke), so the ratio is 1 and its derivative
 0 whatever the angle. Contact laws (an assumption: the scenes give no joint stiffness):
-as stiff as a bearing, ``k`` for the forces and ``k (1 m)^2`` for the moment. The
-physics engines have no homokinetic constraint: they refuse a scene that holds one, in
-one line.
+as stiff as a bearing, ``k`` for the forces and ``k (1 m)^2`` for the moment.
+
+MuJoCo (:meth:`CV.mjcf_steps`): the driven shaft hangs on the driving one by three
+hinges through the centre, about ``a_in``, about the normal ``n`` of the shafts' plane
+and about ``a_out`` (angles ``psi``, ``beta'``, ``chi`` from the start), with the
+coupling ``chi = -psi`` (a joint equality). The relative rotation ``Rz(psi) Rn(beta')
+Rz(-psi)`` then turns about an axis normal to ``a_in`` only: the driven shaft is turned
+by the driving one's angle about its own axis, homokinetic at any angle, and its first
+order freedoms ``n`` and ``a_in - a_out`` span the plane normal to the bisector, the two
+rotations the rigid joint allows. In steady running the two engine bodies between the
+hinges do not spin (``psi`` runs at minus the shaft speed). Drake is not handed the
+coupling: it refuses the joint, in one line.
 
 Penalty model (:meth:`CV.penalty`): a bushing at the joint centre, stiff in the three
 translations (the centre is common to both shafts), stiff in the one relative rotation
@@ -55,7 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Range, table_keys
-from .base import PENALTY_SIMULATION, Column, Law, Layout, Link
+from .base import MUJOCO, PENALTY_SIMULATION, Column, EngineJoint, EngineStep, Law, Layout, Link
 from .joint import JointKind, JointStep, rotate_perp
 
 LENGTH_M = 1.0
@@ -102,7 +111,7 @@ def bend(a_in: np.ndarray, a_out: np.ndarray) -> np.ndarray:
     return np.eye(3) + cross + cross @ cross / (1.0 + cos)
 
 
-class CV(JointKind):
+class CV(JointKind, EngineJoint):
     """The constant-velocity joint kind (module doc)."""
 
     name, record = "cv", CVJoint
@@ -178,11 +187,31 @@ class CV(JointKind):
         rows.twist(link, (mirror @ r1, mirror @ r2), (r1, r2),
                    rows.law(k * LENGTH_M ** 2 / cos_half ** 2))
 
+    def mjcf_steps(self, link: Link, child: int, start) -> list[EngineStep]:
+        """The driven shaft (the engine's tree runs downstream) on the driving one by
+        three hinges through the centre (module doc), their speeds those of non-spinning
+        engine bodies between them.
+        """
+        j, geo = link.joint, start.geo
+        a_in, a_out, centre = geo.axes[j], geo.axes[j + 1], geo.joint_centres[j]
+        normal = np.cross(a_in, a_out)
+        if np.linalg.norm(normal) < 1e-12:  # straight: any normal of the axis
+            normal = np.cross(a_in, np.eye(3)[np.argmin(np.abs(a_in))])
+        speed = start.speed * start.kin.ratio[j, 0]
+        return [EngineStep("hinge", a_in, centre, -speed),
+                EngineStep("hinge", normal / np.linalg.norm(normal), centre),
+                EngineStep("hinge", a_out, centre, speed)]
+
+    def mjcf_couplings(self, link: Link, joints: list[str], soft: str) -> str:
+        """The homokinetic coupling ``chi = -psi`` of the first and last hinges."""
+        return (f'<joint name="{link.name}.homokinetic" joint1="{joints[-1]}" '
+                f'joint2="{joints[0]}" polycoef="0 -1 0 0 0" {soft}/>')
+
     def refusal(self, joint: CVJoint, engine: str) -> str | None:
-        if engine == PENALTY_SIMULATION:
+        if engine in (PENALTY_SIMULATION, MUJOCO):
             return None
-        return (f"constant-velocity joint {joint.name!r}: {engine} has no homokinetic "
-                "constraint to model it with")
+        return (f"constant-velocity joint {joint.name!r}: {engine} is not handed its "
+                "hinges' homokinetic coupling (an MJCF joint equality)")
 
     def words(self, link: Link) -> str:
         return "constant-velocity joint"

@@ -16,8 +16,11 @@ ranges accepted (:data:`STIFFNESS`) span rubber discs to steel disc packs.
 The penalty simulation models it as a bushing (:meth:`~..penalty.ContactRows.bushing`:
 a linear six-way spring-damper at the coupling, in the shaft's frame, with these
 stiffnesses and the scene's damping fraction of each); its reported forces are the
-link's six columns. The physics engines have no bushing to model it with: they
-refuse a scene that holds one, in one line.
+link's six columns. MuJoCo (:meth:`Disc.mjcf_steps`) models the same bushing as six
+sprung joints in a row at the coupling, slides along ``r1, r2, axis`` then hinges about
+them (small deflections: the order does not matter to first order), each with its
+stiffness and damping. Drake is not handed joint springs: it refuses the coupling, in
+one line.
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Range
-from .base import PENALTY_SIMULATION, Column, Law, Layout, Link
+from .base import MUJOCO, PENALTY_SIMULATION, Column, EngineJoint, EngineStep, Law, Layout, Link
 from .inshaft import InShaftKind, sides
 
 STIFFNESS = {
@@ -61,7 +64,7 @@ COMPONENTS = ("shear.r1", "shear.r2", "axial", "bending.r1", "bending.r2", "torq
 """Its components in column order, named in the shaft's frame."""
 
 
-class Disc(InShaftKind):
+class Disc(InShaftKind, EngineJoint):
     """The flexible disc coupling kind (module doc)."""
 
     name, table, record, noun = "disc", "disc_couplings", DiscCoupling, "disc coupling"
@@ -113,11 +116,27 @@ class Disc(InShaftKind):
                      (radial, radial, disc.axial_stiffness_N_m),
                      (angular, angular, disc.torsional_stiffness_N_m_rad))
 
+    def mjcf_steps(self, link: Link, child: int, start) -> list[EngineStep]:
+        """The bushing as six sprung joints at the coupling (module doc): slides along
+        the shaft's ``r1, r2, axis``, then hinges about them, each with its stiffness and
+        the scene's damping fraction of it; all start still (one shaft, one speed).
+        """
+        disc = next(e for e in start.scene.elements if e.name == link.element)
+        k, geo = link.shaft, start.geo
+        point = geo.centres[k] + disc.offset_m * geo.axes[k]
+        radial, angular = disc.radial_stiffness_N_m, disc.angular_stiffness_N_m_rad
+        stiff = (radial, radial, disc.axial_stiffness_N_m,
+                 angular, angular, disc.torsional_stiffness_N_m_rad)
+        fraction = start.scene.contact.damping_fraction_of_stiffness
+        axes = np.concatenate([start.frames[k]] * 2)
+        return [EngineStep("slide" if i < 3 else "hinge", axes[i], point, 0.0, s,
+                           fraction * s) for i, s in enumerate(stiff)]
+
     def refusal(self, disc: DiscCoupling, engine: str) -> str | None:
-        if engine == PENALTY_SIMULATION:
+        if engine in (PENALTY_SIMULATION, MUJOCO):
             return None
-        return (f"disc coupling {disc.name!r}: {engine} has no six-way spring-damper "
-                "(bushing) to model it with")
+        return (f"disc coupling {disc.name!r}: {engine} is not handed its six sprung "
+                "joints (MJCF joint springs)")
 
     def words(self, link: Link) -> str:
         return "disc coupling"

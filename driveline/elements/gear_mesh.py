@@ -61,8 +61,9 @@ modelled.
 A line has at most one mesh at each end: on its last shaft, of any type, and on its
 first, a helical one. The penalty simulation applies the mesh force instead of the
 torque, at the mesh point fixed in space on the body that holds the gear
-(:meth:`~..penalty_model.Model._line_loads`); the physics engines apply the torques as
-torques: they refuse a scene with a mesh, in one line.
+(:meth:`~..penalty_model.Model._line_loads`), and MuJoCo's model likewise at each step
+(:func:`~..engine_mujoco.run`). Drake is given the line's torques as torques: it refuses
+a scene with a mesh, in one line.
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import Range, Scene, SceneError
-from .base import PENALTY_SIMULATION, Loads
+from .base import MUJOCO, PENALTY_SIMULATION, Loads
 from .inshaft import InShaftKind
 
 PRESSURE_ANGLE_DEG = Range(10.0, 35.0, "deg")
@@ -284,7 +285,7 @@ class Mesh(InShaftKind, Loads):
         """None: the mesh is a load (:meth:`load`), not a contact."""
 
     def refusal(self, gear: GearMesh, engine: str) -> str | None:
-        if engine == PENALTY_SIMULATION:
+        if engine in (PENALTY_SIMULATION, MUJOCO):
             return None
         return (f"gear mesh {gear.name!r}: {engine} applies the line's torques as "
                 "torques, not as mesh forces")
