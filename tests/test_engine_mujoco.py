@@ -14,6 +14,7 @@ import pytest
 pytest.importorskip("mujoco")
 
 from cardan_forces.driveline import engine_mujoco as em  # noqa: E402
+from cardan_forces.driveline.loading import builtin_names  # noqa: E402
 
 import cardan_forces as cf  # noqa: E402
 
@@ -276,3 +277,15 @@ def test_report_with_the_engine_overlays_members_of_the_rigid_set(tmp_path, caps
     free = sum(r["determinate"] == "False" for r in settled)
     md = (out / "report.md").read_text().split("## MuJoCo beside the rigid set")[1]
     assert f"inside their interval: {free} of {free}" in md and "outside: none" in md
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", builtin_names())
+def test_cardan_engine_runs_on_every_built_in_scene(name, tmp_path):
+    """Every built-in scene, dynamic or quasi-static, with every kind it holds: the
+    command writes its report (MuJoCo; Drake where it can)."""
+    from cardan_forces.cli import main
+
+    assert main(["engine", name, "--stop", "0.1", "--instants", "3", "--out",
+                 str(tmp_path), "--quiet"]) == 0
+    assert "Agreement with the rigid model" in (tmp_path / "engine.md").read_text()
