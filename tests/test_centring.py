@@ -7,7 +7,7 @@ import pytest
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
-from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
+from cardan_forces.driveline.elements.base import DRAKE, MUJOCO, PENALTY_SIMULATION
 from cardan_forces.driveline.elements.centring import KIND, meeting_point
 from cardan_forces.driveline.elements.registry import refusals
 from cardan_forces.driveline.equilibrium import build_operator
@@ -61,8 +61,22 @@ def test_a_ball_off_the_centre_yokes_middle_is_refused(device):
         scene_from_dict({"extends": "double-cardan", "centring_devices": [device]})
 
 
-def test_models_without_non_adjacent_contacts_refuse_it_by_name(scene):
-    assert "centring device 'ball'" in KIND.refusal(scene.elements[0], "the engine")
+def test_drake_refuses_it_by_name_and_mujoco_takes_it(scene):
+    assert "centring device 'ball'" in KIND.refusal(scene.elements[0], DRAKE)
+    assert KIND.refusal(scene.elements[0], MUJOCO) is None
+
+
+def test_mujocos_carrier_slides_along_the_driven_axis_from_the_ball(scene):
+    """:meth:`Centring.mjcf_loop`: the carrier hangs on the driven shaft's first body by
+    a slide along that shaft's axis, at the ball's centre (the link's point)."""
+    from cardan_forces.driveline.engine_mujoco import start_of
+
+    op = build_operator(simulate(scene, [0.0]))
+    link = next(c for c in op.contacts if c.element == "ball")
+    host, step = KIND.mjcf_loop(link, start_of(op))
+    assert host == link.body and step.type == "slide" and step.speed == 0.0
+    assert np.allclose(step.axis, op.shaft_frames[link.shaft][2], atol=1e-12)
+    assert np.allclose(step.point, op.points[0, link.columns[0]], atol=1e-12)
 
 
 # ------------------------------------------------------------------ penalty model
@@ -85,7 +99,7 @@ def _ball(model):
 def test_the_penalty_simulation_takes_it_and_the_engines_refuse_it():
     scene = _released()
     assert refusals(scene, PENALTY_SIMULATION) == []
-    assert any("centring device 'ball'" in why for why in refusals(scene, "the engine"))
+    assert any("centring device 'ball'" in why for why in refusals(scene, DRAKE))
 
 
 @pytest.mark.parametrize("component", range(3))

@@ -10,7 +10,7 @@ import pytest
 from cardan_forces.driveline import dynamics, penalty
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
-from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
+from cardan_forces.driveline.elements.base import DRAKE, MUJOCO, PENALTY_SIMULATION
 from cardan_forces.driveline.elements.cv import KIND, bisector
 from cardan_forces.driveline.elements.registry import refusals
 from cardan_forces.driveline.equilibrium import build_operator
@@ -87,9 +87,34 @@ def test_a_cardan_field_on_a_cv_joint_is_named():
                               {"name": "b", "kind": "cv", "articulation_deg": 10.0}])
 
 
-def test_models_without_a_homokinetic_constraint_refuse_it_by_name():
+def test_drake_refuses_it_by_name_and_mujoco_takes_it():
     joint = load_scene("halfshaft").joints[0]
-    assert "constant-velocity joint 'inboard'" in KIND.refusal(joint, "the engine")
+    assert "constant-velocity joint 'inboard'" in KIND.refusal(joint, DRAKE)
+    assert KIND.refusal(joint, MUJOCO) is None
+
+
+@pytest.mark.parametrize("j", [0, 1])
+def test_mujocos_three_hinges_start_homokinetic_with_still_bodies_between(j):
+    """:meth:`CV.mjcf_steps`: hinges through the centre about ``a_in``, the shafts'
+    normal and ``a_out``; their speeds leave the engine bodies between them still and
+    give the driven shaft the driving one's spin about its own axis; the coupling ties
+    the last hinge to minus the first."""
+    from cardan_forces.driveline.engine_mujoco import start_of
+
+    op = build_operator(simulate(load_scene("halfshaft"), [0.0]))
+    link = [c for c in op.contacts if c.kind == "cv-joint"][j]
+    start = start_of(op)
+    steps = KIND.mjcf_steps(link, link.body, start)
+    a_in, a_out = start.geo.axes[j], start.geo.axes[j + 1]
+    assert [s.type for s in steps] == ["hinge"] * 3
+    assert np.allclose(steps[0].axis, a_in) and np.allclose(steps[2].axis, a_out)
+    assert abs(steps[1].axis @ a_in) < 1e-12 and abs(steps[1].axis @ a_out) < 1e-12
+    spin = start.speed * start.kin.ratio[j, 0] * a_in
+    assert np.allclose(spin + steps[0].speed * a_in, 0.0, atol=1e-12)
+    driven = spin + sum(s.speed * s.axis for s in steps)
+    assert np.allclose(driven, start.speed * start.kin.ratio[j + 1, 0] * a_out, atol=1e-12)
+    coupling = KIND.mjcf_couplings(link, ["psi", "beta", "chi"], "")
+    assert 'joint1="chi" joint2="psi" polycoef="0 -1 0 0 0"' in coupling
 
 
 # ------------------------------------------------------------------ penalty model
@@ -132,7 +157,7 @@ def test_the_penalty_simulation_takes_it_and_the_engines_refuse_it():
     scene = _released()
     assert refusals(scene, PENALTY_SIMULATION) == []
     assert any("constant-velocity joint 'inboard'" in why
-               for why in refusals(scene, "the engine"))
+               for why in refusals(scene, DRAKE))
 
 
 def test_its_penalty_rows_stay_unloaded_while_the_shafts_turn_homokinetically(

@@ -4,7 +4,9 @@ model), its compliance laws, and the refusals of the models without a bushing.""
 import numpy as np
 import pytest
 from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.elements.base import DRAKE, MUJOCO
 from cardan_forces.driveline.elements.disc_coupling import COMPONENTS, KIND
+from cardan_forces.driveline.engine_mujoco import start_of
 from cardan_forces.driveline.equilibrium import build_operator
 from cardan_forces.driveline.loading import load_scene, scene_from_dict
 from cardan_forces.driveline.scene import SceneError
@@ -57,7 +59,29 @@ def test_a_stiffness_outside_its_range_is_refused_with_the_range(key, value):
                          "disc_couplings": [{**DISC, key: value}]})
 
 
-def test_models_without_a_bushing_refuse_it_by_name(scene):
-    assert "disc coupling 'disc'" in KIND.refusal(scene.elements[0], "the engine")
+def test_drake_refuses_it_by_name_and_mujoco_takes_it(scene):
+    assert "disc coupling 'disc'" in KIND.refusal(scene.elements[0], DRAKE)
+    assert KIND.refusal(scene.elements[0], MUJOCO) is None
     assert "disc coupling disc in shaft front_prop @ -0.55 m" in KIND.describe(
         scene.elements[0])
+
+
+def test_mujocos_six_sprung_joints_have_each_components_stiffness(scene):
+    """:meth:`Disc.mjcf_steps`: slides along ``r1, r2, axis`` with the radial, radial and
+    axial stiffness, hinges about them with the angular, angular and torsional one, all
+    at the coupling, each damped by the scene's fraction of its stiffness."""
+    op = build_operator(simulate(scene, [0.0]))
+    link = next(c for c in op.contacts if c.element == "disc")
+    steps = KIND.mjcf_steps(link, link.body, start_of(op))
+    disc, frame = scene.elements[0], op.shaft_frames[link.shaft]
+    radial, angular = disc.radial_stiffness_N_m, disc.angular_stiffness_N_m_rad
+    expected = [("slide", radial), ("slide", radial), ("slide", disc.axial_stiffness_N_m),
+                ("hinge", angular), ("hinge", angular),
+                ("hinge", disc.torsional_stiffness_N_m_rad)]
+    assert [(s.type, s.stiffness) for s in steps] == expected
+    for step, axis in zip(steps, np.concatenate([frame, frame])):
+        assert np.allclose(step.axis, axis, atol=1e-12)
+        assert np.allclose(step.point, op.points[0, link.columns[0]], atol=1e-12)
+        assert step.damping == pytest.approx(
+            scene.contact.damping_fraction_of_stiffness * step.stiffness)
+        assert step.speed == 0.0

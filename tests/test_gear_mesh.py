@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from cardan_forces.driveline.determinacy import determinacy
 from cardan_forces.driveline.dynamics import simulate
+from cardan_forces.driveline.elements.base import DRAKE
 from cardan_forces.driveline.elements.gear_mesh import (
     KIND,
     GearMesh,
@@ -125,7 +126,7 @@ def test_a_reversed_torque_keeps_the_helical_radial_force_separating():
 def test_models_that_apply_a_torque_refuse_it_by_name():
     scene = load_scene(str(Path(__file__).parent / "data" / "every_kind.toml"))
     gear = next(e for e in scene.elements if isinstance(e, GearMesh))
-    assert "gear mesh 'transfer'" in KIND.refusal(gear, "the engine")
+    assert "gear mesh 'transfer'" in KIND.refusal(gear, DRAKE)
 
 
 # ------------------------------------------------------------------ bevel and hypoid

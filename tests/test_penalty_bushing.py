@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.determinacy import determinacy
-from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
+from cardan_forces.driveline.elements.base import DRAKE, PENALTY_SIMULATION
 from cardan_forces.driveline.elements.disc_coupling import STIFFNESS
 from cardan_forces.driveline.elements.registry import refusals
 from cardan_forces.driveline.loading import scene_from_dict
@@ -60,7 +60,7 @@ def _columns(model, y):
 
 def test_the_penalty_simulation_takes_the_disc_and_the_engines_refuse_it(scene):
     assert refusals(scene, PENALTY_SIMULATION) == []
-    assert any("disc coupling 'disc'" in why for why in refusals(scene, "the engine"))
+    assert any("disc coupling 'disc'" in why for why in refusals(scene, DRAKE))
 
 
 @pytest.mark.parametrize("axis", range(3))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from cardan_forces.driveline import penalty
 from cardan_forces.driveline.determinacy import determinacy
-from cardan_forces.driveline.elements.base import PENALTY_SIMULATION
+from cardan_forces.driveline.elements.base import DRAKE, PENALTY_SIMULATION
 from cardan_forces.driveline.elements.bodies import frames_of
 from cardan_forces.driveline.elements.gear_mesh import KIND
 from cardan_forces.driveline.elements.registry import refusals
@@ -47,7 +47,7 @@ def model(scene):
 
 def test_the_penalty_simulation_takes_a_mesh_and_the_engines_refuse_it(scene):
     assert refusals(scene, PENALTY_SIMULATION) == []
-    assert any("gear mesh 'drive'" in why for why in refusals(scene, "the engine"))
+    assert any("gear mesh 'drive'" in why for why in refusals(scene, DRAKE))
 
 
 @pytest.mark.parametrize("t", [0.0, 0.013])
