@@ -41,6 +41,11 @@ the cones' interior (:func:`_warm_start`); one that this leaves short of solved 
 solved again from the cold start (its iterations count both). Then an instant's
 answer depends on the instants before it in its run (never on the threads).
 
+The reduction of a formulation's problems into (1) and the lift of (1)'s answers back
+(:func:`reduce`, :func:`lift`: the compiled form of :mod:`.conversions` and
+:mod:`.reduced_`'s NumPy, which the tests hold them to) run here too, one instant after
+the other on numba's threads, where the formulation gives its null-space basis.
+
 Nothing raises on numbers (NumPy's error model, :mod:`cardan_forces.util.compiled`):
 non-finite numbers end an instant with a code, as in the reference. No fastmath: every
 operation rounds as IEEE 754 says.
