@@ -737,20 +737,29 @@ def solve(P, q, G, h, cones, params, warm):
     for run in numba.prange(runs):
         S = _scratch(m, k, len(cones.start))
         for t in range(run * RUN, min(T, (run + 1) * RUN)):
-            x, s, z = x_out[t], s_out[t], z_out[t]
-            spent = 0
-            if warm and t > run * RUN and code[t - 1] == SOLVED:
-                x[:] = x_out[t - 1]
-                s[:] = s_out[t - 1]
-                z[:] = z_out[t - 1]
-                _warm_start(cones, params.warm_margin, s, z)
-                code[t], spent = _instant(P[t], q[t], G[t], h[t], cones, params, S, x, s, z)
-            if spent == 0 or code[t] != SOLVED:  # cold, or again cold
-                _cold_start(P[t], q[t], G[t], h[t], cones, x, s, z, S)
-                code[t], iterations[t] = _instant(P[t], q[t], G[t], h[t], cones, params, S,
-                                                  x, s, z)
-            iterations[t] += spent
+            _solve_instant(P[t], q[t], G[t], h[t], cones, params, S, warm and t > run * RUN,
+                           x_out, s_out, z_out, code, iterations, t)
     return x_out, z_out, s_out, iterations, code
+
+
+@kernel
+def _solve_instant(P, q, G, h, cones, params, S, warm, x_out, s_out, z_out, code,
+                   iterations, t):
+    """Instant ``t`` of :func:`solve` into row ``t`` of its outputs; ``warm``: from the
+    answer of instant ``t - 1`` where that one was solved.
+    """
+    x, s, z = x_out[t], s_out[t], z_out[t]
+    spent = 0
+    if warm and code[t - 1] == SOLVED:
+        x[:] = x_out[t - 1]
+        s[:] = s_out[t - 1]
+        z[:] = z_out[t - 1]
+        _warm_start(cones, params.warm_margin, s, z)
+        code[t], spent = _instant(P, q, G, h, cones, params, S, x, s, z)
+    if spent == 0 or code[t] != SOLVED:  # cold, or again cold
+        _cold_start(P, q, G, h, cones, x, s, z, S)
+        code[t], iterations[t] = _instant(P, q, G, h, cones, params, S, x, s, z)
+    iterations[t] += spent
 
 
 # The reduction (1) of a formulation's problems and the lift of their answers.
@@ -778,38 +787,50 @@ def reduce(P, q, A, b, N, eq, rows, member, sign, partner):
     G, h = np.zeros((T, m, k)), np.zeros((T, m))
     z0, norm, same = np.zeros((T, n)), np.zeros((T, r)), np.zeros((T, f), np.bool_)
     for t in numba.prange(T):
-        At, Nt, Pt, z = A[t], N[t], P[0] if P.shape[0] == 1 else P[t], z0[t]
-        for j in range(r):  # z0 = sum of the rows over their norms, times b over them
-            row, total = At[eq[j]], 0.0
-            for i in range(n):
-                total += row[i] * row[i]
-            norm[t, j] = np.sqrt(total)
-            w = b[t, eq[j]] / norm[t, j] / norm[t, j]
-            for i in range(n):
-                z[i] += row[i] * w
-        PN, g = np.zeros((n, k)), q[t].copy()  # P N and P z0 + q, over P's nonzeros
-        for i in range(n):
-            for c in range(n):
-                p = Pt[i, c]
-                if p != 0.0:
-                    g[i] += p * z[c]
-                    for a in range(k):
-                        PN[i, a] += p * Nt[c, a]
-        for i in range(n):
-            for a in range(k):
-                q_out[t, a] += Nt[i, a] * g[i]
-                for c in range(k):
-                    P_out[t, a, c] += Nt[i, a] * PN[i, c]
-        for j in range(m):
-            rhs = b[t, rows[j]] - _row_times(At[rows[j]], 1.0, Nt, z, G[t, j])
-            if j < f:
-                same[t, j] = b[t, member[j]] == sign[j] * b[t, partner[j]]
-                for i in range(n):
-                    same[t, j] &= At[member[j], i] == sign[j] * At[partner[j], i]
-                rhs -= sign[j] * (b[t, member[j]]
-                                  - _row_times(At[member[j]], -sign[j], Nt, z, G[t, j]))
-            h[t, j] = rhs
+        _reduce_instant(P[0] if P.shape[0] == 1 else P[t], q[t], A[t], b[t], N[t], eq, rows,
+                        member, sign, partner, P_out[t], q_out[t], G[t], h[t], z0[t],
+                        norm[t], same[t])
     return P_out, q_out, G, h, z0, norm, same
+
+
+@kernel
+def _reduce_instant(Pt, qt, At, bt, Nt, eq, rows, member, sign, partner, P_out, q_out, G,
+                    h, z, norm, same):
+    """One instant of :func:`reduce` into its rows of the outputs (overwritten)."""
+    n, k = Nt.shape
+    P_out[:] = 0.0
+    q_out[:] = 0.0
+    G[:] = 0.0
+    z[:] = 0.0
+    for j in range(len(eq)):  # z0 = sum of the rows over their norms, times b over them
+        row, total = At[eq[j]], 0.0
+        for i in range(n):
+            total += row[i] * row[i]
+        norm[j] = np.sqrt(total)
+        w = bt[eq[j]] / norm[j] / norm[j]
+        for i in range(n):
+            z[i] += row[i] * w
+    PN, g = np.zeros((n, k)), qt.copy()  # P N and P z0 + q, over P's nonzeros
+    for i in range(n):
+        for c in range(n):
+            p = Pt[i, c]
+            if p != 0.0:
+                g[i] += p * z[c]
+                for a in range(k):
+                    PN[i, a] += p * Nt[c, a]
+    for i in range(n):
+        for a in range(k):
+            q_out[a] += Nt[i, a] * g[i]
+            for c in range(k):
+                P_out[a, c] += Nt[i, a] * PN[i, c]
+    for j in range(len(rows)):
+        rhs = bt[rows[j]] - _row_times(At[rows[j]], 1.0, Nt, z, G[j])
+        if j < len(member):
+            same[j] = bt[member[j]] == sign[j] * bt[partner[j]]
+            for i in range(n):
+                same[j] &= At[member[j], i] == sign[j] * At[partner[j], i]
+            rhs -= sign[j] * (bt[member[j]] - _row_times(At[member[j]], -sign[j], Nt, z, G[j]))
+        h[j] = rhs
 
 
 @njit(cache=True, parallel=True)
@@ -823,31 +844,69 @@ def lift(P, q, A, N, z0, norm, eq, rows, member, sign, x, u):
     orthogonality makes ``l = A_eq g / norm^2`` with ``g = -(P z + q + A_in' y_in)``.
     """
     T, M, n = A.shape
-    k, m, f = N.shape[2], len(rows), len(member)
     z, y = np.zeros((T, n)), np.zeros((T, M))
     for t in numba.prange(T):
-        At, Nt, Pt, zt, yt = A[t], N[t], P[0] if P.shape[0] == 1 else P[t], z[t], y[t]
-        for i in range(n):
-            total = z0[t, i]
-            for a in range(k):
-                total += Nt[i, a] * x[t, a]
-            zt[i] = total
-        for j in range(m):
-            yt[rows[j]] = u[t, j]
-        for j in range(f):
-            yt[member[j]] = -sign[j] * u[t, j]
-        g = -q[t]
-        for i in range(n):
-            for c in range(n):
-                if Pt[i, c] != 0.0:
-                    g[i] -= Pt[i, c] * zt[c]
-        _subtract_rows(At, yt, rows, member, g)
-        for j in range(len(eq)):
-            total = 0.0
-            for i in range(n):
-                total += At[eq[j], i] * g[i]
-            yt[eq[j]] = total / norm[t, j] / norm[t, j]
+        _lift_instant(P[0] if P.shape[0] == 1 else P[t], q[t], A[t], N[t], z0[t], norm[t], eq,
+                      rows, member, sign, x[t], u[t], z[t], y[t])
     return z, y
+
+
+@kernel
+def _lift_instant(Pt, qt, At, Nt, z0, norm, eq, rows, member, sign, x, u, z, y):
+    """One instant of :func:`lift` into its rows ``z``, ``y`` (overwritten)."""
+    n, k = Nt.shape
+    for i in range(n):
+        total = z0[i]
+        for a in range(k):
+            total += Nt[i, a] * x[a]
+        z[i] = total
+    for j in range(len(rows)):
+        y[rows[j]] = u[j]
+    for j in range(len(member)):
+        y[member[j]] = -sign[j] * u[j]
+    g = -qt
+    for i in range(n):
+        for c in range(n):
+            if Pt[i, c] != 0.0:
+                g[i] -= Pt[i, c] * z[c]
+    _subtract_rows(At, y, rows, member, g)
+    for j in range(len(eq)):
+        total = 0.0
+        for i in range(n):
+            total += At[eq[j], i] * g[i]
+        y[eq[j]] = total / norm[j] / norm[j]
+
+
+@njit(cache=True, parallel=True, depends=("reduced_ipm.py",))
+def solve_full(P, q, A, b, N, eq, rows, member, sign, partner, cones, params, warm):
+    """:func:`reduce`, :func:`solve` and :func:`lift` instant by instant in one pass
+    (the same numbers): an instant's full data is read once and is still in the cache
+    for its lift, and the instants share one parallel region, where three regions each
+    wait for the slower thread (on a machine whose cores other work shares, a
+    region's end waited for a thread the system had not scheduled). Returns ``(z, y)``
+    of the full problems, ``(x, z, s, iterations, code)`` of (1) as :func:`solve` and
+    ``same`` as :func:`reduce`.
+    """
+    T, M, n = A.shape
+    k, m = N.shape[2], len(rows)
+    x_out, s_out, z_out = np.zeros((T, k)), np.zeros((T, m)), np.zeros((T, m))
+    code, iterations = np.zeros(T, np.int64), np.zeros(T, np.int64)
+    z0, norm = np.zeros((T, n)), np.zeros((T, len(eq)))
+    same = np.zeros((T, len(member)), np.bool_)
+    z, y = np.zeros((T, n)), np.zeros((T, M))
+    runs = (T + RUN - 1) // RUN
+    for run in numba.prange(runs):
+        S = _scratch(m, k, len(cones.start))
+        Pr, qr, G, h = np.zeros((k, k)), np.zeros(k), np.zeros((m, k)), np.zeros(m)
+        for t in range(run * RUN, min(T, (run + 1) * RUN)):
+            Pt = P[0] if P.shape[0] == 1 else P[t]
+            _reduce_instant(Pt, q[t], A[t], b[t], N[t], eq, rows, member, sign, partner, Pr,
+                            qr, G, h, z0[t], norm[t], same[t])
+            _solve_instant(Pr, qr, G, h, cones, params, S, warm and t > run * RUN, x_out,
+                           s_out, z_out, code, iterations, t)
+            _lift_instant(Pt, q[t], A[t], N[t], z0[t], norm[t], eq, rows, member, sign,
+                          x_out[t], z_out[t], z[t], y[t])
+    return z, y, x_out, z_out, s_out, iterations, code, same
 
 
 @kernel

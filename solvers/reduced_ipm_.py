@@ -34,7 +34,12 @@ depends on the instants before it in its run, so the backend starts cold unless 
 Where the formulation gives its null-space basis (every built-in conic one) the
 reduction and the lift run compiled too (:func:`reduced_problem`): on ``paper``, 22 and
 20 us per instant of ``min_max`` and ``socp_face`` for both in NumPy, 7 and 9 compiled
-(numba's two threads), the NumPy form the reference the tests hold them to.
+(numba's two threads), the NumPy form the reference the tests hold them to. The
+backend then runs each instant's reduction, interior point and lift in one compiled
+pass (:func:`._reduced_ipm_kernels.solve_full`, the same numbers), its ``ipm`` stage
+holding all three: one parallel region, not three that each wait for the slower
+thread (where other work shared the cores, a short region's end waited for a thread
+the system had not yet run).
 ``stages``: ``reduce`` (elimination and folding), ``ipm``, ``lift`` and ``fallback``.
 """
 
@@ -99,6 +104,14 @@ def solve_reduced(P, q, G, h, cones, tol: float = reduced_ipm.TOL,
         if warm:
             raise ValueError("the NumPy reference takes no warm start")
         return reduced_ipm.solve(P, q, G, h, cones, tol=tol, max_iter=max_iter)
+    x, z, s, iterations, code = kernels.solve(
+        *(np.ascontiguousarray(a, float) for a in (P, q, G, h)),
+        *_settings(kernels, cones, tol, max_iter), bool(warm))
+    return reduced_ipm.Answer(x, z, s, iterations, code)
+
+
+def _settings(kernels, cones, tol: float, max_iter: int):
+    """The kernels' ``(Cones, Params)`` of (1)'s ``cones`` and the options."""
     lay = reduced_ipm.layout(tuple(cones))
     size = np.sum(lay.soc < lay.m, axis=1).astype(np.int64)
     rows = kernels.Cones(lay.nonneg, np.ascontiguousarray(lay.soc[:, 0]), size)
@@ -106,9 +119,7 @@ def solve_reduced(P, q, G, h, cones, tol: float = reduced_ipm.TOL,
                             reduced_ipm.BACKTRACKS, reduced_ipm.MIN_STEP,
                             reduced_ipm.STEP_FRACTION, reduced_ipm.REDUCED, kernels.REFINE,
                             kernels.REFINE_RTOL, kernels.WARM_MARGIN)
-    x, z, s, iterations, code = kernels.solve(
-        *(np.ascontiguousarray(a, float) for a in (P, q, G, h)), rows, params, bool(warm))
-    return reduced_ipm.Answer(x, z, s, iterations, code)
+    return rows, params
 
 
 def _kernels(compiled: bool | None):
@@ -135,34 +146,56 @@ def reduced_problem(batch: ConicBatch, rows: np.ndarray | slice,
     4.5: NumPy's stacked products of small matrices pass over every instant's arrays
     several times, and the cone rows, a bound on one force each, are mostly zeros).
     """
-    eq, rest, kept = zero_rows(batch.cones)
-    n = batch.q.shape[1]
-    basis = batch.null_space
-    kernels = None if basis is None or basis.shape[1:] != (n, n - len(eq)) else _kernels(
-        compiled)
+    kernels = _reduction_kernels(batch, compiled)
     if kernels is None:
         return _reference(batch, rows)
-    P = np.zeros((1, n, n)) if batch.P is None else np.asarray(batch.P, float)
-    P = P[None] if P.ndim == 2 else P[rows]
-    data = [np.ascontiguousarray(a, float) for a in (P, batch.q[rows], batch.A[rows],
-                                                     batch.b[rows], basis[rows])]
-    apex, partner, sign = matched(data[2][0, rest], data[3][0, rest], kept)
-    while True:  # a cone matched at the first instant but not at another is not folded
-        plan = fold_plan(kept, apex, sign)
-        order, member, signs = ((np.arange(len(rest)), np.zeros(0, int), np.zeros(0))
-                                if plan is None else (plan.order, plan.member, plan.sign))
-        index = (eq, rest[order], rest[member], np.asarray(signs, float))
-        P_r, q_r, G, h, z0, norm, same = kernels.reduce(*data, *index, rest[partner])
-        holds = same.all(axis=0)
-        if holds.all():
-            break
-        apex, partner, sign = apex[holds], partner[holds], sign[holds]
+    data, index, (P_r, q_r, G, h, z0, norm, _), cones = _folded(
+        batch, rows, lambda data, index, partner, cones: kernels.reduce(*data, *index, partner))
 
     def lift(x, z):
         return kernels.lift(data[0], data[1], data[2], data[4], z0, norm, *index,
                             np.ascontiguousarray(x, float), np.ascontiguousarray(z, float))
 
-    return lift, (P_r, q_r, G, h, kept if plan is None else plan.cones)
+    return lift, (P_r, q_r, G, h, cones)
+
+
+def _reduction_kernels(batch: ConicBatch, compiled: bool | None):
+    """The compiled kernels where the batch's reduction runs compiled (the formulation
+    gives its basis, numba is installed and ``compiled`` allows it), else None.
+    """
+    n, eq = batch.q.shape[1], zero_rows(batch.cones)[0]
+    basis = batch.null_space
+    if basis is None or basis.shape[1:] != (n, n - len(eq)):
+        return None
+    return _kernels(compiled)
+
+
+def _folded(batch: ConicBatch, rows: np.ndarray | slice, call):
+    """``call(data, index, partner, cones)`` on the instants ``rows`` with the full
+    problems' ``data`` ``(P, q, A, b, N)``, the rows ``index`` ``(eq, rows, member,
+    sign)`` and ``partner`` of the compiled reduction (:func:`._reduced_ipm_kernels.reduce`)
+    and (1)'s ``cones``; again without the two-row cones whose fold, matched at the
+    first instant, fails at another (the last item of ``call``'s result says where):
+    ``(data, index, result, cones)``.
+    """
+    eq, rest, kept = zero_rows(batch.cones)
+    n = batch.q.shape[1]
+    P = np.zeros((1, n, n)) if batch.P is None else np.asarray(batch.P, float)
+    P = P[None] if P.ndim == 2 else P[rows]
+    data = [np.ascontiguousarray(a, float) for a in (P, batch.q[rows], batch.A[rows],
+                                                     batch.b[rows], batch.null_space[rows])]
+    apex, partner, sign = matched(data[2][0, rest], data[3][0, rest], kept)
+    while True:
+        plan = fold_plan(kept, apex, sign)
+        order, member, signs = ((np.arange(len(rest)), np.zeros(0, int), np.zeros(0))
+                                if plan is None else (plan.order, plan.member, plan.sign))
+        index = (eq, rest[order], rest[member], np.asarray(signs, float))
+        cones = kept if plan is None else plan.cones
+        result = call(data, index, rest[partner], cones)
+        holds = result[-1].all(axis=0)
+        if holds.all():
+            return data, index, result, cones
+        apex, partner, sign = apex[holds], partner[holds], sign[holds]
 
 
 def _reference(batch: ConicBatch, rows: np.ndarray | slice):
@@ -182,7 +215,19 @@ def _reference(batch: ConicBatch, rows: np.ndarray | slice):
 
 def _solve_group(batch: ConicBatch, rows: np.ndarray | slice, tol: float, max_iter: int,
                  compiled: bool | None, warm: bool):
-    """One group's reduction, interior point and lift: ``(z, y, answer, seconds)``."""
+    """One group's reduction, interior point and lift: ``(z, y, answer, seconds)``;
+    compiled as one pass over the instants where the reduction runs compiled
+    (:func:`._reduced_ipm_kernels.solve_full`: its ``ipm`` stage then holds the
+    reduction and the lift).
+    """
+    kernels = _reduction_kernels(batch, compiled)
+    if kernels is not None:
+        clock = time.perf_counter()
+        _, _, (z, y, *answer, _), _ = _folded(
+            batch, rows, lambda data, index, partner, cones: kernels.solve_full(
+                *data, *index, partner, *_settings(kernels, cones, tol, max_iter), bool(warm)))
+        return z, y, reduced_ipm.Answer(*answer), {
+            "reduce": 0.0, "ipm": time.perf_counter() - clock, "lift": 0.0}
     clock = time.perf_counter()
     lift, problem = reduced_problem(batch, rows, compiled)
     reduced = time.perf_counter()

@@ -150,6 +150,23 @@ def _same_reduction(batch):
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.abs(b).max())
 
 
+@pytest.mark.parametrize("warm", [False, True])
+def test_one_compiled_pass_is_reduction_interior_point_and_lift(op, warm):
+    """The backend's one compiled pass over the instants gives, to the bit, what the
+    compiled reduction, interior point and lift give one after the other.
+    """
+    pytest.importorskip("numba")
+    batch = _batch(op, "min_max", np.arange(41))
+    lift, problem = adapter.reduced_problem(batch, slice(None), compiled=True)
+    answer = adapter.solve_reduced(*problem, compiled=True, warm=warm)
+    out = adapter.solve_batch(batch, compiled=True, warm=warm)
+    z, y = lift(answer.x, answer.z)
+    solved = answer.code <= reduced_ipm.ALMOST  # the others are the fallback's
+    np.testing.assert_array_equal(out.z[solved], z[solved])
+    np.testing.assert_array_equal(out.y[solved], y[solved])
+    np.testing.assert_array_equal(out.iterations, answer.iterations)
+
+
 def test_compiled_reduction_folds_only_what_holds_at_every_instant(op):
     """A two-row cone whose member row matches its nonnegative row at the first instant
     but not at a later one is not folded, by both forms.
