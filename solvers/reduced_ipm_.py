@@ -32,9 +32,8 @@ instant from the one before it: on ``paper`` it cuts the iterations of ``min_max
 from 11.7 to 6.3 per instant and of ``socp_face`` from 7.1 to 5.5, but an answer then
 depends on the instants before it in its run, so the backend starts cold unless asked.
 Where the formulation gives its null-space basis (every built-in conic one) the
-reduction and the lift run compiled too (:func:`reduced_problem`): on ``paper``, 22 and
-20 us per instant of ``min_max`` and ``socp_face`` for both in NumPy, 7 and 9 compiled
-(numba's two threads), the NumPy form the reference the tests hold them to. The
+reduction and the lift run compiled too (:func:`reduced_problem`), the NumPy form the
+reference the tests hold them to. The
 backend then runs each instant's reduction, interior point and lift in one compiled
 pass (:func:`._reduced_ipm_kernels.solve_full`, the same numbers), its ``ipm`` stage
 holding all three: one parallel region, not three that each wait for the slower
@@ -141,10 +140,9 @@ def reduced_problem(batch: ConicBatch, rows: np.ndarray | slice,
     and :meth:`~.conversions.Reduced.lift`. Where the formulation gives its basis
     (``Conic.null_space``) the reduction and the lift run compiled where numba is
     installed (:func:`._reduced_ipm_kernels.reduce` and ``lift``, ``compiled`` as
-    :func:`solve_reduced` takes it): the same numbers to rounding in less time (on
-    ``paper``'s ``min_max``, 4.7 and 2.3 us per instant on two threads against 18 and
-    4.5: NumPy's stacked products of small matrices pass over every instant's arrays
-    several times, and the cone rows, a bound on one force each, are mostly zeros).
+    :func:`solve_reduced` takes it): the same numbers to rounding in less time (NumPy's
+    stacked products of small matrices pass over every instant's arrays several times,
+    and the cone rows, a bound on one force each, are mostly zeros).
     """
     kernels = _reduction_kernels(batch, compiled)
     if kernels is None:
