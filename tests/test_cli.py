@@ -299,7 +299,7 @@ def test_solve_says_the_engine_is_a_simulation(capsys, flag):
 
 
 @pytest.mark.parametrize("args, words", [
-    (["engine", "propshaft"], "'inertia'"),
+    (["engine", "paper", "--engine", "nope"], "--engine"),
     (["engine", "paper", "--stop", "-1"], "--stop"),
     (["engine", "paper", "--stop", "x"], "not a number"),
     (["engine", "paper", "--instants", "1"], "--instants"),
