@@ -112,21 +112,22 @@ class Softness:
 
 @dataclass(frozen=True)
 class Governor:
-    """A governor on the input torque that holds the input shaft on the steady motion
-    ``angle + speed (t - start_s)`` (rad): ``inertia (2 e' / tau + e / tau^2)`` (N m)
-    added to the scene's, ``e`` the engine's lag behind that motion, ``inertia`` the
-    line's reduced inertia (kg m^2, eq. 5's ``I(q)`` at the start), ``tau`` =
-    ``time_s`` (critically damped: no steady lag against a steady loss). It holds a
-    quasi-static scene taken in motion (:meth:`~.scene.Scene.in_motion`) at its steady
-    speed: with balanced torques and a small inertia, the energy the engine's soft
-    constraints dissipate would otherwise drift its speed (double-cardan's 10 rad/s
-    reversed within 0.4 s), and its forces would be read at other angles than the rigid
-    set's.
+    """A governor on the input torque that holds the input shaft on the package's own
+    motion of the scene (:func:`~.dynamics.simulate`, the same torques and inertia):
+    ``inertia (2 e' / tau + e / tau^2)`` (N m) added to the scene's, ``e`` the engine's
+    lag behind that motion (its angle ``q`` and speed ``qd`` at instants ``t``, a cubic
+    Hermite curve between them), ``inertia`` the line's reduced inertia (kg m^2, eq.
+    5's ``I(q)`` at the start), ``tau`` = ``time_s`` (critically damped: no steady lag
+    against a steady loss). It holds a quasi-static scene taken in motion
+    (:meth:`~.scene.Scene.in_motion`) on the motion the rigid set is read on: with a
+    small inertia, the energy the engine's soft constraints dissipate would otherwise
+    drift it away (double-cardan's 10 rad/s reversed within 0.4 s), and its forces would
+    be read at other angles than the rigid set's.
     """
 
-    angle: float
-    speed: float
-    start_s: float
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
     inertia: float
     time_s: float = 0.005
 
@@ -134,8 +135,16 @@ class Governor:
         """The governor's torque (N m) at time ``t`` (s), input angle ``q`` (rad,
         unwrapped) and speed ``qd`` (rad/s).
         """
-        lag = self.angle + self.speed * (t - self.start_s) - q
-        return self.inertia * (2.0 * (self.speed - qd) / self.time_s + lag / self.time_s ** 2)
+        k = int(np.clip(np.searchsorted(self.t, t) - 1, 0, len(self.t) - 2))
+        h = self.t[k + 1] - self.t[k]
+        u = (t - self.t[k]) / h
+        q0, q1, v0, v1 = self.q[k], self.q[k + 1], self.qd[k] * h, self.qd[k + 1] * h
+        ref = ((2 * u**3 - 3 * u**2 + 1) * q0 + (u**3 - 2 * u**2 + u) * v0
+               + (-2 * u**3 + 3 * u**2) * q1 + (u**3 - u**2) * v1)
+        speed = ((6 * u**2 - 6 * u) * q0 + (3 * u**2 - 4 * u + 1) * v0
+                 + (-6 * u**2 + 6 * u) * q1 + (3 * u**2 - 2 * u) * v1) / h
+        return self.inertia * (2.0 * (speed - qd) / self.time_s
+                               + (ref - q) / self.time_s ** 2)
 
 
 @dataclass(frozen=True)

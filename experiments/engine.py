@@ -295,9 +295,8 @@ def study(spec: str, stop_s: float | None = None, instants: int = 6,
                                 f"{scene.time.start_s} s with step {scene.time.step_s} s; "
                                 "give at least two of its instants")
     motion = simulate(scene, t)
-    governor = None if given is scene else Governor(
-        scene.initial_angle_rad, scene.initial_speed_rad_s, scene.time.start_s,
-        float(reduced_inertia(scene, motion.kin)[0][0]))
+    governor = None if given is scene or len(t) < 2 else Governor(
+        motion.t, motion.q, motion.qd, float(reduced_inertia(scene, motion.kin)[0][0]))
     return study_operator(build_operator(motion), instants, settings, engines,
                           drake_settings, governor)
 
@@ -472,7 +471,7 @@ def report_lines(result: EngineStudy, versions: str) -> list[str]:
         held = max(run.governed_N_m for run in result.runs.values())
         lines += ["", "The scene is quasi-static: it is taken in motion, its inertia added "
                   "for the engines and the rigid set alike (the engines integrate dynamics), "
-                  "and the engines' input shaft held on the scene's steady motion by a "
+                  "and the engines' input shaft held on the rigid set's motion by a "
                   "governor on the "
                   f"input torque (`Governor`): at most {_g(held)} N m at the instants "
                   "read."]
