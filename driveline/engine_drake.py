@@ -363,8 +363,9 @@ def run(op: Operator, stepping: Stepping = Stepping(),
             now, _ = _angle(op, model)  # counted every step: a turn is many steps
             turns += round((prev - now) / (2 * np.pi))
             prev = now
-        held = max(held, abs(governed()))
-        _torques(op, model, float(op.t[i]), governed())
+        now_governed = governed()
+        held = max(held, abs(now_governed))
+        _torques(op, model, float(op.t[i]), now_governed)
         forces[i], misfit[i] = _read(op, model, i)
         q[i], qd[i] = prev + 2 * np.pi * turns, _angle(op, model)[1]
     return EngineRun(op.t, forces, op.names, q, qd, misfit, stepping, dt, step,

@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -131,20 +132,19 @@ class Governor:
     inertia: float
     time_s: float = 0.005
 
+    @cached_property
+    def _motion(self):
+        """The reference angle as a curve of time (SciPy's cubic Hermite spline)."""
+        from scipy.interpolate import CubicHermiteSpline
+
+        return CubicHermiteSpline(self.t, self.q, self.qd)
+
     def torque(self, t: float, q: float, qd: float) -> float:
         """The governor's torque (N m) at time ``t`` (s), input angle ``q`` (rad,
         unwrapped) and speed ``qd`` (rad/s).
         """
-        k = int(np.clip(np.searchsorted(self.t, t) - 1, 0, len(self.t) - 2))
-        h = self.t[k + 1] - self.t[k]
-        u = (t - self.t[k]) / h
-        q0, q1, v0, v1 = self.q[k], self.q[k + 1], self.qd[k] * h, self.qd[k + 1] * h
-        ref = ((2 * u**3 - 3 * u**2 + 1) * q0 + (u**3 - 2 * u**2 + u) * v0
-               + (-2 * u**3 + 3 * u**2) * q1 + (u**3 - u**2) * v1)
-        speed = ((6 * u**2 - 6 * u) * q0 + (3 * u**2 - 4 * u + 1) * v0
-                 + (-6 * u**2 + 6 * u) * q1 + (3 * u**2 - 2 * u) * v1) / h
-        return self.inertia * (2.0 * (speed - qd) / self.time_s
-                               + (ref - q) / self.time_s ** 2)
+        lag, lag_rate = self._motion(t) - q, self._motion(t, 1) - qd
+        return float(self.inertia * (2.0 * lag_rate / self.time_s + lag / self.time_s ** 2))
 
 
 @dataclass(frozen=True)
@@ -203,9 +203,11 @@ def check_expressible(scene: Scene, engine: str = MUJOCO) -> None:
 
 
 ENGINE_BODY_KG = 1e-6
-"""Mass (kg; inertia ``ENGINE_BODY_KG`` x 1e-6 kg m^2 each way) of an engine body between
-two joints of one link (:meth:`~.elements.base.EngineJoint.mjcf_steps`) or of a loop's
-carrier: MuJoCo needs a positive one; its weight, 1e-5 N, is far below the loads."""
+"""Mass (kg; inertia :data:`ENGINE_BODY_INERTIA`) of an engine body between two joints
+of one link (:meth:`~.elements.base.EngineJoint.mjcf_steps`) or of a loop's carrier:
+MuJoCo needs a positive one; its weight, 1e-5 N, is far below the loads."""
+ENGINE_BODY_INERTIA = 1e-12 * np.eye(3)
+"""Its inertia tensor (kg m^2)."""
 
 
 COUPLING_STEPS, COUPLING_IMPEDANCE = 2, 0.9999
@@ -285,8 +287,8 @@ def _chain(op: Operator) -> list[_Body]:
     (an engine body between two of them; the body itself where the kind made it, a
     cross-pin).
     """
-    start = start_of(op)
-    joins = [c for c in op.contacts if c.other is not None and c not in _loops(op)]
+    start, loops = start_of(op), _loops(op)
+    joins = [c for c in op.contacts if c.other is not None and c not in loops]
     chain = [_shaft_body(op, start, 0, None, None)]
     here, seen = 0, {0}
     while True:
@@ -300,7 +302,7 @@ def _chain(op: Operator) -> list[_Body]:
         steps = kind.mjcf_steps(link, child, start)
         for k, step in enumerate(steps[:-1]):
             chain.append(_Body(None, f"{link.name}.{k}", step.point, chain[-1].rot,
-                               ENGINE_BODY_KG, ENGINE_BODY_KG * 1e-6 * np.eye(3), step, link))
+                               ENGINE_BODY_KG, ENGINE_BODY_INERTIA, step, link))
         if op.bodies[child].shaft is not None:
             chain.append(_shaft_body(op, start, child, steps[-1], link))
         else:
@@ -355,16 +357,15 @@ def _body_xml(body: _Body, parent: _Body | None) -> str:
             f'<inertial pos="0 0 0" mass="{body.mass:.17g}" fullinertia="{_vec(full)}"/>')
 
 
-def _carrier(link: Link, start: Start, host: _Body, names: dict) -> tuple[str, str]:
-    """A loop's carrier body (nested in its host) and its ``connect`` equality, named
-    as the link (:class:`~.elements.base.EngineLoop`): the carrier at the loop's point,
-    held there by the link's other body.
+def _carrier(link: Link, step: EngineStep, host: _Body, names: dict) -> tuple[str, str]:
+    """A loop's carrier body (nested in its host, on the joint ``step``) and its
+    ``connect`` equality, named as the link (:class:`~.elements.base.EngineLoop`): the
+    carrier at the loop's point, held there by the link's other body.
     """
-    _, step = link.element_kind.mjcf_loop(link, start)
     name = f"carrier.{link.name}"
     other = link.other if host.index == link.body else link.body
     carrier = _Body(None, name, step.point, host.rot, ENGINE_BODY_KG,
-                    ENGINE_BODY_KG * 1e-6 * np.eye(3), step, link)
+                    ENGINE_BODY_INERTIA, step, link)
     return (_body_xml(carrier, host) + "</body>",
             f'<connect name="{link.name}" body1="{name}" body2="{names[other]}" '
             'anchor="0 0 0"')
@@ -403,8 +404,8 @@ def build_mjcf(op: Operator, softness: Softness = Softness()) -> str:
         carriers.append(carrier)
         equalities.append(equality)
     for link in _loops(op):
-        host, _ = link.element_kind.mjcf_loop(link, start)
-        xml, connect = _carrier(link, start, next(b for b in chain if b.index == host), names)
+        host, step = link.element_kind.mjcf_loop(link, start)
+        xml, connect = _carrier(link, step, next(b for b in chain if b.index == host), names)
         hosted[host] = hosted.get(host, "") + xml
         equalities.append(f"{connect} {soft(host)}/>")
     hard = (f'solref="{COUPLING_STEPS * _timestep(op, softness):.9g} 1" '
@@ -474,12 +475,11 @@ def _groups(mj, model, op: Operator, chain: list[_Body]):
     tree joins (a cross-pin side, a slip joint, a CV joint, ...): the engine body
     ``child`` of the two, whose parent's pull is the wrench on ``body`` times ``sign``.
     """
-    eq = {n: mj.mj_name2id(model, mj.mjtObj.mjOBJ_EQUALITY, n)
-          for n in [link.name for link, _ in _bearings(op)] + [c.name for c in _loops(op)]}
-    out = [("equality", link, eq[link.name]) for link, _ in _bearings(op)]
-    out += [("equality", link, eq[link.name]) for link in _loops(op)]
+    loops = _loops(op)
+    out = [("equality", link, mj.mj_name2id(model, mj.mjtObj.mjOBJ_EQUALITY, link.name))
+           for link in [link for link, _ in _bearings(op)] + loops]
     pairs: dict[tuple[int, int | None], list] = {}
-    for link in (c for c in op.contacts if c.other is not None and c not in _loops(op)):
+    for link in (c for c in op.contacts if c.other is not None and c not in loops):
         pairs.setdefault((link.body, link.other), []).append(link)
     position = {b.index: p for p, b in enumerate(chain) if b.index is not None}
     for (body, other), links in pairs.items():
@@ -607,8 +607,9 @@ def run(op: Operator, softness: Softness = Softness(),
             turns += round((prev - now) / (2 * np.pi))
             prev = now
         data.xfrc_applied[:] = 0.0
-        held = max(held, abs(governed()))
-        apply(data, scene.time.start_s + step * dt, governed())
+        now_governed = governed()
+        held = max(held, abs(now_governed))
+        apply(data, scene.time.start_s + step * dt, now_governed)
         mj.mj_forward(model, data)
         forces[i], misfit[i] = _read(mj, model, data, op, i, groups, refs)
         q[i] = prev + 2 * np.pi * turns
