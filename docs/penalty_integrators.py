@@ -2,7 +2,7 @@
 
     python docs/penalty_integrators.py              # 1 s of every scene, 2 runs each
     python docs/penalty_integrators.py --stop 0.2 --repeats 3
-    python docs/penalty_integrators.py --scipy-on all   # SciPy on every scene: hours
+    python docs/penalty_integrators.py --scipy-on all   # SciPy on every scene: long
     python docs/penalty_integrators.py --page       # only rewrite the page's table
 
 Runs :func:`~cardan_forces.driveline.penalty.simulate_penalty` on every built-in scene
@@ -16,14 +16,11 @@ On every scene the compiled BDF (``BDF-numba``) runs, and again at a tenfold tig
 tolerance. SciPy's LSODA, BDF and Radau, on the same compiled right-hand side and
 Jacobian (``kernel="numba"``), run where ``--scipy-on`` says: by default ``dynamic``,
 the built-in scenes that are dynamic as defined (not a quasi-static scene's
-counterpart). The counterparts cost the compiled BDF up to some thirty times
-paper-penalty's CPU per simulated second (the table's column; light-truck's the most,
-halfshaft's about paper-penalty's), and SciPy's BDF and Radau take 20 to 90 times the
-compiled BDF: on the counterparts they would add hours (the decision says how many at
-the measured ratios) to a run of about 20 minutes on two shared cores. The rule goes by
-kind, not cost, so the run's length is known before it starts (halfshaft's counterpart,
-cheap enough, is left out with the others). ``all`` runs them everywhere, ``none``
-nowhere.
+counterpart). The counterparts cost the compiled BDF many times paper-penalty's CPU per
+simulated second (the table's column), and SciPy's BDF and Radau many times the
+compiled BDF, so on the counterparts they would dominate the run (the decision says by
+how much at the measured ratios). The rule goes by kind, not cost, so the run's length
+is known before it starts. ``all`` runs them everywhere, ``none`` nowhere.
 
 Each run is repeated and its smallest CPU time kept: the CPU time of this process over
 the integration (``PenaltyResult.cpu_s``, ``time.process_time``; loading the compiled
@@ -36,7 +33,7 @@ Writes ``docs/data/penalty_integrators.json`` (the measurements with the command
 date, the machine and the versions) and rewrites the generated part of
 ``docs/explanation/physical.md`` (between its ``penalty-integrators`` markers) from it:
 the table and the decision (:func:`decision`), which weighs SciPy's integrators on the
-scenes they ran on. The scenes refused (none today) are stored, not shown.
+scenes they ran on. The scenes refused are stored, not shown.
 ``tests/test_penalty_integrators_page.py`` holds the page to the stored data.
 """
 

@@ -227,7 +227,7 @@ def _solve_group(batch: ConicBatch, rows: np.ndarray | slice, tol: float, max_it
         return z, y, reduced_ipm.Answer(*answer), {
             "reduce": 0.0, "ipm": time.perf_counter() - clock, "lift": 0.0}
     clock = time.perf_counter()
-    lift, problem = reduced_problem(batch, rows, compiled)
+    lift, problem = _reference(batch, rows)  # no compiled reduction here
     reduced = time.perf_counter()
     answer = solve_reduced(*problem, tol=tol, max_iter=max_iter, compiled=compiled,
                            warm=warm)
