@@ -63,6 +63,7 @@ from cardan_forces.experiments.images import (
     coinciding,
     draw_set,
     format_list,
+    legend_below,
     limits,
     on_bound,
     save,
@@ -381,10 +382,7 @@ def draw(result: EngineStudy, stem: Path, formats=("png",)) -> list[Path]:
             handles.update(_draw_load(ax, result, label, c, names, start))
         fig.suptitle(f"The engines' first-shaft bearing loads over the rigid set "
                      f"({op.scene.name})\n{'; '.join(counts)}; from {start:g} s")
-        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=2)
-        fig.canvas.draw()
-        below = fig.legends[0].get_window_extent().height / fig.dpi + 0.08
-        fig.tight_layout(rect=(0, below / fig.get_figheight(), 1, 1), h_pad=0.6)
+        legend_below(fig, handles)
         paths = save(fig, stem, formats)
     plt.close(fig)
     return paths

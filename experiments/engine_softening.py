@@ -28,7 +28,7 @@ from cardan_forces.driveline.engine_mujoco import Softness
 
 from . import engine_member, files
 from .engine_loads import ENGINES, engine_of, load_of, load_rows
-from .images import PAGE_IN, chars_across, limits, save, styled
+from .images import PAGE_IN, chars_across, legend_below, limits, save, styled
 
 RATIOS = np.geomspace(1 / 8, 8, 49)
 """The ratios ``s`` of the MuJoCo prediction's curve."""
@@ -141,10 +141,7 @@ def draw(result, found: list[dict], stem: Path, formats=("png",)) -> list[Path]:
                 ax.grid(True)
         fig.suptitle(f"What the engines' softening selects ({result.op.scene.name}, "
                      f"t = {found[0]['t']:.3g} s)")
-        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=2)
-        fig.canvas.draw()
-        below = fig.legends[0].get_window_extent().height / fig.dpi + 0.08
-        fig.tight_layout(rect=(0, below / fig.get_figheight(), 1, 1), h_pad=0.6)
+        legend_below(fig, handles)
         paths = save(fig, stem, formats)
     plt.close(fig)
     return paths

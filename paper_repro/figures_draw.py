@@ -137,21 +137,8 @@ def grid_figure(cols: dict[str, np.ndarray], panels: list[Panel], title: str, nc
     for ax in axes.ravel()[len(panels):]:
         ax.axis("off")
     fig.suptitle(images.typeset(title))
-    legend_below(fig, handles)
+    images.legend_below(fig, handles)
     return fig, caption
-
-
-def legend_below(fig, handles: dict) -> None:
-    """One legend for the figure under its panels, in two columns where the labels
-    allow (a long label wrapped), the panels laid out above it.
-    """
-    texts = [textwrap.fill(label, 58) for label in handles]
-    ncol = 2 if len(texts) > 2 else 1
-    legend = fig.legend(list(handles.values()), texts, loc="lower center", ncol=ncol,
-                        bbox_to_anchor=(0.5, 0.0), columnspacing=1.5)
-    fig.canvas.draw()
-    below = legend.get_window_extent().height / fig.dpi + 0.08
-    fig.tight_layout(rect=(0, below / fig.get_figheight(), 1, 1), h_pad=0.6, w_pad=1.0)
 
 
 def draw_panel(ax, cols: dict[str, np.ndarray], panel: Panel, labels: dict,
